@@ -1,0 +1,36 @@
+"""Compilation shim: numba's ``njit`` when available, a transparent no-op otherwise.
+
+numba is a core dependency (the hot loop must run compiled), but keeping the kernels importable
+without it lets the pure-Python path serve as a slow, debuggable reference.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+try:  # pragma: no cover - exercised implicitly
+    if os.environ.get("FLEXMBS_DISABLE_JIT", "") == "1":
+        raise ImportError
+    from numba import njit as _njit
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover
+    HAVE_NUMBA = False
+    _njit = None
+
+
+def njit(*args: Any, **kwargs: Any) -> Any:
+    """``numba.njit(cache=True, ...)`` or identity when numba is absent or disabled."""
+    if _njit is None:
+        if len(args) == 1 and callable(args[0]) and not kwargs:
+            return args[0]
+        return lambda f: f
+    kwargs.setdefault("cache", True)
+    if len(args) == 1 and callable(args[0]):
+        return _njit(**kwargs)(args[0])
+    return _njit(*args, **kwargs)
+
+
+__all__ = ["njit", "HAVE_NUMBA"]

@@ -1,0 +1,27 @@
+"""Exceptions of flexmbs. Every message should tell the user what is wrong and how to fix it."""
+
+from __future__ import annotations
+
+
+class FlexmbsError(Exception):
+    """Base class of all flexmbs errors (the CLI prints these as one line)."""
+
+
+class ModelError(FlexmbsError):
+    """The model is inconsistent (unknown names, redundant constraints, bad sizes...)."""
+
+
+class GeometryError(FlexmbsError):
+    """A curve, mesh or section cannot be used as given."""
+
+
+class ScenarioError(FlexmbsError):
+    """A scenario file or override is invalid; the message names the key path."""
+
+
+class ConvergenceError(FlexmbsError):
+    """A nonlinear solve failed; the message names the worst equation and its object."""
+
+
+class RedundantConstraintError(ModelError):
+    """The constraint Jacobian is rank deficient; the message lists the dependent equations."""
