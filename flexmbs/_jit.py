@@ -7,7 +7,6 @@ without it lets the pure-Python path serve as a slow, debuggable reference.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from typing import Any
 
 try:  # pragma: no cover - exercised implicitly

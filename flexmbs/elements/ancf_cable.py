@@ -1,0 +1,621 @@
+"""Element A: 12-DOF gradient-deficient ANCF cable (FORMULATION I §1).
+
+Element coordinates ``q_e = [r0 (3), r0' (3), r1 (3), r1' (3)]`` with cubic Hermite shape
+functions (§1.1). Strains are measured relative to a curved stress-free reference ``q_ref``
+(§1.3); forces and the consistent tangent are analytic (§1.4); quadrature as in §1.5.
+
+Array layout: element arrays are ``(n_elem, 12)``, element matrices ``(n_elem, 12, 12)``,
+quadrature tables ``(n_elem, n_qp, ...)``. Shape-function index ``n = 0..3`` (S1..S4) multiplies
+the 3 coordinates ``q_e[3n:3n+3]``.
+
+All functions are stateless. The hot path, :func:`internal_forces`, is a thin wrapper around a
+numba kernel that loops over elements and quadrature points and writes into caller-owned arrays.
+Residual convention (§0): ``M q̈ + Q_int(q, q̇) − Q_ext = 0`` with ``Q_int = ∂U/∂q`` + damping.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, NamedTuple
+
+import numpy as np
+
+from .._jit import njit
+
+__all__ = [
+    "CableOptions",
+    "CableProperties",
+    "CableRest",
+    "shape_functions",
+    "rest_state",
+    "mass_matrix",
+    "gravity_force",
+    "distributed_force",
+    "point_force_vector",
+    "internal_forces",
+    "strain_energy",
+    "axial_strain_and_curvature",
+]
+
+_BENDINGS = ("vector", "scalar")
+_AXIAL_RULES = ("lobatto3", "gauss5")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CableOptions:
+    """Formulation choices of the ANCF cable (FORMULATION I §1.3, §1.5, §1.6).
+
+    - ``bending="vector"``: A-vec, ``½EI|K − K_ref|²`` (Exudyn); ``"scalar"``: A-scal,
+      ``½EI(|K|_δ − |K_ref|_δ)²`` (objective for curved references).
+    - ``axial_rule``: ``"lobatto3"`` (ξ = 0, ½, 1; free of membrane locking, the default) or
+      ``"gauss5"`` (full integration, as Exudyn/Chrono by default).
+    - ``bending_points``: 2 or 3 Gauss points for the bending term.
+    - ``exudyn_compatible``: Exudyn ObjectANCFCable strains, ``ε_E = |r′| − 1`` with the
+      reference offset ``|r′_ref| − 1``, ``K = r′×r″/|r′|²``, integrated over dx (μ = 1);
+      requires ``bending="vector"``.
+    """
+
+    bending: Literal["vector", "scalar"] = "vector"
+    axial_rule: Literal["lobatto3", "gauss5"] = "lobatto3"
+    bending_points: int = 3
+    exudyn_compatible: bool = False
+
+    def __post_init__(self) -> None:
+        if self.bending not in _BENDINGS:
+            raise ValueError(f"CableOptions.bending must be one of {_BENDINGS} "
+                             f"(got {self.bending!r})")
+        if self.axial_rule not in _AXIAL_RULES:
+            raise ValueError(f"CableOptions.axial_rule must be one of {_AXIAL_RULES} "
+                             f"(got {self.axial_rule!r})")
+        if self.bending_points not in (2, 3) or isinstance(self.bending_points, bool):
+            raise ValueError(f"CableOptions.bending_points must be 2 or 3 "
+                             f"(got {self.bending_points!r})")
+        if self.exudyn_compatible and self.bending != "vector":
+            raise ValueError("CableOptions: exudyn_compatible=True reproduces Exudyn's A-vec "
+                             "bending; use bending='vector' with it (FORMULATION I §1.6)")
+
+
+class CableProperties(NamedTuple):
+    """Section resultants per element; every field has shape ``(n_elem,)``."""
+
+    length: np.ndarray                  #: element reference length L [m]
+    axial_stiffness: np.ndarray         #: EA [N]
+    bending_stiffness: np.ndarray       #: EI [N m²]
+    mass_per_length: np.ndarray         #: ρA [kg/m]
+    axial_damping: np.ndarray           #: d_ε [N s]:  N = EA(ε − ε0) + d_ε ε̇
+    bending_damping: np.ndarray         #: d_K [N m² s]: m = EI(K − K_ref) + d_K K̇
+    reference_axial_strain: np.ndarray  #: ε0 [-]: N = EA(ε − ε0) (ε0 < 0: pretension)
+
+
+class CableRest(NamedTuple):
+    """Reference-configuration data precomputed by :func:`rest_state` (FORMULATION I §1.3, §1.5).
+
+    ``n_ax`` / ``n_b`` are the numbers of axial / bending quadrature points. "Metric" is
+    ``μ = |r′_ref|`` (set to 1 everywhere in the Exudyn-compatible variant).
+    """
+
+    length: np.ndarray           #: (n_elem,) element reference length L
+    q_ref: np.ndarray            #: (n_elem, 12) stress-free reference coordinates
+    axial_xi: np.ndarray         #: (n_ax,) axial quadrature points ξ ∈ [0, 1]
+    axial_weight: np.ndarray     #: (n_elem, n_ax) dx-weights w_k·L
+    axial_metric: np.ndarray     #: (n_elem, n_ax) μ_k (1 for Exudyn)
+    axial_offset: np.ndarray     #: (n_elem, n_ax) ε0, plus |r′_ref| − 1 for Exudyn
+    axial_dS: np.ndarray         #: (n_elem, n_ax, 4) S′_n(ξ_k)
+    bending_xi: np.ndarray       #: (n_b,) bending Gauss points ξ ∈ [0, 1]
+    bending_weight: np.ndarray   #: (n_elem, n_b) ds0-weights w_k·L·μ_k (w_k·L for Exudyn)
+    bending_metric: np.ndarray   #: (n_elem, n_b) μ_k in K = r′×r″/(|r′|² μ) (1 for Exudyn)
+    bending_dS: np.ndarray       #: (n_elem, n_b, 4) S′_n(ξ_k)
+    bending_ddS: np.ndarray      #: (n_elem, n_b, 4) S″_n(ξ_k)
+    rest_curvature: np.ndarray   #: (n_elem, n_b, 3) K_ref
+    rest_curvature_norm: np.ndarray  #: (n_elem, n_b) |K_ref|_δ = sqrt(K_ref·K_ref + δ²)
+    delta_sq: np.ndarray         #: (n_elem,) δ² with δ = 1e-8/L (A-scal regularisation)
+
+
+# ---------------------------------------------------------------------------------------------
+# shape functions and quadrature
+def shape_functions(xi: np.ndarray, length: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Hermite shape functions S1..S4 and their x-derivatives (FORMULATION I §1.1).
+
+    ``xi`` and ``length`` broadcast against each other (e.g. ``(n,)`` with ``(n,)`` for one
+    point per element, or ``xi[None, :]`` with ``L[:, None]`` for a table); each returned array
+    has shape ``broadcast(xi, length).shape + (4,)``: ``S``, ``dS = dS/dx``, ``ddS = d²S/dx²``.
+    """
+    xi, L = np.broadcast_arrays(np.asarray(xi, dtype=float), np.asarray(length, dtype=float))
+    x2 = xi * xi
+    x3 = x2 * xi
+    S = np.stack([1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3,
+                  L * (x3 - x2)], axis=-1)
+    dS = np.stack([(6.0 * x2 - 6.0 * xi) / L, 1.0 - 4.0 * xi + 3.0 * x2, (6.0 * xi - 6.0 * x2) / L,
+                   3.0 * x2 - 2.0 * xi], axis=-1)
+    ddS = np.stack([(12.0 * xi - 6.0) / L**2, (6.0 * xi - 4.0) / L, (6.0 - 12.0 * xi) / L**2,
+                    (6.0 * xi - 2.0) / L], axis=-1)
+    return S, dS, ddS
+
+
+def _gauss01(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss–Legendre points and weights on [0, 1] (weights sum to 1)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
+def _axial_rule(rule: str) -> tuple[np.ndarray, np.ndarray]:
+    """FORMULATION I §1.5: 3-point Lobatto (0, ½, 1; 1/6, 4/6, 1/6) or 5-point Gauss on [0, 1]."""
+    if rule == "lobatto3":
+        return np.array([0.0, 0.5, 1.0]), np.array([1.0, 4.0, 1.0]) / 6.0
+    return _gauss01(5)
+
+
+def _interp(table: np.ndarray, q_e: np.ndarray) -> np.ndarray:
+    """Σ_n table[e, k, n] q_e[e, 3n:3n+3] -> (n_elem, n_qp, 3)."""
+    return np.einsum("ekn,enc->ekc", table, q_e.reshape(q_e.shape[0], 4, 3))
+
+
+def rest_state(q_ref: np.ndarray, props: CableProperties, options: CableOptions) -> CableRest:
+    """Precompute quadrature tables, metric μ = |r′_ref| and rest curvature K_ref (§1.3, §1.5)."""
+    q_ref = np.ascontiguousarray(q_ref, dtype=float)
+    L = np.ascontiguousarray(props.length, dtype=float)
+    if q_ref.ndim != 2 or q_ref.shape[1] != 12 or L.shape != (q_ref.shape[0],):
+        raise ValueError(f"rest_state: q_ref must be (n_elem, 12) and props.length (n_elem,) "
+                         f"(got {q_ref.shape} and {L.shape})")
+    if np.any(L <= 0.0):
+        raise ValueError("rest_state: element lengths must be positive")
+    exu = options.exudyn_compatible
+    eps0 = np.asarray(props.reference_axial_strain, dtype=float)
+
+    xa, wa = _axial_rule(options.axial_rule)
+    _, dSa, _ = shape_functions(xa[None, :], L[:, None])
+    a_ref = _interp(dSa, q_ref)
+    mu_a = np.linalg.norm(a_ref, axis=-1)
+    if np.any(mu_a <= 0.0):
+        raise ValueError("rest_state: reference slope |r'_ref| vanishes at a quadrature point")
+    if exu:
+        axial_metric = np.ones_like(mu_a)
+        axial_offset = eps0[:, None] + (mu_a - 1.0)
+    else:
+        axial_metric = mu_a
+        axial_offset = np.broadcast_to(eps0[:, None], mu_a.shape).copy()
+
+    xb, wb = _gauss01(options.bending_points)
+    _, dSb, ddSb = shape_functions(xb[None, :], L[:, None])
+    a = _interp(dSb, q_ref)
+    b = _interp(ddSb, q_ref)
+    mu_b = np.linalg.norm(a, axis=-1)
+    metric_b = np.ones_like(mu_b) if exu else mu_b
+    K_ref = np.cross(a, b) / (np.einsum("ekc,ekc->ek", a, a) * metric_b)[..., None]
+    delta_sq = (1e-8 / L) ** 2
+    c = np.ascontiguousarray
+    return CableRest(
+        length=L.copy(), q_ref=q_ref.copy(), axial_xi=xa, axial_weight=c(wa[None, :] * L[:, None]),
+        axial_metric=c(axial_metric), axial_offset=c(axial_offset), axial_dS=c(dSa),
+        bending_xi=xb, bending_weight=c(wb[None, :] * L[:, None] * metric_b),
+        bending_metric=c(metric_b), bending_dS=c(dSb), bending_ddS=c(ddSb),
+        rest_curvature=c(K_ref),
+        rest_curvature_norm=c(np.sqrt(np.einsum("ekc,ekc->ek", K_ref, K_ref) + delta_sq[:, None])),
+        delta_sq=delta_sq)
+
+
+# ---------------------------------------------------------------------------------------------
+# mass and external loads (constant, closed form)
+_M4 = np.array([[13 / 35, 11 / 210, 9 / 70, -13 / 420],
+                [11 / 210, 1 / 105, 13 / 420, -1 / 140],
+                [9 / 70, 13 / 420, 13 / 35, -11 / 210],
+                [-13 / 420, -1 / 140, -11 / 210, 1 / 105]])
+#: powers of L multiplying the entries of _M4 (besides ρA·L)
+_M4_POW = np.array([[0, 1, 0, 1], [1, 2, 1, 2], [0, 1, 0, 1], [1, 2, 1, 2]])
+
+
+def mass_matrix(props: CableProperties) -> np.ndarray:
+    """Consistent mass ``∫ρA SᵀS dx = ρA L M4(L) ⊗ I3`` (FORMULATION I §1.2); (n_elem, 12, 12)."""
+    L = np.asarray(props.length, dtype=float)
+    rhoA = np.asarray(props.mass_per_length, dtype=float)
+    M4 = (rhoA * L)[:, None, None] * _M4[None] * L[:, None, None] ** _M4_POW[None]
+    return np.einsum("eij,cd->eicjd", M4, np.eye(3)).reshape(L.shape[0], 12, 12)
+
+
+def distributed_force(props: CableProperties, f: np.ndarray) -> np.ndarray:
+    """Constant load per length f: ``∫Sᵀf dx = [L/2, L²/12, L/2, −L²/12] ⊗ f`` (§1.2); (n_elem, 12).
+
+    ``f`` is ``(3,)`` (same for all elements) or ``(n_elem, 3)``.
+    """
+    L = np.asarray(props.length, dtype=float)
+    f = np.broadcast_to(np.asarray(f, dtype=float), (L.shape[0], 3))
+    s = np.stack([0.5 * L, L * L / 12.0, 0.5 * L, -L * L / 12.0], axis=-1)
+    return (s[:, :, None] * f[:, None, :]).reshape(L.shape[0], 12)
+
+
+def gravity_force(props: CableProperties, g: np.ndarray) -> np.ndarray:
+    """Gravity ``Q_g = ρA [L/2, L²/12, L/2, −L²/12] ⊗ g`` (FORMULATION I §1.2); (n_elem, 12)."""
+    rhoA = np.asarray(props.mass_per_length, dtype=float)
+    return distributed_force(props, rhoA[:, None] * np.asarray(g, dtype=float)[None, :])
+
+
+def point_force_vector(xi: np.ndarray, length: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Point force at ξ: ``Q = S(ξ)ᵀ F`` (FORMULATION I §1.2).
+
+    ``xi``, ``length``: (n,); ``force``: (n, 3); returns (n, 12).
+    """
+    S, _, _ = shape_functions(np.asarray(xi, dtype=float), np.asarray(length, dtype=float))
+    F = np.asarray(force, dtype=float)
+    return (S[:, :, None] * F[:, None, :]).reshape(S.shape[0], 12)
+
+
+# ---------------------------------------------------------------------------------------------
+# internal forces: numba kernel (FORMULATION I §1.4)
+@njit(inline="always")
+def _blend(w, x, e, c):  # noqa: ANN001, ANN202
+    """Σ_n w[n] x[e, 3n + c]: component c of S′q or S″q (or of S′q̇, S″q̇)."""
+    return w[0] * x[e, c] + w[1] * x[e, 3 + c] + w[2] * x[e, 6 + c] + w[3] * x[e, 9 + c]
+
+
+@njit
+def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, damp):  # noqa: ANN001, ANN202, C901, PLR0912, PLR0915
+    """Q_int, ∂Q_int/∂q, ∂Q_int/∂q̇ per element (FORMULATION I §1.4, derivation in the notes).
+
+    Each S′_i has a single non-zero component, so every 12×12 contribution of a quadrature point
+    is Σ over 4×4 node pairs (n, m) of scalar products of S′/S″ values times four 3×3 operators.
+    Bending (with K = f/g, f = a×b, g = μ|a|²): D_n = S′_n B1 + S″_n B2 with
+    B1 = (−b̃ − 2μ K aᵀ)/g, B2 = ã/g; the Hessian contracted with m gives
+    Σ_c m_c ∂²K_c/∂q_i∂q_j = S′_nS′_m X + S″_nS′_m (Y − Z) + S′_nS″_m (Yᵀ + Z) with
+    X = −2μ(p aᵀ + a pᵀ + (m·K) I)/g, Y = −2μ s aᵀ/g, Z = −m̃/g, p = B1ᵀm, s = B2ᵀm; and the
+    Hessian contracted with q̇ (for the damping force's q-dependence) is S′_n E1 + S″_n E2 with
+    E1 = (−ḃ̃ − ġB1 − 2μ(K̇aᵀ + Kȧᵀ))/g, E2 = (ȧ̃ − ġB2)/g, ġ = 2μ a·ȧ.
+    """
+    n_elem = q.shape[0]
+    n_ax = rest.axial_weight.shape[1]
+    n_b = rest.bending_weight.shape[1]
+    EAv = props.axial_stiffness
+    EIv = props.bending_stiffness
+    dAv = props.axial_damping
+    dBv = props.bending_damping
+    a = np.empty(3)
+    b = np.empty(3)
+    ad = np.empty(3)
+    bd = np.empty(3)
+    t = np.empty(3)
+    K = np.empty(3)
+    Kd = np.empty(3)
+    meff = np.empty(3)
+    p = np.empty(3)
+    s = np.empty(3)
+    al = np.empty(3)
+    be = np.empty(3)
+    r1 = np.empty(3)
+    r2 = np.empty(3)
+    ds = np.empty(4)
+    dds = np.empty(4)
+    A3 = np.empty((3, 3))
+    B1 = np.empty((3, 3))
+    B2 = np.empty((3, 3))
+    E1 = np.empty((3, 3))
+    E2 = np.empty((3, 3))
+    P11 = np.empty((3, 3))
+    P12 = np.empty((3, 3))
+    P21 = np.empty((3, 3))
+    P22 = np.empty((3, 3))
+
+    for e in range(n_elem):
+        EA = EAv[e]
+        EI = EIv[e]
+        dA = dAv[e]
+        dB = dBv[e]
+        for i in range(12):
+            force[e, i] = 0.0
+        if want_k:
+            for i in range(12):
+                for j in range(12):
+                    stiff[e, i, j] = 0.0
+        if want_c:
+            for i in range(12):
+                for j in range(12):
+                    damp[e, i, j] = 0.0
+
+        # ---- axial: N = EA(|a|/μ − 1 − ε_off) + d_ε t·ȧ/μ,  Q = W N S′ᵀt
+        for k in range(n_ax):
+            W = rest.axial_weight[e, k]
+            mu = rest.axial_metric[e, k]
+            for n in range(4):
+                ds[n] = rest.axial_dS[e, k, n]
+            for c in range(3):
+                a[c] = _blend(ds, q, e, c)
+                ad[c] = _blend(ds, v, e, c)
+            la = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+            for c in range(3):
+                t[c] = a[c] / la
+            tad = t[0] * ad[0] + t[1] * ad[1] + t[2] * ad[2]
+            eps = la / mu - 1.0
+            N = EA * (eps - rest.axial_offset[e, k]) + dA * tad / mu
+            WN = W * N
+            for n in range(4):
+                for c in range(3):
+                    force[e, 3 * n + c] += WN * ds[n] * t[c]
+            if want_k:
+                # ∂N/∂q = S′ᵀ[(EA/μ) t + (d_ε/(μ|a|)) (I − ttᵀ) ȧ];  ∂t/∂q = (I − ttᵀ)S′/|a|
+                c1 = EA / mu
+                c2 = dA / (mu * la)
+                c3 = N / la
+                for c in range(3):
+                    for d in range(3):
+                        pad = ad[d] - t[d] * tad
+                        A3[c, d] = t[c] * (c1 * t[d] + c2 * pad) - c3 * t[c] * t[d]
+                    A3[c, c] += c3
+                for n in range(4):
+                    for m in range(4):
+                        cw = W * ds[n] * ds[m]
+                        for c in range(3):
+                            for d in range(3):
+                                stiff[e, 3 * n + c, 3 * m + d] += cw * A3[c, d]
+            if want_c:
+                c1 = dA / mu
+                for n in range(4):
+                    for m in range(4):
+                        cw = W * c1 * ds[n] * ds[m]
+                        for c in range(3):
+                            for d in range(3):
+                                damp[e, 3 * n + c, 3 * m + d] += cw * t[c] * t[d]
+
+        # ---- bending
+        for k in range(n_b):
+            W = rest.bending_weight[e, k]
+            mu = rest.bending_metric[e, k]
+            for n in range(4):
+                ds[n] = rest.bending_dS[e, k, n]
+                dds[n] = rest.bending_ddS[e, k, n]
+            for c in range(3):
+                a[c] = _blend(ds, q, e, c)
+                b[c] = _blend(dds, q, e, c)
+                ad[c] = _blend(ds, v, e, c)
+                bd[c] = _blend(dds, v, e, c)
+            g = mu * (a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+            ig = 1.0 / g
+            K[0] = (a[1] * b[2] - a[2] * b[1]) * ig
+            K[1] = (a[2] * b[0] - a[0] * b[2]) * ig
+            K[2] = (a[0] * b[1] - a[1] * b[0]) * ig
+            tm = 2.0 * mu
+            # B1 = (−b̃ − 2μ K aᵀ)/g,  B2 = ã/g
+            for c in range(3):
+                for d in range(3):
+                    B1[c, d] = -tm * K[c] * a[d] * ig
+                    B2[c, d] = 0.0
+            B1[0, 1] += b[2] * ig
+            B1[0, 2] -= b[1] * ig
+            B1[1, 0] -= b[2] * ig
+            B1[1, 2] += b[0] * ig
+            B1[2, 0] += b[1] * ig
+            B1[2, 1] -= b[0] * ig
+            B2[0, 1] = -a[2] * ig
+            B2[0, 2] = a[1] * ig
+            B2[1, 0] = a[2] * ig
+            B2[1, 2] = -a[0] * ig
+            B2[2, 0] = -a[1] * ig
+            B2[2, 1] = a[0] * ig
+            for c in range(3):
+                Kd[c] = (B1[c, 0] * ad[0] + B1[c, 1] * ad[1] + B1[c, 2] * ad[2]
+                         + B2[c, 0] * bd[0] + B2[c, 1] * bd[1] + B2[c, 2] * bd[2])
+            kap = 0.0
+            kapd = 0.0
+            ms = 0.0
+            if scalar:
+                kap = math.sqrt(K[0] * K[0] + K[1] * K[1] + K[2] * K[2] + rest.delta_sq[e])
+                kapd = (K[0] * Kd[0] + K[1] * Kd[1] + K[2] * Kd[2]) / kap
+                ms = EI * (kap - rest.rest_curvature_norm[e, k]) + dB * kapd
+                for c in range(3):
+                    meff[c] = ms / kap * K[c]
+            else:
+                for c in range(3):
+                    meff[c] = EI * (K[c] - rest.rest_curvature[e, k, c]) + dB * Kd[c]
+            for c in range(3):
+                p[c] = B1[0, c] * meff[0] + B1[1, c] * meff[1] + B1[2, c] * meff[2]
+                s[c] = B2[0, c] * meff[0] + B2[1, c] * meff[1] + B2[2, c] * meff[2]
+            for n in range(4):
+                for c in range(3):
+                    force[e, 3 * n + c] += W * (ds[n] * p[c] + dds[n] * s[c])
+
+            if scalar and (want_k or want_c):
+                # k_q = DᵀK/κ has node blocks S′_n α + S″_n β
+                for c in range(3):
+                    al[c] = (B1[0, c] * K[0] + B1[1, c] * K[1] + B1[2, c] * K[2]) / kap
+                    be[c] = (B2[0, c] * K[0] + B2[1, c] * K[1] + B2[2, c] * K[2]) / kap
+
+            if want_k:
+                gd = tm * (a[0] * ad[0] + a[1] * ad[1] + a[2] * ad[2])
+                # E1 = (−ḃ̃ − ġB1 − 2μ(K̇aᵀ + Kȧᵀ))/g,  E2 = (ȧ̃ − ġB2)/g
+                for c in range(3):
+                    for d in range(3):
+                        E1[c, d] = (-gd * B1[c, d] - tm * (Kd[c] * a[d] + K[c] * ad[d])) * ig
+                        E2[c, d] = -gd * B2[c, d] * ig
+                E1[0, 1] += bd[2] * ig
+                E1[0, 2] -= bd[1] * ig
+                E1[1, 0] -= bd[2] * ig
+                E1[1, 2] += bd[0] * ig
+                E1[2, 0] += bd[1] * ig
+                E1[2, 1] -= bd[0] * ig
+                E2[0, 1] -= ad[2] * ig
+                E2[0, 2] += ad[1] * ig
+                E2[1, 0] += ad[2] * ig
+                E2[1, 2] -= ad[0] * ig
+                E2[2, 0] -= ad[1] * ig
+                E2[2, 1] += ad[0] * ig
+                # Hessian of K contracted with m_eff: X, Y, Z
+                mK = meff[0] * K[0] + meff[1] * K[1] + meff[2] * K[2]
+                cx = -tm * ig
+                for c in range(3):
+                    for d in range(3):
+                        P11[c, d] = cx * (p[c] * a[d] + a[c] * p[d])
+                        y_cd = cx * s[c] * a[d]
+                        y_dc = cx * s[d] * a[c]
+                        P21[c, d] = y_cd
+                        P12[c, d] = y_dc
+                        P22[c, d] = 0.0
+                    P11[c, c] += cx * mK
+                # Z = −m̃/g:  P12 += Z, P21 −= Z
+                z01 = meff[2] * ig
+                z02 = -meff[1] * ig
+                z12 = meff[0] * ig
+                P12[0, 1] += z01
+                P12[1, 0] -= z01
+                P12[0, 2] += z02
+                P12[2, 0] -= z02
+                P12[1, 2] += z12
+                P12[2, 1] -= z12
+                P21[0, 1] -= z01
+                P21[1, 0] += z01
+                P21[0, 2] -= z02
+                P21[2, 0] += z02
+                P21[1, 2] -= z12
+                P21[2, 1] += z12
+                if scalar:
+                    # EI k_q k_qᵀ + m_s/κ (DᵀD − k_q k_qᵀ) + d_K k_q (∂κ̇/∂q)ᵀ
+                    c0 = ms / kap
+                    ce = EI - c0
+                    for c in range(3):
+                        # ∂κ̇/∂q node blocks S′_n γ + S″_n η
+                        gam = ((B1[0, c] * Kd[0] + B1[1, c] * Kd[1] + B1[2, c] * Kd[2]
+                                + E1[0, c] * K[0] + E1[1, c] * K[1] + E1[2, c] * K[2]) / kap
+                               - kapd / kap * al[c])
+                        eta = ((B2[0, c] * Kd[0] + B2[1, c] * Kd[1] + B2[2, c] * Kd[2]
+                                + E2[0, c] * K[0] + E2[1, c] * K[1] + E2[2, c] * K[2]) / kap
+                               - kapd / kap * be[c])
+                        r1[c] = ce * al[c] + dB * gam
+                        r2[c] = ce * be[c] + dB * eta
+                    for c in range(3):
+                        for d in range(3):
+                            b11 = B1[0, c] * B1[0, d] + B1[1, c] * B1[1, d] + B1[2, c] * B1[2, d]
+                            b12 = B1[0, c] * B2[0, d] + B1[1, c] * B2[1, d] + B1[2, c] * B2[2, d]
+                            b21 = B2[0, c] * B1[0, d] + B2[1, c] * B1[1, d] + B2[2, c] * B1[2, d]
+                            b22 = B2[0, c] * B2[0, d] + B2[1, c] * B2[1, d] + B2[2, c] * B2[2, d]
+                            P11[c, d] += c0 * b11 + al[c] * r1[d]
+                            P12[c, d] += c0 * b12 + al[c] * r2[d]
+                            P21[c, d] += c0 * b21 + be[c] * r1[d]
+                            P22[c, d] += c0 * b22 + be[c] * r2[d]
+                else:
+                    # EI DᵀD + d_K Dᵀ(∂K̇/∂q)
+                    for c in range(3):
+                        for d in range(3):
+                            b11 = B1[0, c] * B1[0, d] + B1[1, c] * B1[1, d] + B1[2, c] * B1[2, d]
+                            b12 = B1[0, c] * B2[0, d] + B1[1, c] * B2[1, d] + B1[2, c] * B2[2, d]
+                            b21 = B2[0, c] * B1[0, d] + B2[1, c] * B1[1, d] + B2[2, c] * B1[2, d]
+                            b22 = B2[0, c] * B2[0, d] + B2[1, c] * B2[1, d] + B2[2, c] * B2[2, d]
+                            e11 = B1[0, c] * E1[0, d] + B1[1, c] * E1[1, d] + B1[2, c] * E1[2, d]
+                            e12 = B1[0, c] * E2[0, d] + B1[1, c] * E2[1, d] + B1[2, c] * E2[2, d]
+                            e21 = B2[0, c] * E1[0, d] + B2[1, c] * E1[1, d] + B2[2, c] * E1[2, d]
+                            e22 = B2[0, c] * E2[0, d] + B2[1, c] * E2[1, d] + B2[2, c] * E2[2, d]
+                            P11[c, d] += EI * b11 + dB * e11
+                            P12[c, d] += EI * b12 + dB * e12
+                            P21[c, d] += EI * b21 + dB * e21
+                            P22[c, d] += EI * b22 + dB * e22
+                for n in range(4):
+                    for m in range(4):
+                        c11 = W * ds[n] * ds[m]
+                        c12 = W * ds[n] * dds[m]
+                        c21 = W * dds[n] * ds[m]
+                        c22 = W * dds[n] * dds[m]
+                        for c in range(3):
+                            for d in range(3):
+                                stiff[e, 3 * n + c, 3 * m + d] += (
+                                    c11 * P11[c, d] + c12 * P12[c, d]
+                                    + c21 * P21[c, d] + c22 * P22[c, d])
+
+            if want_c:
+                # A-vec: d_K DᵀD;  A-scal: d_K k_q k_qᵀ
+                for c in range(3):
+                    for d in range(3):
+                        if scalar:
+                            P11[c, d] = dB * al[c] * al[d]
+                            P12[c, d] = dB * al[c] * be[d]
+                            P21[c, d] = dB * be[c] * al[d]
+                            P22[c, d] = dB * be[c] * be[d]
+                        else:
+                            P11[c, d] = dB * (B1[0, c] * B1[0, d] + B1[1, c] * B1[1, d]
+                                              + B1[2, c] * B1[2, d])
+                            P12[c, d] = dB * (B1[0, c] * B2[0, d] + B1[1, c] * B2[1, d]
+                                              + B1[2, c] * B2[2, d])
+                            P21[c, d] = dB * (B2[0, c] * B1[0, d] + B2[1, c] * B1[1, d]
+                                              + B2[2, c] * B1[2, d])
+                            P22[c, d] = dB * (B2[0, c] * B2[0, d] + B2[1, c] * B2[1, d]
+                                              + B2[2, c] * B2[2, d])
+                for n in range(4):
+                    for m in range(4):
+                        c11 = W * ds[n] * ds[m]
+                        c12 = W * ds[n] * dds[m]
+                        c21 = W * dds[n] * ds[m]
+                        c22 = W * dds[n] * dds[m]
+                        for c in range(3):
+                            for d in range(3):
+                                damp[e, 3 * n + c, 3 * m + d] += (
+                                    c11 * P11[c, d] + c12 * P12[c, d]
+                                    + c21 * P21[c, d] + c22 * P22[c, d])
+
+
+_NO_MATRIX = np.zeros((0, 12, 12))
+
+
+def internal_forces(q_e: np.ndarray, v_e: np.ndarray, props: CableProperties, rest: CableRest,
+                    options: CableOptions, force_out: np.ndarray,
+                    stiffness_out: np.ndarray | None = None,
+                    damping_out: np.ndarray | None = None) -> None:
+    """Internal force ``Q_int = ∂U/∂q`` + damping and its derivatives (FORMULATION I §1.4).
+
+    ``q_e``, ``v_e``: (n_elem, 12) float64 C-contiguous. Overwrites ``force_out`` (n_elem, 12),
+    and when given ``stiffness_out = ∂Q_int/∂q`` (consistent, including the q-dependence of the
+    damping force) and ``damping_out = ∂Q_int/∂q̇``, both (n_elem, 12, 12). No allocation.
+    """
+    want_k = stiffness_out is not None
+    want_c = damping_out is not None
+    _internal_kernel(q_e, v_e, props, rest, 1 if options.bending == "scalar" else 0,
+                     want_k, want_c, force_out,
+                     stiffness_out if want_k else _NO_MATRIX,
+                     damping_out if want_c else _NO_MATRIX)
+
+
+# ---------------------------------------------------------------------------------------------
+# energy and output (vectorised numpy, independent of the kernel)
+def strain_energy(q_e: np.ndarray, props: CableProperties, rest: CableRest,
+                  options: CableOptions) -> np.ndarray:
+    """Elastic energy per element, ∫½EA(ε − ε_off)² + bending per ds0 (FORMULATION I §1.3).
+
+    Returns (n_elem,); damping does not enter.
+    """
+    q_e = np.asarray(q_e, dtype=float)
+    EA = np.asarray(props.axial_stiffness, dtype=float)
+    EI = np.asarray(props.bending_stiffness, dtype=float)
+    a = _interp(rest.axial_dS, q_e)
+    mu = rest.axial_metric
+    eps = np.linalg.norm(a, axis=-1) / mu - 1.0 - rest.axial_offset
+    U = 0.5 * EA * np.sum(rest.axial_weight * mu * eps * eps, axis=1)
+    a = _interp(rest.bending_dS, q_e)
+    b = _interp(rest.bending_ddS, q_e)
+    K = np.cross(a, b) / (np.einsum("ekc,ekc->ek", a, a) * rest.bending_metric)[..., None]
+    if options.bending == "scalar":
+        kap = np.sqrt(np.einsum("ekc,ekc->ek", K, K) + rest.delta_sq[:, None])
+        dk2 = (kap - rest.rest_curvature_norm) ** 2
+    else:
+        dK = K - rest.rest_curvature
+        dk2 = np.einsum("ekc,ekc->ek", dK, dK)
+    return U + 0.5 * EI * np.sum(rest.bending_weight * dk2, axis=1)
+
+
+def axial_strain_and_curvature(q_e: np.ndarray, rest: CableRest, options: CableOptions,
+                               xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axial strain and curvature vector at ξ (FORMULATION I §1.3), for output.
+
+    Returns ``eps`` (n_elem, m) and ``K`` (n_elem, m, 3). ``eps = |r′|/μ − 1`` (exact) or
+    ``|r′| − |r′_ref|`` (Exudyn-compatible), i.e. the strain relative to the stress-free
+    reference, without ε0; ``K = r′×r″/(|r′|² μ)`` (μ = 1 for Exudyn-compatible).
+    """
+    q_e = np.asarray(q_e, dtype=float)
+    xi = np.atleast_1d(np.asarray(xi, dtype=float))
+    _, dS, ddS = shape_functions(xi[None, :], rest.length[:, None])
+    a = _interp(dS, q_e)
+    b = _interp(ddS, q_e)
+    la = np.linalg.norm(a, axis=-1)
+    mu_ref = np.linalg.norm(_interp(dS, rest.q_ref), axis=-1)
+    if options.exudyn_compatible:
+        eps = la - mu_ref
+        metric = np.ones_like(mu_ref)
+    else:
+        eps = la / mu_ref - 1.0
+        metric = mu_ref
+    K = np.cross(a, b) / (la * la * metric)[..., None]
+    return eps, K

@@ -1,0 +1,325 @@
+"""Rigid body in Cartesian coordinates with Euler parameters (Haug 1989 form; FORMULATION I §5).
+
+Coordinates per body ``q_B = [r (3), p (4)]``: ``r`` is the centre of mass (global), and
+``p = [e0, e1, e2, e3]`` the Euler parameters with ``pᵀp = 1`` (enforced by a constraint,
+:class:`flexmbs.constraints.joints.EulerParameterNormalization`).
+
+Conventions (FORMULATION I §5 / Haug; Part II §0 calls the same matrices G and Ḡ):
+
+- ``E(p) = [−e, ẽ + e0 I]`` (global angular velocity ``ω = 2Eṗ``),
+  ``G(p) = [−e, −ẽ + e0 I]`` (body angular velocity ``ω′ = 2Gṗ``).
+- ``A(p) = E Gᵀ = (e0² − eᵀe) I + 2(e eᵀ + e0 ẽ)``: the *homogeneous quadratic* form. It equals
+  ``(2e0² − 1) I + 2(e eᵀ + e0 ẽ)`` on ``|p| = 1`` and makes ``A(p) s = pᵀ T(s) p`` an exact
+  polynomial identity for any p, so ``∂(As)/∂p = 2 T(s) p`` is Haug's ``B(p, s)`` and
+  ``∂²(As)_k/∂p² = 2 T_k(s)``.
+- Residual convention ``M q̈ + Q_int + Φ_qᵀλ − Q_ext = 0``: :func:`inertial_residual` returns
+  ``M q̈ − Q_v``; :func:`applied_force` / :func:`applied_torque_global` return ``Q_ext`` and its
+  derivative (the assembler subtracts them).
+
+All functions are stateless and batched: a leading axis ``nb`` over bodies (or any ``...``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "skew",
+    "normalize",
+    "rotation_matrix",
+    "e_matrix",
+    "g_matrix",
+    "g_hat",
+    "e_hat",
+    "point_tensor",
+    "point_tensor_contract",
+    "point_jacobian",
+    "quaternion_from_matrix",
+    "quaternion_from_axis_angle",
+    "angular_velocity_global",
+    "angular_velocity_body",
+    "pdot_from_omega_global",
+    "pdot_from_omega_body",
+    "mass_matrix",
+    "inertial_residual",
+    "kinetic_energy",
+    "applied_force",
+    "applied_torque_global",
+    "applied_torque_body",
+]
+
+
+# ---------------------------------------------------------------------------------------------
+# matrix helpers
+def skew(v: np.ndarray) -> np.ndarray:
+    """(...,3) -> (...,3,3) with ``skew(a) @ b = a × b``."""
+    v = np.asarray(v, dtype=float)
+    out = np.zeros(v.shape + (3,))
+    out[..., 0, 1] = -v[..., 2]
+    out[..., 0, 2] = v[..., 1]
+    out[..., 1, 0] = v[..., 2]
+    out[..., 1, 2] = -v[..., 0]
+    out[..., 2, 0] = -v[..., 1]
+    out[..., 2, 1] = v[..., 0]
+    return out
+
+
+def normalize(p: np.ndarray) -> np.ndarray:
+    """Project Euler parameters on the unit sphere, ``p / |p|`` (batched)."""
+    p = np.asarray(p, dtype=float)
+    return p / np.linalg.norm(p, axis=-1, keepdims=True)
+
+
+def rotation_matrix(p: np.ndarray) -> np.ndarray:
+    """FORMULATION I §5, homogeneous form ``A = E Gᵀ = (e0² − eᵀe)I + 2(eeᵀ + e0ẽ)`` (...,3,3)."""
+    p = np.asarray(p, dtype=float)
+    e0 = p[..., 0]
+    e = p[..., 1:]
+    A = 2.0 * (e[..., :, None] * e[..., None, :] + e0[..., None, None] * skew(e))
+    d = e0 * e0 - np.einsum("...i,...i->...", e, e)
+    A[..., 0, 0] += d
+    A[..., 1, 1] += d
+    A[..., 2, 2] += d
+    return A
+
+
+def e_matrix(p: np.ndarray) -> np.ndarray:
+    """Haug 1989, FORMULATION I §5: ``E(p) = [−e, ẽ + e0 I]`` (...,3,4); global ``ω = 2Eṗ``."""
+    p = np.asarray(p, dtype=float)
+    out = np.empty(p.shape[:-1] + (3, 4))
+    out[..., :, 0] = -p[..., 1:]
+    out[..., :, 1:] = skew(p[..., 1:])
+    for i in range(3):
+        out[..., i, i + 1] += p[..., 0]
+    return out
+
+
+def g_matrix(p: np.ndarray) -> np.ndarray:
+    """Haug 1989, FORMULATION I §5: ``G(p) = [−e, −ẽ + e0 I]`` (...,3,4); body ``ω′ = 2Gṗ``."""
+    p = np.asarray(p, dtype=float)
+    out = np.empty(p.shape[:-1] + (3, 4))
+    out[..., :, 0] = -p[..., 1:]
+    out[..., :, 1:] = -skew(p[..., 1:])
+    for i in range(3):
+        out[..., i, i + 1] += p[..., 0]
+    return out
+
+
+def g_hat(y: np.ndarray) -> np.ndarray:
+    """FORMULATION I §5 ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (...,4,4), so that ``G(p)ᵀ y = Ĝ(y) p``."""
+    y = np.asarray(y, dtype=float)
+    out = np.zeros(y.shape[:-1] + (4, 4))
+    out[..., 0, 1:] = -y
+    out[..., 1:, 0] = y
+    out[..., 1:, 1:] = -skew(y)
+    return out
+
+
+def e_hat(y: np.ndarray) -> np.ndarray:
+    """``Ê(y) = [[0, −yᵀ], [y, ỹ]]`` (...,4,4), so that ``E(p)ᵀ y = Ê(y) p``."""
+    y = np.asarray(y, dtype=float)
+    out = np.zeros(y.shape[:-1] + (4, 4))
+    out[..., 0, 1:] = -y
+    out[..., 1:, 0] = y
+    out[..., 1:, 1:] = skew(y)
+    return out
+
+
+def point_tensor(s: np.ndarray) -> np.ndarray:
+    """Symmetric ``T_k(s)`` (...,3,4,4) with ``(A(p)s)_k = pᵀT_k(s)p`` for every p (A homogeneous).
+
+    Derivation [D]: ``As = (e0² − eᵀe) s + 2e(eᵀs) + 2e0 (e × s)``, read off term by term.
+    """
+    s = np.asarray(s, dtype=float)
+    T = np.zeros(s.shape[:-1] + (3, 4, 4))
+    S = skew(s)
+    for k in range(3):
+        sk = s[..., k]
+        T[..., k, 0, 0] = sk
+        for i in range(3):
+            T[..., k, i + 1, i + 1] -= sk
+            # 2 e_k (eᵀ s), split symmetrically
+            T[..., k, k + 1, i + 1] += s[..., i]
+            T[..., k, i + 1, k + 1] += s[..., i]
+            # 2 e0 (e × s)_k = −2 e0 (s̃ e)_k
+            T[..., k, 0, i + 1] = -S[..., k, i]
+            T[..., k, i + 1, 0] = -S[..., k, i]
+    return T
+
+
+def point_tensor_contract(s: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``C(s, w) = Σ_k w_k T_k(s)`` (...,4,4), so that ``wᵀ A(p) s = pᵀ C p``."""
+    return np.einsum("...k,...kij->...ij", np.asarray(w, dtype=float), point_tensor(s))
+
+
+def point_jacobian(p: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Haug's ``B(p, s) = ∂(A(p)s)/∂p = 2 T(s) p`` (...,3,4); equals ``−2A s̃ G + 2(As)pᵀ``."""
+    return 2.0 * np.einsum("...kij,...j->...ki", point_tensor(s), np.asarray(p, dtype=float))
+
+
+def quaternion_from_matrix(A: np.ndarray) -> np.ndarray:
+    """Euler parameters (e0 ≥ 0) of rotation matrices (...,3,3) -> (...,4) (Shepperd 1978)."""
+    A = np.asarray(A, dtype=float)
+    batch = A.shape[:-2]
+    R = A.reshape(-1, 3, 3)
+    n = R.shape[0]
+    tr = np.trace(R, axis1=1, axis2=2)
+    cand = np.stack([tr, R[:, 0, 0], R[:, 1, 1], R[:, 2, 2]], axis=1)
+    which = np.argmax(cand, axis=1)
+    p = np.empty((n, 4))
+    for b in range(n):
+        Rb = R[b]
+        i = which[b]
+        if i == 0:
+            e0 = 0.5 * np.sqrt(1.0 + tr[b])
+            f = 0.25 / e0
+            p[b] = (e0, (Rb[2, 1] - Rb[1, 2]) * f, (Rb[0, 2] - Rb[2, 0]) * f,
+                    (Rb[1, 0] - Rb[0, 1]) * f)
+        else:
+            j, k = (i % 3), ((i + 1) % 3)  # cyclic successors of axis i-1
+            a = i - 1
+            ei = 0.5 * np.sqrt(max(1.0 + 2.0 * Rb[a, a] - tr[b], 0.0))
+            f = 0.25 / ei
+            q = np.empty(4)
+            q[0] = (Rb[k, j] - Rb[j, k]) * f
+            q[1 + a] = ei
+            q[1 + j] = (Rb[a, j] + Rb[j, a]) * f
+            q[1 + k] = (Rb[a, k] + Rb[k, a]) * f
+            p[b] = q
+    p *= np.where(p[:, :1] < 0.0, -1.0, 1.0)
+    return p.reshape(batch + (4,))
+
+
+def quaternion_from_axis_angle(axis: np.ndarray, angle: np.ndarray | float) -> np.ndarray:
+    """``p = [cos(θ/2), sin(θ/2) u]`` for a rotation by θ about unit ``axis`` (...,3) -> (...,4)."""
+    u = np.asarray(axis, dtype=float)
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+    h = 0.5 * np.asarray(angle, dtype=float)
+    return np.concatenate([np.cos(h)[..., None] * np.ones(u.shape[:-1] + (1,)),
+                           np.sin(h)[..., None] * u], axis=-1)
+
+
+# ---------------------------------------------------------------------------------------------
+# kinematics
+def angular_velocity_global(p: np.ndarray, pd: np.ndarray) -> np.ndarray:
+    """Haug 1989, FORMULATION I §5: ``ω = 2 E(p) ṗ`` (global components)."""
+    return 2.0 * np.einsum("...ij,...j->...i", e_matrix(p), pd)
+
+
+def angular_velocity_body(p: np.ndarray, pd: np.ndarray) -> np.ndarray:
+    """Haug 1989, FORMULATION I §5: ``ω′ = 2 G(p) ṗ`` (body components)."""
+    return 2.0 * np.einsum("...ij,...j->...i", g_matrix(p), pd)
+
+
+def pdot_from_omega_global(p: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``ṗ = ½ Eᵀ ω`` (satisfies ``pᵀṗ = 0``)."""
+    return 0.5 * np.einsum("...ji,...j->...i", e_matrix(p), w)
+
+
+def pdot_from_omega_body(p: np.ndarray, w_body: np.ndarray) -> np.ndarray:
+    """``ṗ = ½ Gᵀ ω′`` (satisfies ``pᵀṗ = 0``)."""
+    return 0.5 * np.einsum("...ji,...j->...i", g_matrix(p), w_body)
+
+
+# ---------------------------------------------------------------------------------------------
+# inertia
+def _gjg(inertia: np.ndarray, Ga: np.ndarray, Gb: np.ndarray) -> np.ndarray:
+    """``Gaᵀ J′ Gb`` batched (nb,4,4)."""
+    return np.einsum("bki,bkl,blj->bij", Ga, inertia, Gb)
+
+
+def mass_matrix(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """FORMULATION I §5: ``M = diag(m I3, 4 GᵀJ′G)`` (nb,7,7); singular along p (see Φ^p)."""
+    mass = np.asarray(mass, dtype=float)
+    nb = mass.shape[0]
+    M = np.zeros((nb, 7, 7))
+    for i in range(3):
+        M[:, i, i] = mass
+    G = g_matrix(p)
+    M[:, 3:, 3:] = 4.0 * _gjg(inertia, G, G)
+    return M
+
+
+def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: np.ndarray,
+                      qdd: np.ndarray, out_r: np.ndarray, out_dq: np.ndarray,
+                      out_dv: np.ndarray) -> None:
+    """FORMULATION I §5: ``r = [m r̈ ; 4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p]`` (= M q̈ − Q_v), Ġ = G(ṗ).
+
+    Writes (overwrites) ``out_r`` (nb,7), ``out_dq = ∂r/∂q`` (nb,7,7, only the p-p block is
+    nonzero) and ``out_dv = ∂r/∂q̇`` (nb,7,7, p-p block). ``∂r/∂q̈`` is :func:`mass_matrix`.
+    Jacobians use the Ĝ identities of §5:
+    ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``, ``∂(8ĠᵀJ′Ġp)/∂p = 8ĠᵀJ′Ġ``,
+    ``∂(8ĠᵀJ′Ġp)/∂ṗ = 8[Ĝ(J′Ġp) − ĠᵀJ′G]``.
+    """
+    mass = np.asarray(mass, dtype=float)
+    pdd = qdd[:, 3:]
+    G = g_matrix(p)
+    Gd = g_matrix(pd)
+    Gpdd = g_matrix(pdd)
+    GJG = _gjg(inertia, G, G)
+    GdJGd = _gjg(inertia, Gd, Gd)
+    JGpdd = np.einsum("bij,bjk,bk->bi", inertia, G, pdd)
+    Gd_p = np.einsum("bij,bj->bi", Gd, p)              # = −Gṗ = −ω′/2
+    JGd_p = np.einsum("bij,bj->bi", inertia, Gd_p)
+
+    out_r[:, :3] = mass[:, None] * qdd[:, :3]
+    out_r[:, 3:] = (4.0 * np.einsum("bij,bj->bi", GJG, pdd)
+                    - 8.0 * np.einsum("bji,bj->bi", Gd, JGd_p))
+
+    out_dq.fill(0.0)
+    out_dq[:, 3:, 3:] = 4.0 * (g_hat(JGpdd) - _gjg(inertia, G, Gpdd)) - 8.0 * GdJGd
+    out_dv.fill(0.0)
+    out_dv[:, 3:, 3:] = -8.0 * (g_hat(JGd_p) - _gjg(inertia, Gd, G))
+
+
+def kinetic_energy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray,
+                   v: np.ndarray) -> np.ndarray:
+    """Haug 1989, FORMULATION I §5: ``T = ½ m ṙᵀṙ + 2 ṗᵀGᵀJ′Gṗ`` (nb,)."""
+    v = np.asarray(v, dtype=float)
+    wb = np.einsum("bij,bj->bi", g_matrix(p), v[:, 3:])       # = ω′/2
+    return (0.5 * np.asarray(mass, dtype=float) * np.einsum("bi,bi->b", v[:, :3], v[:, :3])
+            + 2.0 * np.einsum("bi,bij,bj->b", wb, inertia, wb))
+
+
+# ---------------------------------------------------------------------------------------------
+# applied loads (Q_ext; forces and torques fixed in the global frame)
+def applied_force(p: np.ndarray, s: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """FORMULATION I §5, force F (global) at body point s′: ``Q_r = F``, ``Q_p = BᵀF = 2C(s′,F)p``.
+
+    ``B = ∂(As′)/∂p`` of the homogeneous A, so ``Q·δq = F·δx_P`` holds exactly to first order
+    for every δq (not only tangent ones); it differs from ``2Gᵀ(s′ × AᵀF)`` by a multiple of p.
+    Returns ``Q`` (nb,7) and ``dQ_dq`` (nb,7,7) with p-p block ``2 C(s′, F)`` (symmetric).
+    """
+    F = np.asarray(F, dtype=float)
+    C = point_tensor_contract(s, F)
+    nb = F.shape[0]
+    Q = np.empty((nb, 7))
+    Q[:, :3] = F
+    Q[:, 3:] = 2.0 * np.einsum("bij,bj->bi", C, p)
+    dQ = np.zeros((nb, 7, 7))
+    dQ[:, 3:, 3:] = 2.0 * C
+    return Q, dQ
+
+
+def applied_torque_global(p: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Global torque n: ``Q_p = 2Eᵀn = 2Ê(n)p`` (FORMULATION I §5); returns (Q, dQ_dq)."""
+    n = np.asarray(n, dtype=float)
+    Eh = e_hat(n)
+    nb = n.shape[0]
+    Q = np.zeros((nb, 7))
+    Q[:, 3:] = 2.0 * np.einsum("bij,bj->bi", Eh, p)
+    dQ = np.zeros((nb, 7, 7))
+    dQ[:, 3:, 3:] = 2.0 * Eh
+    return Q, dQ
+
+
+def applied_torque_body(p: np.ndarray, n_body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Body-fixed torque n′: ``Q_p = 2Gᵀn′ = 2Ĝ(n′)p`` (FORMULATION I §5); returns (Q, dQ_dq)."""
+    n_body = np.asarray(n_body, dtype=float)
+    Gh = g_hat(n_body)
+    nb = n_body.shape[0]
+    Q = np.zeros((nb, 7))
+    Q[:, 3:] = 2.0 * np.einsum("bij,bj->bi", Gh, p)
+    dQ = np.zeros((nb, 7, 7))
+    dQ[:, 3:, 3:] = 2.0 * Gh
+    return Q, dQ

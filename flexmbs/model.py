@@ -1,0 +1,511 @@
+"""Model: a plain container of beams, rigid bodies, constraints and loads.
+
+The model holds no solver state and no DOF numbering: :class:`flexmbs.assembly.Assembly`
+derives the DOF map from it. Objects are identified by name; every name is unique per kind.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .elements.ancf_cable import CableOptions
+from .errors import ModelError
+from .geometry.curves import Centerline
+from .loads import TimeFunction, as_time_function
+from .sections import BeamStiffness, CircularSection, Material
+
+ArrayLike3 = Sequence[float] | np.ndarray
+
+
+def _vec3(x: ArrayLike3, what: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ModelError(f"{what} must be 3 finite numbers (got {x!r})")
+    return a
+
+
+def _unit(x: ArrayLike3, what: str) -> np.ndarray:
+    a = _vec3(x, what)
+    n = np.linalg.norm(a)
+    if n == 0:
+        raise ModelError(f"{what} must not be the zero vector")
+    return a / n
+
+
+def quaternion_from_rotation(R: np.ndarray) -> np.ndarray:
+    """Euler parameters [e0, e1, e2, e3] (e0 >= 0) of a rotation matrix (Shepperd's method)."""
+    R = np.asarray(R, float)
+    tr = np.trace(R)
+    cands = np.array([tr, R[0, 0], R[1, 1], R[2, 2]])
+    i = int(np.argmax(cands))
+    if i == 0:
+        e0 = 0.5 * np.sqrt(1 + tr)
+        p = [e0, (R[2, 1] - R[1, 2]) / (4 * e0), (R[0, 2] - R[2, 0]) / (4 * e0),
+             (R[1, 0] - R[0, 1]) / (4 * e0)]
+    elif i == 1:
+        e1 = 0.5 * np.sqrt(1 + 2 * R[0, 0] - tr)
+        p = [(R[2, 1] - R[1, 2]) / (4 * e1), e1, (R[0, 1] + R[1, 0]) / (4 * e1),
+             (R[0, 2] + R[2, 0]) / (4 * e1)]
+    elif i == 2:
+        e2 = 0.5 * np.sqrt(1 + 2 * R[1, 1] - tr)
+        p = [(R[0, 2] - R[2, 0]) / (4 * e2), (R[0, 1] + R[1, 0]) / (4 * e2), e2,
+             (R[1, 2] + R[2, 1]) / (4 * e2)]
+    else:
+        e3 = 0.5 * np.sqrt(1 + 2 * R[2, 2] - tr)
+        p = [(R[1, 0] - R[0, 1]) / (4 * e3), (R[0, 2] + R[2, 0]) / (4 * e3),
+             (R[1, 2] + R[2, 1]) / (4 * e3), e3]
+    p = np.asarray(p)
+    if p[0] < 0:
+        p = -p
+    return p / np.linalg.norm(p)
+
+
+def rotation_from_quaternion(p: ArrayLike3) -> np.ndarray:
+    e0, e1, e2, e3 = np.asarray(p, float)
+    e = np.array([e1, e2, e3])
+    et = np.array([[0, -e3, e2], [e3, 0, -e1], [-e2, e1, 0]])
+    return (2 * e0 * e0 - 1) * np.eye(3) + 2 * (np.outer(e, e) + e0 * et)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Position and orientation (rotation matrix, columns = body axes in global components)."""
+
+    position: np.ndarray
+    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        return quaternion_from_rotation(self.rotation)
+
+    def shifted(self, offset: ArrayLike3, *, local: bool = False) -> Pose:
+        """Pose moved by ``offset`` (global components, or body components with ``local=True``)."""
+        d = _vec3(offset, "offset")
+        if local:
+            d = self.rotation @ d
+        return Pose(self.position + d, self.rotation)
+
+    @staticmethod
+    def from_quaternion(position: ArrayLike3, quaternion: ArrayLike3) -> Pose:
+        q = np.asarray(quaternion, float)
+        if q.shape != (4,) or not np.linalg.norm(q) > 0:
+            raise ModelError(f"quaternion must be 4 numbers [w, x, y, z], not zero (got {quaternion!r})")
+        return Pose(_vec3(position, "position"), rotation_from_quaternion(q / np.linalg.norm(q)))
+
+
+class Ground:
+    """The inertial frame (no coordinates)."""
+
+    name = "ground"
+
+    def __repr__(self) -> str:
+        return "GROUND"
+
+
+GROUND = Ground()
+
+
+@dataclass(frozen=True, eq=False)
+class Node:
+    beam: Beam
+    index: int
+
+    @property
+    def name(self) -> str:
+        return f"{self.beam.name}.node[{self.index}]"
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.beam.centerline.points[self.index]
+
+    @property
+    def tangent(self) -> np.ndarray:
+        return self.beam.centerline.tangents[self.index]
+
+
+class Beam:
+    """An ANCF cable beam (12 DOF per element) on a stress-free reference ``centerline``."""
+
+    def __init__(self, name: str, centerline: Centerline, stiffness: BeamStiffness, *,
+                 options: CableOptions, damping: float, reference_axial_strain: float) -> None:
+        self.name = name
+        self.centerline = centerline
+        self.stiffness = stiffness
+        self.options = options
+        self.damping = float(damping)
+        self.reference_axial_strain = float(reference_axial_strain)
+
+    @property
+    def n_elem(self) -> int:
+        return int(self.centerline.n_elem)
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.centerline.n_nodes)
+
+    @property
+    def closed(self) -> bool:
+        return bool(self.centerline.closed)
+
+    @property
+    def length(self) -> float:
+        return float(np.sum(self.centerline.lengths))
+
+    @property
+    def radius(self) -> float | None:
+        return self.stiffness.radius
+
+    def node(self, index: int | Literal["first", "last"]) -> Node:
+        if index == "first":
+            index = 0
+        elif index == "last":
+            index = self.n_nodes - 1
+        if not isinstance(index, (int, np.integer)) or not -self.n_nodes <= index < self.n_nodes:
+            raise ModelError(
+                f"beam '{self.name}' has nodes 0..{self.n_nodes - 1}; node {index!r} does not exist"
+            )
+        return Node(self, int(index) % self.n_nodes)
+
+    @property
+    def first_node(self) -> Node:
+        return self.node(0)
+
+    @property
+    def last_node(self) -> Node:
+        return self.node(self.n_nodes - 1)
+
+    @property
+    def connectivity(self) -> np.ndarray:
+        """(n_elem, 2) node indices of each element."""
+        i = np.arange(self.n_elem)
+        return np.stack([i, (i + 1) % self.n_nodes], axis=1)
+
+    def locate(self, s: float) -> tuple[int, float]:
+        """Element index and local xi in [0, 1] of reference arc length ``s`` from the first node."""
+        if not -1e-12 * self.length <= s <= self.length * (1 + 1e-12):
+            raise ModelError(f"s = {s} is outside beam '{self.name}' (0 <= s <= {self.length:.6g})")
+        return self.centerline.locate(min(max(s, 0.0), self.length))
+
+    def frame_at(self, s: float, *, up: ArrayLike3 | None = None) -> Pose:
+        """Reference pose at arc length ``s``: x axis along the tangent, y/z completing a frame.
+
+        ``up`` (optional) fixes the body z axis direction (projected normal to the tangent).
+        """
+        self.locate(s)
+        pos, t = self.centerline.frame_at(s)
+        t = t / np.linalg.norm(t)
+        if up is None:
+            up = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        z = np.asarray(up, float) - np.dot(up, t) * t
+        if np.linalg.norm(z) < 1e-9:
+            raise ModelError("frame_at: 'up' is parallel to the beam tangent")
+        z /= np.linalg.norm(z)
+        y = np.cross(z, t)
+        return Pose(np.asarray(pos, float), np.column_stack([t, y, z]))
+
+    def __repr__(self) -> str:
+        return f"Beam({self.name!r}, elements={self.n_elem}, length={self.length:.6g})"
+
+
+class RigidBody:
+    """A rigid body in Cartesian coordinates with Euler parameters (Haug 1989)."""
+
+    def __init__(self, name: str, mass: float, inertia: np.ndarray, pose: Pose,
+                 velocity: np.ndarray, angular_velocity: np.ndarray) -> None:
+        self.name = name
+        self.mass = float(mass)
+        self.inertia = inertia
+        self.pose = pose
+        self.velocity = velocity
+        self.angular_velocity = angular_velocity
+
+    def __repr__(self) -> str:
+        return f"RigidBody({self.name!r}, mass={self.mass:.6g})"
+
+
+Target = Node | RigidBody | Ground
+
+
+@dataclass(frozen=True)
+class ConstraintSpec:
+    """What the user asked for; the assembly turns it into equations with DOF indices."""
+
+    kind: str
+    name: str
+    a: Target
+    b: Target = GROUND
+    point_a: np.ndarray | None = None   # body frame of a (rigid) / global (ground)
+    point_b: np.ndarray | None = None
+    frame_a: np.ndarray | None = None   # joint frame, columns in body coordinates of a
+    frame_b: np.ndarray | None = None
+    translation: tuple[int, int, int] = (1, 1, 1)
+    rotation: tuple[int, int, int] = (0, 0, 0)
+    components: tuple[int, ...] = ()
+    function: TimeFunction | None = None
+
+
+@dataclass(frozen=True)
+class LoadSpec:
+    kind: Literal["point", "distributed", "torque"]
+    name: str
+    target: Node | RigidBody | Beam | tuple[Beam, float]
+    force: np.ndarray
+    moment: np.ndarray | None
+    point: np.ndarray | None          # body-frame point for rigid-body point loads
+    function: TimeFunction
+
+
+class Model:
+    """Container of the mechanical system. See DESIGN.md "Python API"."""
+
+    def __init__(self, *, gravity: ArrayLike3 = (0.0, 0.0, 0.0), name: str = "model") -> None:
+        self.name = name
+        self.gravity = _vec3(gravity, "gravity")
+        self.beams: list[Beam] = []
+        self.bodies: list[RigidBody] = []
+        self.constraints: list[ConstraintSpec] = []
+        self.loads: list[LoadSpec] = []
+        self.interactions: list[object] = []
+        self._names: set[str] = set()
+
+    # ------------------------------------------------------------------ naming
+    def _unique(self, name: str | None, prefix: str) -> str:
+        if name is None:
+            i = 1
+            while f"{prefix}{i}" in self._names:
+                i += 1
+            name = f"{prefix}{i}"
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"name must be a non-empty string (got {name!r})")
+        if name in self._names:
+            raise ModelError(f"the name '{name}' is already used in this model; names must be unique")
+        self._names.add(name)
+        return name
+
+    def beam(self, name: str) -> Beam:
+        for b in self.beams:
+            if b.name == name:
+                return b
+        raise ModelError(f"no beam named '{name}' (beams: {[b.name for b in self.beams]})")
+
+    def body(self, name: str) -> RigidBody:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise ModelError(f"no rigid body named '{name}' (bodies: {[b.name for b in self.bodies]})")
+
+    # ------------------------------------------------------------------ beams and bodies
+    def add_beam(self, centerline: Centerline, *, section: CircularSection | BeamStiffness,
+                 material: Material | None = None, name: str | None = None,
+                 options: CableOptions | None = None, damping: float = 0.0,
+                 reference_axial_strain: float = 0.0, elements: int | None = None) -> Beam:
+        """Add an ANCF cable on ``centerline`` (stress-free reference).
+
+        ``section`` is a :class:`CircularSection` (with ``material``) or explicit
+        :class:`BeamStiffness`. ``damping`` is stiffness-proportional [s]: axial and bending
+        damping coefficients are ``damping*EA`` and ``damping*EI``. ``reference_axial_strain``
+        eps0 gives the normal force ``N = EA (eps - eps0)`` (eps0 < 0: pretension).
+        ``elements`` resamples the centreline to that many equal elements.
+        """
+        if not isinstance(centerline, Centerline):
+            raise ModelError("add_beam: centerline must be a flexmbs Centerline (use fm.line, "
+                             "fm.arc, fm.polyline or fm.read_curve)")
+        if elements is not None and elements != centerline.n_elem:
+            from .geometry.curves import polyline
+
+            pts = centerline.points
+            tans = centerline.tangents
+            centerline = polyline(pts, tans, closed=centerline.closed, elements=int(elements))
+        if isinstance(section, CircularSection):
+            if material is None:
+                raise ModelError("add_beam: a CircularSection needs a material=Material(E=..., rho=...)")
+            stiffness = BeamStiffness.from_section(section, material)
+        elif isinstance(section, BeamStiffness):
+            stiffness = section
+        else:
+            raise ModelError("add_beam: section must be CircularSection or BeamStiffness")
+        if damping < 0:
+            raise ModelError(f"add_beam: damping must be >= 0 (got {damping})")
+        beam = Beam(self._unique(name, "beam"), centerline, stiffness,
+                    options=options or CableOptions(), damping=damping,
+                    reference_axial_strain=reference_axial_strain)
+        self.beams.append(beam)
+        return beam
+
+    def add_rigid_body(self, *, mass: float, inertia: Sequence[float] | np.ndarray,
+                       pose: Pose | None = None, position: ArrayLike3 = (0.0, 0.0, 0.0),
+                       quaternion: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
+                       velocity: ArrayLike3 = (0.0, 0.0, 0.0),
+                       angular_velocity: ArrayLike3 = (0.0, 0.0, 0.0),
+                       name: str | None = None) -> RigidBody:
+        """Add a rigid body; ``inertia`` = principal moments (3) or a 3x3 tensor, body frame,
+        about the centre of mass; ``angular_velocity`` in global components."""
+        if not mass > 0:
+            raise ModelError(f"add_rigid_body: mass must be > 0 (got {mass})")
+        J = np.asarray(inertia, float)
+        if J.shape == (3,):
+            J = np.diag(J)
+        if J.shape != (3, 3) or not np.allclose(J, J.T, rtol=1e-10, atol=1e-14 * np.abs(J).max()):
+            raise ModelError("add_rigid_body: inertia must be 3 principal moments or a symmetric 3x3")
+        ev = np.linalg.eigvalsh(J)
+        if ev.min() <= 0:
+            raise ModelError(f"add_rigid_body: inertia must be positive definite (eigenvalues {ev})")
+        if pose is None:
+            pose = Pose.from_quaternion(position, quaternion)
+        body = RigidBody(self._unique(name, "body"), mass, J, pose,
+                         _vec3(velocity, "velocity"), _vec3(angular_velocity, "angular_velocity"))
+        self.bodies.append(body)
+        return body
+
+    # ------------------------------------------------------------------ constraints
+    def _add_constraint(self, spec: ConstraintSpec) -> ConstraintSpec:
+        self.constraints.append(spec)
+        return spec
+
+    def clamp(self, node: Node, *, name: str | None = None) -> ConstraintSpec:
+        """Fix the node position and the transverse components of its slope (not the axial one)."""
+        self._check_node(node, "clamp")
+        return self._add_constraint(ConstraintSpec("clamp", self._unique(name, "clamp"), node))
+
+    def pin(self, node: Node, *, name: str | None = None) -> ConstraintSpec:
+        """Fix the node position (spherical hinge to ground)."""
+        self._check_node(node, "pin")
+        return self._add_constraint(ConstraintSpec("pin", self._unique(name, "pin"), node))
+
+    def prescribe(self, target: Node | RigidBody, components: Sequence[int], function=None, *,
+                  name: str | None = None) -> ConstraintSpec:
+        """Prescribe coordinates: ``q_i(t) = q_i(0) + f(t)`` for the listed local coordinate
+        indices (node: 0-2 position, 3-5 slope; body: 0-2 position, 3-6 Euler parameters)."""
+        n = 6 if isinstance(target, Node) else 7
+        comps = tuple(int(c) for c in components)
+        if not comps or any(not 0 <= c < n for c in comps):
+            raise ModelError(f"prescribe: components must be in 0..{n - 1} (got {components!r})")
+        return self._add_constraint(ConstraintSpec(
+            "prescribed", self._unique(name, "prescribed"), target, components=comps,
+            function=as_time_function(function if function is not None else 0.0)))
+
+    def fix_body(self, body: RigidBody, *, name: str | None = None) -> ConstraintSpec:
+        self._check_body(body, "fix_body")
+        return self.joint(body, GROUND, point=body.pose.position, translation=(1, 1, 1),
+                          rotation=(1, 1, 1), name=name, kind="fix_body")
+
+    def spherical(self, a: RigidBody | Node, b: RigidBody | Node | Ground = GROUND, *,
+                  point: ArrayLike3 | None = None, name: str | None = None) -> ConstraintSpec:
+        """Spherical joint at global ``point`` (default: the position of ``a``) between a and b."""
+        if point is None:
+            point = a.position if isinstance(a, Node) else a.pose.position
+        return self.joint(a, b, point=point, translation=(1, 1, 1), rotation=(0, 0, 0),
+                          name=name, kind="spherical")
+
+    def revolute(self, a: RigidBody, b: RigidBody | Ground = GROUND, *, point: ArrayLike3,
+                 axis: ArrayLike3, name: str | None = None) -> ConstraintSpec:
+        """Revolute joint about global ``axis`` through global ``point`` (initial configuration)."""
+        return self.joint(a, b, point=point, axis=axis, translation=(1, 1, 1), rotation=(0, 1, 1),
+                          name=name, kind="revolute")
+
+    def prismatic(self, a: RigidBody, b: RigidBody | Ground = GROUND, *, point: ArrayLike3,
+                  axis: ArrayLike3, name: str | None = None) -> ConstraintSpec:
+        """Prismatic joint sliding along global ``axis`` (initial configuration)."""
+        return self.joint(a, b, point=point, axis=axis, translation=(0, 1, 1), rotation=(1, 1, 1),
+                          name=name, kind="prismatic")
+
+    def rigid(self, node: Node, body: RigidBody | Ground, *, name: str | None = None) -> ConstraintSpec:
+        """Rigid connection of a beam node (position and slope direction) to a body or ground."""
+        self._check_node(node, "rigid")
+        return self._add_constraint(ConstraintSpec("rigid", self._unique(name, "rigid"), node, body))
+
+    def joint(self, a: RigidBody | Node, b: RigidBody | Node | Ground = GROUND, *, point: ArrayLike3,
+              axis: ArrayLike3 | None = None, frame: np.ndarray | None = None,
+              translation: Sequence[int] = (1, 1, 1), rotation: Sequence[int] = (0, 0, 0),
+              name: str | None = None, kind: str = "joint") -> ConstraintSpec:
+        """Generic joint: lock the relative translations/rotations selected by the masks, in a
+        joint frame at global ``point`` with x axis ``axis`` (or a full 3x3 ``frame``)."""
+        tr = tuple(int(bool(x)) for x in translation)
+        ro = tuple(int(bool(x)) for x in rotation)
+        if len(tr) != 3 or len(ro) != 3 or sum(tr) + sum(ro) == 0:
+            raise ModelError(f"{kind}: translation and rotation masks need 3 entries and at least one 1")
+        if isinstance(a, Ground):
+            raise ModelError(f"{kind}: the first object must be a body or a beam node, not ground")
+        if isinstance(a, Node) and isinstance(b, Node):
+            raise ModelError(f"{kind}: node-to-node joints are not supported; connect nodes to a body")
+        if isinstance(b, Node):
+            a, b = b, a
+        if isinstance(a, Node) and sum(ro) > 0:
+            raise ModelError(f"{kind}: a beam node has no rotation frame; use model.rigid(node, body) "
+                             "for a rigid connection or only translation constraints")
+        x = _vec3(point, f"{kind}: point")
+        if frame is None:
+            ex = _unit(axis, f"{kind}: axis") if axis is not None else np.array([1.0, 0.0, 0.0])
+            helper = np.array([0.0, 0.0, 1.0]) if abs(ex[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            ey = np.cross(helper, ex)
+            ey /= np.linalg.norm(ey)
+            frame = np.column_stack([ex, ey, np.cross(ex, ey)])
+        frame = np.asarray(frame, float)
+        if frame.shape != (3, 3) or not np.allclose(frame.T @ frame, np.eye(3), atol=1e-9):
+            raise ModelError(f"{kind}: frame must be a 3x3 rotation matrix")
+
+        def local(obj: Target) -> tuple[np.ndarray, np.ndarray]:
+            if isinstance(obj, RigidBody):
+                R = obj.pose.rotation
+                return R.T @ (x - obj.pose.position), R.T @ frame
+            return x.copy(), frame.copy()
+
+        for obj in (a, b):
+            if isinstance(obj, RigidBody):
+                self._check_body(obj, kind)
+            elif isinstance(obj, Node):
+                self._check_node(obj, kind)
+        pa, fa = local(a)
+        pb, fb = local(b)
+        return self._add_constraint(ConstraintSpec(kind, self._unique(name, kind), a, b, pa, pb, fa, fb,
+                                                   translation=tr, rotation=ro))
+
+    # ------------------------------------------------------------------ loads
+    def add_point_load(self, target: Node | RigidBody | tuple[Beam, float], force: ArrayLike3 = (0, 0, 0),
+                       *, moment: ArrayLike3 | None = None, point: ArrayLike3 = (0.0, 0.0, 0.0),
+                       function=None, name: str | None = None) -> LoadSpec:
+        """Force (global, fixed direction) on a node, at arc length ``(beam, s)``, or on a body
+        at body-frame ``point``; optional ``moment`` (global). Scaled by ``function(t)``."""
+        F = _vec3(force, "force")
+        M = None if moment is None else _vec3(moment, "moment")
+        if isinstance(target, tuple):
+            beam, s = target
+            beam.locate(float(s))
+        elif isinstance(target, Node):
+            self._check_node(target, "add_point_load")
+        elif isinstance(target, RigidBody):
+            self._check_body(target, "add_point_load")
+        else:
+            raise ModelError("add_point_load: target must be a Node, a RigidBody or (beam, s)")
+        spec = LoadSpec("point", self._unique(name, "load"), target, F, M,
+                        _vec3(point, "point"), as_time_function(function))
+        self.loads.append(spec)
+        return spec
+
+    def add_distributed_load(self, beam: Beam, force_per_length: ArrayLike3, *, function=None,
+                             name: str | None = None) -> LoadSpec:
+        """Constant force per unit reference length on a whole beam, scaled by ``function(t)``."""
+        if beam not in self.beams:
+            raise ModelError("add_distributed_load: the beam is not part of this model")
+        spec = LoadSpec("distributed", self._unique(name, "load"), beam,
+                        _vec3(force_per_length, "force_per_length"), None, None,
+                        as_time_function(function))
+        self.loads.append(spec)
+        return spec
+
+    # ------------------------------------------------------------------ checks
+    def _check_node(self, node: object, what: str) -> None:
+        if not isinstance(node, Node) or node.beam not in self.beams:
+            raise ModelError(f"{what}: expected a node of a beam of this model (got {node!r})")
+
+    def _check_body(self, body: object, what: str) -> None:
+        if not isinstance(body, RigidBody) or body not in self.bodies:
+            raise ModelError(f"{what}: expected a rigid body of this model (got {body!r})")
+
+    def __repr__(self) -> str:
+        return (f"Model({self.name!r}: {len(self.beams)} beams, {len(self.bodies)} bodies, "
+                f"{len(self.constraints)} constraints, {len(self.loads)} loads)")

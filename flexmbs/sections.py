@@ -1,0 +1,82 @@
+"""Cross-section and material data of beams."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .errors import ModelError
+
+
+@dataclass(frozen=True, kw_only=True)
+class Material:
+    """Linear elastic isotropic material (SI units)."""
+
+    E: float
+    rho: float
+    nu: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not self.E > 0:
+            raise ModelError(f"Material: Young's modulus E must be > 0 (got {self.E})")
+        if not self.rho >= 0:
+            raise ModelError(f"Material: density rho must be >= 0 (got {self.rho})")
+        if not -1.0 < self.nu < 0.5:
+            raise ModelError(f"Material: Poisson ratio nu must be in (-1, 0.5) (got {self.nu})")
+
+    @property
+    def G(self) -> float:
+        return self.E / (2.0 * (1.0 + self.nu))
+
+
+@dataclass(frozen=True)
+class CircularSection:
+    """Solid circular cross-section of radius ``radius``."""
+
+    radius: float
+
+    def __post_init__(self) -> None:
+        if not self.radius > 0:
+            raise ModelError(f"CircularSection: radius must be > 0 (got {self.radius})")
+
+    @property
+    def area(self) -> float:
+        return math.pi * self.radius**2
+
+    @property
+    def second_moment(self) -> float:
+        return math.pi * self.radius**4 / 4.0
+
+    @property
+    def polar_moment(self) -> float:
+        return math.pi * self.radius**4 / 2.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class BeamStiffness:
+    """Beam section resultants given directly: EA [N], EI [N m^2], rho A [kg/m] (optional GJ, radius)."""
+
+    axial_stiffness: float
+    bending_stiffness: float
+    mass_per_length: float
+    torsional_stiffness: float | None = None
+    radius: float | None = None  # contact/output radius, if the section is circular
+
+    def __post_init__(self) -> None:
+        for key in ("axial_stiffness", "bending_stiffness"):
+            if not getattr(self, key) > 0:
+                raise ModelError(f"BeamStiffness: {key} must be > 0 (got {getattr(self, key)})")
+        if not self.mass_per_length >= 0:
+            raise ModelError(
+                f"BeamStiffness: mass_per_length must be >= 0 (got {self.mass_per_length})"
+            )
+
+    @classmethod
+    def from_section(cls, section: CircularSection, material: Material) -> BeamStiffness:
+        return cls(
+            axial_stiffness=material.E * section.area,
+            bending_stiffness=material.E * section.second_moment,
+            mass_per_length=material.rho * section.area,
+            torsional_stiffness=material.G * section.polar_moment,
+            radius=section.radius,
+        )

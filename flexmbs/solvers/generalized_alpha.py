@@ -1,0 +1,255 @@
+"""Generalized-alpha for the index-3 DAE  M q'' + Q_int + Phi_q^T lam = Q_ext,  Phi = 0.
+
+Arnold & Brüls, Multibody Syst. Dyn. 18 (2007) 185-202, with the scaled iteration matrix of
+Bottasso, Bauchau & Cardona (2007): dynamic rows times s = beta h^2, multiplier update divided by
+s (FORMULATION Part I §6.1). HHT is the special case alpha_m = 0 (Chung & Hulbert 1993).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from ..assembly import Assembly
+from ..errors import ConvergenceError, ModelError
+from .newton import Newton, NewtonOptions
+
+
+@dataclass(frozen=True, kw_only=True)
+class GeneralizedAlpha:
+    """Options of the generalized-alpha (or HHT) integrator.
+
+    ``rho_inf`` is the spectral radius at infinite frequency (1: no numerical damping;
+    0.8 default). ``scheme="hht"`` uses alpha_m = 0 and needs rho_inf in [0.5, 1].
+    Newton defaults to modified Newton (factorisation reused while it contracts).
+    On Newton failure the step is halved (``adaptive``) down to ``min_step``, then grows back.
+    """
+
+    rho_inf: float = 0.8
+    scheme: Literal["generalized_alpha", "hht"] = "generalized_alpha"
+    newton: NewtonOptions = field(default_factory=NewtonOptions)
+    adaptive: bool = True
+    min_step: float = 0.0            # 0: dt / 1024
+    grow_after: int = 10             # successful steps before the step is doubled back
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.rho_inf <= 1.0:
+            raise ModelError(f"rho_inf must be in [0, 1] (got {self.rho_inf})")
+        if self.scheme == "hht" and self.rho_inf < 0.5:
+            raise ModelError(f"HHT needs rho_inf in [0.5, 1] (got {self.rho_inf})")
+        if self.scheme not in ("generalized_alpha", "hht"):
+            raise ModelError(f"unknown scheme '{self.scheme}' (known: generalized_alpha, hht)")
+
+    def parameters(self) -> tuple[float, float, float, float]:
+        """(alpha_m, alpha_f, gamma, beta) in the Arnold-Brüls convention."""
+        r = self.rho_inf
+        if self.scheme == "hht":
+            am, af = 0.0, (1 - r) / (1 + r)
+        else:
+            am, af = (2 * r - 1) / (r + 1), r / (r + 1)
+        gamma = 0.5 + af - am
+        beta = 0.25 * (gamma + 0.5) ** 2
+        return am, af, gamma, beta
+
+
+@dataclass
+class State:
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    qdd: np.ndarray
+    a: np.ndarray      # algorithmic acceleration
+    lam: np.ndarray
+
+    def copy(self) -> State:
+        return State(self.t, self.q.copy(), self.v.copy(), self.qdd.copy(), self.a.copy(),
+                     self.lam.copy())
+
+
+@dataclass
+class IntegrationStats:
+    steps: int = 0
+    rejected_steps: int = 0
+    newton_iterations: int = 0
+    factorizations: int = 0
+    residual_evaluations: int = 0
+
+
+class _AlphaStep:
+    """The nonlinear problem of one step, seen by :class:`Newton`."""
+
+    def __init__(self, asm: Assembly, state: State) -> None:
+        self.asm = asm
+        self.s = state
+        self.n = asm.n_total
+        self.r_q = np.zeros(asm.n_coords)
+        self.r_lam = np.zeros(asm.n_mult)
+        self.t = 0.0
+        self.bp = self.gp = self.scale_s = 0.0
+
+    def setup(self, t: float, beta_p: float, gamma_p: float, s: float) -> None:
+        self.t, self.bp, self.gp, self.scale_s = t, beta_p, gamma_p, s
+
+    def evaluate(self, want_matrix: bool):
+        s = self.scale_s
+        mat = (s * self.bp, s * self.gp, s) if want_matrix else None
+        scale = self.asm.evaluate(self.s.q, self.s.v, self.s.qdd, self.s.lam, self.t, self.r_q,
+                                  self.r_lam, matrix=mat)
+        return self.r_q, self.r_lam, scale
+
+    def matrix(self):
+        return self.asm.matrix
+
+    def scaled_rhs(self, r_q, r_lam, out) -> None:
+        n = self.r_q.size
+        np.multiply(r_q, -self.scale_s, out=out[:n])
+        np.negative(r_lam, out=out[n:])
+
+    def apply(self, dx, factor: float) -> None:
+        n = self.r_q.size
+        dq = dx[:n]
+        st = self.s
+        if factor == 1.0:
+            st.q += dq
+            st.v += self.gp * dq
+            st.qdd += self.bp * dq
+            st.lam += dx[n:] / self.scale_s
+        else:
+            st.q += factor * dq
+            st.v += (factor * self.gp) * dq
+            st.qdd += (factor * self.bp) * dq
+            st.lam += (factor / self.scale_s) * dx[n:]
+
+    def save(self):
+        return self.s.copy()
+
+    def restore(self, saved) -> None:
+        self.s.q[:] = saved.q
+        self.s.v[:] = saved.v
+        self.s.qdd[:] = saved.qdd
+        self.s.lam[:] = saved.lam
+
+    def describe(self, index: int) -> str:
+        return self.asm.describe_coordinate(index)
+
+    def stiffness_scale(self) -> float:
+        return self.asm.stiffness_scale
+
+
+def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: float) -> State:
+    """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0)."""
+    n, m = asm.n_coords, asm.n_mult
+    r_q = np.zeros(n)
+    r_lam = np.zeros(m)
+    zeros_acc = np.zeros(n)
+    asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
+    rhs = np.concatenate([-r_q, asm.constraint_time_terms(q0, v0, t0)])
+    try:
+        lu = spla.splu(asm.matrix.tocsc())
+        x = lu.solve(rhs)
+    except RuntimeError as exc:
+        raise ConvergenceError(
+            f"cannot compute consistent initial accelerations: singular mass/constraint matrix "
+            f"({exc}); every coordinate needs mass or a constraint") from None
+    if not np.all(np.isfinite(x)):
+        raise ConvergenceError("initial accelerations are not finite (singular mass matrix?)")
+    qdd = x[:n].copy()
+    return State(t0, q0.copy(), v0.copy(), qdd, qdd.copy(), x[n:].copy())
+
+
+Observer = Callable[[State], None]
+
+
+def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: float,
+              state: State | None = None, output_interval: float | None = None,
+              observer: Observer | None = None,
+              progress: Callable[[State, IntegrationStats], None] | None = None,
+              ) -> tuple[State, IntegrationStats]:
+    """Integrate from ``state`` (default: consistent initial state) to ``t_end``.
+
+    ``observer(state)`` is called at t0 and at every multiple of ``output_interval`` (default:
+    every step). Raises :class:`ConvergenceError` if the step cannot be completed even at
+    ``min_step``; everything observed before stays valid.
+    """
+    if not dt > 0:
+        raise ModelError(f"time step dt must be > 0 (got {dt})")
+    if state is None:
+        q0, v0 = asm.initial_state()
+        state = consistent_initial_state(asm, q0, v0, 0.0)
+    if not t_end > state.t:
+        raise ModelError(f"t_end ({t_end}) must be greater than the start time ({state.t})")
+    out_dt = output_interval if output_interval is not None else dt
+    if not out_dt > 0:
+        raise ModelError(f"output_interval must be > 0 (got {output_interval})")
+    am, af, gamma, beta = options.parameters()
+    newton = Newton(options.newton, asm.length_scale)
+    step = _AlphaStep(asm, state)
+    stats = IntegrationStats()
+    h_nom = dt
+    h = dt
+    h_min = options.min_step or dt / 1024
+    ok_since_cut = 0
+    t_eps = 1e-9 * dt
+    k_out = int(math.floor(state.t / out_dt + 1e-9)) + 1
+    if observer is not None:
+        observer(state)
+    h_matrix = None
+    while state.t < t_end - t_eps:
+        t_out = min(k_out * out_dt, t_end)
+        h_step = min(h, t_out - state.t)
+        if t_out - state.t - h_step < t_eps:
+            h_step = t_out - state.t
+        saved = state.copy()
+        bp = (1 - am) / (h_step * h_step * beta * (1 - af))
+        gp = gamma / (h_step * beta)
+        s = beta * h_step * h_step
+        if h_matrix is None or abs(h_step - h_matrix) > 1e-12 * h_step:
+            newton.invalidate()
+            h_matrix = h_step
+        # predictor (Arnold & Brüls): q'' = 0, lam = lam_n
+        a_star = (af * state.qdd - am * state.a) / (1 - am)
+        state.q += h_step * state.v + h_step * h_step * ((0.5 - beta) * state.a + beta * a_star)
+        state.v += h_step * ((1 - gamma) * state.a + gamma * a_star)
+        state.qdd[:] = 0.0
+        t_new = state.t + h_step
+        step.setup(t_new, bp, gp, s)
+        try:
+            newton.solve(step)
+        except ConvergenceError as exc:
+            stats.rejected_steps += 1
+            state.t, state.q[:], state.v[:], state.qdd[:], state.a[:], state.lam[:] = (
+                saved.t, saved.q, saved.v, saved.qdd, saved.a, saved.lam)
+            if not options.adaptive or h_step <= h_min * (1 + 1e-12):
+                raise ConvergenceError(f"step from t = {state.t:.6g} failed at h = {h_step:.3g}: "
+                                       f"{exc}") from None
+            h = max(h_step / 2, h_min)
+            ok_since_cut = 0
+            newton.invalidate()
+            continue
+        state.a[:] = a_star + (1 - af) / (1 - am) * state.qdd
+        state.t = t_new
+        stats.steps += 1
+        if h < h_nom:
+            ok_since_cut += 1
+            if ok_since_cut >= options.grow_after:
+                h = min(2 * h, h_nom)
+                ok_since_cut = 0
+        for obj in asm.model.interactions:
+            post = getattr(obj, "post_step", None)
+            if post is not None:
+                post(asm, state)
+        if abs(state.t - t_out) <= t_eps:
+            k_out += 1
+            if observer is not None:
+                observer(state)
+        if progress is not None:
+            progress(state, stats)
+    stats.newton_iterations = newton.total.iterations
+    stats.factorizations = newton.total.factorizations
+    stats.residual_evaluations = newton.total.residual_evaluations
+    return state, stats

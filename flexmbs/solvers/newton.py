@@ -1,0 +1,171 @@
+"""Newton iteration on the assembled saddle-point system, shared by the static and dynamic solvers.
+
+The solver sees only a *step problem*: an object that evaluates the residual (and on request
+refills the iteration matrix) at its current iterate and applies a correction. It never sees
+elements. Convergence is measured on the unscaled residual with tolerances scaled to the model's
+own force and length scales (see :class:`NewtonOptions`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import ConvergenceError
+
+
+@dataclass(frozen=True, kw_only=True)
+class NewtonOptions:
+    """Newton settings.
+
+    Converged when ``max|r_q| <= relative_tolerance * F`` and ``max|Phi| <= constraint_tolerance
+    * L``, where ``F`` is the largest single force entering the residual in that evaluation (element
+    forces, inertia, loads: it bounds the rounding floor, so the test works for a steel beam and a
+    soft cable alike) and ``L`` the model's length scale (bounding box). The force test also
+    passes below the rounding floor ``roundoff_factor * eps * k * L`` (``k`` the largest
+    diagonal stiffness entry): there a residual corresponds to a displacement error of about
+    ``roundoff_factor * eps * L`` and cannot be reduced further in double precision (a steel
+    cable's floor grows from ~1e-8 N at 8 elements to ~1e-5 N at 512).
+    """
+
+    max_iterations: int = 25
+    relative_tolerance: float = 1e-8
+    constraint_tolerance: float = 1e-10
+    modified: bool = True           # reuse the factorisation while it contracts well
+    refresh_ratio: float = 0.25     # refresh when err_new / err_old exceeds this
+    line_search: bool = False
+    divergence_limit: float = 1e8   # error growth factor that counts as divergence
+    roundoff_factor: float = 1e3
+
+
+class StepProblem(Protocol):
+    n: int
+
+    def evaluate(self, want_matrix: bool) -> tuple[np.ndarray, np.ndarray, float]: ...
+    def matrix(self) -> sp.csc_matrix: ...
+    def scaled_rhs(self, r_q: np.ndarray, r_lam: np.ndarray, out: np.ndarray) -> None: ...
+    def apply(self, dx: np.ndarray, factor: float) -> None: ...
+    def save(self) -> object: ...
+    def restore(self, saved: object) -> None: ...
+    def describe(self, index: int) -> str: ...
+    def stiffness_scale(self) -> float: ...
+
+
+@dataclass
+class NewtonStats:
+    iterations: int = 0
+    factorizations: int = 0
+    residual_evaluations: int = 0
+    history: list[float] = field(default_factory=list)
+
+
+class Newton:
+    """Newton solver with optional modified-Newton factorisation reuse and line search."""
+
+    def __init__(self, options: NewtonOptions, length_scale: float) -> None:
+        self.options = options
+        self.length_scale = length_scale
+        self.lu: spla.SuperLU | None = None
+        self.total = NewtonStats()
+        self._rhs: np.ndarray | None = None
+
+    def invalidate(self) -> None:
+        """Forget the factorisation (matrix coefficients changed, e.g. a new step size)."""
+        self.lu = None
+
+    def error(self, r_q: np.ndarray, r_lam: np.ndarray, scale: float,
+              stiffness: float = 0.0) -> tuple[float, int]:
+        """Scaled error (converged when <= 1) and the index of the worst equation."""
+        o = self.options
+        n = r_q.size
+        tol = max(o.relative_tolerance * scale,
+                  o.roundoff_factor * 2.2e-16 * stiffness * self.length_scale, 1e-300)
+        eq = np.abs(r_q).max() / tol if n else 0.0
+        ec = (np.abs(r_lam).max() / (o.constraint_tolerance * self.length_scale)
+              if r_lam.size else 0.0)
+        if eq >= ec:
+            return float(eq), int(np.argmax(np.abs(r_q))) if n else 0
+        return float(ec), n + int(np.argmax(np.abs(r_lam)))
+
+    def _factorize(self, A: sp.csc_matrix) -> None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", spla.MatrixRankWarning)
+            try:
+                self.lu = spla.splu(A, permc_spec="COLAMD", options={"SymmetricMode": False})
+            except (RuntimeError, spla.MatrixRankWarning) as exc:
+                self.lu = None
+                raise ConvergenceError(
+                    "the iteration matrix is singular: the model has an unconstrained motion "
+                    "(a free rigid-body mode in statics, a body without mass or inertia) or "
+                    f"redundant constraints ({exc})") from None
+        self.total.factorizations += 1
+
+    def solve(self, problem: StepProblem, *, full: bool = False) -> NewtonStats:
+        o = self.options
+        stats = NewtonStats()
+        modified = o.modified and not full
+        need = self.lu is None or not modified
+        err_prev = np.inf
+        if self._rhs is None or self._rhs.size != problem.n:
+            self._rhs = np.zeros(problem.n)
+        rhs = self._rhs
+        for it in range(o.max_iterations + 1):
+            r_q, r_lam, scale = problem.evaluate(need)
+            stats.residual_evaluations += 1
+            err, worst = self.error(r_q, r_lam, scale, problem.stiffness_scale())
+            stats.history.append(err)
+            if not np.isfinite(err):
+                raise ConvergenceError(f"Newton produced a non-finite residual at iteration {it} "
+                                       f"(worst: {problem.describe(worst)})")
+            if err <= 1.0:
+                stats.iterations = it
+                self._accumulate(stats)
+                return stats
+            if it == o.max_iterations:
+                break
+            if it > 0 and err > o.divergence_limit * stats.history[0]:
+                break
+            if modified and not need and it > 0 and err > o.refresh_ratio * err_prev:
+                # poor contraction with an old matrix: refresh it at the current iterate
+                r_q, r_lam, scale = problem.evaluate(True)
+                stats.residual_evaluations += 1
+                need = True
+            if need:
+                self._factorize(problem.matrix())
+                stats.factorizations += 1
+                need = not modified
+            problem.scaled_rhs(r_q, r_lam, rhs)
+            dx = self.lu.solve(rhs)  # type: ignore[union-attr]
+            if o.line_search:
+                self._line_search(problem, dx, err)
+            else:
+                problem.apply(dx, 1.0)
+            err_prev = err
+        stats.iterations = o.max_iterations
+        self._accumulate(stats)
+        self.lu = None
+        raise ConvergenceError(
+            f"Newton did not converge in {stats.iterations} iterations (scaled error "
+            f"{stats.history[-1]:.3g}, 1 = tolerance; worst equation: {problem.describe(worst)})")
+
+    def _line_search(self, problem: StepProblem, dx: np.ndarray, err0: float) -> None:
+        saved = problem.save()
+        alpha = 1.0
+        for _ in range(8):
+            problem.apply(dx, alpha)
+            r_q, r_lam, scale = problem.evaluate(False)
+            err, _ = self.error(r_q, r_lam, scale, problem.stiffness_scale())
+            if np.isfinite(err) and err < (1 - 1e-4 * alpha) * err0:
+                return
+            problem.restore(saved)
+            alpha *= 0.5
+        problem.apply(dx, alpha)
+
+    def _accumulate(self, s: NewtonStats) -> None:
+        self.total.iterations += s.iterations
+        self.total.residual_evaluations += s.residual_evaluations

@@ -1,0 +1,112 @@
+"""Static equilibrium by full Newton with adaptive load stepping (FORMULATION Part I §6.5)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..assembly import Assembly
+from ..errors import ConvergenceError, ModelError
+from .newton import Newton, NewtonOptions
+
+
+@dataclass(frozen=True, kw_only=True)
+class StaticOptions:
+    """Load stepping: the external loads are scaled by a factor growing from 0 to 1.
+
+    ``load_steps`` is the initial number of increments; a failed increment is halved (down to
+    ``min_increment``), an easy one (``<= easy_iterations`` Newton iterations) grows by 1.5.
+    """
+
+    load_steps: int = 1
+    min_increment: float = 1e-4
+    easy_iterations: int = 4
+    newton: NewtonOptions = field(default_factory=lambda: NewtonOptions(
+        modified=False, line_search=False, max_iterations=30))
+
+
+@dataclass
+class StaticResult:
+    q: np.ndarray
+    lam: np.ndarray
+    load_increments: int
+    newton_iterations: int
+
+
+class _StaticStep:
+    def __init__(self, asm: Assembly, q: np.ndarray, lam: np.ndarray, t: float) -> None:
+        self.asm = asm
+        self.q = q
+        self.lam = lam
+        self.v = np.zeros_like(q)
+        self.t = t
+        self.n = asm.n_total
+        self.r_q = np.zeros(asm.n_coords)
+        self.r_lam = np.zeros(asm.n_mult)
+        self.load = 1.0
+
+    def evaluate(self, want_matrix: bool):
+        scale = self.asm.evaluate(self.q, self.v, None, self.lam, self.t, self.r_q, self.r_lam,
+                                  matrix=(0.0, 0.0, 1.0) if want_matrix else None,
+                                  load_factor=self.load, with_damping=False)
+        return self.r_q, self.r_lam, scale
+
+    def matrix(self):
+        return self.asm.matrix
+
+    def scaled_rhs(self, r_q, r_lam, out) -> None:
+        n = r_q.size
+        np.negative(r_q, out=out[:n])
+        np.negative(r_lam, out=out[n:])
+
+    def apply(self, dx, factor: float) -> None:
+        n = self.r_q.size
+        self.q += factor * dx[:n]
+        self.lam += factor * dx[n:]
+
+    def save(self):
+        return self.q.copy(), self.lam.copy()
+
+    def restore(self, saved) -> None:
+        self.q[:] = saved[0]
+        self.lam[:] = saved[1]
+
+    def describe(self, index: int) -> str:
+        return self.asm.describe_coordinate(index)
+
+    def stiffness_scale(self) -> float:
+        return self.asm.stiffness_scale
+
+
+def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
+                 q0: np.ndarray | None = None, t: float = 0.0) -> StaticResult:
+    """Static equilibrium under the loads at time ``t`` (inertia and damping ignored)."""
+    o = options or StaticOptions()
+    if o.load_steps < 1:
+        raise ModelError(f"load_steps must be >= 1 (got {o.load_steps})")
+    q = (asm.q_ref if q0 is None else q0).copy()
+    lam = np.zeros(asm.n_mult)
+    prob = _StaticStep(asm, q, lam, t)
+    newton = Newton(o.newton, asm.length_scale)
+    factor, inc = 0.0, 1.0 / o.load_steps
+    n_inc = 0
+    while factor < 1.0:
+        trial = min(1.0, factor + inc)
+        saved = prob.save()
+        prob.load = trial
+        try:
+            st = newton.solve(prob, full=True)
+        except ConvergenceError as exc:
+            prob.restore(saved)
+            inc *= 0.5
+            if inc < o.min_increment:
+                raise ConvergenceError(
+                    f"static solve failed at load factor {factor:.4g} (increment below "
+                    f"{o.min_increment:g}): {exc}") from None
+            continue
+        factor = trial
+        n_inc += 1
+        if st.iterations <= o.easy_iterations:
+            inc *= 1.5
+    return StaticResult(q, lam, n_inc, newton.total.iterations)

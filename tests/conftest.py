@@ -1,0 +1,39 @@
+"""Shared fixtures and tolerances for the flexmbs test suite."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+import flexmbs as fm
+
+#: run long validations in full only when asked (CI runs their fast form)
+FULL = os.environ.get("FLEXMBS_FULL", "") == "1"
+
+
+def straight_beam(model: fm.Model, n_elem: int, *, length: float = 1.0, EA: float = 1e7,
+                  EI: float = 50.0, rhoA: float = 0.5, name: str = "beam",
+                  options: fm.CableOptions | None = None, damping: float = 0.0) -> fm.Beam:
+    """Straight beam along +x from the origin with explicit section resultants."""
+    return model.add_beam(fm.line((0, 0, 0), (length, 0, 0), elements=n_elem),
+                          section=fm.BeamStiffness(axial_stiffness=EA, bending_stiffness=EI,
+                                                   mass_per_length=rhoA),
+                          name=name, options=options, damping=damping)
+
+
+def quarter_arc_beam(model: fm.Model, n_elem: int, *, R: float = 1.0, EA: float = 1e6,
+                     EI: float = 1.0, rhoA: float = 1.0,
+                     options: fm.CableOptions | None = None) -> fm.Beam:
+    """Quarter circle of FORMULATION §7.4: clamped end at the origin with tangent +y, centre
+    (R, 0, 0), tip at (R, R, 0) with tangent +x."""
+    return model.add_beam(fm.arc((R, 0, 0), R, (0, 0, 0), -np.pi / 2, normal=(0, 0, 1),
+                                 elements=n_elem),
+                          section=fm.BeamStiffness(axial_stiffness=EA, bending_stiffness=EI,
+                                                   mass_per_length=rhoA), options=options)
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(1234)
