@@ -215,8 +215,13 @@ class RigidBody:
     """A rigid body in Cartesian coordinates with Euler parameters (Haug 1989)."""
 
     def __init__(self, name: str, mass: float, inertia: np.ndarray, pose: Pose,
-                 velocity: np.ndarray, angular_velocity: np.ndarray) -> None:
+                 velocity: np.ndarray, angular_velocity: np.ndarray,
+                 shape: dict | None = None) -> None:
         self.name = name
+        #: output geometry, e.g. {"type": "cylinder", "radius": .., "length": .., "inner_radius": ..}
+        #: (axis = body x), {"type": "box", "size": [lx, ly, lz]}, {"type": "mesh", "file": ..};
+        #: None: a small box sized from the inertia
+        self.shape = shape
         self.mass = float(mass)
         self.inertia = inertia
         self.pose = pose
@@ -341,7 +346,7 @@ class Model:
                        quaternion: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
                        velocity: ArrayLike3 = (0.0, 0.0, 0.0),
                        angular_velocity: ArrayLike3 = (0.0, 0.0, 0.0),
-                       name: str | None = None) -> RigidBody:
+                       name: str | None = None, shape: dict | None = None) -> RigidBody:
         """Add a rigid body; ``inertia`` = principal moments (3) or a 3x3 tensor, body frame,
         about the centre of mass; ``angular_velocity`` in global components."""
         if not mass > 0:
@@ -357,7 +362,8 @@ class Model:
         if pose is None:
             pose = Pose.from_quaternion(position, quaternion)
         body = RigidBody(self._unique(name, "body"), mass, J, pose,
-                         _vec3(velocity, "velocity"), _vec3(angular_velocity, "angular_velocity"))
+                         _vec3(velocity, "velocity"), _vec3(angular_velocity, "angular_velocity"),
+                         shape)
         self.bodies.append(body)
         return body
 
