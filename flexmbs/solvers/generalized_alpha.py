@@ -36,6 +36,7 @@ class GeneralizedAlpha:
     adaptive: bool = True
     min_step: float = 0.0            # 0: dt / 1024
     grow_after: int = 10             # successful steps before the step is doubled back
+    compiled: bool = True            # compiled Newton loop when the model allows it
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.rho_inf <= 1.0:
@@ -165,6 +166,154 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
 Observer = Callable[[State], None]
 
 
+class _PythonStepper:
+    """General path: Newton on :class:`_AlphaStep` (any model), one step per call."""
+
+    def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
+        self.am, self.af, self.gamma, self.beta = options.parameters()
+        self.newton = Newton(options.newton, asm.length_scale)
+        self.step = _AlphaStep(asm, state)
+        self.state = state
+
+    def max_chunk(self) -> int:
+        return 1
+
+    def invalidate(self) -> None:
+        self.newton.invalidate()
+
+    def advance(self, h: float, n_steps: int, t0: float) -> None:
+        """One step from t0 (``n_steps`` is 1); on failure the state is restored."""
+        am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
+        st = self.state
+        saved = st.copy()
+        # predictor (Arnold & Brüls): q'' = 0, lam = lam_n
+        a_star = (af * st.qdd - am * st.a) / (1 - am)
+        st.q += h * st.v + h * h * ((0.5 - beta) * st.a + beta * a_star)
+        st.v += h * ((1 - gamma) * st.a + gamma * a_star)
+        st.qdd[:] = 0.0
+        self.step.setup(t0 + h, (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta),
+                        beta * h * h)
+        try:
+            self.newton.solve(self.step)
+        except ConvergenceError as exc:
+            st.q[:], st.v[:], st.qdd[:], st.a[:], st.lam[:] = (saved.q, saved.v, saved.qdd,
+                                                               saved.a, saved.lam)
+            raise _StepFailure(0, str(exc)) from None
+        st.a[:] = a_star + (1 - af) / (1 - am) * st.qdd
+
+    def totals(self) -> tuple[int, int, int]:
+        t = self.newton.total
+        return t.iterations, t.factorizations, t.residual_evaluations
+
+
+class _StepFailure(Exception):
+    def __init__(self, done: int, reason: str) -> None:
+        super().__init__(reason)
+        self.done = done
+
+
+class _CompiledStepper:
+    """Fast path for beams + linear constraints: whole runs of steps (up to the next output)
+    execute in numba (:func:`flexmbs.solvers._compiled.alpha_run`); Python is re-entered
+    only to refresh the Jacobian (assembly + SuperLU) and at output times."""
+
+    def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
+        from . import _compiled as cc
+
+        self.cc = cc
+        self.asm = asm
+        self.o = options.newton
+        self.am, self.af, self.gamma, self.beta = options.parameters()
+        self.state = state
+        self.grp = asm.groups[0]
+        n, m = asm.n_coords, asm.n_mult
+        self.f_ext = np.zeros(n)
+        self.lin = asm.lin_matrix
+        self.lin_rhs = np.zeros(m)
+        self.r = np.zeros(n + m)
+        self.rhs = np.zeros(n + m)
+        self.dx = np.zeros(n + m)
+        self.a_star = np.zeros(n)
+        self.backup = np.zeros((5, n + m))
+        self.info = np.zeros(7)
+        self.r_q = np.zeros(n)
+        self.r_lam = np.zeros(m)
+        self.band = cc.BandedLU(asm.matrix)
+        self.have_factor = False
+        self._no_matrix = np.zeros((0, 12, 12))
+        self.constant_loads = not asm.f_timed and not asm.lin_functions
+        self.factorizations = self.evaluations = 0
+
+    @staticmethod
+    def applicable(asm: Assembly) -> bool:
+        return (len(asm.groups) == 1 and not asm.model.bodies and not asm.nonlinear
+                and not asm.model.interactions and not asm.body_loads)
+
+    def max_chunk(self) -> int:
+        return 1_000_000 if self.constant_loads else 1
+
+    def invalidate(self) -> None:
+        self.have_factor = False
+
+    def _refresh(self, h: float, t: float) -> None:
+        am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
+        s = beta * h * h
+        bp = (1 - am) / (h * h * beta * (1 - af))
+        gp = gamma / (h * beta)
+        st = self.state
+        self.asm.evaluate(st.q, st.v, st.qdd, st.lam, t, self.r_q, self.r_lam,
+                          matrix=(s * bp, s * gp, s))
+        self.evaluations += 1
+        self.factorizations += 1
+        self.have_factor = self.band.factorize(self.asm.matrix.data)
+        if not self.have_factor:
+            raise _StepFailure(0, "the iteration matrix is singular (a coordinate without mass "
+                                  "or stiffness, or dependent constraints)")
+
+    def advance(self, h: float, n_steps: int, t0: float) -> None:
+        asm, st, o, g = self.asm, self.state, self.o, self.grp
+        t1 = t0 + h   # loads are evaluated at the end of the (first) step: constant if chunked
+        asm.external_force(t1, self.f_ext)
+        self.lin_rhs[:] = asm.lin_rhs0
+        for row, fn in asm.lin_functions:
+            self.lin_rhs[row] += fn(t1)
+        ctol = o.constraint_tolerance * asm.length_scale
+        scalar = 1 if g.options.bending == "scalar" else 0
+        resume = False
+        done = 0
+        refreshes = 0
+        while True:
+            floor = o.roundoff_factor * 2.2e-16 * asm.stiffness_scale * asm.length_scale
+            b = self.band
+            status = self.cc.alpha_run(
+                n_steps - done, resume, h, self.am, self.af, self.gamma, self.beta, st.q, st.v,
+                st.qdd, st.a, st.lam, self.backup, self.f_ext, g.dofs, g.qe, g.ve, g.props,
+                g.rest, scalar, g.force, g.mass, self.lin.indptr, self.lin.indices,
+                self.lin.data, self.lin_rhs, b.ab, b.kl, b.ku, b.piv, b.perm, self.have_factor,
+                b.work, self.r, self.rhs, self.dx, self.a_star,
+                o.max_iterations, not o.modified, o.relative_tolerance, ctol, floor,
+                o.refresh_ratio, o.refresh_iterations, self.info, self._no_matrix)
+            done += int(self.info[4])
+            self.evaluations += int(self.info[4])
+            if int(self.info[4]) > 0:
+                refreshes = 0   # refresh count of the current step only
+            if status == self.cc.STATUS_CONVERGED:
+                return
+            if status == self.cc.STATUS_REFRESH and refreshes <= 2 * o.max_iterations:
+                self._refresh(h, t0 + (done + 1) * h)
+                refreshes += 1
+                resume = True
+                continue
+            self.have_factor = False
+            raise _StepFailure(done, (
+                f"Newton did not converge in {int(self.info[0])} iterations (scaled error "
+                f"{self.info[2]:.3g}, 1 = tolerance; worst equation: "
+                f"{asm.describe_coordinate(int(self.info[3]))})"))
+
+    def totals(self) -> tuple[int, int, int]:
+        return int(self.info[5]), self.factorizations, self.evaluations
+
+
 def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: float,
               state: State | None = None, output_interval: float | None = None,
               observer: Observer | None = None,
@@ -173,7 +322,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     """Integrate from ``state`` (default: consistent initial state) to ``t_end``.
 
     ``observer(state)`` is called at t0 and at every multiple of ``output_interval`` (default:
-    every step). Raises :class:`ConvergenceError` if the step cannot be completed even at
+    every step). Raises :class:`ConvergenceError` if a step cannot be completed even at
     ``min_step``; everything observed before stays valid.
     """
     if not dt > 0:
@@ -186,9 +335,8 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     out_dt = output_interval if output_interval is not None else dt
     if not out_dt > 0:
         raise ModelError(f"output_interval must be > 0 (got {output_interval})")
-    am, af, gamma, beta = options.parameters()
-    newton = Newton(options.newton, asm.length_scale)
-    step = _AlphaStep(asm, state)
+    use_compiled = options.compiled and _CompiledStepper.applicable(asm)
+    stepper = (_CompiledStepper if use_compiled else _PythonStepper)(asm, options, state)
     stats = IntegrationStats()
     h_nom = dt
     h = dt
@@ -201,41 +349,42 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     h_matrix = None
     while state.t < t_end - t_eps:
         t_out = min(k_out * out_dt, t_end)
-        h_step = min(h, t_out - state.t)
-        if t_out - state.t - h_step < t_eps:
-            h_step = t_out - state.t
-        saved = state.copy()
-        bp = (1 - am) / (h_step * h_step * beta * (1 - af))
-        gp = gamma / (h_step * beta)
-        s = beta * h_step * h_step
+        remaining = t_out - state.t
+        n_full = int(math.floor(remaining / h + 1e-9))
+        if n_full == 0 or remaining - h < t_eps:
+            h_step, n_chunk = remaining, 1
+        else:
+            h_step = h
+            n_chunk = n_full if remaining - n_full * h < t_eps else n_full
+            if h < h_nom:   # after a cut-back: few steps, then try to grow again
+                n_chunk = min(n_chunk, options.grow_after - ok_since_cut)
+        n_chunk = max(1, min(n_chunk, stepper.max_chunk()))
         if h_matrix is None or abs(h_step - h_matrix) > 1e-12 * h_step:
-            newton.invalidate()
+            stepper.invalidate()
             h_matrix = h_step
-        # predictor (Arnold & Brüls): q'' = 0, lam = lam_n
-        a_star = (af * state.qdd - am * state.a) / (1 - am)
-        state.q += h_step * state.v + h_step * h_step * ((0.5 - beta) * state.a + beta * a_star)
-        state.v += h_step * ((1 - gamma) * state.a + gamma * a_star)
-        state.qdd[:] = 0.0
-        t_new = state.t + h_step
-        step.setup(t_new, bp, gp, s)
+        t_start = state.t
         try:
-            newton.solve(step)
-        except ConvergenceError as exc:
+            stepper.advance(h_step, n_chunk, t_start)
+            done = n_chunk
+        except _StepFailure as exc:
+            done = exc.done
+            stats.steps += done
+            state.t = t_start + done * h_step
             stats.rejected_steps += 1
-            state.t, state.q[:], state.v[:], state.qdd[:], state.a[:], state.lam[:] = (
-                saved.t, saved.q, saved.v, saved.qdd, saved.a, saved.lam)
             if not options.adaptive or h_step <= h_min * (1 + 1e-12):
                 raise ConvergenceError(f"step from t = {state.t:.6g} failed at h = {h_step:.3g}: "
                                        f"{exc}") from None
             h = max(h_step / 2, h_min)
             ok_since_cut = 0
-            newton.invalidate()
+            stepper.invalidate()
+            h_matrix = None
             continue
-        state.a[:] = a_star + (1 - af) / (1 - am) * state.qdd
-        state.t = t_new
-        stats.steps += 1
+        state.t = t_start + done * h_step
+        if abs(state.t - t_out) <= t_eps:
+            state.t = t_out
+        stats.steps += done
         if h < h_nom:
-            ok_since_cut += 1
+            ok_since_cut += done
             if ok_since_cut >= options.grow_after:
                 h = min(2 * h, h_nom)
                 ok_since_cut = 0
@@ -243,13 +392,11 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             post = getattr(obj, "post_step", None)
             if post is not None:
                 post(asm, state)
-        if abs(state.t - t_out) <= t_eps:
+        if state.t == t_out:
             k_out += 1
             if observer is not None:
                 observer(state)
         if progress is not None:
             progress(state, stats)
-    stats.newton_iterations = newton.total.iterations
-    stats.factorizations = newton.total.factorizations
-    stats.residual_evaluations = newton.total.residual_evaluations
+    stats.newton_iterations, stats.factorizations, stats.residual_evaluations = stepper.totals()
     return state, stats

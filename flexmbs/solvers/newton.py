@@ -37,10 +37,11 @@ class NewtonOptions:
     relative_tolerance: float = 1e-8
     constraint_tolerance: float = 1e-10
     modified: bool = True           # reuse the factorisation while it contracts well
-    refresh_ratio: float = 0.25     # refresh when err_new / err_old exceeds this
+    refresh_ratio: float = 0.7        # refresh when err_new / err_old exceeds this ...
+    refresh_iterations: float = 10.0  # ... or more further iterations are predicted
     line_search: bool = False
     divergence_limit: float = 1e8   # error growth factor that counts as divergence
-    roundoff_factor: float = 1e3
+    roundoff_factor: float = 20.0
 
 
 class StepProblem(Protocol):
@@ -62,6 +63,13 @@ class NewtonStats:
     factorizations: int = 0
     residual_evaluations: int = 0
     history: list[float] = field(default_factory=list)
+
+
+def _too_slow(err: float, err_prev: float, o: NewtonOptions) -> bool:
+    """Modified Newton contracts too slowly: rate above ``refresh_ratio``, or more than
+    ``refresh_iterations`` further iterations predicted at the current rate."""
+    rho = err / err_prev
+    return rho > o.refresh_ratio or np.log(err) > o.refresh_iterations * -np.log(rho)
 
 
 class Newton:
@@ -130,7 +138,7 @@ class Newton:
                 break
             if it > 0 and err > o.divergence_limit * stats.history[0]:
                 break
-            if modified and not need and it > 0 and err > o.refresh_ratio * err_prev:
+            if modified and not need and it > 0 and _too_slow(err, err_prev, o):
                 # poor contraction with an old matrix: refresh it at the current iterate
                 r_q, r_lam, scale = problem.evaluate(True)
                 stats.residual_evaluations += 1
