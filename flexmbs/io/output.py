@@ -1,0 +1,249 @@
+"""The output folder of a run (DESIGN.md, "Output folder"), written as the run goes::
+
+    with OutputWriter(out_dir, "run", asm, probes=[...]) as out:
+        final, stats = integrate(asm, opts, ..., observer=out.write)
+        out.finish("completed", stats=stats)
+
+Files (every one valid after every output, so a run that stops early leaves readable results):
+
+- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtu`` (:mod:`flexmbs.io.vtu`);
+- ``probes.csv``: ``t,<probe columns>``, one row per output, flushed after each row;
+- ``contacts.csv``: ``t,joint,section,point,gap,normal_force,qx,qy,qz,px,py,pz,a,b``, one row
+  per active contact (header written even if there is none; missing keys are empty fields);
+- ``checkpoint.npz``: the latest state (:mod:`flexmbs.io.checkpoint`);
+- ``summary.json``: written at start (``status: "running"``) and at the end (``completed``,
+  ``failed: <reason>`` or ``interrupted``).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+
+from ..errors import FlexmbsError
+from .checkpoint import save_checkpoint
+from .probes import Probe, probe_columns
+from .vtu import BLOCK_NAMES, FrameBuilder, VTUSeries
+
+CONTACT_COLUMNS = ("t", "joint", "section", "point", "gap", "normal_force", "qx", "qy", "qz",
+                   "px", "py", "pz", "a", "b")
+
+
+def _fmt(x: Any) -> str:
+    """CSV field: floats with the shortest exact representation, others as text."""
+    if x is None:
+        return ""
+    if isinstance(x, (float, np.floating)):
+        return repr(float(x))
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    return str(x)
+
+
+def _jsonable(o: Any) -> Any:
+    if isinstance(o, dict):
+        return {str(k): _jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_jsonable(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return _jsonable(o.tolist())
+    if isinstance(o, np.generic):
+        o = o.item()
+    if isinstance(o, float) and not math.isfinite(o):
+        return str(o)           # JSON has no NaN/inf
+    if isinstance(o, (str, int, float, bool)) or o is None:
+        return o
+    if isinstance(o, os.PathLike):
+        return os.fspath(o)
+    return str(o)
+
+
+def failure_reason(exc: BaseException) -> str:
+    """One line describing ``exc`` for ``status: "failed: <reason>"``."""
+    msg = str(exc).strip().splitlines()
+    text = msg[0] if msg else ""
+    if not isinstance(exc, FlexmbsError) or not text:
+        text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return text
+
+
+class OutputWriter:
+    """Writes the output folder of one run (context manager; see the module docstring).
+
+    ``asm`` is the :class:`~flexmbs.assembly.Assembly`; ``metadata`` (scenario path, solver
+    settings, ...) is stored under ``summary.json["metadata"]``. ``write_vtu=False`` skips the
+    VTU series, ``checkpoints=False`` the checkpoint. Each :meth:`write` is one output time.
+    """
+
+    def __init__(self, directory: str | os.PathLike, name: str, asm: Any, *,
+                 probes: Sequence[Probe] = (), write_vtu: bool = True, checkpoints: bool = True,
+                 metadata: dict | None = None, samples_per_element: int = 8,
+                 vtu_encoding: str = "binary") -> None:
+        self.directory = Path(directory)
+        self.name = str(name)
+        self.asm = asm
+        self.probes = list(probes)
+        self.metadata = dict(metadata or {})
+        self.checkpoints = bool(checkpoints)
+        for p in self.probes:
+            p.check(asm)
+        self.probe_columns = probe_columns(self.probes)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self._t_start = time.perf_counter()
+        self.n_outputs = 0
+        self.final_time: float | None = None
+        self.initial_energy: dict[str, float] | None = None
+        self.final_energy: dict[str, float] | None = None
+        self.finished = False
+        self.status = "running"
+        self._files: list[Any] = []
+        self.series: VTUSeries | None = None
+        self.frames: FrameBuilder | None = None
+        try:
+            if write_vtu:
+                self.frames = FrameBuilder(asm, samples_per_element=samples_per_element)
+                self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding)
+            self._probe_file = self._open_csv("probes.csv", ["t", *self.probe_columns])
+            self._contact_file = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
+            self._write_summary()
+        except BaseException:
+            self._close_files()
+            raise
+
+    # ------------------------------------------------------------------ paths
+    @property
+    def pvd_path(self) -> Path:
+        return self.directory / f"{self.name}.pvd"
+
+    @property
+    def checkpoint_path(self) -> Path:
+        return self.directory / "checkpoint.npz"
+
+    @property
+    def summary_path(self) -> Path:
+        return self.directory / "summary.json"
+
+    def _open_csv(self, fname: str, header: list[str]) -> Any:
+        f = open(self.directory / fname, "w", newline="", encoding="utf-8")  # noqa: SIM115
+        self._files.append(f)
+        csv.writer(f).writerow(header)
+        f.flush()
+        return f
+
+    def _close_files(self) -> None:
+        for f in self._files:
+            f.close()
+        self._files = []
+        if self.series is not None:
+            self.series.close()
+
+    # ------------------------------------------------------------------ per output
+    def write(self, state: Any, *, contacts: Sequence[dict] | None = None,
+              checkpoint_extra: dict | None = None) -> None:
+        """Record one output time: VTU frame, probe row, contact rows, checkpoint."""
+        if self.finished:
+            raise ValueError("OutputWriter.write after finish()")
+        t = float(state.t)
+        contacts = list(contacts or [])
+        if self.series is not None and self.frames is not None:
+            self.series.write(t, self.frames(state, contacts=contacts))
+        row = [_fmt(t)]
+        for p in self.probes:
+            row.extend(_fmt(float(x)) for x in np.asarray(p.evaluate(self.asm, state)).reshape(-1))
+        csv.writer(self._probe_file).writerow(row)
+        self._probe_file.flush()
+        if contacts:
+            w = csv.writer(self._contact_file)
+            for c in contacts:
+                w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in CONTACT_COLUMNS[1:]])
+            self._contact_file.flush()
+        if self.checkpoints:
+            extra = {"output_step": self.n_outputs, **(checkpoint_extra or {})}
+            save_checkpoint(self.checkpoint_path, state, extra=extra)
+        energy = self.asm.energies(state.q, state.v)
+        if self.initial_energy is None:
+            self.initial_energy = energy
+        self.final_energy = energy
+        self.final_time = t
+        self.n_outputs += 1
+
+    # ------------------------------------------------------------------ summary
+    def _summary(self, *, stats: Any = None, wall_time: float | None = None,
+                 energy_balance: dict | None = None) -> dict:
+        from .. import __version__
+
+        if dataclasses.is_dataclass(stats) and not isinstance(stats, type):
+            st = dataclasses.asdict(stats)
+        else:
+            st = dict(stats or {})
+        energy: dict[str, Any] = {}
+        if self.initial_energy is not None and self.final_energy is not None:
+            energy = {"initial_total": self.initial_energy["total"],
+                      "final_total": self.final_energy["total"],
+                      "change": self.final_energy["total"] - self.initial_energy["total"],
+                      "initial": self.initial_energy, "final": self.final_energy}
+        energy.update(energy_balance or {})
+        model = self.asm.model
+        return _jsonable({
+            "scenario": self.name,
+            "flexmbs_version": __version__,
+            "status": self.status,
+            "final_time": self.final_time,
+            "outputs": self.n_outputs,
+            "steps": st.get("steps"),
+            "newton_iterations": st.get("newton_iterations"),
+            "rejected_steps": st.get("rejected_steps"),
+            "wall_time": time.perf_counter() - self._t_start if wall_time is None else wall_time,
+            "dofs": {"coordinates": int(self.asm.n_coords), "multipliers": int(self.asm.n_mult)},
+            "energy_balance": energy,
+            "stats": st,
+            "files": {"pvd": self.pvd_path.name if self.series else None,
+                      "probes": "probes.csv", "contacts": "contacts.csv",
+                      "checkpoint": self.checkpoint_path.name if self.checkpoints else None},
+            "vtu_blocks": {"block_id": {str(k): v for k, v in BLOCK_NAMES.items()},
+                           "beam_id": [b.name for b in model.beams],
+                           "body_id": [b.name for b in model.bodies]},
+            "metadata": self.metadata,
+        })
+
+    def _write_summary(self, **kwargs: Any) -> None:
+        tmp = self.summary_path.with_name(f".{self.summary_path.name}.tmp")
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(self._summary(**kwargs), f, indent=2)
+            f.write("\n")
+        os.replace(tmp, self.summary_path)
+
+    def finish(self, status: str = "completed", *, stats: Any = None, wall_time: float | None = None,
+               energy_balance: dict | None = None) -> None:
+        """Close the files and write the final ``summary.json`` (``status``: ``"completed"``,
+        ``"failed: <reason>"`` or ``"interrupted"``); ``stats`` is an ``IntegrationStats``."""
+        if self.finished:
+            return
+        self.status = " ".join(str(status).split())   # one line
+        self._close_files()
+        self.finished = True
+        self._write_summary(stats=stats, wall_time=wall_time, energy_balance=energy_balance)
+
+    def __enter__(self) -> OutputWriter:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        if self.finished:
+            return
+        if exc is None:
+            self.finish("completed")
+        elif isinstance(exc, KeyboardInterrupt):
+            self.finish("interrupted")
+        else:
+            self.finish(f"failed: {failure_reason(exc)}")

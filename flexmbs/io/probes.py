@@ -1,0 +1,178 @@
+"""Probes: named scalar/vector quantities written to ``probes.csv`` at every output time.
+
+A probe declares its CSV columns and evaluates them from the assembly and a solver state.
+Vector probes write ``<name>_x, <name>_y, <name>_z`` (DESIGN.md, "Output folder"). The registry
+:data:`PROBE_TYPES` maps the names used in scenario files (``[[probes]] type = ...``) to classes;
+more types register themselves with :func:`register_probe`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..elements import ancf_cable as cable
+from ..errors import ModelError, ScenarioError
+from ..model import Beam, RigidBody
+
+_XYZ = ("x", "y", "z")
+
+
+class Probe(ABC):
+    """A named output quantity; ``columns()`` and ``evaluate()`` have the same length."""
+
+    name: str
+
+    @abstractmethod
+    def columns(self) -> list[str]:
+        """CSV column names: ``[name]`` for scalars, ``[name_x, name_y, name_z]`` for vectors."""
+
+    @abstractmethod
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        """Values in the order of :meth:`columns`."""
+
+    def check(self, asm: Any) -> None:  # noqa: B027 - optional hook, default accepts everything
+        """Raise :class:`ModelError` if the probe does not belong to ``asm.model``."""
+
+
+def _check_name(name: object) -> str:
+    if not isinstance(name, str) or not name or "," in name:
+        raise ModelError(f"probe name must be a non-empty string without commas (got {name!r})")
+    return name
+
+
+class BeamPointProbe(Probe):
+    """Position, displacement or velocity of the material point at reference arc length ``s``."""
+
+    QUANTITIES = ("position", "displacement", "velocity")
+
+    def __init__(self, name: str, beam: Beam, s: float, quantity: str = "position") -> None:
+        self.name = _check_name(name)
+        if not isinstance(beam, Beam):
+            raise ModelError(f"probe '{name}': beam must be a Beam (got {beam!r})")
+        if quantity not in self.QUANTITIES:
+            raise ModelError(f"probe '{name}': quantity must be one of {list(self.QUANTITIES)} "
+                             f"(got {quantity!r})")
+        s = float(s)
+        if not (np.isfinite(s) and 0.0 <= s <= beam.length * (1 + 1e-12)):
+            raise ModelError(f"probe '{name}': s = {s} is outside beam '{beam.name}'; valid range "
+                             f"is 0 <= s <= {beam.length:.12g} (reference arc length)")
+        self.beam, self.s, self.quantity = beam, s, quantity
+        e, xi = beam.locate(min(s, beam.length))
+        S, _, _ = cable.shape_functions(np.array([xi]), np.array([beam.centerline.lengths[e]]))
+        self._element = e
+        self._S = np.asarray(S).reshape(4)
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{c}" for c in _XYZ]
+
+    def check(self, asm: Any) -> None:
+        if not any(b is self.beam for b in asm.model.beams):
+            raise ModelError(f"probe '{self.name}': beam '{self.beam.name}' is not part of the model")
+
+    def _interp(self, asm: Any, x: np.ndarray) -> np.ndarray:
+        dofs = asm.element_dofs(self.beam)[self._element]
+        return self._S @ np.asarray(x)[dofs].reshape(4, 3)
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        if self.quantity == "velocity":
+            return self._interp(asm, state.v)
+        r = self._interp(asm, state.q)
+        if self.quantity == "displacement":
+            r = r - self._interp(asm, asm.q_ref)
+        return r
+
+
+class BodyPositionProbe(Probe):
+    """Position of the body reference point (centre of mass)."""
+
+    def __init__(self, name: str, body: RigidBody) -> None:
+        self.name = _check_name(name)
+        if not isinstance(body, RigidBody):
+            raise ModelError(f"probe '{name}': body must be a RigidBody (got {body!r})")
+        self.body = body
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{c}" for c in _XYZ]
+
+    def check(self, asm: Any) -> None:
+        if not any(b is self.body for b in asm.model.bodies):
+            raise ModelError(f"probe '{self.name}': body '{self.body.name}' is not part of the model")
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return np.asarray(state.q)[asm.body_dofs(self.body)[:3]].copy()
+
+
+class BodyOrientationProbe(BodyPositionProbe):
+    """Euler parameters [w, x, y, z] of the body orientation."""
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{c}" for c in ("w", "x", "y", "z")]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return np.asarray(state.q)[asm.body_dofs(self.body)[3:]].copy()
+
+
+class EnergyProbe(Probe):
+    """Total, kinetic, strain or gravitational energy (``Assembly.energies``)."""
+
+    QUANTITIES = ("total", "kinetic", "strain", "gravity")
+
+    def __init__(self, name: str, quantity: str = "total") -> None:
+        self.name = _check_name(name)
+        if quantity not in self.QUANTITIES:
+            raise ModelError(f"probe '{name}': quantity must be one of {list(self.QUANTITIES)} "
+                             f"(got {quantity!r})")
+        self.quantity = quantity
+
+    def columns(self) -> list[str]:
+        return [self.name]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return np.array([asm.energies(state.q, state.v)[self.quantity]])
+
+
+#: scenario ``type`` -> probe class
+PROBE_TYPES: dict[str, type[Probe]] = {
+    "beam_point": BeamPointProbe,
+    "body_position": BodyPositionProbe,
+    "body_orientation": BodyOrientationProbe,
+    "energy": EnergyProbe,
+}
+
+
+def register_probe(name: str) -> Callable[[type[Probe]], type[Probe]]:
+    """Class decorator adding a probe type to :data:`PROBE_TYPES` under ``name``."""
+
+    def deco(cls: type[Probe]) -> type[Probe]:
+        if name in PROBE_TYPES and PROBE_TYPES[name] is not cls:
+            raise ValueError(f"probe type '{name}' is already registered ({PROBE_TYPES[name]})")
+        PROBE_TYPES[name] = cls
+        return cls
+
+    return deco
+
+
+def get_probe_type(name: str) -> type[Probe]:
+    """The probe class registered as ``name``; unknown names list the known ones."""
+    try:
+        return PROBE_TYPES[name]
+    except (KeyError, TypeError):
+        raise ScenarioError(f"unknown probe type {name!r} (known: {', '.join(sorted(PROBE_TYPES))})"
+                            ) from None
+
+
+def probe_columns(probes: list[Probe] | tuple[Probe, ...]) -> list[str]:
+    """All columns of ``probes`` in order; duplicate names are a :class:`ModelError`."""
+    cols: list[str] = []
+    for p in probes:
+        cols.extend(p.columns())
+    seen: set[str] = set()
+    dup = sorted({c for c in cols if c in seen or seen.add(c)})  # type: ignore[func-returns-value]
+    if dup or "t" in cols:
+        raise ModelError(f"probe columns must be unique and not 't' (duplicates: {dup or ['t']}); "
+                         "give the probes distinct names")
+    return cols
