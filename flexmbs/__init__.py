@@ -10,6 +10,7 @@ Short public API (see DESIGN.md, "Python API")::
     result = fm.simulate(model, t_end=1.0, dt=1e-3)
 """
 
+from .constraints.sliding import SimulationStopped, SlidingJoint
 from .elements.ancf_cable import CableOptions
 from .errors import (
     ConvergenceError,
@@ -42,6 +43,6 @@ __all__ = [
     "GROUND", "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
     "ConvergenceError", "FlexmbsError", "Function", "GeneralizedAlpha", "GeometryError", "HalfSine",
     "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp", "RedundantConstraintError",
-    "Result", "RigidBody", "ScenarioError", "Sine", "StaticOptions", "Table", "TimeFunction", "arc",
+    "Result", "RigidBody", "ScenarioError", "SimulationStopped", "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "arc",
     "line", "modes", "polyline", "read_curve", "simulate", "solve_static", "__version__",
 ]

@@ -60,6 +60,7 @@ class _NonlinearRows:
     pos_jac: np.ndarray | None = None
     pos_jacT: np.ndarray | None = None
     pos_hess: np.ndarray | None = None
+    version: int = 0
 
 
 class Assembly:
@@ -99,6 +100,12 @@ class Assembly:
             self.body_offset[id(body)] = off
             labels.extend((f"body '{body.name}'", c) for c in ("x", "y", "z", "e0", "e1", "e2", "e3"))
             off += 7
+        self.extra_dofs: dict[int, np.ndarray] = {}
+        for obj in m.interactions:
+            names = obj.extra_labels()
+            self.extra_dofs[id(obj)] = np.arange(off, off + len(names), dtype=np.int64)
+            labels.extend((f"joint '{obj.name}'", c) for c in names)
+            off += len(names)
         self.n_coords = off
         self._coord_labels = labels
         q0 = np.zeros(off)
@@ -114,6 +121,10 @@ class Assembly:
             q0[o + 3:o + 7] = p
             v0[o:o + 3] = body.velocity
             v0[o + 3:o + 7] = rb.pdot_from_omega_global(p, body.angular_velocity)
+        for obj in m.interactions:
+            d = self.extra_dofs[id(obj)]
+            obj.bind(self, d)
+            q0[d] = obj.initial_extra(q0)
         self.q_ref = q0
         self.v_init = v0
 
@@ -260,7 +271,14 @@ class Assembly:
             nonlinear.append(EulerParameterNormalization(f"{body.name}.normalization",
                                                          self.body_dofs(body)))
         for obj in self.model.interactions:
-            nonlinear.extend(getattr(obj, "constraints", lambda: [])())
+            for c in obj.constraints():
+                phi, _ = c.evaluate(q0[c.coordinates()], 0.0)
+                if np.abs(phi).max(initial=0.0) > 1e-6 * max(self._length_scale(), 1e-3):
+                    raise ModelError(
+                        f"joint '{obj.name}' is violated by {np.abs(phi).max():.3g} in the initial "
+                        "configuration: place the body on the beam (e.g. pose = beam.frame_at(s), "
+                        "scenario pose = {on_beam, s}) with its hole axis along the tangent")
+                nonlinear.append(c)
 
         # ---- redundancy check on the full Jacobian at the initial configuration
         n = self.n_coords
@@ -441,7 +459,23 @@ class Assembly:
             kh = key(np.repeat(c, c.size), np.tile(c, c.size))
             keys_parts += [kj, kt, kh]
             contributions.append(("nl", nl, (kj, kt, kh)))
+        for obj in self.model.interactions:
+            for rows_i, cols_i in obj.pattern_blocks():
+                rr, cc = np.meshgrid(np.asarray(rows_i, np.int64), np.asarray(cols_i, np.int64),
+                                     indexing="ij")
+                keys_parts += [key(rr.ravel(), cc.ravel()), key(cc.ravel(), rr.ravel())]
+        for nl in self.nonlinear:   # interaction constraints: their multipliers x reserved coords
+            c = nl.constraint
+            if hasattr(c, "version"):
+                for obj in self.model.interactions:
+                    if c in obj.constraints():
+                        for _, cols_i in obj.pattern_blocks():
+                            cc = np.asarray(cols_i, np.int64)
+                            rows = n + nl.rows
+                            keys_parts += [key(np.repeat(rows, cc.size), np.tile(cc, rows.size)),
+                                           key(np.tile(cc, rows.size), np.repeat(rows, cc.size))]
         ukeys = np.unique(np.concatenate(keys_parts))
+        self._ukeys = ukeys
         cols = ukeys // N
         rows = ukeys % N
         indptr = np.zeros(N + 1, np.int64)
@@ -554,6 +588,8 @@ class Assembly:
                 r_lam[row] -= fn(t)
         for nl in self.nonlinear:
             c = nl.constraint
+            if getattr(c, "version", 0) != nl.version:
+                self._update_positions(nl)
             ql = q[nl.coords]
             phi, jac = c.evaluate(ql, t)
             lam_full = np.zeros(c.n_equations)
@@ -565,9 +601,44 @@ class Assembly:
                 data[nl.pos_jac] += jk.ravel()
                 data[nl.pos_jacT] += jk.ravel()
                 data[nl.pos_hess] += cK * c.hessian_lambda(ql, lam_full, t).ravel()
+        for obj in self.model.interactions:
+            scale = max(scale, obj.evaluate(self, q, v, lam, t, r_q, matrix))
         if want and kscale > 0:
             self.stiffness_scale = kscale
         return scale
+
+    # ---------------------------------------------------------------- helpers for interactions
+    def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """CSC data positions of the (rows[i], cols[j]) block (must be in the pattern)."""
+        N = self.n_total
+        k = (np.asarray(cols, np.int64)[None, :] * N + np.asarray(rows, np.int64)[:, None]).ravel()
+        pos = np.searchsorted(self._ukeys, k)
+        if np.any(pos >= self._ukeys.size) or np.any(self._ukeys[np.minimum(pos, self._ukeys.size - 1)] != k):
+            raise ModelError("internal: matrix entry outside the reserved sparsity pattern")
+        return pos
+
+    def add_to_matrix(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
+        """Add a dense block to the iteration matrix being assembled (rows/cols global)."""
+        np.add.at(self._data, self.positions(rows, cols), np.asarray(block, float).ravel())
+
+    def multiplier_rows(self, constraint: Constraint) -> np.ndarray:
+        """Multiplier indices (into lam) of the kept equations of ``constraint``."""
+        for nl in self.nonlinear:
+            if nl.constraint is constraint:
+                out = np.full(constraint.n_equations, -1, np.int64)
+                out[nl.keep] = nl.rows
+                return out
+        raise ModelError(f"constraint '{constraint.name}' is not part of this assembly")
+
+    def _update_positions(self, nl: _NonlinearRows) -> None:
+        c = nl.constraint
+        nl.coords = np.asarray(c.coordinates(), np.int64)
+        rows = self.n_coords + nl.rows
+        cc = nl.coords
+        nl.pos_jac = self.positions(rows, cc)
+        nl.pos_jacT = self.positions(cc, rows).reshape(cc.size, rows.size).T.ravel()
+        nl.pos_hess = self.positions(cc, cc)
+        nl.version = getattr(c, "version", 0)
 
     def constraint_jacobian(self, q: np.ndarray, t: float = 0.0) -> sp.csr_matrix:
         """Phi_q as a sparse (n_mult, n_coords) matrix."""

@@ -470,6 +470,17 @@ class Model:
         return self._add_constraint(ConstraintSpec(kind, self._unique(name, kind), a, b, pa, pb, fa, fb,
                                                    translation=tr, rotation=ro))
 
+    def add_joint(self, joint):  # noqa: ANN001, ANN201 - any Interaction
+        """Attach a joint or contact interaction (e.g. :class:`flexmbs.SlidingJoint`)."""
+        from .constraints.interaction import Interaction
+
+        if not isinstance(joint, Interaction):
+            raise ModelError(f"add_joint: expected a joint object such as SlidingJoint (got {joint!r})")
+        joint.validate(self)
+        joint.name = self._unique(joint.name, "joint")
+        self.interactions.append(joint)
+        return joint
+
     # ------------------------------------------------------------------ loads
     def add_point_load(self, target: Node | RigidBody | tuple[Beam, float], force: ArrayLike3 = (0, 0, 0),
                        *, moment: ArrayLike3 | None = None, point: ArrayLike3 = (0.0, 0.0, 0.0),

@@ -144,6 +144,29 @@ PROBE_TYPES: dict[str, type[Probe]] = {
 }
 
 
+class SlideCoordinateProbe(Probe):
+    """Arc length ``s`` (from the beam's first node) of a sliding joint's contact point."""
+
+    def __init__(self, name: str, joint: Any) -> None:
+        self.name = _check_name(name)
+        if not hasattr(joint, "slide_coordinate"):
+            raise ModelError(f"probe '{name}': joint {joint!r} has no slide coordinate")
+        self.joint = joint
+
+    def columns(self) -> list[str]:
+        return [self.name]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return np.array([self.joint.slide_coordinate(state.q)])
+
+    def check(self, asm: Any) -> None:
+        if self.joint not in asm.model.interactions:
+            raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
+
+
+PROBE_TYPES["slide_coordinate"] = SlideCoordinateProbe
+
+
 def register_probe(name: str) -> Callable[[type[Probe]], type[Probe]]:
     """Class decorator adding a probe type to :data:`PROBE_TYPES` under ``name``."""
 

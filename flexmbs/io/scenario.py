@@ -914,9 +914,29 @@ def _not_available(kind: str) -> Callable[..., Any]:
     return build
 
 
+def _sliding(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+    """``type = "sliding"``: SlidingJoint (no clearance), FORMULATION Part II §7."""
+    from ..constraints.sliding import SlidingJoint
+
+    t.allow(("name", "type", "beam", "body", "variant", "s0", "hole_point", "axis", "friction",
+             "friction_velocity", "axial_force"))
+    beam = ctx.beam(t)
+    body = ctx.body(t)
+    s0 = ctx.arc_length(t, beam, "s0") if t.has("s0") else None
+    joint = SlidingJoint(
+        beam, body, name=t.raw["name"],
+        variant=t.choice("variant", ("cylindrical", "ring"), "cylindrical", what="variant"),
+        s0=s0, hole_point=t.vector("hole_point", (0.0, 0.0, 0.0)),
+        axis=t.vector("axis", (1.0, 0.0, 0.0)),
+        friction=t.number("friction", 0.0, ge=0.0),
+        friction_velocity=t.number("friction_velocity", 1e-3, gt=0.0),
+        axial_force=_function(t, "axial_force", None) if t.has("axial_force") else None)
+    return model.add_joint(joint)
+
+
 #: ``[[joints]]`` types: builder(model, table, keypath, context) -> joint object
 JOINT_TYPES: dict[str, Callable[[Model, Table, str, BuildContext], Any]] = {
-    "sliding": _not_available("sliding"),
+    "sliding": _sliding,
     "sliding_clearance": _not_available("sliding_clearance"),
 }
 
@@ -1053,6 +1073,19 @@ def _probe_energy(model: Model, t: Table, keypath: str, ctx: BuildContext) -> An
     return probes.EnergyProbe(t.raw["name"], quantity)
 
 
+def _probe_slide_coordinate(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+    from . import probes
+
+    t.allow(("name", "type", "joint"))
+    name = t.string("joint")
+    joint = ctx.joints.get(name)
+    if joint is None or not hasattr(joint, "slide_coordinate"):
+        known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, "slide_coordinate"))
+        raise ScenarioError(f"{t.key('joint')}: no sliding joint named '{name}' "
+                            f"(sliding joints: {known or 'none'})")
+    return probes.SlideCoordinateProbe(t.raw["name"], joint)
+
+
 def _probe_not_available(kind: str) -> Callable[..., Any]:
     def build(model: Model, table: Table, keypath: str, context: BuildContext) -> Any:
         raise ScenarioError(f"{keypath}.type: probe type '{kind}' is not available in this "
@@ -1066,7 +1099,7 @@ PROBE_BUILDERS: dict[str, Callable[[Model, Table, str, BuildContext], Any]] = {
     "body_position": _probe_body_position,
     "body_orientation": _probe_body_orientation,
     "energy": _probe_energy,
-    "slide_coordinate": _probe_not_available("slide_coordinate"),
+    "slide_coordinate": _probe_slide_coordinate,
     "contact_force": _probe_not_available("contact_force"),
 }
 

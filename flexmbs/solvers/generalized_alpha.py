@@ -391,7 +391,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         for obj in asm.model.interactions:
             post = getattr(obj, "post_step", None)
             if post is not None:
-                post(asm, state)
+                post(asm, state.q, state.v, state.t)
         if state.t == t_out:
             k_out += 1
             if observer is not None:

@@ -217,8 +217,10 @@ bending_stiffness = 1.0
     # --- joints and probes
     ("joint_unknown_type", SIM + "[[joints]]\nname = 'j'\ntype = 'magic'\n",
      "joints[j].type: unknown joint type 'magic' (known: sliding, sliding_clearance)"),
-    ("joint_not_available", SIM + "[[joints]]\nname = 'j'\ntype = 'sliding'\n",
-     "joints[j].type: joint type 'sliding' is not available in this version"),
+    ("joint_missing_beam", SIM + "[[joints]]\nname = 'j'\ntype = 'sliding'\n",
+     "joints[j].beam: missing required key"),
+    ("joint_unknown_beam", SIM + BEAM + "[[joints]]\nname = 'j'\ntype = 'sliding'\nbeam = 'rial'\n",
+     "joints[j].beam: no beam named 'rial' (beams: rail)"),
     ("probe_s_outside_beam", SIM + BEAM + "[[probes]]\nname = 'tip'\ntype = 'beam_point'\n"
                                           "beam = 'rail'\ns = 1.5\n",
      "probes[tip].s: expected an arc length in [0, 1] (length of beam 'rail'), got 1.5"),
