@@ -40,9 +40,10 @@ def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (mes
 __version__ = "0.1.0"
 
 __all__ = [
-    "GROUND", "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
-    "ConvergenceError", "FlexmbsError", "Function", "GeneralizedAlpha", "GeometryError", "HalfSine",
-    "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp", "RedundantConstraintError",
-    "Result", "RigidBody", "ScenarioError", "SimulationStopped", "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "arc",
-    "line", "modes", "polyline", "read_curve", "simulate", "solve_static", "__version__",
+    "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
+    "ConvergenceError", "FlexmbsError", "Function", "GROUND", "GeneralizedAlpha", "GeometryError",
+    "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",
+    "RedundantConstraintError", "Result", "RigidBody", "ScenarioError", "SimulationStopped",
+    "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
+    "modes", "polyline", "read_curve", "simulate", "solve_static",
 ]

@@ -2,15 +2,24 @@
 
 from __future__ import annotations
 
+import dataclasses
+import json
+import math
+import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .assembly import Assembly
 from .elements import ancf_cable as cable
-from .errors import ConvergenceError, ModelError
+from .errors import ConvergenceError, ModelError, ScenarioError
+from .io.checkpoint import load_checkpoint
+from .io.output import OutputWriter, failure_reason
+from .io.probes import Probe, probe_columns
 from .model import Beam, Model, Node, RigidBody
 from .solvers.eigen import Modes, eigenmodes
 from .solvers.generalized_alpha import (
@@ -111,20 +120,62 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
              initial_static: bool = False, record_energy: bool = True,
              observer: Callable[[State], None] | None = None,
              progress: Callable[[State, IntegrationStats], None] | None = None,
-             redundant_constraints: str = "error") -> Result:
+             redundant_constraints: str = "error", out: str | os.PathLike | None = None,
+             probes: Sequence[Probe] = (), name: str | None = None,
+             static_options: StaticOptions | None = None, resume: bool = False,
+             metadata: dict | None = None, write_vtu: bool = True) -> Result:
     """Implicit dynamic simulation from the model's initial state (or its static equilibrium,
-    ``initial_static=True``) to ``t_end`` with step ``dt``; results every ``output_interval``.
+    ``initial_static=True``, solved with ``static_options``) to ``t_end`` with step ``dt``;
+    results every ``output_interval``.
+
+    With ``out`` the output folder of DESIGN.md ("Output folder") is written as the run goes
+    (``<name>.pvd`` + ``vtu/``, ``probes.csv`` with ``probes``, ``contacts.csv``,
+    ``checkpoint.npz``, ``summary.json``; ``name`` defaults to the model name) and stays valid
+    if the run fails (``status: "failed: ..."``) or is interrupted (``"interrupted"``).
+    ``resume=True`` continues the stopped run in ``out`` from its ``checkpoint.npz`` to
+    ``t_end``, appending to its files (see :func:`resume_point`); the returned history then
+    starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``.
+    A :class:`ConvergenceError` carries the history so far as ``partial_result``.
     """
     asm = model if isinstance(model, Assembly) else Assembly(
         model, redundant_constraints=redundant_constraints)
     opts = integrator or GeneralizedAlpha()
-    q0, v0 = asm.initial_state()
-    if initial_static:
-        st = _solve_static(asm)
-        q0 = st.q
-    state0 = consistent_initial_state(asm, q0, v0, 0.0)
-    ts, qs, vs, ls = [], [], [], []
+    run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
+    probes = list(probes)
+    columns = probe_columns(probes)
+    for p in probes:
+        p.check(asm)
+    resume_t: float | None = None
+    previous: dict = {}
+    if resume:
+        if out is None:
+            raise ModelError("simulate(resume=True) needs out= (the folder of the stopped run)")
+        state0, previous = resume_point(out, asm, run_name)
+        resume_t = state0.t
+        if not t_end > resume_t:
+            raise ModelError(f"cannot resume: the checkpoint in {out} is at t = {resume_t:.6g} "
+                             f"and t_end = {t_end:.6g}; give a later t_end")
+    else:
+        q0, v0 = asm.initial_state()
+        if initial_static:
+            q0 = _solve_static(asm, static_options).q
+        state0 = consistent_initial_state(asm, q0, v0, 0.0)
+    ts: list[float] = []
+    qs: list[np.ndarray] = []
+    vs: list[np.ndarray] = []
+    ls: list[np.ndarray] = []
     energies: dict[str, list[float]] = {}
+    probe_rows: list[np.ndarray] = []
+    last_stats: list[IntegrationStats] = []
+    writer: OutputWriter | None = None
+    if out is not None:
+        meta = {"dt": dt, "t_end": t_end, "output_interval": output_interval,
+                "integrator": dataclasses.asdict(opts), **(metadata or {})}
+        if resume_t is not None:
+            meta["resumed_from"] = resume_t
+        writer = OutputWriter(out, run_name, asm, probes=probes, metadata=meta,
+                              write_vtu=write_vtu, resume_at=resume_t)
+    ckpt_extra = {"scenario": run_name, "n_coords": int(asm.n_coords), "n_mult": int(asm.n_mult)}
 
     def record(s: State) -> None:
         ts.append(s.t)
@@ -134,23 +185,130 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         if record_energy:
             for k, val in asm.energies(s.q, s.v).items():
                 energies.setdefault(k, []).append(val)
+        if probes:
+            probe_rows.append(np.concatenate(
+                [np.asarray(p.evaluate(asm, s), float).reshape(-1) for p in probes]))
+        # a resumed run starts at the checkpoint, which the folder already holds
+        if writer is not None and (resume_t is None or s.t > resume_t):
+            writer.write(s, contacts=interaction_outputs(asm, s),
+                         checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm)})
         if observer is not None:
             observer(s)
+
+    def watch(s: State, st: IntegrationStats) -> None:
+        if not last_stats:
+            last_stats.append(st)   # the integrator's own (mutated) counters
+        if progress is not None:
+            progress(s, st)
 
     t0 = time.perf_counter()
 
     def result(final: State, stats: IntegrationStats, status: str) -> Result:
+        extra: dict[str, Any] = {}
+        if probes:
+            arr = np.array(probe_rows).reshape(len(probe_rows), len(columns))
+            extra["probes"] = {c: arr[:, i] for i, c in enumerate(columns)}
+        if writer is not None:
+            extra["out"] = writer.directory
         return Result(asm, np.array(ts), np.array(qs), np.array(vs), np.array(ls),
                       {k: np.array(v) for k, v in energies.items()}, stats,
-                      time.perf_counter() - t0, final, status)
+                      time.perf_counter() - t0, final, status, extra)
+
+    def finish(status: str, stats: IntegrationStats) -> None:
+        if writer is not None:
+            total = _add_stats(previous.get("stats"), stats)
+            wall = time.perf_counter() - t0 + float(previous.get("wall_time") or 0.0)
+            writer.finish(status, stats=total, wall_time=wall)
 
     try:
         final, stats = integrate(asm, opts, t_end=t_end, dt=dt, state=state0,
                                  output_interval=output_interval, observer=record,
-                                 progress=progress)
+                                 progress=watch)
     except ConvergenceError as exc:
         # keep what was computed: the partial history travels with the exception
+        stats = last_stats[0] if last_stats else IntegrationStats()
+        status = f"failed: {failure_reason(exc)}"
+        finish(status, stats)
         last = State(ts[-1], qs[-1], vs[-1], np.zeros_like(qs[-1]), np.zeros_like(qs[-1]), ls[-1])
-        exc.partial_result = result(last, IntegrationStats(), f"failed: {exc}")  # type: ignore[attr-defined]
+        exc.partial_result = result(last, stats, status)  # type: ignore[attr-defined]
         raise
+    except KeyboardInterrupt:
+        finish("interrupted", last_stats[0] if last_stats else IntegrationStats())
+        raise
+    except BaseException as exc:
+        finish(f"failed: {failure_reason(exc)}", last_stats[0] if last_stats else IntegrationStats())
+        raise
+    finish("completed", stats)
     return result(final, stats, "completed")
+
+
+def _add_stats(previous: dict | None, stats: IntegrationStats) -> IntegrationStats:
+    """Counters of a resumed run added to those of the run it continues."""
+    total = dataclasses.replace(stats)
+    for f in dataclasses.fields(IntegrationStats):
+        old = (previous or {}).get(f.name)
+        if isinstance(old, int):
+            setattr(total, f.name, getattr(total, f.name) + old)
+    return total
+
+
+def interaction_outputs(asm: Assembly, state: State) -> list[dict]:
+    """Contact records (contacts.csv columns) of every interaction of the model at ``state``."""
+    rows: list[dict] = []
+    for obj in asm.model.interactions:
+        fn = getattr(obj, "output", None)
+        if fn is not None:
+            rows.extend(fn(asm, state.q, state.v, state.lam, state.t))
+    return rows
+
+
+def interaction_states(asm: Assembly) -> dict[str, Any]:
+    """Internal state of the interactions (warm starts, active sets) by name, for checkpoints."""
+    out: dict[str, Any] = {}
+    for i, obj in enumerate(asm.model.interactions):
+        fn = getattr(obj, "get_state", None)
+        if fn is not None:
+            out[str(getattr(obj, "name", i))] = fn()
+    return out
+
+
+def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[State, dict]:
+    """The state to continue a stopped run from: ``out/checkpoint.npz``, checked against this
+    model (scenario name, coordinate and multiplier counts); interaction state is restored.
+    Returns ``(state, previous summary)``; raises :class:`ScenarioError` if the folder does not
+    belong to this run."""
+    folder = Path(out)
+    ckpt = folder / "checkpoint.npz"
+    if not ckpt.is_file():
+        raise ScenarioError(f"cannot resume: no checkpoint {ckpt} (run without --resume first)")
+    try:
+        state, extra = load_checkpoint(ckpt)
+    except (OSError, ValueError, KeyError) as exc:
+        raise ScenarioError(f"cannot resume: {ckpt} is not readable ({exc})") from None
+    summary: dict = {}
+    if (folder / "summary.json").is_file():
+        try:
+            summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        except ValueError as exc:
+            raise ScenarioError(f"cannot resume: {folder / 'summary.json'} is not valid JSON "
+                                f"({exc})") from None
+    dofs = summary.get("dofs") or {}
+    found = {"scenario": extra.get("scenario", summary.get("scenario")),
+             "n_coords": extra.get("n_coords", dofs.get("coordinates")),
+             "n_mult": extra.get("n_mult", dofs.get("multipliers"))}
+    wanted = {"scenario": name, "n_coords": int(asm.n_coords), "n_mult": int(asm.n_mult)}
+    bad = [f"{k} {found[k]!r} (this run: {wanted[k]!r})" for k in wanted if found[k] != wanted[k]]
+    if bad:
+        raise ScenarioError(f"cannot resume: {folder} belongs to another run: " + ", ".join(bad))
+    if state.q.shape != (asm.n_coords,) or state.lam.shape != (asm.n_mult,):
+        raise ScenarioError(f"cannot resume: {ckpt} has {state.q.size} coordinates and "
+                            f"{state.lam.size} multipliers (this run: {asm.n_coords}, {asm.n_mult})")
+    if not (math.isfinite(state.t) and np.all(np.isfinite(state.q))):
+        raise ScenarioError(f"cannot resume: {ckpt} holds a non-finite state")
+    saved = extra.get("interactions") or {}
+    for i, obj in enumerate(asm.model.interactions):
+        key = str(getattr(obj, "name", i))
+        fn = getattr(obj, "set_state", None)
+        if fn is not None and key in saved:
+            fn(saved[key])
+    return state, summary

@@ -13,6 +13,9 @@ Files (every one valid after every output, so a run that stops early leaves read
 - ``checkpoint.npz``: the latest state (:mod:`flexmbs.io.checkpoint`);
 - ``summary.json``: written at start (``status: "running"``) and at the end (``completed``,
   ``failed: <reason>`` or ``interrupted``).
+
+``OutputWriter(..., resume_at=t)`` continues the folder of a stopped run (``flexmbs run
+--resume``): rows and frames at times ``<= t`` are kept, later ones removed, new ones appended.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import FlexmbsError
+from ..errors import FlexmbsError, ModelError
 from .checkpoint import save_checkpoint
 from .probes import Probe, probe_columns
 from .vtu import BLOCK_NAMES, FrameBuilder, VTUSeries
@@ -83,12 +86,14 @@ class OutputWriter:
     ``asm`` is the :class:`~flexmbs.assembly.Assembly`; ``metadata`` (scenario path, solver
     settings, ...) is stored under ``summary.json["metadata"]``. ``write_vtu=False`` skips the
     VTU series, ``checkpoints=False`` the checkpoint. Each :meth:`write` is one output time.
+    ``resume_at=t`` appends to the folder of an earlier run whose outputs up to ``t`` are kept
+    (the CSV headers must match; the initial energy is taken from its ``summary.json``).
     """
 
     def __init__(self, directory: str | os.PathLike, name: str, asm: Any, *,
                  probes: Sequence[Probe] = (), write_vtu: bool = True, checkpoints: bool = True,
                  metadata: dict | None = None, samples_per_element: int = 8,
-                 vtu_encoding: str = "binary") -> None:
+                 vtu_encoding: str = "binary", resume_at: float | None = None) -> None:
         self.directory = Path(directory)
         self.name = str(name)
         self.asm = asm
@@ -109,12 +114,22 @@ class OutputWriter:
         self._files: list[Any] = []
         self.series: VTUSeries | None = None
         self.frames: FrameBuilder | None = None
+        self.resume_at = None if resume_at is None else float(resume_at)
+        self.previous_summary: dict | None = None
+        if self.resume_at is not None and self.summary_path.is_file():
+            with open(self.summary_path, encoding="utf-8") as f:
+                self.previous_summary = json.load(f)
+            initial = (self.previous_summary.get("energy_balance") or {}).get("initial")
+            if isinstance(initial, dict):
+                self.initial_energy = initial
         try:
             if write_vtu:
                 self.frames = FrameBuilder(asm, samples_per_element=samples_per_element)
-                self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding)
-            self._probe_file = self._open_csv("probes.csv", ["t", *self.probe_columns])
-            self._contact_file = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
+                self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding,
+                                        resume_at=self.resume_at)
+            self._probe_file, kept = self._open_csv("probes.csv", ["t", *self.probe_columns])
+            self._contact_file, _ = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
+            self.n_outputs = kept
             self._write_summary()
         except BaseException:
             self._close_files()
@@ -133,12 +148,26 @@ class OutputWriter:
     def summary_path(self) -> Path:
         return self.directory / "summary.json"
 
-    def _open_csv(self, fname: str, header: list[str]) -> Any:
-        f = open(self.directory / fname, "w", newline="", encoding="utf-8")  # noqa: SIM115
+    def _open_csv(self, fname: str, header: list[str]) -> tuple[Any, int]:
+        """Open ``fname`` for writing rows; returns (file, number of data rows kept)."""
+        path = self.directory / fname
+        rows: list[list[str]] = []
+        if self.resume_at is not None and path.is_file():
+            with open(path, newline="", encoding="utf-8") as f:
+                old = list(csv.reader(f))
+            if not old or old[0] != header:
+                raise ModelError(f"cannot resume into {self.directory}: the columns of {fname} "
+                                 f"differ from this run's ({','.join(header)})")
+            rows = [r for r in old[1:] if r and float(r[0]) <= self.resume_at]
+        tmp = path.with_name(f".{fname}.tmp")
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f)
+            w.writerow(header)
+            w.writerows(rows)
+        os.replace(tmp, path)
+        f = open(path, "a", newline="", encoding="utf-8")  # noqa: SIM115
         self._files.append(f)
-        csv.writer(f).writerow(header)
-        f.flush()
-        return f
+        return f, len(rows)
 
     def _close_files(self) -> None:
         for f in self._files:

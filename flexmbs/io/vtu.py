@@ -251,10 +251,14 @@ class VTUSeries:
 
     The ``.pvd`` is valid after construction (empty collection) and after every write. Stale
     frames ``<name>_NNNNNN.vtu`` of an earlier run in the same folder are removed on creation.
+
+    ``resume_at=t`` continues an existing series instead (a resumed run): the frames of the
+    ``.pvd`` at times ``<= t`` are kept, later ones (and their files) are removed, and new
+    frames are appended after them.
     """
 
     def __init__(self, pvd_path: str | os.PathLike, *, vtu_subdir: str = "vtu",
-                 encoding: str = "binary") -> None:
+                 encoding: str = "binary", resume_at: float | None = None) -> None:
         if encoding not in ("binary", "ascii"):
             raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
         self.pvd_path = Path(pvd_path)
@@ -263,11 +267,14 @@ class VTUSeries:
         self.encoding = encoding
         self.vtu_dir = self.pvd_path.parent / vtu_subdir
         self.vtu_dir.mkdir(parents=True, exist_ok=True)
+        self.entries: list[tuple[float, str]] = []
+        if resume_at is not None:
+            self.entries = [(t, f) for t, f in read_pvd(self.pvd_path) if t <= resume_at]
+        keep = {Path(f).name for _, f in self.entries}
         stale = re.compile(rf"{re.escape(self.name)}_\d{{6,}}\.vtu")
         for f in self.vtu_dir.iterdir():
-            if stale.fullmatch(f.name):
+            if stale.fullmatch(f.name) and f.name not in keep:
                 f.unlink()
-        self.entries: list[tuple[float, str]] = []
         self.closed = False
         self._write_pvd()
 
@@ -304,6 +311,18 @@ class VTUSeries:
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
         self.close()
+
+
+_PVD_DATASET = re.compile(r'<DataSet\b[^>]*\btimestep="([^"]*)"[^>]*\bfile="([^"]*)"')
+
+
+def read_pvd(pvd_path: str | os.PathLike) -> list[tuple[float, str]]:
+    """``(time, relative file)`` of every ``DataSet`` of a ``.pvd`` written by
+    :class:`VTUSeries` (in file order); a missing file is an empty series."""
+    p = Path(pvd_path)
+    if not p.is_file():
+        return []
+    return [(float(t), f) for t, f in _PVD_DATASET.findall(p.read_text(encoding="utf-8"))]
 
 
 # =============================================================================== body shapes

@@ -397,6 +397,8 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             if observer is not None:
                 observer(state)
         if progress is not None:
+            stats.newton_iterations, stats.factorizations, stats.residual_evaluations = (
+                stepper.totals())
             progress(state, stats)
     stats.newton_iterations, stats.factorizations, stats.residual_evaluations = stepper.totals()
     return state, stats

@@ -1,0 +1,370 @@
+"""Command line: ``flexmbs run | info | render | plot | sweep`` (DESIGN.md, "CLI").
+
+``main(argv)`` returns the exit status, so tests call it directly::
+
+    main(["run", "examples/cantilever.toml", "--t-end", "0.05", "--quiet"])
+
+Exit status: 0 success; 2 bad input (invalid scenario or override, model or geometry error,
+a folder that cannot be resumed, usage errors); 3 the run failed (divergence); 130 interrupted
+(Ctrl-C). Errors are one line ``flexmbs: error: <message>`` on stderr, never a traceback; an
+unexpected internal error keeps its traceback (exit 1) so that it can be reported.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from .errors import ConvergenceError, FlexmbsError
+
+EXIT_OK = 0
+EXIT_BAD_INPUT = 2
+EXIT_FAILED = 3
+EXIT_INTERRUPTED = 130
+
+_NOT_AVAILABLE = "not available in this version (post-processing arrives with a later release)"
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _error(message: str) -> None:
+    print(f"flexmbs: error: {' '.join(message.split())}", file=sys.stderr)
+
+
+# ================================================================================ parser
+def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="flexmbs", description="Flexible multibody dynamics: ANCF beams, rigid bodies, "
+        "sliding joints with clearance. See docs/cli.md.")
+    parser.add_argument("--version", action="version", version=f"flexmbs {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    overrides = argparse.ArgumentParser(add_help=False)
+    overrides.add_argument("--set", dest="overrides", action="append", default=[],
+                           metavar="KEY=VALUE",
+                           help="override a scenario value, e.g. simulation.dt=5e-4 or "
+                                "beams.rod.elements=8 (repeatable)")
+
+    run = sub.add_parser("run", parents=[overrides], help="run a scenario",
+                         description="Run a scenario and write its output folder.")
+    run.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
+    run.add_argument("--out", metavar="DIR",
+                     help="output folder (default: out/<scenario name> in the current directory)")
+    run.add_argument("--t-end", type=float, metavar="T", help="end time (= --set simulation.t_end=T)")
+    run.add_argument("--dt", type=float, metavar="H", help="time step (= --set simulation.dt=H)")
+    run.add_argument("--quiet", "-q", action="store_true",
+                     help="no progress bar and no final summary (errors are still printed)")
+    run.add_argument("--resume", metavar="OUT_DIR",
+                     help="continue the stopped run in OUT_DIR from its checkpoint.npz to t_end, "
+                          "appending to its files")
+
+    info = sub.add_parser("info", parents=[overrides], help="print the model of a scenario",
+                          description="Print the model: coordinates, beams, bodies, constraints, "
+                                      "loads, joints, probes and solver settings.")
+    info.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
+
+    render = sub.add_parser("render", help="off-screen rendering of an output folder "
+                            f"({_NOT_AVAILABLE.split(' (')[0]})")
+    render.add_argument("directory", metavar="DIR")
+    render.add_argument("--movie", metavar="FILE")
+    render.add_argument("--png-every", type=int, metavar="N")
+    plot = sub.add_parser("plot", help="time-history figures of an output folder "
+                          f"({_NOT_AVAILABLE.split(' (')[0]})")
+    plot.add_argument("directory", metavar="DIR")
+    sweep = sub.add_parser("sweep", help="run scenario variants "
+                           f"({_NOT_AVAILABLE.split(' (')[0]})")
+    sweep.add_argument("scenario", metavar="SCENARIO")
+    sweep.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...")
+    sweep.add_argument("--scheduler", metavar="ADDRESS")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``flexmbs`` console script; returns the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(None if argv is None else list(argv))
+    except SystemExit as exc:   # --help, --version, usage errors (argparse printed them)
+        return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
+    if args.command == "run":
+        return cmd_run(args)
+    if args.command == "info":
+        return cmd_info(args)
+    print(f"flexmbs {args.command}: {_NOT_AVAILABLE}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+# ================================================================================ run
+def _overrides(args: argparse.Namespace) -> list[str]:
+    sets = list(args.overrides)
+    if getattr(args, "t_end", None) is not None:
+        sets.append(f"simulation.t_end={args.t_end!r}")
+    if getattr(args, "dt", None) is not None:
+        sets.append(f"simulation.dt={args.dt!r}")
+    return sets
+
+
+class _Progress:
+    """tqdm bar over simulated time with steps/s and Newton iterations in the postfix."""
+
+    def __init__(self, t0: float, t_end: float, *, disable: bool, name: str) -> None:
+        self.bar: Any = None
+        self.t0 = t0
+        self.wall0 = time.perf_counter()
+        self.last = 0.0
+        if disable:
+            return
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=t_end, initial=t0, desc=name, unit="s", file=sys.stderr,
+                        dynamic_ncols=True, leave=True,
+                        bar_format="{desc}: {percentage:3.0f}%|{bar}| t = {n:.4g}/{total:.4g} s "
+                                   "[{elapsed}<{remaining}{postfix}]")
+
+    def __call__(self, state: Any, stats: Any) -> None:
+        if self.bar is None:
+            return
+        self.stats = stats
+        self.bar.n = float(state.t)
+        now = time.perf_counter()
+        if now - self.last >= 0.1:
+            self.last = now
+            self._postfix(now)
+            self.bar.refresh()
+
+    def _postfix(self, now: float) -> None:
+        stats = getattr(self, "stats", None)
+        if stats is None:
+            return
+        rate = stats.steps / max(now - self.wall0, 1e-9)
+        post = {"steps": stats.steps, "steps/s": f"{rate:.3g}"}
+        # the integrator totals Newton iterations at the end of a run; show them once known
+        if stats.newton_iterations:
+            post["newton"] = stats.newton_iterations
+        if stats.rejected_steps:
+            post["rejected"] = stats.rejected_steps
+        self.bar.set_postfix(post, refresh=False)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self._postfix(time.perf_counter())   # final counts (same stats object, now totalled)
+            self.bar.close()
+            self.bar = None
+
+
+def _run_static(sc: Any, asm: Any, out: Path, metadata: dict) -> tuple[str, dict]:
+    """``integrator = "static"``: the equilibrium at t_end, written as one output frame."""
+    from .io.output import OutputWriter, failure_reason
+    from .simulation import interaction_outputs
+    from .solvers.generalized_alpha import State
+    from .solvers.static import solve_static
+
+    t = sc.simulation.t_end
+    t0 = time.perf_counter()
+    with OutputWriter(out, sc.name, asm, probes=sc.probes, metadata=metadata) as writer:
+        try:
+            st = solve_static(asm, sc.static_options(), t=t)
+        except ConvergenceError as exc:
+            writer.finish(f"failed: {failure_reason(exc)}", stats={"steps": 0},
+                          wall_time=time.perf_counter() - t0)
+            raise
+        zero = np.zeros_like(st.q)
+        state = State(t, st.q, zero, zero.copy(), zero.copy(), st.lam)
+        writer.write(state, contacts=interaction_outputs(asm, state),
+                     checkpoint_extra={"scenario": sc.name, "n_coords": int(asm.n_coords),
+                                       "n_mult": int(asm.n_mult)})
+        stats = {"steps": 0, "newton_iterations": st.newton_iterations, "rejected_steps": 0,
+                 "load_increments": st.load_increments}
+        writer.finish("completed", stats=stats, wall_time=time.perf_counter() - t0)
+    return "completed", stats
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from .assembly import Assembly
+    from .io.scenario import load_scenario
+    from .simulation import simulate
+
+    quiet = bool(args.quiet)
+    status = "failed"
+    out: Path | None = None
+    t_wall = time.perf_counter()
+    progress: _Progress | None = None
+    try:
+        sc = load_scenario(args.scenario, _overrides(args))
+        sim = sc.simulation
+        if args.resume is not None:
+            if args.out is not None and Path(args.out).resolve() != Path(args.resume).resolve():
+                _error(f"--out {args.out} and --resume {args.resume} name different folders")
+                return EXIT_BAD_INPUT
+            out = Path(args.resume)
+            if not out.is_dir():
+                _error(f"cannot resume: {out} is not a folder")
+                return EXIT_BAD_INPUT
+        else:
+            out = Path(args.out) if args.out is not None else Path("out") / sc.name
+        asm = Assembly(sc.model, redundant_constraints=sim.redundant_constraints)
+        metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": _overrides(args),
+                    "integrator_name": sim.integrator, "initial_static": sim.initial_static}
+        if sim.integrator == "static":
+            if args.resume is not None:
+                _error("--resume: a static scenario has nothing to resume")
+                return EXIT_BAD_INPUT
+            status, st = _run_static(sc, asm, out, metadata)
+            steps, newton, rejected = 0, st["newton_iterations"], 0
+        else:
+            start = 0.0
+            if args.resume is not None:
+                from .io.checkpoint import load_checkpoint
+
+                ckpt = out / "checkpoint.npz"
+                if ckpt.is_file():
+                    try:
+                        start = load_checkpoint(ckpt)[0].t
+                    except (OSError, ValueError, KeyError):
+                        start = 0.0   # simulate() reports the unreadable checkpoint
+            progress = _Progress(start, sim.t_end, name=sc.name,
+                                 disable=quiet or not sys.stderr.isatty())
+            res = simulate(asm, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
+                           output_interval=sim.output_interval,
+                           initial_static=sim.initial_static, static_options=sc.static_options(),
+                           record_energy=False, progress=progress, out=out, probes=sc.probes,
+                           name=sc.name, resume=args.resume is not None, metadata=metadata)
+            progress.close()
+            status = res.status
+            steps, newton = res.stats.steps, res.stats.newton_iterations
+            rejected = res.stats.rejected_steps
+    except KeyboardInterrupt:
+        if progress is not None:
+            progress.close()
+        _error("interrupted" + (f" (output so far in {out})" if out is not None else ""))
+        return EXIT_INTERRUPTED
+    except FlexmbsError as exc:
+        if progress is not None:
+            progress.close()
+        _error(_one_line(exc))
+        return EXIT_FAILED if isinstance(exc, ConvergenceError) else EXIT_BAD_INPUT
+    except OSError as exc:
+        if progress is not None:
+            progress.close()
+        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
+        _error(f"cannot write or read{where}: {exc.strerror or _one_line(exc)}")
+        return EXIT_BAD_INPUT
+    if not quiet:
+        wall = time.perf_counter() - t_wall
+        print(f"{sc.name}: {status} at t = {sim.t_end:.6g} s: {steps} steps, {newton} Newton "
+              f"iterations, {rejected} rejected, wall time {wall:.3g} s; output: {out}")
+    return EXIT_OK
+
+
+# ================================================================================ info
+def _fmt(x: Any) -> str:
+    if isinstance(x, (float, np.floating)):
+        return f"{float(x):.6g}"
+    if isinstance(x, np.ndarray):
+        return "[" + ", ".join(_fmt(v) for v in x.reshape(-1)) + "]"
+    if isinstance(x, (list, tuple)):
+        return "[" + ", ".join(_fmt(v) for v in x) + "]"
+    return str(x)
+
+
+def _target(obj: Any) -> str:
+    return str(getattr(obj, "name", obj))
+
+
+def print_info(sc: Any, asm: Any, file: TextIO) -> None:
+    """The model of a loaded scenario, human readable."""
+    def p(*parts: Any) -> None:
+        print(*parts, file=file)
+
+    model = sc.model
+    sim = sc.simulation
+    p(f"scenario     {sc.name}  ({sc.path})")
+    if sc.description:
+        p(f"description  {' '.join(sc.description.split())}")
+    p(f"coordinates  {asm.n_coords}")
+    p(f"multipliers  {asm.n_mult}")
+    p(f"gravity      {_fmt(model.gravity)} m/s^2")
+    p(f"beams ({len(model.beams)})")
+    for b in model.beams:
+        k = b.stiffness
+        opts = getattr(b, "options", None)
+        p(f"  {b.name}: {b.n_elem} elements, {b.n_nodes} nodes, length {_fmt(b.length)} m"
+          f"{', closed' if b.closed else ''}")
+        p(f"    EA {_fmt(k.axial_stiffness)} N, EI {_fmt(k.bending_stiffness)} N m^2, "
+          f"rhoA {_fmt(k.mass_per_length)} kg/m"
+          + (f", GJ {_fmt(k.torsional_stiffness)} N m^2" if k.torsional_stiffness else "")
+          + (f", radius {_fmt(k.radius)} m" if k.radius else ""))
+        p(f"    damping {_fmt(b.damping)} s, reference axial strain "
+          f"{_fmt(b.reference_axial_strain)}" + (f", options {opts}" if opts is not None else ""))
+    p(f"rigid bodies ({len(model.bodies)})")
+    for body in model.bodies:
+        pose = body.pose
+        p(f"  {body.name}: mass {_fmt(body.mass)} kg, inertia "
+          f"{_fmt(np.asarray(body.inertia, float))} kg m^2")
+        p(f"    position {_fmt(pose.position)} m, quaternion {_fmt(pose.quaternion)}")
+    p(f"constraints ({len(model.constraints)}; {asm.n_mult} equations)")
+    labels = list(asm.multiplier_labels)
+    for c in model.constraints:
+        eqs = [lab for lab in labels if f"'{c.name}'" in lab]
+        target = _target(c.a) + (f" -> {_target(c.b)}" if c.kind not in ("clamp", "pin") and
+                                 c.kind != "prescribed" else "")
+        p(f"  {c.name}: {c.kind} {target}, {len(eqs)} equations")
+        for lab in eqs:
+            p(f"    {lab}")
+    other = [lab for lab in labels if not any(f"'{c.name}'" in lab for c in model.constraints)]
+    if other:
+        p(f"  other equations ({len(other)})")
+        for lab in other:
+            p(f"    {lab}")
+    dropped = list(getattr(asm, "dropped_equations", []))
+    p(f"dropped redundant equations ({len(dropped)})" + (": " + "; ".join(dropped) if dropped else ""))
+    p(f"loads ({len(model.loads)})")
+    for ld in model.loads:
+        tgt = ld.target
+        where = (f"{tgt[0].name} at s = {_fmt(tgt[1])}" if isinstance(tgt, tuple) else _target(tgt))
+        p(f"  {ld.name}: {ld.kind} on {where}, force {_fmt(ld.force)}"
+          + (f", moment {_fmt(ld.moment)}" if ld.moment is not None else "")
+          + f", function {ld.function!r}")
+    joints = list(model.interactions)
+    p(f"joints/interactions ({len(joints)})")
+    for j in joints:
+        p(f"  {j!r}")
+    p(f"probes ({len(sc.probes)})")
+    for pr in sc.probes:
+        p(f"  {pr.name}: {type(pr).__name__} -> {', '.join(pr.columns())}")
+    p("simulation")
+    for k, v in vars(sim).items():
+        if k == "newton":
+            v = v or "{} (defaults)"
+        p(f"  {k:22s} {_fmt(v)}")
+    opts_i = sc.integrator_options()
+    p(f"  solver                 {opts_i if opts_i is not None else sc.static_options()}")
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from .assembly import Assembly
+    from .io.scenario import load_scenario
+
+    try:
+        sc = load_scenario(args.scenario, _overrides(args))
+        asm = Assembly(sc.model, redundant_constraints=sc.simulation.redundant_constraints)
+    except FlexmbsError as exc:
+        _error(_one_line(exc))
+        return EXIT_BAD_INPUT
+    print_info(sc, asm, sys.stdout)
+    return EXIT_OK
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

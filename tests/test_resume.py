@@ -1,0 +1,109 @@
+"""``flexmbs run --resume``: a run stopped at t1 and continued to t2 equals an uninterrupted run
+to t2, its folder holds each output once, and a folder of another run is refused.
+
+Tolerances: with full Newton (``simulation.newton.modified=false``) every step depends only on
+the state, so the resumed run is bit-identical (files compared byte for byte). With modified
+Newton (the default) the uninterrupted run may still use a factorisation from before t1 where
+the resumed run refactorises, so the two agree to the Newton tolerance: RTOL_MODIFIED relative.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexmbs.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from flexmbs.io.checkpoint import load_checkpoint
+from flexmbs.io.vtu import read_pvd
+
+ROOT = Path(__file__).resolve().parents[1]
+CANTILEVER = str(ROOT / "examples" / "cantilever.toml")
+PENDULUM = str(ROOT / "examples" / "flexible_pendulum.toml")
+FULL_NEWTON = ["--set", "simulation.newton.modified=false"]
+RTOL_MODIFIED = 1e-8
+T1, T2 = "0.03", "0.06"
+
+
+def run(*args: str) -> int:
+    return main(["run", *args, "--quiet"])
+
+
+def stopped_and_resumed(tmp_path: Path, extra: list[str]) -> tuple[Path, Path]:
+    """(uninterrupted run to T2, run to T1 resumed to T2)."""
+    full, part = tmp_path / "full", tmp_path / "part"
+    assert run(CANTILEVER, "--t-end", T2, "--out", str(full), *extra) == EXIT_OK
+    assert run(CANTILEVER, "--t-end", T1, "--out", str(part), *extra) == EXIT_OK
+    assert run(CANTILEVER, "--t-end", T2, "--resume", str(part), *extra) == EXIT_OK
+    return full, part
+
+
+def test_resume_bit_identical_with_full_newton(tmp_path):
+    full, part = stopped_and_resumed(tmp_path, FULL_NEWTON)
+    for f in ("probes.csv", "contacts.csv"):
+        assert (part / f).read_bytes() == (full / f).read_bytes()
+    assert read_pvd(part / "cantilever.pvd") == read_pvd(full / "cantilever.pvd")
+    for _, f in read_pvd(full / "cantilever.pvd"):
+        assert (part / f).read_bytes() == (full / f).read_bytes()
+    sa, _ = load_checkpoint(full / "checkpoint.npz")
+    sb, _ = load_checkpoint(part / "checkpoint.npz")
+    assert sa.t == sb.t == 0.06
+    for k in ("q", "v", "qdd", "a", "lam"):
+        np.testing.assert_array_equal(getattr(sb, k), getattr(sa, k))
+    a, b = (json.loads((d / "summary.json").read_text()) for d in (full, part))
+    assert b["status"] == "completed" and b["metadata"]["resumed_from"] == 0.03
+    for k in ("steps", "newton_iterations", "outputs", "final_time"):
+        assert b[k] == a[k], k
+    assert b["energy_balance"]["final_total"] == a["energy_balance"]["final_total"]
+
+
+def test_resume_default_modified_newton_agrees(tmp_path):
+    full, part = stopped_and_resumed(tmp_path, [])
+    pa = np.loadtxt(full / "probes.csv", delimiter=",", skiprows=1)
+    pb = np.loadtxt(part / "probes.csv", delimiter=",", skiprows=1)
+    assert pa.shape == pb.shape == (7, 5)
+    np.testing.assert_array_equal(pa[:, 0], pb[:, 0])      # each output once, same times
+    np.testing.assert_array_equal(pa[:4], pb[:4])          # up to t1: the same run
+    scale = np.abs(pa[:, 1:4]).max()
+    np.testing.assert_allclose(pb[:, 1:4], pa[:, 1:4], rtol=0, atol=RTOL_MODIFIED * scale)
+
+
+def test_resume_drops_outputs_after_checkpoint(tmp_path):
+    """Rows or frames after the checkpoint (a crash between writes) are not duplicated."""
+    part = tmp_path / "part"
+    assert run(CANTILEVER, "--t-end", T1, "--out", str(part), *FULL_NEWTON) == EXIT_OK
+    with (part / "probes.csv").open("a") as f:
+        f.write("0.035,1,2,3,4\n")
+    assert run(CANTILEVER, "--t-end", T2, "--resume", str(part), *FULL_NEWTON) == EXIT_OK
+    t = np.loadtxt(part / "probes.csv", delimiter=",", skiprows=1)[:, 0]
+    np.testing.assert_allclose(t, np.arange(7) * 0.01, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("what", ["missing", "other_scenario", "other_size", "not_later",
+                                  "no_folder"])
+def test_resume_refuses(tmp_path, capsys, what):
+    folder = tmp_path / "run"
+    folder.mkdir()
+    args = [CANTILEVER, "--t-end", T2]
+    if what == "other_scenario":
+        assert run(PENDULUM, "--t-end", T1, "--out", str(folder)) == EXIT_OK
+    elif what in ("other_size", "not_later"):
+        assert run(CANTILEVER, "--t-end", T1, "--out", str(folder)) == EXIT_OK
+        if what == "other_size":
+            args += ["--set", "beams.rod.elements=8"]
+        else:
+            args = [CANTILEVER, "--t-end", T1]
+    elif what == "no_folder":
+        folder = tmp_path / "nothing"
+    capsys.readouterr()
+    before = {p: p.read_bytes() for p in folder.glob("*.csv")}
+    assert run(*args, "--resume", str(folder)) == EXIT_BAD_INPUT
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmbs: error: ")
+    expected = {"missing": "no checkpoint", "other_scenario": "belongs to another run",
+                "other_size": "n_coords 102 (this run: 54)", "not_later": "give a later t_end",
+                "no_folder": "is not a folder"}[what]
+    assert expected in lines[0]
+    assert {p: p.read_bytes() for p in folder.glob("*.csv")} == before   # left untouched
