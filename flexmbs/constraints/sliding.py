@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from ..elements import ancf_cable as cable
-from ..elements.rigid_body import point_jacobian, point_tensor, rotation_matrix
+from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError
 from ..loads import TimeFunction, as_time_function
 from .base import Constraint
@@ -76,14 +76,14 @@ class _SlidingConstraint(Constraint):
         jac = np.zeros((m, 20))
         phi[:3] = rH + A @ j.hole_point - r
         jac[:3, :3] = np.eye(3)
-        jac[:3, 3:7] = point_jacobian(p, j.hole_point)
+        jac[:3, 3:7] = 2.0 * (j._T_u @ p)
         jac[:3, 7:19] = -np.kron(S, np.eye(3))
         jac[:3, 19] = -r1
         if m == 5:
-            for i, w in enumerate((j._y_body, j._z_body)):
+            for i, (w, Tw) in enumerate(((j._y_body, j._T_y), (j._z_body, j._T_z))):
                 aw = A @ w
                 phi[3 + i] = aw @ r1
-                jac[3 + i, 3:7] = r1 @ point_jacobian(p, w)
+                jac[3 + i, 3:7] = r1 @ (2.0 * (Tw @ p))
                 jac[3 + i, 7:19] = np.kron(dS, aw)
                 jac[3 + i, 19] = aw @ r2
         return phi, jac
@@ -96,17 +96,15 @@ class _SlidingConstraint(Constraint):
         r1 = dS @ e
         r2 = ddS @ e
         r3 = d3 @ e
-        T = point_tensor(j.hole_point)
-        H[3:7, 3:7] += 2.0 * np.einsum("k,kij->ij", lp, T)
+        H[3:7, 3:7] += 2.0 * np.einsum("k,kij->ij", lp, j._T_u)
         H[7:19, 19] += -np.kron(dS, lp)
         H[19, 19] += -lp @ r2
         if self.n_equations == 5:
             A = rotation_matrix(p)
-            for mu, w in zip(lam[3:5], (j._y_body, j._z_body), strict=True):
+            for mu, w, Tw in zip(lam[3:5], (j._y_body, j._z_body), (j._T_y, j._T_z), strict=True):
                 if mu == 0.0:
                     continue
-                Tw = point_tensor(w)
-                Bw = point_jacobian(p, w)                     # d(A w)/dp, 3x4
+                Bw = 2.0 * (Tw @ p)                           # d(A w)/dp, 3x4
                 aw = A @ w
                 H[3:7, 3:7] += mu * 2.0 * np.einsum("k,kij->ij", r1, Tw)
                 H[3:7, 7:19] += mu * Bw.T @ np.kron(dS, np.eye(3))
@@ -153,6 +151,10 @@ class SlidingJoint(Interaction):
         y = np.cross(helper, self.axis)
         self._y_body = y / np.linalg.norm(y)
         self._z_body = np.cross(self.axis, self._y_body)
+        # point tensors of the constant body vectors: (A(p) w)_k = p^T T_k(w) p
+        self._T_u = point_tensor(self.hole_point)
+        self._T_y = point_tensor(self._y_body)
+        self._T_z = point_tensor(self._z_body)
         self.s0 = s0
         self.friction = float(friction)
         self.friction_velocity = float(friction_velocity)

@@ -125,11 +125,8 @@ def e_hat(y: np.ndarray) -> np.ndarray:
     return out
 
 
-def point_tensor(s: np.ndarray) -> np.ndarray:
-    """Symmetric ``T_k(s)`` (...,3,4,4) with ``(A(p)s)_k = pᵀT_k(s)p`` for every p (A homogeneous).
-
-    Derivation [D]: ``As = (e0² − eᵀe) s + 2e(eᵀs) + 2e0 (e × s)``, read off term by term.
-    """
+def _point_tensor_loop(s: np.ndarray) -> np.ndarray:
+    """Reference construction of ``point_tensor`` (used once to build the linear basis)."""
     s = np.asarray(s, dtype=float)
     T = np.zeros(s.shape[:-1] + (3, 4, 4))
     S = skew(s)
@@ -145,6 +142,18 @@ def point_tensor(s: np.ndarray) -> np.ndarray:
             T[..., k, 0, i + 1] = -S[..., k, i]
             T[..., k, i + 1, 0] = -S[..., k, i]
     return T
+
+
+_T_BASIS = _point_tensor_loop(np.eye(3))   # T(e_i), i = 0..2: T(s) = Σ s_i T(e_i)
+
+
+def point_tensor(s: np.ndarray) -> np.ndarray:
+    """Symmetric ``T_k(s)`` (...,3,4,4) with ``(A(p)s)_k = pᵀT_k(s)p`` for every p (A homogeneous).
+
+    Derivation [D]: ``As = (e0² − eᵀe) s + 2e(eᵀs) + 2e0 (e × s)``, read off term by term;
+    T is linear in s, so it is evaluated from a precomputed basis.
+    """
+    return np.tensordot(np.asarray(s, dtype=float), _T_BASIS, axes=([-1], [0]))
 
 
 def point_tensor_contract(s: np.ndarray, w: np.ndarray) -> np.ndarray:
