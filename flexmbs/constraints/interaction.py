@@ -43,7 +43,8 @@ class Interaction:
         return []
 
     def pattern_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """(rows, cols) index sets whose couplings the sparse pattern must reserve."""
+        """(rows, cols) index sets whose couplings (both ways) the sparse pattern must reserve;
+        the multipliers of :meth:`constraints` are coupled with every ``cols`` set."""
         return []
 
     def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,

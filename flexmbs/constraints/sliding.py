@@ -233,8 +233,10 @@ class SlidingJoint(Interaction):
         return [self._constraint]
 
     def pattern_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        local = np.concatenate([self._body_dofs, self._beam_dofs, [self._s_dof]])
-        return [(local, local)]
+        # body and s couple with every beam coordinate (the current element moves along the
+        # beam); element-element blocks are already in the pattern, so no beam x beam block
+        own = np.concatenate([self._body_dofs, [self._s_dof]])
+        return [(own, np.concatenate([own, self._beam_dofs]))]
 
     # ------------------------------------------------------------------ forces on s
     def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
