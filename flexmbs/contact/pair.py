@@ -1,0 +1,249 @@
+"""One contact point of the clearance sliding joint: gap, forces, tangent (FORMULATION II §4–§5).
+
+Local coordinates of a contact ``q_c = [r_H (3), p (4), e_k (12)]`` (19): the hole body and the
+beam element holding the projection point P. The hole point Q is a frozen material point of the
+hole (body coordinates ``u_Q``); P is its closest-point projection on the centreline, re-projected
+here for the current ``q_elem`` (Newton on the single element, warm-started at the given ξ; ξ may
+leave [0, 1] — the caller then moves the contact to the neighbour element).
+
+Conventions (package residual ``M q̈ + Q_int − Q_ext = 0``): ``Q_body``, ``Q_elem`` are *external*
+generalized forces (the caller subtracts them from the residual), ``K = −∂Q/∂q_c`` and
+``C = −∂Q/∂q̇_c`` are the matrices to *add* to the iteration matrix. The rotation is the
+homogeneous ``A(p)`` of :mod:`flexmbs.elements.rigid_body`, so ``∂(A u)/∂p = 2T(u)p`` (Haug's
+B(p, u), :func:`~flexmbs.elements.rigid_body.point_jacobian`) and ``∂²(A u)_k/∂p² = 2T_k(u)``
+(:func:`~flexmbs.elements.rigid_body.point_tensor`) hold exactly; the kernel re-implements them
+in numba (checked against rigid_body in the tests).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from .._jit import njit
+from .laws import ForceLaw, RegularizedCoulomb
+
+__all__ = ["ContactResult", "contact_point", "contact_geometry"]
+
+
+class ContactResult(NamedTuple):
+    """Result of :func:`contact_point` (all vectors global)."""
+
+    gap: float                 #: g_N = |Q − P| − r_b (< 0: penetration)
+    normal: np.ndarray         #: (3,) unit n from P to Q
+    P: np.ndarray              #: (3,) centreline point r(ξ_P)
+    Q: np.ndarray              #: (3,) hole point
+    f_n: float                 #: normal force magnitude (≥ 0)
+    force_on_hole: np.ndarray  #: (3,) F_H = f_n n + F_t (the beam gets −F_H at P)
+    Q_body: np.ndarray         #: (7,) external generalized force on [r_H, p]
+    Q_elem: np.ndarray         #: (12,) external generalized force on e_k
+    K: np.ndarray              #: (19, 19) −∂Q/∂q_c
+    C: np.ndarray              #: (19, 19) −∂Q/∂q̇_c
+    xi: float                  #: re-projected ξ_P (may lie outside [0, 1])
+    gap_rate: float            #: ġ_N = n·(v_Q − v_P)
+
+
+@njit
+def _point_tensor(u):  # noqa: ANN001, ANN202
+    """``T_k(u)`` (3,4,4) with ``(A(p)u)_k = pᵀT_k p`` (same as rigid_body.point_tensor)."""
+    T = np.zeros((3, 4, 4))
+    Sk = np.zeros((3, 3))
+    Sk[0, 1] = -u[2]
+    Sk[0, 2] = u[1]
+    Sk[1, 0] = u[2]
+    Sk[1, 2] = -u[0]
+    Sk[2, 0] = -u[1]
+    Sk[2, 1] = u[0]
+    for k in range(3):
+        T[k, 0, 0] = u[k]
+        for i in range(3):
+            T[k, i + 1, i + 1] -= u[k]
+            T[k, k + 1, i + 1] += u[i]
+            T[k, i + 1, k + 1] += u[i]
+            T[k, 0, i + 1] = -Sk[k, i]
+            T[k, i + 1, 0] = -Sk[k, i]
+    return T
+
+
+@njit
+def _shape(xi, L):  # noqa: ANN001, ANN202
+    x2 = xi * xi
+    x3 = x2 * xi
+    S = np.array([1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3,
+                  L * (x3 - x2)])
+    dS = np.array([6.0 * x2 - 6.0 * xi, L * (1.0 - 4.0 * xi + 3.0 * x2), 6.0 * xi - 6.0 * x2,
+                   L * (3.0 * x2 - 2.0 * xi)])
+    ddS = np.array([12.0 * xi - 6.0, L * (6.0 * xi - 4.0), 6.0 - 12.0 * xi, L * (6.0 * xi - 2.0)])
+    return S, dS, ddS
+
+
+@njit
+def _interp(w, q):  # noqa: ANN001, ANN202
+    out = np.zeros(3)
+    for m in range(4):
+        for c in range(3):
+            out[c] += w[m] * q[3 * m + c]
+    return out
+
+
+@njit
+def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):  # noqa: ANN001, ANN201
+    """Gap kinematics of one contact (FORMULATION II §4–§5), numba kernel.
+
+    Returns ``(xi, g, gdot, n, P, Q, B (19,), W (3,19), H (19,19))`` with ``W = ∂(x_Q − x_P)/∂q_c``
+    at fixed ξ, ``B = nᵀW = ∂g_N/∂q_c``, and (if ``want_hessian``) the consistent
+    ``H = ∂²g_N/∂q_c²`` of §5 including the ξ_P variation and the Euler-parameter Hessian.
+    """
+    p = q_body[3:7]
+    T = _point_tensor(u_Q)
+    Bp = np.zeros((3, 4))
+    Q = q_body[0:3].copy()
+    for k in range(3):
+        for i in range(4):
+            acc = 0.0
+            for j in range(4):
+                acc += T[k, i, j] * p[j]
+            Bp[k, i] = 2.0 * acc
+            Q[k] += acc * p[i]                # pᵀT_k p = (A u)_k
+    # closest-point projection on this element (extrapolating the cubic)
+    xi = xi0
+    for _ in range(30):
+        S, dS, ddS = _shape(xi, length)
+        r = _interp(S, q_elem)
+        rx = _interp(dS, q_elem)
+        rxx = _interp(ddS, q_elem)
+        d = r - Q
+        h = d[0] * rx[0] + d[1] * rx[1] + d[2] * rx[2]
+        a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
+        if abs(h) <= 1e-14 * math.sqrt(a11) * max(1.0, math.sqrt(Q[0]**2 + Q[1]**2 + Q[2]**2)):
+            break
+        hx = a11 + d[0] * rxx[0] + d[1] * rxx[1] + d[2] * rxx[2]
+        step = -h / hx if hx > 0.0 else (-0.25 if h > 0.0 else 0.25)
+        step = max(-0.5, min(0.5, step))
+        xi = max(-1.0, min(2.0, xi + step))
+        if abs(step) < 1e-15:
+            break
+    S, dS, ddS = _shape(xi, length)
+    P = _interp(S, q_elem)
+    rx = _interp(dS, q_elem)
+    rxx = _interp(ddS, q_elem)
+    u = Q - P
+    ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    n = u / ell
+    g = ell - r_b
+    W = np.zeros((3, 19))
+    for c in range(3):
+        W[c, c] = 1.0
+        for i in range(4):
+            W[c, 3 + i] = Bp[c, i]
+        for m in range(4):
+            W[c, 7 + 3 * m + c] = -S[m]
+    B = np.zeros(19)
+    vrel = np.zeros(3)
+    for j in range(19):
+        B[j] = n[0] * W[0, j] + n[1] * W[1, j] + n[2] * W[2, j]
+    for c in range(3):
+        acc = v_body[c]
+        for i in range(4):
+            acc += Bp[c, i] * v_body[3 + i]
+        for m in range(4):
+            acc -= S[m] * v_elem[3 * m + c]
+        vrel[c] = acc
+    gdot = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
+    H = np.zeros((19, 19))
+    if want_hessian:
+        Pn = np.eye(3) - np.outer(n, n)
+        PW = Pn @ W
+        H += (W.T @ PW) / ell
+        for i in range(4):
+            for j in range(4):
+                acc = 0.0
+                for k in range(3):
+                    acc += n[k] * T[k, i, j]
+                H[3 + i, 3 + j] += 2.0 * acc
+        a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
+        den = a11 - ell * (n[0] * rxx[0] + n[1] * rxx[1] + n[2] * rxx[2])
+        w = np.zeros(19)
+        for j in range(19):
+            w[j] = rx[0] * W[0, j] + rx[1] * W[1, j] + rx[2] * W[2, j]
+        for m in range(4):
+            for c in range(3):
+                w[7 + 3 * m + c] += ell * dS[m] * n[c]
+        H -= np.outer(w, w) / (ell * den)
+    return xi, g, gdot, n, P, Q, B, W, H
+
+
+def _friction_force(q_c: np.ndarray, v_c: np.ndarray, u_Q: np.ndarray, length: float, xi: float,
+                    r_b: float, law: ForceLaw, friction: RegularizedCoulomb,
+                    approach_velocity: float) -> np.ndarray:
+    """Friction part ``Wᵀ F_t`` of the generalized force (for the finite-difference tangent)."""
+    _, g, gd, n, _, _, _, W, _ = contact_geometry(q_c[:7], v_c[:7], u_Q, q_c[7:], v_c[7:], length,
+                                                  xi, r_b, False)
+    f, _, _ = law.force(-g, -gd, approach_velocity)
+    vt = W @ v_c
+    vt -= n * (n @ vt)
+    Ft, _, _ = friction.force(vt, f)
+    return W.T @ Ft
+
+
+def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_elem: np.ndarray,
+                  v_elem: np.ndarray, length: float, xi: float, r_b: float, law: ForceLaw,
+                  friction: RegularizedCoulomb | None = None, approach_velocity: float = 0.0,
+                  consistent: bool = False) -> ContactResult:
+    """Gap, penalty force and tangent of one beam/hole contact point (FORMULATION II §4–§5).
+
+    ``g_N = |Q − P| − r_b``, ``n = (Q − P)/|Q − P|``, ``f_N = law(−g_N, −ġ_N, approach_velocity)``,
+    ``F_H = f_N n + F_t`` on the hole at Q and ``−F_H`` on the beam at P;
+    ``Q_c = Wᵀ F_H`` (= ``f_N Bᵀ`` frictionless, virtual work ``δW = f_N δg_N``).
+
+    Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction/normal-force coupling
+    ``k_t Wᵀ(∂F_t/∂f_N)Bᵀ``); ``consistent=True`` adds the exact geometric and damping terms of
+    the normal force, ``−f_N ∂²g_N + c_t B (∂²g_N q̇)ᵀ`` (analytic, §5), and replaces the friction
+    stiffness by central finite differences of ``Wᵀ F_t`` over the 19 coordinates.
+    ``C = c_t BᵀB`` + the exact friction velocity derivative.
+    """
+    q_body = np.ascontiguousarray(q_body, dtype=float)
+    v_body = np.ascontiguousarray(v_body, dtype=float)
+    u_Q = np.ascontiguousarray(u_Q, dtype=float)
+    q_elem = np.ascontiguousarray(q_elem, dtype=float)
+    v_elem = np.ascontiguousarray(v_elem, dtype=float)
+    xi_p, g, gdot, n, P, Q, B, W, H = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem,
+                                                       float(length), float(xi), float(r_b),
+                                                       bool(consistent))
+    f, kt, ct = law.force(-g, -gdot, approach_velocity)
+    F_H = f * n
+    K = kt * np.outer(B, B)
+    C = ct * np.outer(B, B)
+    if consistent:
+        v_c = np.concatenate([v_body, v_elem])
+        K += ct * np.outer(B, H @ v_c) - f * H
+    if friction is not None and f > 0.0:
+        v_c = np.concatenate([v_body, v_elem])
+        vrel = W @ v_c
+        Pn = np.eye(3) - np.outer(n, n)
+        vt = Pn @ vrel
+        Ft, dF_dv, dF_dfn = friction.force(vt, f)
+        F_H = F_H + Ft
+        WtdF = W.T @ dF_dfn
+        C += -W.T @ (dF_dv @ Pn @ W) + ct * np.outer(WtdF, B)
+        if consistent:
+            q_c = np.concatenate([q_body, q_elem])
+            hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
+            for j in range(19):
+                qp = q_c.copy()
+                qm = q_c.copy()
+                qp[j] += hstep
+                qm[j] -= hstep
+                dQ = (_friction_force(qp, v_c, u_Q, length, xi_p, r_b, law, friction,
+                                      approach_velocity)
+                      - _friction_force(qm, v_c, u_Q, length, xi_p, r_b, law, friction,
+                                        approach_velocity)) / (2.0 * hstep)
+                K[:, j] -= dQ
+        else:
+            K += kt * np.outer(WtdF, B)
+    Qc = W.T @ F_H
+    return ContactResult(gap=float(g), normal=n, P=P, Q=Q, f_n=float(f), force_on_hole=F_H,
+                         Q_body=Qc[:7], Q_elem=Qc[7:], K=K, C=C, xi=float(xi_p),
+                         gap_rate=float(gdot))

@@ -1,0 +1,415 @@
+"""2D hole sections and the common-normal contact detector (FORMULATION II §3, §6).
+
+Section coordinates are ``(y, z)`` with the hole centre at the origin. The beam cuts the section
+plane in an ellipse (:class:`Ellipse2D`, FORMULATION II §2). A hole section reports every
+stationary point of the penetration of that ellipse through its boundary (:meth:`candidates`):
+local maxima (``kind=+1``) are contact points, local minima (``kind=-1``) enter the force with the
+opposite sign (continuity rule, FORMULATION II §3).
+
+Pluggable (DESIGN.md "Pluggable parts"): a :class:`HoleSection` provides ``boundary(psi)`` and the
+generic detector of §6 (sample the common-normal residual F(ψ), bracket, safeguarded Newton). The
+circle overrides it with the closed-form quartic of §3. ``SECTION_TYPES`` maps scenario names
+to classes; :func:`get_section` builds one by name.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._jit import njit
+from ..errors import ModelError
+
+__all__ = [
+    "Ellipse2D",
+    "Candidate",
+    "HoleSection",
+    "CircleSection",
+    "SuperellipseSection",
+    "SECTION_TYPES",
+    "get_section",
+    "two_point_possible",
+    "inside_evolute",
+    "jamming",
+    "circle_stationary_points",
+]
+
+
+@dataclass(frozen=True)
+class Ellipse2D:
+    """Beam section ellipse ``X(φ) = c + a cos φ e_a + b sin φ e_b`` (FORMULATION II §2–§3)."""
+
+    center: np.ndarray   #: (2,) centre c (beam centreline crossing) in section coordinates
+    e_a: np.ndarray      #: (2,) unit major axis
+    a: float             #: major semi-axis (a ≥ b)
+    b: float             #: minor semi-axis (b > 0)
+
+    def __post_init__(self) -> None:
+        c = np.asarray(self.center, dtype=float).reshape(2)
+        ea = np.asarray(self.e_a, dtype=float).reshape(2)
+        nrm = math.hypot(ea[0], ea[1])
+        if not nrm > 0.0:
+            raise ModelError("Ellipse2D: e_a must be a nonzero vector")
+        if not (self.b > 0.0 and self.a >= self.b * (1.0 - 1e-12)):
+            raise ModelError(f"Ellipse2D: need a >= b > 0 (got a={self.a}, b={self.b})")
+        object.__setattr__(self, "center", c)
+        object.__setattr__(self, "e_a", ea / nrm)
+        object.__setattr__(self, "a", float(self.a))
+        object.__setattr__(self, "b", float(self.b))
+
+    @property
+    def e_b(self) -> np.ndarray:
+        """Minor axis ``rot90(e_a)``."""
+        return np.array([-self.e_a[1], self.e_a[0]])
+
+    def point(self, phi: np.ndarray | float) -> np.ndarray:
+        """``X(φ)`` (..., 2)."""
+        phi = np.asarray(phi, dtype=float)
+        return (self.center + (self.a * np.cos(phi))[..., None] * self.e_a
+                + (self.b * np.sin(phi))[..., None] * self.e_b)
+
+    def angle_of(self, X: np.ndarray) -> float:
+        """Ellipse angle φ of a point X on the ellipse."""
+        d = np.asarray(X, dtype=float) - self.center
+        return math.atan2(float(d @ self.e_b) / self.b, float(d @ self.e_a) / self.a)
+
+    def support(self, N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Support point and map (FORMULATION II §6): ``X(N) = c + ΣN/√(NᵀΣN)`` and
+        ``J_E = (Σ − ΣNNᵀΣ/NᵀΣN)/√(NᵀΣN)`` for unit normals ``N (..., 2)``."""
+        N = np.asarray(N, dtype=float)
+        ea, eb = self.e_a, self.e_b
+        Sig = self.a**2 * np.outer(ea, ea) + self.b**2 * np.outer(eb, eb)
+        SN = N @ Sig
+        q = np.einsum("...i,...i->...", N, SN)
+        sq = np.sqrt(q)
+        X = self.center + SN / sq[..., None]
+        J = (Sig - SN[..., :, None] * SN[..., None, :] / q[..., None, None]) / sq[..., None, None]
+        return X, J
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One stationary point of the section penetration (FORMULATION II §3/§6)."""
+
+    phi: float           #: ellipse angle of X
+    X: np.ndarray        #: (2,) beam-ellipse point
+    Q: np.ndarray        #: (2,) hole boundary point (hole point of FORMULATION II §4)
+    normal: np.ndarray   #: (2,) outward hole normal at Q (from the bore into the hole material)
+    depth: float         #: penetration along the normal, > 0 = penetrating
+    kind: int            #: +1 local max of penetration (contact point), −1 local min
+    psi: float = field(default=math.nan)  #: boundary parameter of Q (generic detector only)
+
+
+# ---------------------------------------------------------------------------------------------
+class HoleSection(ABC):
+    """Convex C¹ hole cross-section (DESIGN.md "Pluggable parts", FORMULATION II §6)."""
+
+    #: number of samples of F(ψ) in the generic detector (≥ 64, FORMULATION II §6)
+    samples: int = 128
+
+    @abstractmethod
+    def boundary(self, psi: np.ndarray | float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(Y, N, T, speed, curvature)`` at parameter ψ ∈ [0, 2π): point, outward unit normal,
+        CCW unit tangent, ``|Y_ψ|``, curvature κ ≥ 0 (shapes ``(..., 2)`` / ``(...)``)."""
+
+    @abstractmethod
+    def bounding_radius(self) -> float:
+        """Radius of the smallest centred circle containing the section (broad phase)."""
+
+    @abstractmethod
+    def inscribed_radius(self) -> float:
+        """Radius of the largest centred circle inside the section (broad phase)."""
+
+    def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
+        """All stationary points of the penetration with ``depth > −margin`` (FORMULATION II §6).
+
+        Generic detector: common-normal residual ``F(ψ) = T·(X(N(ψ)) − Y(ψ))`` sampled at
+        ``self.samples`` points, sign changes bracketed, safeguarded Newton with
+        ``F' = |Y_ψ|[κ(TᵀJ_E T − d) − 1]``; ``F' < 0`` is a maximum of ``d = N·(X − Y)``.
+        """
+        c = ellipse.center
+        if math.hypot(c[0], c[1]) + ellipse.a < self.inscribed_radius() - margin:
+            return []  # broad phase: the ellipse is strictly inside the inscribed circle
+        m = max(int(self.samples), 64)
+        psi = np.linspace(0.0, 2.0 * np.pi, m, endpoint=False)
+        F, _, _ = self._residual(ellipse, psi)
+        out: list[Candidate] = []
+        for i in range(m):
+            j = (i + 1) % m
+            if F[i] == 0.0 or F[i] * F[j] < 0.0:
+                lo = psi[i]
+                hi = psi[i] + 2.0 * np.pi / m
+                root = self._bracketed_root(ellipse, lo, hi, F[i])
+                if root is not None:
+                    cand = self._candidate(ellipse, root)
+                    if cand.depth > -margin:
+                        out.append(cand)
+        return out
+
+    # --- generic helpers -------------------------------------------------------------------
+    def _residual(self, ellipse: Ellipse2D, psi: np.ndarray | float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``F(ψ)``, ``F'(ψ)`` and ``d(ψ)`` (FORMULATION II §6)."""
+        Y, N, T, speed, kappa = self.boundary(psi)
+        X, J = ellipse.support(N)
+        F = np.einsum("...i,...i->...", T, X - Y)
+        d = np.einsum("...i,...i->...", N, X - Y)
+        rho = np.einsum("...i,...ij,...j->...", T, J, T)
+        dF = speed * (kappa * (rho - d) - 1.0)
+        return F, dF, d
+
+    def _bracketed_root(self, ellipse: Ellipse2D, lo: float, hi: float, flo: float
+                        ) -> float | None:
+        s = 0.5 * (lo + hi)
+        tol = 1e-13 * max(1.0, self.bounding_radius())
+        for _ in range(60):
+            f, df, _ = self._residual(ellipse, s)
+            f = float(f)
+            df = float(df)
+            if abs(f) <= tol:
+                return s
+            if (f < 0.0) == (flo < 0.0):
+                lo, flo = s, f
+            else:
+                hi = s
+            s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
+            if not (lo < s_new < hi):
+                s_new = 0.5 * (lo + hi)
+            if hi - lo < 1e-15:
+                return s_new
+            s = s_new
+        return s
+
+    def _candidate(self, ellipse: Ellipse2D, psi: float) -> Candidate:
+        Y, N, T, speed, kappa = self.boundary(psi)
+        X, J = ellipse.support(N)
+        d = float(N @ (X - Y))
+        dF = float(speed * (kappa * (T @ J @ T - d) - 1.0))
+        return Candidate(phi=ellipse.angle_of(X) % (2.0 * np.pi), X=X, Q=np.asarray(Y, dtype=float),
+                         normal=np.asarray(N, dtype=float), depth=d,
+                         kind=1 if dF < 0.0 else -1, psi=float(psi % (2.0 * np.pi)))
+
+
+# ---------------------------------------------------------------------------------------------
+@njit
+def _circle_f(phi, a, b, da, db):  # noqa: ANN001, ANN202
+    s = math.sin(phi)
+    c = math.cos(phi)
+    f = (b * b - a * a) * s * c + a * da * s - b * db * c
+    df = (b * b - a * a) * (c * c - s * s) + a * da * c + b * db * s
+    return f, df
+
+
+@njit
+def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
+    """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (FORMULATION II §3).
+
+    Closed form: quartic in ``t = tan(φ/2)``,
+    ``b d_b t⁴ + 2(a d_a + a² − b²)t³ + 2(a d_a − a² + b²)t − b d_b = 0``, roots by ``np.roots``
+    (nearly-real ones accepted), ``φ = π`` tried when ``|b d_b|`` is tiny, 3 Newton polishing steps
+    on ``f = D'``, residual check, duplicates removed. Returns ``(phi (k,), kind (k,))`` with
+    ``kind = +1`` for maxima (``f' < 0``), ``−1`` for minima. Degenerate a ≈ b centred (f ≡ 0):
+    no points if ``a ≤ R``, else the four axis points as maxima (uniform penetration, net force 0).
+    """
+    da = -(cx * eax + cy * eay)          # d = O − c, O = 0
+    db = -(cx * (-eay) + cy * eax)
+    dist = math.hypot(cx, cy)
+    scale = a * a + a * dist
+    if a - b <= 1e-12 * a and dist <= 1e-12 * a:
+        if a > R:
+            return (np.array([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi]),
+                    np.array([1, 1, 1, 1], dtype=np.int64))
+        return np.empty(0), np.empty(0, dtype=np.int64)
+    coef = np.array([b * db, 2.0 * (a * da + a * a - b * b), 0.0,
+                     2.0 * (a * da - a * a + b * b), -b * db])
+    cmax = np.max(np.abs(coef))
+    k0 = 0
+    while k0 < 4 and abs(coef[k0]) <= 1e-300:
+        k0 += 1
+    seeds = np.empty(5)
+    ns = 0
+    if k0 < 4:
+        roots = np.roots(coef[k0:].astype(np.complex128))
+        for t in roots:
+            if abs(t.imag) <= 1e-6 * (1.0 + abs(t)):
+                seeds[ns] = 2.0 * math.atan(t.real)
+                ns += 1
+    if abs(b * db) <= 1e-8 * cmax:
+        seeds[ns] = np.pi
+        ns += 1
+    phis = np.empty(ns)
+    kinds = np.empty(ns, dtype=np.int64)
+    nf = 0
+    ftol = 1e-10 * scale
+    for i in range(ns):
+        phi = seeds[i]
+        for _ in range(4):
+            f, df = _circle_f(phi, a, b, da, db)
+            if df == 0.0:
+                break
+            step = -f / df
+            if abs(step) > 0.3:
+                step = 0.3 if step > 0 else -0.3
+            phi += step
+        f, df = _circle_f(phi, a, b, da, db)
+        if abs(f) > ftol:
+            continue
+        phi = phi % (2.0 * np.pi)
+        dup = False
+        for j in range(nf):
+            dd = abs(phi - phis[j])
+            if min(dd, 2.0 * np.pi - dd) < 1e-9:
+                dup = True
+                break
+        if dup:
+            continue
+        phis[nf] = phi
+        kinds[nf] = 1 if df < 0.0 else -1
+        nf += 1
+    return phis[:nf], kinds[:nf]
+
+
+@dataclass(frozen=True)
+class CircleSection(HoleSection):
+    """Circular bore of radius R (FORMULATION II §3): closed-form quartic detector."""
+
+    radius: float
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.radius, (int, float)) and self.radius > 0.0):
+            raise ModelError(f"CircleSection: radius must be > 0 (got {self.radius!r})")
+
+    def boundary(self, psi: np.ndarray | float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        psi = np.asarray(psi, dtype=float)
+        N = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
+        T = np.stack([-N[..., 1], N[..., 0]], axis=-1)
+        R = float(self.radius)
+        return R * N, N, T, np.full(psi.shape, R), np.full(psi.shape, 1.0 / R)
+
+    def bounding_radius(self) -> float:
+        return float(self.radius)
+
+    def inscribed_radius(self) -> float:
+        return float(self.radius)
+
+    def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
+        """Stationary points of ``|X(φ)| − R`` with depth > −margin (FORMULATION II §3, §4):
+        ``Q = R u``, ``u = X/|X|``."""
+        R = float(self.radius)
+        c = ellipse.center
+        if math.hypot(c[0], c[1]) + ellipse.a < R - margin:
+            return []  # broad phase
+        phis, kinds = circle_stationary_points(float(c[0]), float(c[1]), float(ellipse.e_a[0]),
+                                               float(ellipse.e_a[1]), ellipse.a, ellipse.b, R)
+        out: list[Candidate] = []
+        for phi, kind in zip(phis, kinds, strict=True):
+            X = ellipse.point(phi)
+            rho = math.hypot(X[0], X[1])
+            if rho - R <= -margin or rho == 0.0:
+                continue
+            u = X / rho
+            out.append(Candidate(phi=float(phi), X=X, Q=R * u, normal=u, depth=rho - R,
+                                 kind=int(kind), psi=math.atan2(u[1], u[0]) % (2.0 * np.pi)))
+        return out
+
+
+@dataclass(frozen=True)
+class SuperellipseSection(HoleSection):
+    """Superellipse bore ``|y/A|ⁿ + |z/B|ⁿ = 1``, n ≥ 2 (FORMULATION II §6), radially parametrised
+    ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``; generic common-normal detector."""
+
+    A: float
+    B: float
+    n: float = 2.0
+    samples: int = 128
+
+    def __post_init__(self) -> None:
+        for name in ("A", "B"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and v > 0.0):
+                raise ModelError(f"SuperellipseSection: {name} must be > 0 (got {v!r})")
+        if not (isinstance(self.n, (int, float)) and self.n >= 2.0):
+            raise ModelError(f"SuperellipseSection: exponent n must be >= 2 (got {self.n!r})")
+        if int(self.samples) < 64:
+            raise ModelError(f"SuperellipseSection: samples must be >= 64 (got {self.samples!r})")
+
+    def boundary(self, psi: np.ndarray | float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        psi = np.asarray(psi, dtype=float)
+        A, B, n = float(self.A), float(self.B), float(self.n)
+        c, s = np.cos(psi), np.sin(psi)
+        ac, as_ = np.abs(c / A), np.abs(s / B)
+        g = ac**n + as_**n
+        rho = g ** (-1.0 / n)
+        # g' = n(|c/A|^(n-1) sgn(c)(-s)/A + |s/B|^(n-1) sgn(s) c/B)
+        dg = n * (ac ** (n - 1.0) * np.sign(c) * (-s) / A + as_ ** (n - 1.0) * np.sign(s) * c / B)
+        drho = -rho * dg / (n * g)
+        y, z = rho * c, rho * s
+        Yp = np.stack([drho * c - rho * s, drho * s + rho * c], axis=-1)
+        speed = np.sqrt(np.einsum("...i,...i->...", Yp, Yp))
+        ay, az = np.abs(y), np.abs(z)
+        py = n * np.sign(y) * ay ** (n - 1.0) / A**n
+        pz = n * np.sign(z) * az ** (n - 1.0) / B**n
+        gn = np.sqrt(py * py + pz * pz)
+        N = np.stack([py / gn, pz / gn], axis=-1)
+        T = np.stack([-N[..., 1], N[..., 0]], axis=-1)
+        pyy = n * (n - 1.0) * ay ** (n - 2.0) / A**n
+        pzz = n * (n - 1.0) * az ** (n - 2.0) / B**n
+        kappa = (pyy * pz * pz + pzz * py * py) / gn**3
+        return np.stack([y, z], axis=-1), N, T, speed, kappa
+
+    def bounding_radius(self) -> float:
+        psi = np.linspace(0.0, 0.5 * np.pi, 2049)
+        Y = self.boundary(psi)[0]
+        return float(np.max(np.hypot(Y[:, 0], Y[:, 1]))) * (1.0 + 1e-6)
+
+    def inscribed_radius(self) -> float:
+        return float(min(self.A, self.B))  # ρ(ψ) ≥ min(A, B) for n ≥ 2
+
+
+SECTION_TYPES: dict[str, type[HoleSection]] = {
+    "circle": CircleSection,
+    "superellipse": SuperellipseSection,
+}
+
+
+def get_section(name: str, **params: float) -> HoleSection:
+    """Hole section by scenario name (``"circle"``: radius; ``"superellipse"``: A, B, n)."""
+    try:
+        cls = SECTION_TYPES[name]
+    except KeyError:
+        known = ", ".join(sorted(SECTION_TYPES))
+        raise ModelError(f"unknown hole section {name!r} (known: {known})") from None
+    try:
+        return cls(**params)  # type: ignore[call-arg]
+    except TypeError as exc:
+        raise ModelError(f"hole section {name!r}: {exc}") from None
+
+
+def two_point_possible(ellipse: Ellipse2D, R: float) -> bool:
+    """Two-point contact at the minor vertex is possible iff ``ρ_max = a²/b > R`` (FORMULATION II §3)."""
+    return ellipse.a**2 / ellipse.b > R
+
+
+def inside_evolute(ellipse: Ellipse2D, point: np.ndarray | None = None) -> bool:
+    """Is ``point`` (default: hole centre) inside the ellipse's evolute (astroid)?  Then D(φ) has 4
+    stationary points, else 2 (FORMULATION II §3)."""
+    o = np.zeros(2) if point is None else np.asarray(point, dtype=float)
+    d = o - ellipse.center
+    da, db = float(d @ ellipse.e_a), float(d @ ellipse.e_b)
+    a, b = ellipse.a, ellipse.b
+    return abs(a * da) ** (2 / 3) + abs(b * db) ** (2 / 3) < (a * a - b * b) ** (2 / 3)
+
+
+def jamming(ellipse: Ellipse2D, hole: HoleSection) -> bool:
+    """True when the ellipse is wider than the hole's inscribed circle (``a > R_in``).
+
+    Exact for the circle (the ellipse cannot fit anywhere: jamming, FORMULATION II §2); for other
+    shapes a conservative flag (the ellipse may still fit along a wider direction).
+    """
+    return ellipse.a > hole.inscribed_radius()
