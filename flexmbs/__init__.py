@@ -11,6 +11,8 @@ Short public API (see DESIGN.md, "Python API")::
 """
 
 from .constraints.sliding import SimulationStopped, SlidingJoint
+from .contact.joint import CircleHole, Hole, SlidingClearanceJoint, SuperellipseHole
+from .contact.laws import Hertz, HuntCrossley, LankaraniNikravesh, LinearPenalty, RegularizedCoulomb
 from .elements.ancf_cable import CableOptions
 from .errors import (
     ConvergenceError,
@@ -40,6 +42,8 @@ def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (mes
 __version__ = "0.1.0"
 
 __all__ = [
+    "CircleHole", "Hole", "SlidingClearanceJoint", "SuperellipseHole", "Hertz", "HuntCrossley",
+    "LankaraniNikravesh", "LinearPenalty", "RegularizedCoulomb",
     "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
     "ConvergenceError", "FlexmbsError", "Function", "GROUND", "GeneralizedAlpha", "GeometryError",
     "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",

@@ -275,20 +275,27 @@ class Model:
         self.constraints: list[ConstraintSpec] = []
         self.loads: list[LoadSpec] = []
         self.interactions: list[object] = []
-        self._names: set[str] = set()
+        self._names: dict[str, set[str]] = {}
 
     # ------------------------------------------------------------------ naming
+    _KIND = {"beam": "beam", "body": "rigid body", "joint": "joint", "load": "load"}
+
     def _unique(self, name: str | None, prefix: str) -> str:
+        """A name unique among objects of the same kind (beams, bodies, joints, loads,
+        constraints); ``prefix`` also numbers unnamed objects."""
+        kind = self._KIND.get(prefix, "constraint")
+        used = self._names.setdefault(kind, set())
         if name is None:
             i = 1
-            while f"{prefix}{i}" in self._names:
+            while f"{prefix}{i}" in used:
                 i += 1
             name = f"{prefix}{i}"
         if not isinstance(name, str) or not name:
             raise ModelError(f"name must be a non-empty string (got {name!r})")
-        if name in self._names:
-            raise ModelError(f"the name '{name}' is already used in this model; names must be unique")
-        self._names.add(name)
+        if name in used:
+            raise ModelError(f"the {kind} name '{name}' is already used in this model; "
+                             f"{kind} names must be unique")
+        used.add(name)
         return name
 
     def beam(self, name: str) -> Beam:

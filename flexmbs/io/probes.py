@@ -167,6 +167,29 @@ class SlideCoordinateProbe(Probe):
 PROBE_TYPES["slide_coordinate"] = SlideCoordinateProbe
 
 
+class ContactForceProbe(Probe):
+    """Total contact force on the hole body of a clearance joint (global components)."""
+
+    def __init__(self, name: str, joint: Any) -> None:
+        self.name = _check_name(name)
+        if not hasattr(joint, "contact_force"):
+            raise ModelError(f"probe '{name}': joint {joint!r} has no contact force")
+        self.joint = joint
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{c}" for c in _XYZ]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return self.joint.contact_force(state.q, state.v)
+
+    def check(self, asm: Any) -> None:
+        if self.joint not in asm.model.interactions:
+            raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
+
+
+PROBE_TYPES["contact_force"] = ContactForceProbe
+
+
 def register_probe(name: str) -> Callable[[type[Probe]], type[Probe]]:
     """Class decorator adding a probe type to :data:`PROBE_TYPES` under ``name``."""
 

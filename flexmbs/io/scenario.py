@@ -934,10 +934,56 @@ def _sliding(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
     return model.add_joint(joint)
 
 
+_LAW_KEYS = {"linear": ("stiffness", "damping"), "hertz": ("stiffness", "exponent"),
+             "hunt_crossley": ("stiffness", "exponent", "restitution"),
+             "lankarani_nikravesh": ("stiffness", "exponent", "restitution")}
+
+
+def _sliding_clearance(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+    """``type = "sliding_clearance"``: SlidingClearanceJoint, FORMULATION Part II §1-§8."""
+    from ..contact.joint import Hole, SlidingClearanceJoint
+    from ..contact.laws import RegularizedCoulomb, get_law
+    from ..contact.sections import CircleSection, SuperellipseSection
+
+    t.allow(("name", "type", "beam", "body", "hole", "contact", "beam_radius", "tangent"))
+    beam = ctx.beam(t)
+    body = ctx.body(t)
+    h = t.table("hole")
+    shape = h.choice("shape", ("circle", "superellipse"), "circle", what="hole shape")
+    if shape == "circle":
+        h.allow(("shape", "radius", "length", "sections", "point"))
+        section: Any = CircleSection(h.number("radius", gt=0.0))
+    else:
+        h.allow(("shape", "semi_axes", "exponent", "length", "sections", "point"))
+        A, B = h.vector("semi_axes", n=2, what="2 numbers [A, B] (semi-axes along body y, z)")
+        if not (A > 0 and B > 0):
+            raise h.fail("semi_axes", "2 numbers > 0", [A, B])
+        section = SuperellipseSection(float(A), float(B), h.number("exponent", 2.0, ge=2.0))
+    hole = Hole(section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1))
+    c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
+    law = c.choice("law", tuple(_LAW_KEYS), "linear", what="contact law")
+    c.allow(("law", *_LAW_KEYS[law], "friction", "friction_velocity"))
+    params = {k: c.number(k, ge=0.0) for k in _LAW_KEYS[law] if c.has(k)}
+    try:
+        contact_law = get_law(law, **params)
+    except ModelError as exc:
+        raise ScenarioError(f"{c.where()}: {exc}") from None
+    mu = c.number("friction", 0.0, ge=0.0)
+    friction = (RegularizedCoulomb(mu, c.number("friction_velocity", 1e-3, gt=0.0))
+                if mu > 0 else None)
+    tangent = t.choice("tangent", ("consistent", "gauss_newton"), "consistent", what="tangent")
+    joint = SlidingClearanceJoint(
+        beam, body, hole=hole, contact=contact_law, friction=friction,
+        hole_point=h.vector("point", (0.0, 0.0, 0.0)),
+        beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
+        consistent=tangent == "consistent", name=t.raw["name"])
+    return model.add_joint(joint)
+
+
 #: ``[[joints]]`` types: builder(model, table, keypath, context) -> joint object
 JOINT_TYPES: dict[str, Callable[[Model, Table, str, BuildContext], Any]] = {
     "sliding": _sliding,
-    "sliding_clearance": _not_available("sliding_clearance"),
+    "sliding_clearance": _sliding_clearance,
 }
 
 
@@ -1086,6 +1132,19 @@ def _probe_slide_coordinate(model: Model, t: Table, keypath: str, ctx: BuildCont
     return probes.SlideCoordinateProbe(t.raw["name"], joint)
 
 
+def _probe_contact_force(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+    from . import probes
+
+    t.allow(("name", "type", "joint"))
+    name = t.string("joint")
+    joint = ctx.joints.get(name)
+    if joint is None or not hasattr(joint, "contact_force"):
+        known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, "contact_force"))
+        raise ScenarioError(f"{t.key('joint')}: no clearance joint named '{name}' "
+                            f"(clearance joints: {known or 'none'})")
+    return probes.ContactForceProbe(t.raw["name"], joint)
+
+
 def _probe_not_available(kind: str) -> Callable[..., Any]:
     def build(model: Model, table: Table, keypath: str, context: BuildContext) -> Any:
         raise ScenarioError(f"{keypath}.type: probe type '{kind}' is not available in this "
@@ -1100,7 +1159,7 @@ PROBE_BUILDERS: dict[str, Callable[[Model, Table, str, BuildContext], Any]] = {
     "body_orientation": _probe_body_orientation,
     "energy": _probe_energy,
     "slide_coordinate": _probe_slide_coordinate,
-    "contact_force": _probe_not_available("contact_force"),
+    "contact_force": _probe_contact_force,
 }
 
 

@@ -404,19 +404,20 @@ dt = 0.01
     assert sc.integrator_options() == fm.GeneralizedAlpha()
 
 
-def test_joint_registry_reports_unavailable_types(tmp_path):
+def test_clearance_example_builds_the_joint_and_probes():
+    """examples/curved_beam_sleeve.toml: mesh rail (pi/2 long), sleeve on a clearance joint with
+    9 sections, the four probes; a missing joint reference is a one-line error."""
+    from flexmbs.contact.joint import SlidingClearanceJoint
+
+    sc = load_scenario(EXAMPLES / "curved_beam_sleeve.toml")
+    (joint,) = sc.model.interactions
+    assert isinstance(joint, SlidingClearanceJoint)
+    assert len(joint.stations) == 9 and joint.beam_radius == pytest.approx(2e-3)
+    assert sc.model.beams[0].length == pytest.approx(np.pi / 2, rel=1e-6)
+    assert [p.name for p in sc.probes] == ["sleeve_s", "lowest_point", "contact_force", "energy"]
     assert {"sliding", "sliding_clearance"} <= set(JOINT_TYPES)
-    p = write(tmp_path, """
-[simulation]
-t_end = 1.0
-dt = 0.01
-[[joints]]
-name = "sleeve"
-type = "sliding_clearance"
-""")
-    with pytest.raises(fm.ScenarioError, match=r"joints\[sleeve\]\.type: joint type "
-                                               "'sliding_clearance' is not available"):
-        load_scenario(p)
+    with pytest.raises(fm.ScenarioError, match=r"probes\[sleeve_s\]\.joint: no sliding joint named"):
+        load_scenario(EXAMPLES / "curved_beam_sleeve.toml", ["probes.sleeve_s.joint=other"])
 
 
 def test_loaded_scenario_runs_with_its_settings():

@@ -159,8 +159,8 @@ bending_stiffness = 1.0
      "rigid_bodies[sleeve].pose: give either { position, quaternion } or { on_beam, s, offset }"),
     ("unknown_shape", SIM + BODY + "shape = { type = 'sphere' }\n",
      "rigid_bodies[sleeve].shape.type: unknown shape type 'sphere' (known: cylinder, box, mesh)"),
-    ("duplicate_name_across_kinds", SIM + BEAM + sub(BODY, 'name = "sleeve"', 'name = "rail"'),
-     "rigid_bodies[rail]: the name 'rail' is already used"),
+    ("duplicate_name_same_kind", SIM + BEAM + BEAM,
+     "beams[1].name: duplicate name 'rail' (also beams[0]); names must be unique"),
     # --- constraints
     ("constraint_unknown_beam", SIM + BEAM + "[[constraints]]\ntype = 'clamp'\nbeam = 'rial'\n"
                                              "node = 'first'\n",

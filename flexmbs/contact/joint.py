@@ -1,0 +1,298 @@
+"""Sliding joint WITH clearance: a flexible beam inside a rigid hole (Tang & Liu).
+
+Per hole cross-section k (FORMULATION Part II §8): the section plane at station zeta_k cuts the
+beam centreline at r_I (safeguarded Newton across elements, warm-started); the beam's section
+there is an ellipse (a = r_b / cos(theta), b = r_b); the common-normal condition gives every
+stationary point of the penetration (circle: quartic, superellipse: bracketed Newton); for each
+penetrating candidate the hole point Q is projected onto the centreline (P), the gap is
+g = |Q - P| - r_b and the penalty law gives the normal force. Forces of local maxima count +1,
+of local minima -1 (continuous section force when one contact splits into two, §3).
+Detection is redone at every Newton iteration ("fully nonlinear", §5 option 1); warm starts and
+the approach velocities of the damped laws are updated after each converged step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..constraints.interaction import Interaction
+from ..elements.rigid_body import rotation_matrix
+from ..errors import ModelError
+from .geometry import beam_point, closest_point, section_crossing, section_ellipse
+from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb
+from .pair import contact_point
+from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..assembly import Assembly
+    from ..model import Beam, Model, RigidBody
+
+
+@dataclass(frozen=True)
+class Hole:
+    """A bore of constant section along the body x axis, checked at ``sections`` stations
+    (both end faces included)."""
+
+    section: HoleSection
+    length: float
+    sections: int = 9
+
+    def __post_init__(self) -> None:
+        if not self.length > 0:
+            raise ModelError(f"hole length must be > 0 (got {self.length})")
+        if int(self.sections) < 1:
+            raise ModelError(f"hole sections must be >= 1 (got {self.sections})")
+
+    def stations(self) -> np.ndarray:
+        """Axial positions zeta_k of the sections, from -length/2 to +length/2."""
+        if self.sections == 1:
+            return np.zeros(1)
+        return np.linspace(-0.5 * self.length, 0.5 * self.length, int(self.sections))
+
+
+def CircleHole(radius: float, length: float, sections: int = 9) -> Hole:  # noqa: N802
+    """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``)."""
+    return Hole(CircleSection(radius), length, sections)
+
+
+def SuperellipseHole(A: float, B: float, n: float, length: float, sections: int = 9) -> Hole:  # noqa: N802
+    """Superellipse bore |y/A|^n + |z/B|^n = 1 (FORMULATION Part II §6)."""
+    return Hole(SuperellipseSection(A, B, n), length, sections)
+
+
+class SlidingClearanceJoint(Interaction):
+    """Beam through a rigid hole with clearance, penalty contact per hole section.
+
+    ``hole``: :class:`Hole` (axis = body x through ``hole_point``, body coordinates);
+    ``contact``: a normal force law (default linear penalty); ``friction``: optional
+    :class:`RegularizedCoulomb`; ``beam_radius`` defaults to the beam's section radius.
+    ``consistent=True`` uses the tangent that is exact for a hole point frozen as a material
+    point of the hole (FORMULATION §5), otherwise the Gauss-Newton tangent k B^T B. Neither
+    contains the rotation of the normal caused by the hole point sliding along the bore when it
+    is re-detected (a geometric stiffness of order f_N / clearance): Newton then converges
+    linearly in that direction, with a rate of about f_N / (clearance k).
+    """
+
+    def __init__(self, beam: Beam, body: RigidBody, *, hole: Hole,
+                 contact: ForceLaw | None = None, friction: RegularizedCoulomb | None = None,
+                 hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
+                 consistent: bool = True, name: str | None = None) -> None:
+        self.beam = beam
+        self.body = body
+        self.hole = hole
+        self.contact = contact or LinearPenalty(stiffness=1e6)
+        self.friction = friction
+        self.hole_point = np.asarray(hole_point, float).reshape(3)
+        self.consistent = bool(consistent)
+        self.name = name or f"clearance_{body.name}"
+        r_b = beam_radius if beam_radius is not None else beam.radius
+        if r_b is None or not r_b > 0:
+            raise ModelError(f"joint '{self.name}': the beam radius is unknown; give the beam a "
+                             "CircularSection or pass beam_radius=")
+        self.beam_radius = float(r_b)
+        if not hole.section.inscribed_radius() > self.beam_radius:
+            raise ModelError(
+                f"joint '{self.name}': the hole (inscribed radius "
+                f"{hole.section.inscribed_radius():.6g}) is not larger than the beam (radius "
+                f"{self.beam_radius:.6g}); the beam cannot pass")
+        self.stations = hole.stations()
+        ns = len(self.stations)
+        self._elem = np.zeros(ns, np.int64)     # warm starts of the section crossings
+        self._xi = np.full(ns, 0.5)
+        self._approach: dict[tuple[int, int], float] = {}
+        self._active: set[tuple[int, int]] = set()
+        self._frozen: list | None = None
+
+    # ------------------------------------------------------------------ set-up
+    def validate(self, model: Model) -> None:
+        if self.beam not in model.beams:
+            raise ModelError(f"joint '{self.name}': the beam is not part of the model")
+        if self.body not in model.bodies:
+            raise ModelError(f"joint '{self.name}': the body is not part of the model")
+
+    def bind(self, asm: Assembly, extra_dofs: np.ndarray) -> None:
+        self._body_dofs = asm.body_dofs(self.body)
+        self._elem_dofs = asm.element_dofs(self.beam)
+        self._lengths = np.ascontiguousarray(self.beam.centerline.lengths, dtype=float)
+        self._beam_dofs = asm.beam_dofs(self.beam)
+
+    def initial_extra(self, q0: np.ndarray) -> np.ndarray:
+        self._check_initial(q0)
+        return np.zeros(0)
+
+    def _frames(self, qb: np.ndarray):  # noqa: ANN202
+        A = rotation_matrix(qb[3:7])
+        centre = qb[:3] + A @ self.hole_point
+        return A, centre, A[:, 0], A[:, 1], A[:, 2]
+
+    def _check_initial(self, q0: np.ndarray) -> None:
+        """The beam must cross every section plane inside the bore, and fit (no jamming)."""
+        qb = q0[self._body_dofs]
+        A, centre, n, ey, ez = self._frames(qb)
+        qe = np.ascontiguousarray(q0[self._elem_dofs])
+        R_out = self.hole.section.bounding_radius()
+        R_in = self.hole.section.inscribed_radius()
+        for k, zeta in enumerate(self.stations):
+            origin = centre + zeta * n
+            e, xi, found = section_crossing(qe, self._lengths, origin, n, 0, 0.5)
+            r, r_xi, _ = beam_point(qe, self._lengths, e, xi)
+            if not found or np.linalg.norm(r - origin) > R_out:
+                raise ModelError(
+                    f"joint '{self.name}': beam '{self.beam.name}' does not pass through the hole "
+                    f"of body '{self.body.name}' at section {k} (axial station {zeta:.6g}); place "
+                    "the body on the beam (pose = beam.frame_at(s), scenario pose = {on_beam, s})")
+            a, b, *_ = section_ellipse(r_xi, n, ey, ez, self.beam_radius)
+            if a > R_in * (1 + 1e-12):
+                raise ModelError(
+                    f"joint '{self.name}': the beam is tilted too much to fit the hole at section "
+                    f"{k} (ellipse semi-axis {a:.6g} > bore {R_in:.6g}: jamming); align the hole "
+                    "axis with the beam")
+            self._elem[k], self._xi[k] = e, xi
+
+    def pattern_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        return [(self._body_dofs, np.concatenate([self._body_dofs, self._beam_dofs]))]
+
+    # ------------------------------------------------------------------ detection + forces
+    def _contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
+        """(section, index, kind, elem, ContactResult, a, b) for every penetrating point.
+
+        With ``self._frozen`` (a list from :meth:`freeze_detection`) the detected hole points
+        (body coordinates), elements and kinds are reused: the residual is then exactly the
+        function whose derivative the tangent is (used by the finite-difference tests)."""
+        if self._frozen is not None:
+            qb, vb = q[self._body_dofs], v[self._body_dofs]
+            out = []
+            for k, j, kind, eP, u_Q, xiP, a, b in self._frozen:
+                res = contact_point(qb, vb, u_Q, q[self._elem_dofs[eP]], v[self._elem_dofs[eP]],
+                                    self._lengths[eP], xiP, self.beam_radius, self.contact,
+                                    self.friction, self._approach.get((k, j), 0.0),
+                                    self.consistent and want_tangent)
+                if res.gap < 0.0:
+                    out.append((k, j, kind, eP, res, a, b))
+            return out
+        qb = q[self._body_dofs]
+        vb = v[self._body_dofs]
+        A, centre, n, ey, ez = self._frames(qb)
+        qe = np.ascontiguousarray(q[self._elem_dofs])
+        section = self.hole.section
+        R_out = section.bounding_radius()
+        R_in = section.inscribed_radius()
+        r_b = self.beam_radius
+        out = []
+        for k, zeta in enumerate(self.stations):
+            origin = centre + zeta * n
+            e, xi, found = section_crossing(qe, self._lengths, origin, n, int(self._elem[k]),
+                                            float(self._xi[k]), max_distance=2 * R_out + r_b)
+            if not found:
+                continue
+            if update:
+                self._elem[k], self._xi[k] = e, xi
+            r, r_xi, _ = beam_point(qe, self._lengths, e, xi)
+            a, b, ea3, _, _ = section_ellipse(r_xi, n, ey, ez, r_b)
+            d = r - origin
+            cy, cz = float(d @ ey), float(d @ ez)
+            if math.hypot(cy, cz) + a < R_in:
+                continue  # broad phase: the ellipse is strictly inside the bore
+            ea2 = np.array([ea3 @ ey, ea3 @ ez])
+            if not np.linalg.norm(ea2) > 0:
+                ea2 = np.array([1.0, 0.0])
+            ell = Ellipse2D(np.array([cy, cz]), ea2, max(a, b), b)
+            for j, cand in enumerate(section.candidates(ell)):
+                if cand.depth <= 0.0:
+                    continue
+                Qg = origin + cand.Q[0] * ey + cand.Q[1] * ez
+                u_Q = A.T @ (Qg - qb[:3])
+                eP, xiP, *_ = closest_point(qe, self._lengths, Qg, e, xi)
+                res = contact_point(qb, vb, u_Q, qe[eP], v[self._elem_dofs[eP]],
+                                    self._lengths[eP], xiP, r_b, self.contact, self.friction,
+                                    self._approach.get((k, j), 0.0),
+                                    self.consistent and want_tangent)
+                if res.gap >= 0.0:
+                    continue
+                out.append((k, j, cand.kind, eP, res, a, b))
+        return out
+
+    def freeze_detection(self, q: np.ndarray | None, v: np.ndarray | None = None) -> None:
+        """Freeze (or, with ``q=None``, release) the detected contact points at ``q``."""
+        if q is None:
+            self._frozen = None
+            return
+        v = np.zeros_like(q) if v is None else v
+        qb = q[self._body_dofs]
+        A = rotation_matrix(qb[3:7])
+        self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b)
+                        for k, j, kind, eP, res, a, b in self._contacts(q, v, False, False)]
+
+    def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
+                 r_q: np.ndarray, matrix: tuple[float, float, float] | None) -> float:
+        scale = 0.0
+        for _k, _j, kind, eP, res, _a, _b in self._contacts(q, v, matrix is not None, False):
+            sign = float(kind)
+            r_q[self._body_dofs] -= sign * res.Q_body
+            r_q[self._elem_dofs[eP]] -= sign * res.Q_elem
+            scale = max(scale, float(np.abs(res.Q_body).max()), float(np.abs(res.Q_elem).max()))
+            if matrix is not None:
+                _, cC, cK = matrix
+                idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
+                asm.add_to_matrix(idx, idx, sign * (cK * res.K + cC * res.C))
+        return scale
+
+    def post_step(self, asm: Assembly, q: np.ndarray, v: np.ndarray, t: float) -> None:
+        contacts = self._contacts(q, v, False, True)
+        active = set()
+        for k, j, _kind, _eP, res, _a, _b in contacts:
+            active.add((k, j))
+            if (k, j) not in self._active:
+                self._approach[(k, j)] = -res.gap_rate   # approach velocity at onset
+        for key in list(self._approach):
+            if key not in active:
+                del self._approach[key]
+        self._active = active
+
+    # ------------------------------------------------------------------ output
+    def output(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
+               t: float) -> list[dict[str, Any]]:
+        rows = []
+        for k, j, kind, _eP, res, a, b in self._contacts(q, v, False, False):
+            rows.append({
+                "t": t, "joint": self.name, "section": k, "point": j, "gap": res.gap,
+                "normal_force": float(kind) * res.f_n, "qx": res.Q[0], "qy": res.Q[1],
+                "qz": res.Q[2], "px": res.P[0], "py": res.P[1], "pz": res.P[2], "a": a, "b": b,
+                "position": res.Q, "normal": res.normal})
+        return rows
+
+    def slide_coordinate(self, q: np.ndarray) -> float:
+        """Arc length (from the beam's first node) of the projection of the hole centre onto
+        the beam centreline."""
+        qb = q[self._body_dofs]
+        _, centre, *_ = self._frames(qb)
+        qe = np.ascontiguousarray(q[self._elem_dofs])
+        k = len(self.stations) // 2
+        e, xi, *_ = closest_point(qe, self._lengths, centre, int(self._elem[k]), float(self._xi[k]))
+        return float(np.sum(self._lengths[:e]) + xi * self._lengths[e])
+
+    def contact_force(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Total contact force on the hole body (global components)."""
+        F = np.zeros(3)
+        for _k, _j, kind, _eP, res, _a, _b in self._contacts(q, v, False, False):
+            F += float(kind) * res.force_on_hole
+        return F
+
+    def get_state(self) -> dict[str, Any]:
+        return {"elem": self._elem.tolist(), "xi": self._xi.tolist(),
+                "approach": [[k, j, val] for (k, j), val in self._approach.items()]}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        self._elem[:] = state["elem"]
+        self._xi[:] = state["xi"]
+        self._approach = {(int(k), int(j)): float(val) for k, j, val in state["approach"]}
+        self._active = set(self._approach)
+
+    def __repr__(self) -> str:
+        return (f"SlidingClearanceJoint({self.name!r}, beam={self.beam.name!r}, "
+                f"body={self.body.name!r}, hole={type(self.hole.section).__name__}, "
+                f"sections={len(self.stations)}, law={self.contact!r})")

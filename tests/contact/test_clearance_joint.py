@@ -1,0 +1,135 @@
+"""Sliding joint with clearance in the assembled model: statics (FORMULATION Part III §9, V3),
+tangent vs finite differences, sliding on an incline, input validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import flexmbs as fm
+from flexmbs.assembly import Assembly
+
+M_SLEEVE, G = 0.21441, 9.81
+J_SLEEVE = (2.479e-5, 4.098e-5, 4.098e-5)
+
+
+def _beam_with_sleeve(*, direction=(1.0, 0.0, 0.0), offset=-5.01e-4, stiffness=1e6, damping=0.0,
+                      lock_axial=True, friction=None, s=0.5):
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    model = fm.Model(gravity=(0, 0, -G))
+    beam = model.add_beam(fm.line((0, 0, 0), tuple(d), elements=16), name="rail",
+                          section=fm.CircularSection(2e-3), material=fm.Material(E=2.1e11, rho=7800))
+    model.clamp(beam.first_node)
+    model.clamp(beam.last_node)
+    pose = beam.frame_at(s).shifted((0, 0, offset))
+    sleeve = model.add_rigid_body(mass=M_SLEEVE, inertia=J_SLEEVE, pose=pose, name="sleeve")
+    if lock_axial:   # statics: fix the free slide and roll of the sleeve (frictionless)
+        model.joint(sleeve, fm.GROUND, point=pose.position, axis=tuple(d), translation=(1, 0, 0),
+                    rotation=(1, 0, 0))
+    joint = model.add_joint(fm.SlidingClearanceJoint(
+        beam, sleeve, hole=fm.CircleHole(2.5e-3, 0.04, 9), friction=friction,
+        contact=fm.LinearPenalty(stiffness=stiffness, damping=damping)))
+    return model, beam, sleeve, joint
+
+
+def test_sleeve_at_rest_loads_only_the_end_sections():
+    """V3: horizontal clamped-clamped steel rod (L = 1 m, r = 2 mm), sleeve (bore 2.5 mm,
+    40 mm, 9 sections) at midspan: the beam's sag over the sleeve lifts it off the middle
+    sections, so only sections 0 and 8 carry mg/2 each (to the equilibrium's rounding); the
+    midspan deflection equals that of the beam under two point loads mg/2 at the end-section
+    stations (penalty penetration 1e-6 m shifts the load points negligibly: 1e-5 relative)."""
+    model, beam, sleeve, joint = _beam_with_sleeve()
+    asm = Assembly(model)
+    st = fm.solve_static(asm, fm.StaticOptions(load_steps=4))
+    rows = joint.output(asm, st.q, np.zeros_like(st.q), st.lam, 0.0)
+    assert sorted(r["section"] for r in rows) == [0, 8]
+    for r in rows:
+        assert r["normal_force"] == pytest.approx(M_SLEEVE * G / 2, rel=1e-5)
+        assert r["gap"] == pytest.approx(-M_SLEEVE * G / 2 / 1e6, rel=1e-5)
+    mid = asm.node_dofs(beam.node(8))[2]
+    ref = fm.Model(gravity=(0, 0, -G))
+    b2 = ref.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=16),
+                      section=fm.CircularSection(2e-3), material=fm.Material(E=2.1e11, rho=7800))
+    ref.clamp(b2.first_node)
+    ref.clamp(b2.last_node)
+    for s in (0.48, 0.52):
+        ref.add_point_load((b2, s), (0, 0, -M_SLEEVE * G / 2))
+    st2 = fm.solve_static(ref)
+    assert st.q[mid] == pytest.approx(st2.q[mid], rel=1e-5)
+
+
+def test_contact_tangent_matches_finite_differences(rng):
+    """Assembled iteration matrix with active contacts (consistent tangent, damped penalty)
+    vs central differences of the residual in q and v with the detected hole points frozen as
+    material points of the hole (the function the tangent differentiates): 1e-6 relative."""
+    model, beam, sleeve, joint = _beam_with_sleeve(offset=-5.3e-4, damping=20.0, lock_axial=False)
+    asm = Assembly(model)
+    n, m = asm.n_coords, asm.n_mult
+    q = asm.q_ref.copy()
+    q[asm.body_dofs(sleeve)[:3]] += 1e-5 * rng.standard_normal(3)
+    v = 1e-2 * rng.standard_normal(n)
+    a = np.zeros(n)
+    lam = rng.standard_normal(m)
+
+    def res(q_, v_):
+        rq, rl = np.zeros(n), np.zeros(m)
+        asm.evaluate(q_, v_, a, lam, 0.0, rq, rl)
+        return rq
+
+    rq, rl = np.zeros(n), np.zeros(m)
+    assert joint.output(asm, q, v, lam, 0.0), "the configuration must have active contacts"
+    joint.freeze_detection(q, v)
+    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
+    K = asm.matrix.toarray()[:n, :n]
+    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 1.0, 0.0))
+    C = asm.matrix.toarray()[:n, :n]
+    idx = np.concatenate([asm.body_dofs(sleeve), asm.beam_dofs(beam)[40:60]])
+    h = 1e-8
+    for j in idx:
+        e = np.zeros(n)
+        e[j] = h
+        col = (res(q + e, v) - res(q - e, v)) / (2 * h)
+        assert np.abs(K[:, j] - col).max() <= 1e-6 * np.abs(K).max() + 1e-6 * np.abs(col).max()
+        e[j] = 1e-6
+        colv = (res(q, v + e) - res(q, v - e)) / 2e-6
+        assert np.abs(C[:, j] - colv).max() <= 1e-6 * max(np.abs(C).max(), 1.0)
+
+
+def test_frictionless_sleeve_slides_down_an_incline_with_g_sin_alpha():
+    """Stiff inclined rod, sleeve resting in contact: after the contact settles (0.05 s) the
+    slide acceleration is g sin(alpha) (frictionless, penalty normal forces do no axial work);
+    fitted over 0.05-0.25 s, 2e-3 relative (the rod's own vibration under the moving load)."""
+    alpha = 0.2
+    d = (np.cos(alpha), 0.0, -np.sin(alpha))
+    model, beam, sleeve, joint = _beam_with_sleeve(direction=d, offset=-5.05e-4 / np.cos(alpha),
+                                                   lock_axial=False, damping=20.0, s=0.3)
+    for b in model.beams:
+        b.stiffness = fm.BeamStiffness(axial_stiffness=2.6e8, bending_stiffness=2.6e2,
+                                       mass_per_length=0.098, radius=2e-3)
+    res = fm.simulate(model, t_end=0.25, dt=2e-4, output_interval=5e-3, record_energy=False,
+                      integrator=fm.GeneralizedAlpha(rho_inf=0.8))
+    x = res.body_position(sleeve) @ np.asarray(d)
+    sel = res.t >= 0.05
+    acc = 2 * np.polyfit(res.t[sel], x[sel], 2)[0]
+    assert acc == pytest.approx(G * np.sin(alpha), rel=2e-3)
+
+
+def test_input_errors_are_clear():
+    with pytest.raises(fm.ModelError, match="does not pass through the hole"):
+        model, beam, sleeve, joint = _beam_with_sleeve(offset=-0.01)
+        Assembly(model)
+    model = fm.Model()
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=4),
+                          section=fm.CircularSection(2e-3), material=fm.Material(E=2e11, rho=7800))
+    body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), pose=beam.frame_at(0.5))
+    with pytest.raises(fm.ModelError, match="not larger than the beam"):
+        fm.SlidingClearanceJoint(beam, body, hole=fm.CircleHole(1.9e-3, 0.04, 5))
+    half = np.radians(20.0)   # 40 deg tilt: a = r_b / cos(40 deg) = 2.61 mm > R = 2.5 mm
+    tilted = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), position=(0.5, 0, 0),
+                                  quaternion=(np.cos(half), 0, 0, np.sin(half)))
+    model.add_joint(fm.SlidingClearanceJoint(beam, tilted, hole=fm.CircleHole(2.5e-3, 1e-4, 3)))
+    with pytest.raises(fm.ModelError, match="jamming"):
+        Assembly(model)
+    with pytest.raises(fm.ModelError, match="unknown hole section 'hexagon'"):
+        from flexmbs.contact.sections import get_section
+        get_section("hexagon")
