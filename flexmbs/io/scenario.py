@@ -907,13 +907,6 @@ _CONSTRAINTS: dict[str, tuple[tuple[str, ...], Callable[[BuildContext, Table], N
 
 
 # ------------------------------------------------------------------------------------ joints
-def _not_available(kind: str) -> Callable[..., Any]:
-    def build(model: Model, table: Table, keypath: str, context: BuildContext) -> Any:
-        raise ScenarioError(f"{keypath}.type: joint type '{kind}' is not available in this "
-                            "version of flexmbs")
-    return build
-
-
 def _sliding(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
     """``type = "sliding"``: SlidingJoint (no clearance), FORMULATION Part II §7."""
     from ..constraints.sliding import SlidingJoint
@@ -1143,13 +1136,6 @@ def _probe_contact_force(model: Model, t: Table, keypath: str, ctx: BuildContext
         raise ScenarioError(f"{t.key('joint')}: no clearance joint named '{name}' "
                             f"(clearance joints: {known or 'none'})")
     return probes.ContactForceProbe(t.raw["name"], joint)
-
-
-def _probe_not_available(kind: str) -> Callable[..., Any]:
-    def build(model: Model, table: Table, keypath: str, context: BuildContext) -> Any:
-        raise ScenarioError(f"{keypath}.type: probe type '{kind}' is not available in this "
-                            "version of flexmbs")
-    return build
 
 
 #: ``[[probes]]`` types: builder(model, table, keypath, context) -> probe object

@@ -231,8 +231,9 @@ bending_stiffness = 1.0
      "probes[0].name: missing required key"),
     ("probe_unknown_type", SIM + "[[probes]]\nname = 'x'\ntype = 'stress'\n",
      "probes[x].type: unknown probe type 'stress' (known: beam_point"),
-    ("probe_not_available", SIM + "[[probes]]\nname = 'x'\ntype = 'contact_force'\n",
-     "probes[x].type: probe type 'contact_force' is not available in this version"),
+    ("probe_contact_force_without_joint", SIM + "[[probes]]\nname = 'x'\ntype = 'contact_force'\n"
+                                          "joint = 'sleeve'\n",
+     "probes[x].joint: no clearance joint named 'sleeve' (clearance joints: none)"),
     ("probe_name_with_comma", SIM + "[[probes]]\nname = 'a,b'\ntype = 'energy'\n",
      "probes[a,b].name: expected a probe name usable as a CSV column"),
 ]
