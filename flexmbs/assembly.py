@@ -562,7 +562,7 @@ class Assembly:
             if qdd is not None:
                 rb.inertial_residual(self.body_mass, self.body_inertia, p, v[bd[:, 3:]], qdd[bd],
                                      self._br, self._bdq, self._bdv)
-                np.add.at(r_q, bd, self._br)
+                r_q[bd] += self._br   # body coordinates are distinct: no accumulation needed
                 scale = max(scale, float(np.abs(self._br).max()))
                 if want:
                     self._bM[:] = rb.mass_matrix(self.body_mass, self.body_inertia, p)

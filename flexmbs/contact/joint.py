@@ -22,6 +22,7 @@ import numpy as np
 from ..constraints.interaction import Interaction
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ModelError
+from ._detect import detect_circle
 from .geometry import beam_point, closest_point, section_crossing, section_ellipse
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb
 from .pair import contact_point
@@ -106,6 +107,7 @@ class SlidingClearanceJoint(Interaction):
         self._approach: dict[tuple[int, int], float] = {}
         self._active: set[tuple[int, int]] = set()
         self._frozen: list | None = None
+        self._rows = np.zeros((4 * ns, 11))    # at most 4 stationary points per section
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: Model) -> None:
@@ -174,6 +176,8 @@ class SlidingClearanceJoint(Interaction):
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b))
             return out
+        if isinstance(self.hole.section, CircleSection):
+            return self._contacts_circle(q, v, want_tangent, update)
         qb = q[self._body_dofs]
         vb = v[self._body_dofs]
         A, centre, n, ey, ez = self._frames(qb)
@@ -214,6 +218,27 @@ class SlidingClearanceJoint(Interaction):
                 if res.gap >= 0.0:
                     continue
                 out.append((k, j, cand.kind, eP, res, a, b))
+        return out
+
+    def _contacts_circle(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
+                         update: bool) -> list:
+        """Circular bore: the narrow phase of all sections runs compiled (contact/_detect.py)."""
+        qb = q[self._body_dofs]
+        vb = v[self._body_dofs]
+        A, centre, *_ = self._frames(qb)
+        qe = np.ascontiguousarray(q[self._elem_dofs])
+        m = detect_circle(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
+                          update, self.beam_radius, float(self.hole.section.radius), self._rows)
+        out = []
+        for row in self._rows[:m]:
+            k, j, kind, eP = int(row[0]), int(row[1]), int(row[2]), int(row[3])
+            u_Q = A.T @ (row[5:8] - qb[:3])
+            ed = self._elem_dofs[eP]
+            res = contact_point(qb, vb, u_Q, q[ed], v[ed], self._lengths[eP], row[4],
+                                self.beam_radius, self.contact, self.friction,
+                                self._approach.get((k, j), 0.0), self.consistent and want_tangent)
+            if res.gap < 0.0:
+                out.append((k, j, kind, eP, res, row[8], row[9]))
         return out
 
     def freeze_detection(self, q: np.ndarray | None, v: np.ndarray | None = None) -> None:

@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._jit import njit
+
 __all__ = [
     "skew",
     "normalize",
@@ -73,6 +75,8 @@ def normalize(p: np.ndarray) -> np.ndarray:
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
     """FORMULATION I §5, homogeneous form ``A = E Gᵀ = (e0² − eᵀe)I + 2(eeᵀ + e0ẽ)`` (...,3,3)."""
     p = np.asarray(p, dtype=float)
+    if p.shape == (4,):   # the common single-body case, compiled
+        return _rotation_single(p)
     e0 = p[..., 0]
     e = p[..., 1:]
     A = 2.0 * (e[..., :, None] * e[..., None, :] + e0[..., None, None] * skew(e))
@@ -260,6 +264,17 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
     ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``, ``∂(8ĠᵀJ′Ġp)/∂p = 8ĠᵀJ′Ġ``,
     ``∂(8ĠᵀJ′Ġp)/∂ṗ = 8[Ĝ(J′Ġp) − ĠᵀJ′G]``.
     """
+    _inertial_kernel(np.ascontiguousarray(mass, dtype=float),
+                     np.ascontiguousarray(inertia, dtype=float), np.ascontiguousarray(p, dtype=float),
+                     np.ascontiguousarray(pd, dtype=float), np.ascontiguousarray(qdd, dtype=float),
+                     out_r, out_dq, out_dv)
+
+
+def inertial_residual_numpy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: np.ndarray,
+                            qdd: np.ndarray, out_r: np.ndarray, out_dq: np.ndarray,
+                            out_dv: np.ndarray) -> None:
+    """Vectorised numpy version of :func:`inertial_residual` (the reference the tests compare
+    the compiled kernel with)."""
     mass = np.asarray(mass, dtype=float)
     pdd = qdd[:, 3:]
     G = g_matrix(p)
@@ -279,6 +294,92 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
     out_dq[:, 3:, 3:] = 4.0 * (g_hat(JGpdd) - _gjg(inertia, G, Gpdd)) - 8.0 * GdJGd
     out_dv.fill(0.0)
     out_dv[:, 3:, 3:] = -8.0 * (g_hat(JGd_p) - _gjg(inertia, Gd, G))
+
+
+@njit
+def _rotation_single(p):  # noqa: ANN001, ANN202
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    d = e0 * e0 - e1 * e1 - e2 * e2 - e3 * e3
+    A = np.empty((3, 3))
+    A[0, 0] = d + 2 * e1 * e1
+    A[1, 1] = d + 2 * e2 * e2
+    A[2, 2] = d + 2 * e3 * e3
+    A[0, 1] = 2 * (e1 * e2 - e0 * e3)
+    A[1, 0] = 2 * (e1 * e2 + e0 * e3)
+    A[0, 2] = 2 * (e1 * e3 + e0 * e2)
+    A[2, 0] = 2 * (e1 * e3 - e0 * e2)
+    A[1, 2] = 2 * (e2 * e3 - e0 * e1)
+    A[2, 1] = 2 * (e2 * e3 + e0 * e1)
+    return A
+
+
+@njit
+def _g(p):  # noqa: ANN001, ANN202
+    """G(p) = [-e, -ẽ + e0 I] (3x4)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    G = np.empty((3, 4))
+    G[0, 0] = -e1
+    G[0, 1] = e0
+    G[0, 2] = e3
+    G[0, 3] = -e2
+    G[1, 0] = -e2
+    G[1, 1] = -e3
+    G[1, 2] = e0
+    G[1, 3] = e1
+    G[2, 0] = -e3
+    G[2, 1] = e2
+    G[2, 2] = -e1
+    G[2, 3] = e0
+    return G
+
+
+@njit
+def _ghat(y):  # noqa: ANN001, ANN202
+    """Ĝ(y) = [[0, -yᵀ], [y, -ỹ]] with G(p)ᵀ y = Ĝ(y) p."""
+    H = np.zeros((4, 4))
+    H[0, 1] = -y[0]
+    H[0, 2] = -y[1]
+    H[0, 3] = -y[2]
+    H[1, 0] = y[0]
+    H[2, 0] = y[1]
+    H[3, 0] = y[2]
+    H[1, 2] = y[2]
+    H[1, 3] = -y[1]
+    H[2, 1] = -y[2]
+    H[2, 3] = y[0]
+    H[3, 1] = y[1]
+    H[3, 2] = -y[0]
+    return H
+
+
+@njit
+def _inertial_kernel(mass, inertia, p, pd, qdd, out_r, out_dq, out_dv):  # noqa: ANN001, ANN202
+    nb = mass.size
+    for bi in range(nb):
+        J = inertia[bi]
+        G = _g(p[bi])
+        Gd = _g(pd[bi])
+        pdd = qdd[bi, 3:]
+        Gpdd = _g(pdd)
+        JG = J @ G
+        GJG = G.T @ JG
+        JGd = J @ Gd
+        GdJGd = Gd.T @ JGd
+        JGpdd = JG @ pdd
+        Gd_p = Gd @ p[bi]
+        JGd_p = J @ Gd_p
+        for c in range(3):
+            out_r[bi, c] = mass[bi] * qdd[bi, c]
+        rp = 4.0 * (GJG @ pdd) - 8.0 * (Gd.T @ JGd_p)
+        dq = 4.0 * (_ghat(JGpdd) - G.T @ (J @ Gpdd)) - 8.0 * GdJGd
+        dv = -8.0 * (_ghat(JGd_p) - Gd.T @ JG)
+        out_dq[bi, :, :] = 0.0
+        out_dv[bi, :, :] = 0.0
+        for i in range(4):
+            out_r[bi, 3 + i] = rp[i]
+            for j in range(4):
+                out_dq[bi, 3 + i, 3 + j] = dq[i, j]
+                out_dv[bi, 3 + i, 3 + j] = dv[i, j]
 
 
 def kinetic_energy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray,
