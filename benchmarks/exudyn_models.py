@@ -62,11 +62,19 @@ def _require_exudyn():
 
 def _build_cantilever(n_elem: int, reduced_integration: bool):
     exu = _require_exudyn()
-    from exudyn.itemInterface import (CoordinateConstraint, Gravity, MarkerBodyMass,
-                                      MarkerNodeCoordinate, NodePointGround,
-                                      NodePointSlope1, ObjectANCFCable,
-                                      VCoordinateConstraint, VNodePointGround,
-                                      VNodePointSlope1, VObjectANCFCable)
+    from exudyn.itemInterface import (
+        CoordinateConstraint,
+        Gravity,
+        MarkerBodyMass,
+        MarkerNodeCoordinate,
+        NodePointGround,
+        NodePointSlope1,
+        ObjectANCFCable,
+        VCoordinateConstraint,
+        VNodePointGround,
+        VNodePointSlope1,
+        VObjectANCFCable,
+    )
 
     p = CANTILEVER
     L = float(p["length"])

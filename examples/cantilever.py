@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
     res = fm.simulate(model, t_end=args.t_end, dt=args.dt, output_interval=0.05)
     w = res.node_displacement(rod.last_node)[:, 2]
     print(f"{'t [s]':>8} {'tip w [mm]':>12} {'energy [J]':>12}")
-    for t, wi, e in zip(res.t, w, res.energy["total"]):
+    for t, wi, e in zip(res.t, w, res.energy["total"], strict=True):
         print(f"{t:8.3f} {1e3 * wi:12.4f} {e:12.5f}")
     st = fm.solve_static(model)
     w_static = st.q[res.assembly.node_dofs(rod.last_node)[2]]
