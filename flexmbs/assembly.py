@@ -549,7 +549,7 @@ class Assembly:
             if want:
                 ne = grp.dofs.shape[0]
                 kscale = max(kscale, float(np.abs(grp.stiff[:, _DIAG, _DIAG]).max()))
-                if qdd is not None:
+                if qdd is not None or cM != 0.0:   # statics: cM is the optional stabiliser
                     sc.scatter_matrix(data, grp.pos, grp.stiff.reshape(ne, 144),
                                       grp.damp.reshape(ne, 144), grp.mass_flat, cK, cC, cM)
                 else:
@@ -568,6 +568,9 @@ class Assembly:
                     self._bM[:] = rb.mass_matrix(self.body_mass, self.body_inertia, p)
                     blk = cM * self._bM + cC * self._bdv + cK * self._bdq
                     np.add.at(data, self._body_pos, blk.reshape(nb, 49))
+            elif want and cM != 0.0:   # statics with the mass-proportional stabiliser
+                blk = cM * rb.mass_matrix(self.body_mass, self.body_inertia, p)
+                np.add.at(data, self._body_pos, blk.reshape(nb, 49))
             for dofs, point, force, moment, fn in self.body_loads:
                 f = load_factor * fn(t)
                 pb = q[dofs[3:]][None, :]

@@ -17,10 +17,15 @@ class StaticOptions:
 
     ``load_steps`` is the initial number of increments; a failed increment is halved (down to
     ``min_increment``), an easy one (``<= easy_iterations`` Newton iterations) grows by 1.5.
+    ``stabilizer`` (FORMULATION §6.5, Exudyn's stabilizerODE2term) adds the mass-proportional
+    term ``c_s (1 - load^2) M`` to the Newton matrix only: it regularises slack cables and
+    contacts that are not yet closed in the first increments, and vanishes at full load, so
+    the equilibrium found is unchanged.
     """
 
     load_steps: int = 1
     min_increment: float = 1e-4
+    stabilizer: float = 0.0       # c_s [1/s^2]: adds c_s (1 - load^2) M to the Newton matrix
     easy_iterations: int = 4
     newton: NewtonOptions = field(default_factory=lambda: NewtonOptions(
         modified=False, line_search=False, max_iterations=30))
@@ -45,10 +50,12 @@ class _StaticStep:
         self.r_q = np.zeros(asm.n_coords)
         self.r_lam = np.zeros(asm.n_mult)
         self.load = 1.0
+        self.stabilizer = 0.0
 
     def evaluate(self, want_matrix: bool):
+        cs = self.stabilizer * (1.0 - self.load**2)
         scale = self.asm.evaluate(self.q, self.v, None, self.lam, self.t, self.r_q, self.r_lam,
-                                  matrix=(0.0, 0.0, 1.0) if want_matrix else None,
+                                  matrix=(cs, 0.0, 1.0) if want_matrix else None,
                                   load_factor=self.load, with_damping=False)
         return self.r_q, self.r_lam, scale
 
@@ -88,6 +95,7 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
     q = (asm.q_ref if q0 is None else q0).copy()
     lam = np.zeros(asm.n_mult)
     prob = _StaticStep(asm, q, lam, t)
+    prob.stabilizer = o.stabilizer
     newton = Newton(o.newton, asm.length_scale)
     factor, inc = 0.0, 1.0 / o.load_steps
     n_inc = 0

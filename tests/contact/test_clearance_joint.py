@@ -133,3 +133,4 @@ def test_input_errors_are_clear():
     with pytest.raises(fm.ModelError, match="unknown hole section 'hexagon'"):
         from flexmbs.contact.sections import get_section
         get_section("hexagon")
+
