@@ -107,6 +107,7 @@ class SlidingClearanceJoint(Interaction):
         self._approach: dict[tuple[int, int], float] = {}
         self._active: set[tuple[int, int]] = set()
         self._frozen: list | None = None
+        self._positions: dict[tuple[int, int], np.ndarray] = {}
         self._rows = np.zeros((4 * ns, 11))    # at most 4 stationary points per section
 
     # ------------------------------------------------------------------ set-up
@@ -262,8 +263,12 @@ class SlidingClearanceJoint(Interaction):
             scale = max(scale, float(np.abs(res.Q_body).max()), float(np.abs(res.Q_elem).max()))
             if matrix is not None:
                 _, cC, cK = matrix
-                idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
-                asm.add_to_matrix(idx, idx, sign * (cK * res.K + cC * res.C))
+                key = (id(asm), eP)
+                pos = self._positions.get(key)
+                if pos is None:   # matrix positions of the (body, element) block, cached
+                    idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
+                    pos = self._positions[key] = asm.positions(idx, idx)
+                np.add.at(asm.matrix.data, pos, (sign * (cK * res.K + cC * res.C)).ravel())
         return scale
 
     def post_step(self, asm: Assembly, q: np.ndarray, v: np.ndarray, t: float) -> None:
