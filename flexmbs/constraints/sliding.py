@@ -296,6 +296,12 @@ class SlidingJoint(Interaction):
     def slide_coordinate(self, q: np.ndarray) -> float:
         return float(q[self._s_dof])
 
+    def reaction_force(self, asm: Assembly, lam: np.ndarray) -> np.ndarray:
+        """Constraint force of the joint on the body at the hole centre (global components):
+        ``-lam_pos`` (the body equation reads ``m r'' + lam_pos = F``)."""
+        rows = asm.multiplier_rows(self._constraint)
+        return -lam[rows[:3]]
+
     def get_state(self) -> dict[str, Any]:
         return {"element": int(self.element)}
 

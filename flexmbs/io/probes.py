@@ -167,6 +167,29 @@ class SlideCoordinateProbe(Probe):
 PROBE_TYPES["slide_coordinate"] = SlideCoordinateProbe
 
 
+class JointReactionProbe(Probe):
+    """Reaction force of a (clearance-free) sliding joint on its body (global components)."""
+
+    def __init__(self, name: str, joint: Any) -> None:
+        self.name = _check_name(name)
+        if not hasattr(joint, "reaction_force"):
+            raise ModelError(f"probe '{name}': joint {joint!r} has no reaction force")
+        self.joint = joint
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{c}" for c in _XYZ]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return self.joint.reaction_force(asm, state.lam)
+
+    def check(self, asm: Any) -> None:
+        if self.joint not in asm.model.interactions:
+            raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
+
+
+PROBE_TYPES["joint_reaction"] = JointReactionProbe
+
+
 class ContactForceProbe(Probe):
     """Total contact force on the hole body of a clearance joint (global components)."""
 

@@ -1125,6 +1125,19 @@ def _probe_slide_coordinate(model: Model, t: Table, keypath: str, ctx: BuildCont
     return probes.SlideCoordinateProbe(t.raw["name"], joint)
 
 
+def _probe_joint_reaction(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+    from . import probes
+
+    t.allow(("name", "type", "joint"))
+    name = t.string("joint")
+    joint = ctx.joints.get(name)
+    if joint is None or not hasattr(joint, "reaction_force"):
+        known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, "reaction_force"))
+        raise ScenarioError(f"{t.key('joint')}: no sliding joint named '{name}' "
+                            f"(sliding joints: {known or 'none'})")
+    return probes.JointReactionProbe(t.raw["name"], joint)
+
+
 def _probe_contact_force(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
     from . import probes
 
@@ -1146,6 +1159,7 @@ PROBE_BUILDERS: dict[str, Callable[[Model, Table, str, BuildContext], Any]] = {
     "energy": _probe_energy,
     "slide_coordinate": _probe_slide_coordinate,
     "contact_force": _probe_contact_force,
+    "joint_reaction": _probe_joint_reaction,
 }
 
 
