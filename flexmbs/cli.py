@@ -166,7 +166,7 @@ class _Progress:
 def _run_static(sc: Any, asm: Any, out: Path, metadata: dict) -> tuple[str, dict]:
     """``integrator = "static"``: the equilibrium at t_end, written as one output frame."""
     from .io.output import OutputWriter, failure_reason
-    from .simulation import interaction_outputs
+    from .simulation import interaction_outputs, interaction_sections
     from .solvers.generalized_alpha import State
     from .solvers.static import solve_static
 
@@ -182,6 +182,7 @@ def _run_static(sc: Any, asm: Any, out: Path, metadata: dict) -> tuple[str, dict
         zero = np.zeros_like(st.q)
         state = State(t, st.q, zero, zero.copy(), zero.copy(), st.lam)
         writer.write(state, contacts=interaction_outputs(asm, state),
+                     sections=interaction_sections(asm, state),
                      checkpoint_extra={"scenario": sc.name, "n_coords": int(asm.n_coords),
                                        "n_mult": int(asm.n_mult)})
         stats = {"steps": 0, "newton_iterations": st.newton_iterations, "rejected_steps": 0,

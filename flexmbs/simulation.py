@@ -191,6 +191,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         # a resumed run starts at the checkpoint, which the folder already holds
         if writer is not None and (resume_t is None or s.t > resume_t):
             writer.write(s, contacts=interaction_outputs(asm, s),
+                         sections=interaction_sections(asm, s),
                          checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm)})
         if observer is not None:
             observer(s)
@@ -259,6 +260,16 @@ def interaction_outputs(asm: Assembly, state: State) -> list[dict]:
         fn = getattr(obj, "output", None)
         if fn is not None:
             rows.extend(fn(asm, state.q, state.v, state.lam, state.t))
+    return rows
+
+
+def interaction_sections(asm: Assembly, state: State) -> list[dict]:
+    """Hole-section records (sections.csv) of every clearance joint at ``state``."""
+    rows: list[dict] = []
+    for obj in asm.model.interactions:
+        fn = getattr(obj, "section_records", None)
+        if fn is not None:
+            rows.extend(fn(state.q, state.v, state.t))
     return rows
 
 

@@ -295,6 +295,33 @@ class SlidingClearanceJoint(Interaction):
                 "position": res.Q, "normal": res.normal})
         return rows
 
+    def section_records(self, q: np.ndarray, v: np.ndarray, t: float) -> list[dict[str, Any]]:
+        """Per hole section: section frame, beam ellipse (section coordinates), bore radius and
+        number of contact points (``sections.csv``, used by the section view)."""
+        qb = q[self._body_dofs]
+        A, centre, n, ey, ez = self._frames(qb)
+        qe = np.ascontiguousarray(q[self._elem_dofs])
+        R = self.hole.section.bounding_radius()
+        counts: dict[int, int] = {}
+        for k, *_ in self._contacts(q, v, False, False):
+            counts[k] = counts.get(k, 0) + 1
+        rows = []
+        for k, zeta in enumerate(self.stations):
+            origin = centre + zeta * n
+            e, xi, found = section_crossing(qe, self._lengths, origin, n, int(self._elem[k]),
+                                            float(self._xi[k]), max_distance=2 * R + self.beam_radius)
+            if not found:
+                continue
+            r, r_xi, _ = beam_point(qe, self._lengths, e, xi)
+            a, b, ea3, _, _ = section_ellipse(r_xi, n, ey, ez, self.beam_radius)
+            d = r - origin
+            rows.append({"joint": self.name, "section": k, "ox": origin[0], "oy": origin[1],
+                         "oz": origin[2], "eyx": ey[0], "eyy": ey[1], "eyz": ey[2],
+                         "ezx": ez[0], "ezy": ez[1], "ezz": ez[2], "cy": d @ ey, "cz": d @ ez,
+                         "ey_a": ea3 @ ey, "ez_a": ea3 @ ez, "a": a, "b": b, "R": R,
+                         "contacts": counts.get(k, 0)})
+        return rows
+
     def slide_coordinate(self, q: np.ndarray) -> float:
         """Arc length (from the beam's first node) of the projection of the hole centre onto
         the beam centreline."""

@@ -40,6 +40,12 @@ from .vtu import BLOCK_NAMES, FrameBuilder, VTUSeries
 
 CONTACT_COLUMNS = ("t", "joint", "section", "point", "gap", "normal_force", "qx", "qy", "qz",
                    "px", "py", "pz", "a", "b")
+#: ``sections.csv`` (clearance joints only; an addition to DESIGN.md's folder): the state of every
+#: hole section for the section view: origin and axes of the section plane (global), the beam's
+#: ellipse in section coordinates (centre cy, cz; major axis ey_a, ez_a; semi-axes a, b), the
+#: bore's bounding radius R and the number of contact points
+SECTION_COLUMNS = ("t", "joint", "section", "ox", "oy", "oz", "eyx", "eyy", "eyz", "ezx", "ezy",
+                   "ezz", "cy", "cz", "ey_a", "ez_a", "a", "b", "R", "contacts")
 
 
 def _fmt(x: Any) -> str:
@@ -129,6 +135,7 @@ class OutputWriter:
                                         resume_at=self.resume_at)
             self._probe_file, kept = self._open_csv("probes.csv", ["t", *self.probe_columns])
             self._contact_file, _ = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
+            self._section_file = None
             self.n_outputs = kept
             self._write_summary()
         except BaseException:
@@ -178,7 +185,7 @@ class OutputWriter:
 
     # ------------------------------------------------------------------ per output
     def write(self, state: Any, *, contacts: Sequence[dict] | None = None,
-              checkpoint_extra: dict | None = None) -> None:
+              checkpoint_extra: dict | None = None, sections: Sequence[dict] | None = None) -> None:
         """Record one output time: VTU frame, probe row, contact rows, checkpoint."""
         if self.finished:
             raise ValueError("OutputWriter.write after finish()")
@@ -196,6 +203,13 @@ class OutputWriter:
             for c in contacts:
                 w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in CONTACT_COLUMNS[1:]])
             self._contact_file.flush()
+        if sections:
+            if self._section_file is None:
+                self._section_file, _ = self._open_csv("sections.csv", list(SECTION_COLUMNS))
+            w = csv.writer(self._section_file)
+            for c in sections:
+                w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in SECTION_COLUMNS[1:]])
+            self._section_file.flush()
         if self.checkpoints:
             extra = {"output_step": self.n_outputs, **(checkpoint_extra or {})}
             save_checkpoint(self.checkpoint_path, state, extra=extra)

@@ -512,7 +512,10 @@ class FrameBuilder:
             x, [(VTK_LINE, b.segments)],
             point_data={"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc,
                         "axial_strain": eps, "curvature": K,
-                        "curvature_magnitude": np.linalg.norm(K, axis=1)},
+                        "curvature_magnitude": np.linalg.norm(K, axis=1),
+                        # section radius (for tubes: ParaView Tube "vary radius by scalar")
+                        "radius": np.full(x.shape[0], np.nan if beam.radius is None
+                                          else float(beam.radius))},
             cell_data={"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
                        "beam_id": np.full(nseg, b.index, np.int32),
                        "body_id": np.full(nseg, -1, np.int32)})
