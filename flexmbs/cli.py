@@ -74,14 +74,31 @@ def build_parser() -> argparse.ArgumentParser:
                                       "loads, joints, probes and solver settings.")
     info.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
 
-    render = sub.add_parser("render", help="off-screen rendering of an output folder "
-                            f"({_NOT_AVAILABLE.split(' (')[0]})")
+    render = sub.add_parser("render", help="off-screen rendering of an output folder",
+                            description="Render the .pvd series of DIR off-screen (pyvista): "
+                                        "PNG frames and/or a movie.")
     render.add_argument("directory", metavar="DIR")
-    render.add_argument("--movie", metavar="FILE")
-    render.add_argument("--png-every", type=int, metavar="N")
-    plot = sub.add_parser("plot", help="time-history figures of an output folder "
-                          f"({_NOT_AVAILABLE.split(' (')[0]})")
+    render.add_argument("--movie", metavar="FILE", help="movie file (.mp4 or .gif)")
+    render.add_argument("--png-every", type=int, metavar="N",
+                        help="write every N-th frame as PNG to DIR/frames")
+    render.add_argument("--camera", default="iso", help="iso | xy | xz | yz | x,y,z position")
+    render.add_argument("--color-by", default="curvature_magnitude", metavar="FIELD",
+                        help="beam point field: curvature_magnitude, axial_strain, "
+                             "displacement, velocity, ...")
+    render.add_argument("--tube-scale", type=float, default=1.0, metavar="F",
+                        help="draw beams F times thicker than their radius")
+    render.add_argument("--size", default="1280x720", metavar="WxH")
+    render.add_argument("--quiet", action="store_true")
+    plot = sub.add_parser("plot", help="time-history figures of an output folder",
+                          description="Write matplotlib figures (probes, contact forces, active "
+                                      "contacts) to DIR/figures.")
     plot.add_argument("directory", metavar="DIR")
+    plot.add_argument("--compare", metavar="OTHER_DIR", help="overlay a second run")
+    plot.add_argument("--format", action="append", choices=("png", "svg", "pdf"),
+                      help="figure format (repeatable; default png and svg)")
+    plot.add_argument("--section", action="store_true",
+                      help="also draw the middle hole section of each clearance joint at the "
+                           "last output (the paper's Fig. 2(b))")
     sweep = sub.add_parser("sweep", help="run scenario variants "
                            f"({_NOT_AVAILABLE.split(' (')[0]})")
     sweep.add_argument("scenario", metavar="SCENARIO")
@@ -101,8 +118,41 @@ def main(argv: Sequence[str] | None = None) -> int:
         return cmd_run(args)
     if args.command == "info":
         return cmd_info(args)
+    if args.command in ("render", "plot"):
+        return cmd_postprocess(args)
     print(f"flexmbs {args.command}: {_NOT_AVAILABLE}", file=sys.stderr)
     return EXIT_BAD_INPUT
+
+
+def cmd_postprocess(args: argparse.Namespace) -> int:
+    """``flexmbs render`` / ``flexmbs plot``: postprocess/ is imported lazily."""
+    try:
+        import postprocess
+    except ImportError as exc:
+        print(f"flexmbs: error: post-processing needs pyvista and matplotlib ({exc}); "
+              'install them with pip install -e ".[render]"', file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        if args.command == "render":
+            cam: Any = args.camera
+            if "," in cam:
+                cam = tuple(float(x) for x in cam.split(","))
+            w, h = (int(x) for x in args.size.lower().split("x"))
+            files = postprocess.render(args.directory, movie=args.movie, png_every=args.png_every,
+                                       camera=cam, color_by=args.color_by, window_size=(w, h),
+                                       tube_scale=args.tube_scale, progress=not args.quiet)
+        else:
+            files = postprocess.plot(args.directory, compare=args.compare,
+                                     formats=tuple(args.format or ("png", "svg")))
+            if args.section:
+                run = postprocess.read_run(args.directory)
+                for joint in sorted({r["joint"] for r in run.sections}):
+                    files.append(postprocess.section_view(args.directory, joint=joint)[0])
+    except (FileNotFoundError, ValueError) as exc:
+        print(f"flexmbs: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"wrote {len(files)} file(s) under {Path(args.directory)}")
+    return 0
 
 
 # ================================================================================ run

@@ -1,0 +1,14 @@
+"""Post-processing of flexmbs output folders: off-screen rendering (pyvista), time-history plots
+and hole-section views (matplotlib).
+
+Reads only the files that :mod:`flexmbs.io` writes (``<name>.pvd`` + ``vtu/``, ``probes.csv``,
+``contacts.csv``, ``sections.csv``, ``summary.json``); imports nothing from the solvers. pyvista
+and matplotlib are imported lazily inside the functions.
+"""
+
+from .data import Run, read_run
+from .plots import plot
+from .render import render
+from .section import section_view
+
+__all__ = ["Run", "plot", "read_run", "render", "section_view"]
