@@ -10,8 +10,8 @@ box of the whole motion. Off-screen rendering needs no display with the VTK whee
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
