@@ -22,7 +22,8 @@ R_BEAM, RHO = 2e-3, 1.0             # rail radius, radius of curvature [m]
 HOLE_LENGTH = 0.04
 
 
-def build(*, clearance: float = 5e-4, ideal: bool = False, youngs_modulus: float = 2.1e11):
+def build(*, clearance: float = 5e-4, ideal: bool = False, youngs_modulus: float = 2.1e11,
+          hole_length: float = HOLE_LENGTH):
     model = fm.Model(gravity=(0.0, 0.0, -9.81), name="curved_beam_sleeve")
     rail = model.add_beam(fm.read_curve(HERE.parent / "meshes" / "arc_r1m_90deg.msh", group="rail"),
                           section=fm.CircularSection(R_BEAM),
@@ -35,16 +36,16 @@ def build(*, clearance: float = 5e-4, ideal: bool = False, youngs_modulus: float
         # the sleeve rests on its two end sections: centre below the rail axis by the clearance
         # minus the sagitta of the rail inside the sleeve, along the outward normal
         outward = np.array([-math.sin(math.pi / 6), 0.0, -math.cos(math.pi / 6)])
-        pose = pose.shifted((clearance - HOLE_LENGTH**2 / (8 * RHO)) * outward)
+        pose = pose.shifted((clearance - hole_length**2 / (8 * RHO)) * outward)
     sleeve = model.add_rigid_body(mass=0.21441, inertia=(2.479e-5, 4.098e-5, 4.098e-5), pose=pose,
                                   name="sleeve", shape={"type": "cylinder", "radius": 0.015,
                                                         "inner_radius": R_BEAM + clearance,
-                                                        "length": HOLE_LENGTH})
+                                                        "length": hole_length})
     if ideal:
         joint = model.add_joint(fm.SlidingJoint(rail, sleeve, name="sleeve"))
     else:
         joint = model.add_joint(fm.SlidingClearanceJoint(
-            rail, sleeve, name="sleeve", hole=fm.CircleHole(R_BEAM + clearance, HOLE_LENGTH, 9),
+            rail, sleeve, name="sleeve", hole=fm.CircleHole(R_BEAM + clearance, hole_length, 9),
             contact=fm.LinearPenalty(stiffness=1e6, damping=20.0)))
     probes = [SlideCoordinateProbe("sleeve_s", joint),
               BeamPointProbe("lowest_point", rail, math.pi / 4, "displacement"),

@@ -962,7 +962,7 @@ def _sliding_clearance(model: Model, t: Table, keypath: str, ctx: BuildContext) 
     except ModelError as exc:
         raise ScenarioError(f"{c.where()}: {exc}") from None
     mu = c.number("friction", 0.0, ge=0.0)
-    friction = (RegularizedCoulomb(mu, c.number("friction_velocity", 1e-3, gt=0.0))
+    friction = (RegularizedCoulomb(mu=mu, eps_v=c.number("friction_velocity", 1e-3, gt=0.0))
                 if mu > 0 else None)
     tangent = t.choice("tangent", ("consistent", "gauss_newton"), "consistent", what="tangent")
     joint = SlidingClearanceJoint(
