@@ -39,12 +39,14 @@ def _bounds_union(grids) -> np.ndarray:  # noqa: ANN001
 def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: int | None = None,
            camera: str | Sequence[float] = "iso", color_by: str = "curvature_magnitude",
            window_size: tuple[int, int] = (1280, 720), tube_scale: float = 1.0,
-           progress: bool = True) -> list[Path]:
+           frames: Sequence[int] | None = None, progress: bool = True) -> list[Path]:
     """Render the frames of ``out_dir``; returns the written files (movie and/or PNGs).
 
     Without ``movie`` and ``png_every`` every frame is written as PNG to ``out_dir/frames``.
     ``tube_scale`` multiplies the beam radius (thin beams in large models are invisible at
     their true radius). ``camera``: one of :data:`CAMERAS` or a camera position (x, y, z).
+    ``frames``: indices of the frames to draw (default: all); frames that are neither written
+    as PNG nor part of a movie are not drawn.
     """
     import pyvista as pv
 
@@ -89,7 +91,10 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
     except ImportError:  # pragma: no cover
         it = zip(run.frames, grids, strict=True)
     f_max = max((abs(float(c.get("normal_force") or 0.0)) for c in run.contacts), default=0.0)
+    selected = set(range(len(grids))) if frames is None else {int(i) % len(grids) for i in frames}
     for k, ((t, _), grid) in enumerate(it):
+        if k not in selected or (movie_path is None and k % png_every):  # type: ignore[operator]
+            continue
         plotter.clear()
         beams, bodies, contacts = _split(grid)
         if beams is not None and beams.n_points:
