@@ -29,7 +29,7 @@ EXIT_BAD_INPUT = 2
 EXIT_FAILED = 3
 EXIT_INTERRUPTED = 130
 
-_NOT_AVAILABLE = "not available in this version (post-processing arrives with a later release)"
+_NOT_AVAILABLE = "not available in this version (parameter sweeps on Dask arrive with a later release)"
 
 
 def _one_line(exc: BaseException) -> str:
@@ -114,12 +114,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(None if argv is None else list(argv))
     except SystemExit as exc:   # --help, --version, usage errors (argparse printed them)
         return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
-    if args.command == "run":
-        return cmd_run(args)
-    if args.command == "info":
-        return cmd_info(args)
-    if args.command in ("render", "plot"):
-        return cmd_postprocess(args)
+    try:
+        if args.command == "run":
+            return cmd_run(args)
+        if args.command == "info":
+            return cmd_info(args)
+        if args.command in ("render", "plot"):
+            return cmd_postprocess(args)
+    except BrokenPipeError:   # e.g. `flexmbs info ... | head`: the reader left, not an error
+        import os
+
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
     print(f"flexmbs {args.command}: {_NOT_AVAILABLE}", file=sys.stderr)
     return EXIT_BAD_INPUT
 

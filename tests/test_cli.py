@@ -105,12 +105,16 @@ def test_bad_input_exit_2_one_line(tmp_path, capsys, args, expected):
     assert expected in one_error_line(capsys.readouterr().err)
 
 
-def test_post_processing_commands_not_available(capsys):
-    for cmd in (["render", "out/x"], ["plot", "out/x"], ["sweep", CANTILEVER]):
+def test_missing_output_folder_and_sweep_give_one_line(capsys):
+    """render/plot of a folder that does not exist, and the not-yet-available sweep: exit 2 and
+    one line on stderr."""
+    for cmd, expected in ((["render", "out/x"], "flexmbs: error: output folder not found: out/x"),
+                          (["plot", "out/x"], "flexmbs: error: output folder not found: out/x"),
+                          (["sweep", CANTILEVER], "flexmbs sweep: not available in this version "
+                           "(parameter sweeps on Dask arrive with a later release)")):
         assert main(cmd) == EXIT_BAD_INPUT
         err = capsys.readouterr().err.strip()
-        assert err == f"flexmbs {cmd[0]}: not available in this version (post-processing " \
-                      "arrives with a later release)"
+        assert err == expected
 
 
 def test_usage_error_returns_2(capsys):
