@@ -588,7 +588,8 @@ class Assembly:
             r_q += self.lin_matrix_T @ lam[:self.m_lin]
             r_lam[:self.m_lin] = self.lin_matrix @ q - self.lin_rhs0
             for row, fn in self.lin_functions:
-                r_lam[row] -= fn(t)
+                # prescribed motion ramps with the load factor in statics, like the loads
+                r_lam[row] -= load_factor * fn(t)
         for nl in self.nonlinear:
             c = nl.constraint
             if getattr(c, "version", 0) != nl.version:

@@ -106,6 +106,38 @@ class BodyPositionProbe(Probe):
         return np.asarray(state.q)[asm.body_dofs(self.body)[:3]].copy()
 
 
+class BodyPointProbe(Probe):
+    """Position or displacement of a body-fixed point (body coordinates ``point``)."""
+
+    def __init__(self, name: str, body: RigidBody, point: Any, quantity: str = "position") -> None:
+        self.name = _check_name(name)
+        if not isinstance(body, RigidBody):
+            raise ModelError(f"probe '{name}': body must be a RigidBody (got {body!r})")
+        if quantity not in ("position", "displacement"):
+            raise ModelError(f"probe '{name}': quantity must be 'position' or 'displacement' "
+                             f"(got {quantity!r})")
+        self.body = body
+        self.point = np.asarray(point, dtype=float).reshape(3)
+        self.quantity = quantity
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{c}" for c in _XYZ]
+
+    def _at(self, asm: Any, q: np.ndarray) -> np.ndarray:
+        from ..elements.rigid_body import rotation_matrix
+
+        qb = q[asm.body_dofs(self.body)]
+        return qb[:3] + rotation_matrix(qb[3:7]) @ self.point
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        x = self._at(asm, state.q)
+        return x - self._at(asm, asm.q_ref) if self.quantity == "displacement" else x
+
+    def check(self, asm: Any) -> None:
+        if self.body not in asm.model.bodies:
+            raise ModelError(f"probe '{self.name}': body '{self.body.name}' is not in the model")
+
+
 class BodyOrientationProbe(BodyPositionProbe):
     """Euler parameters [w, x, y, z] of the body orientation."""
 
@@ -165,6 +197,7 @@ class SlideCoordinateProbe(Probe):
 
 
 PROBE_TYPES["slide_coordinate"] = SlideCoordinateProbe
+PROBE_TYPES["body_point"] = BodyPointProbe
 
 
 class JointReactionProbe(Probe):

@@ -1096,6 +1096,14 @@ def _probe_body_position(model: Model, t: Table, keypath: str, ctx: BuildContext
     return probes.BodyPositionProbe(t.raw["name"], ctx.body(t))
 
 
+def _probe_body_point(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+    from . import probes
+
+    t.allow(("name", "type", "body", "point", "quantity"))
+    quantity = t.choice("quantity", ("position", "displacement"), "position", what="quantity")
+    return probes.BodyPointProbe(t.raw["name"], ctx.body(t), t.vector("point"), quantity)
+
+
 def _probe_body_orientation(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
     from . import probes
 
@@ -1156,6 +1164,7 @@ PROBE_BUILDERS: dict[str, Callable[[Model, Table, str, BuildContext], Any]] = {
     "beam_point": _probe_beam_point,
     "body_position": _probe_body_position,
     "body_orientation": _probe_body_orientation,
+    "body_point": _probe_body_point,
     "energy": _probe_energy,
     "slide_coordinate": _probe_slide_coordinate,
     "contact_force": _probe_contact_force,
