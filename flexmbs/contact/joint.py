@@ -71,17 +71,19 @@ class SlidingClearanceJoint(Interaction):
     ``hole``: :class:`Hole` (axis = body x through ``hole_point``, body coordinates);
     ``contact``: a normal force law (default linear penalty); ``friction``: optional
     :class:`RegularizedCoulomb`; ``beam_radius`` defaults to the beam's section radius.
-    ``consistent=True`` uses the tangent that is exact for a hole point frozen as a material
-    point of the hole (FORMULATION §5), otherwise the Gauss-Newton tangent k B^T B. Neither
-    contains the rotation of the normal caused by the hole point sliding along the bore when it
-    is re-detected (a geometric stiffness of order f_N / clearance): Newton then converges
-    linearly in that direction, with a rate of about f_N / (clearance k).
+    The default tangent is Gauss-Newton, k B^T B (FORMULATION §5). ``consistent=True`` adds the
+    geometric terms that are exact for a hole point frozen as a material point of the hole; but
+    the detected hole point slides along the bore, so the true geometric stiffness of a beam
+    pressed into a concave bore is about +f_N/clearance, while the frozen-point term is about
+    -f_N/r_b: for a pretensioned wire pressed sideways into a grommet it makes the tangent
+    indefinite (a spurious negative eigenvalue in the linearised modes). Neither tangent changes
+    the converged solution; Newton converges linearly in the sliding direction.
     """
 
     def __init__(self, beam: Beam, body: RigidBody, *, hole: Hole,
                  contact: ForceLaw | None = None, friction: RegularizedCoulomb | None = None,
                  hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
-                 consistent: bool = True, name: str | None = None) -> None:
+                 consistent: bool = False, name: str | None = None) -> None:
         self.beam = beam
         self.body = body
         self.hole = hole

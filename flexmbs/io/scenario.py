@@ -80,6 +80,7 @@ class SimulationSettings:
     min_step: float | None = None              #: None: dt / 1024
     redundant_constraints: str = "error"       #: "error" | "drop"
     load_steps: int = 1                        #: initial load increments of the static solver
+    static_stabilizer: float = 0.0             #: mass-proportional stabiliser c_s [1/s^2]
     newton: dict[str, Any] = field(default_factory=dict)  #: NewtonOptions overrides
 
     def newton_options(self, *, static: bool = False) -> NewtonOptions:
@@ -115,6 +116,7 @@ class Scenario:
     def static_options(self) -> StaticOptions:
         """Options of the static solver (``integrator = "static"`` or ``initial_static``)."""
         return StaticOptions(load_steps=self.simulation.load_steps,
+                             stabilizer=self.simulation.static_stabilizer,
                              newton=self.simulation.newton_options(static=True))
 
 
@@ -536,6 +538,7 @@ _NEWTON_KEYS = {"max_iterations": "int", "relative_tolerance": "pos", "constrain
 def _simulation(t: Table) -> SimulationSettings:
     t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval",
              "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
+             "static_stabilizer",
              "newton"))
     integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
     static = integrator == "static"
@@ -567,7 +570,8 @@ def _simulation(t: Table) -> SimulationSettings:
         output_interval=out, initial_static=t.boolean("initial_static", False),
         adaptive=t.boolean("adaptive", True), min_step=min_step,
         redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
-        load_steps=t.integer("load_steps", 1, ge=1), newton=newton)
+        load_steps=t.integer("load_steps", 1, ge=1),
+        static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0), newton=newton)
 
 
 # ------------------------------------------------------------------------------------ beams
@@ -964,7 +968,7 @@ def _sliding_clearance(model: Model, t: Table, keypath: str, ctx: BuildContext) 
     mu = c.number("friction", 0.0, ge=0.0)
     friction = (RegularizedCoulomb(mu=mu, eps_v=c.number("friction_velocity", 1e-3, gt=0.0))
                 if mu > 0 else None)
-    tangent = t.choice("tangent", ("consistent", "gauss_newton"), "consistent", what="tangent")
+    tangent = t.choice("tangent", ("consistent", "gauss_newton"), "gauss_newton", what="tangent")
     joint = SlidingClearanceJoint(
         beam, body, hole=hole, contact=contact_law, friction=friction,
         hole_point=h.vector("point", (0.0, 0.0, 0.0)),
