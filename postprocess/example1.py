@@ -28,8 +28,9 @@ sys.path.insert(0, str(ROOT / "examples"))
 
 
 def _run(out: Path, t_end: float, rerun: bool, **kw) -> Path:  # noqa: ANN003
-    import flexmbs as fm
     from curved_beam_sleeve import build  # examples/curved_beam_sleeve.py
+
+    import flexmbs as fm
     from flexmbs.io.probes import BodyOrientationProbe
 
     if (out / "summary.json").is_file() and not rerun:

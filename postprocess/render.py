@@ -1,53 +1,171 @@
 """Off-screen rendering of an output folder with pyvista: PNG frames and movies.
 
-Beams (``block_id == 0``) are drawn as tubes of their section radius (point data ``radius``)
-coloured by a point field, rigid bodies (``block_id == 1``) as translucent surfaces, contact
-points (``block_id == 2``) as spheres with normal-force arrows. The camera frames the bounding
-box of the whole motion. Off-screen rendering needs no display with the VTK wheels from PyPI
-(they fall back to EGL/OSMesa); on systems where it does not, run under ``xvfb-run`` or set
-``PYVISTA_OFF_SCREEN=true`` and a VTK build with OSMesa.
+Beams (cells with ``block_id == 0``, VTK_LINE segments) are joined into polylines and drawn as
+tubes of their section radius, coloured by a beam point field with a scalar bar; rigid bodies
+(``block_id == 1``) are translucent surfaces in their pose; contact points (``block_id == 2``)
+are spheres with arrows of the force on the beam, ``-normal_force * normal``, scaled so that the
+largest normal force of the run is 8 % of the scene diagonal. A time label sits in the upper left;
+the camera frames the bounding box of the whole motion (union over all frames), so it does not
+move during a movie.
+
+Off-screen rendering needs no X server: without ``DISPLAY`` this module selects VTK's EGL window
+(``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow``) when ``libEGL`` is installed, unless the variable
+is already set (``vtkOSOpenGLRenderWindow`` selects OSMesa, if VTK finds ``libOSMesa``). See
+docs/postprocess.md.
 """
 
 from __future__ import annotations
 
+import ctypes.util
+import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .data import Run, read_run
 
 CAMERAS = ("iso", "xy", "xz", "yz")
+#: view direction (from the centre towards the camera) and view-up of the named cameras
+_VIEWS = {"iso": ((1.0, -1.0, 1.0), (0.0, 0.0, 1.0)), "xy": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+          "xz": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)), "yz": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0))}
+#: a beam radius that is not in the output is drawn as this fraction of the scene diagonal
+DEFAULT_RADIUS_FRACTION = 0.004
+BACKGROUND = "white"
 
 
-def _split(grid):  # noqa: ANN001, ANN202
-    """(beams, bodies, contacts) sub-meshes of one frame (None where absent)."""
-    out = []
-    block = np.asarray(grid.cell_data.get("block_id", np.zeros(grid.n_cells)))
-    for b in (0, 1, 2):
-        ids = np.flatnonzero(block == b)
-        out.append(grid.extract_cells(ids).extract_surface(algorithm=None) if ids.size else None)
-    return out
+def configure_offscreen() -> None:
+    """Select VTK's EGL render window when there is no display (avoids VTK's failed attempt
+    to open an X window and its warning). A user's ``VTK_DEFAULT_OPENGL_WINDOW`` is kept."""
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return
+    if "VTK_DEFAULT_OPENGL_WINDOW" not in os.environ and ctypes.util.find_library("EGL"):
+        os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
 
 
-def _bounds_union(grids) -> np.ndarray:  # noqa: ANN001
-    b = np.array([g.bounds for g in grids])
-    return np.array([b[:, 0].min(), b[:, 1].max(), b[:, 2].min(), b[:, 3].max(), b[:, 4].min(),
-                     b[:, 5].max()])
+def _block(grid: Any, block: int) -> Any:
+    """The cells of one block as PolyData (None when absent)."""
+    ids = np.flatnonzero(np.asarray(grid.cell_data.get("block_id", np.zeros(grid.n_cells))) == block)
+    if not ids.size:
+        return None
+    return grid.extract_cells(ids).extract_surface(algorithm=None)
+
+
+def _bounds_union(grids: Sequence[Any]) -> np.ndarray:
+    b = np.array([g.bounds for g in grids if g.n_points])
+    return np.array([b[:, 0].min(), b[:, 1].max(), b[:, 2].min(), b[:, 3].max(),
+                     b[:, 4].min(), b[:, 5].max()])
+
+
+def _scalar(mesh: Any, name: str) -> np.ndarray:
+    """Point field ``name`` as a scalar (vectors by their magnitude)."""
+    v = np.asarray(mesh.point_data[name], float)
+    return np.linalg.norm(v, axis=1) if v.ndim == 2 else v
+
+
+def _beam_fields(grid: Any) -> list[str]:
+    beams = _block(grid, 0)
+    if beams is None:
+        return []
+    return [k for k in beams.point_data if k not in ("vtkOriginalPointIds", "gap", "normal_force",
+                                                     "normal", "radius")]
+
+
+def _metadata_radius(run: Run) -> float | None:
+    """A beam radius stored in ``summary.json["metadata"]`` (``beam_radius`` or
+    ``beams: [{radius}]``), if any."""
+    meta = run.summary.get("metadata") or {}
+    r = meta.get("beam_radius")
+    if r is None and isinstance(meta.get("beams"), list):
+        rs = [b.get("radius") for b in meta["beams"] if isinstance(b, dict) and b.get("radius")]
+        r = max(rs) if rs else None
+    try:
+        return float(r) if r is not None and float(r) > 0 else None
+    except (TypeError, ValueError):
+        return None
+
+
+def _tubes(beams: Any, radius: float | None, meta_radius: float | None, fallback: float,
+           scale: float) -> tuple[Any, float]:
+    """One tube per beam (``beam_id``), of the radius in the point data ``radius`` (the
+    section radius written by flexmbs), else ``meta_radius``, else ``fallback``; ``radius``
+    overrides them all. Returns (tubes, largest drawn radius)."""
+    import pyvista as pv
+
+    ids = np.asarray(beams.cell_data.get("beam_id", np.zeros(beams.n_cells)), int)
+    parts = []
+    drawn = 0.0
+    for bid in np.unique(ids):
+        one = beams.extract_cells(np.flatnonzero(ids == bid)).extract_surface(algorithm=None)
+        r = radius
+        if r is None and "radius" in one.point_data:
+            rr = np.asarray(one.point_data["radius"], float)
+            r = float(np.nanmax(rr)) if np.isfinite(rr).any() else None
+        r = r if r is not None else (meta_radius if meta_radius is not None else fallback)
+        drawn = max(drawn, r * scale)
+        parts.append(one.strip().tube(radius=r * scale, n_sides=20, capping=True))
+    return (parts[0] if len(parts) == 1 else pv.merge(parts)), drawn
+
+
+def _camera(plotter: Any, camera: str | Sequence[float] | None, bounds: np.ndarray) -> None:
+    centre = 0.5 * (bounds[0::2] + bounds[1::2])
+    diag = float(np.linalg.norm(bounds[1::2] - bounds[0::2])) or 1.0
+    if camera is None:
+        camera = "iso"
+    if isinstance(camera, str):
+        if camera not in CAMERAS:
+            raise ValueError(f"camera must be one of {', '.join(CAMERAS)} or a position (x, y, z) "
+                             f"(got '{camera}')")
+        direction, up = (np.array(v) for v in _VIEWS[camera])
+    else:
+        pos = np.asarray(camera, float).reshape(-1)
+        if pos.size != 3 or not np.all(np.isfinite(pos)):
+            raise ValueError(f"a camera position needs 3 finite numbers (got {camera})")
+        direction = pos - centre
+        if np.linalg.norm(direction) == 0:
+            raise ValueError("the camera position is the centre of the scene")
+        up = np.array([0.0, 0.0, 1.0])
+        if np.linalg.norm(np.cross(direction, up)) < 1e-9 * np.linalg.norm(direction):
+            up = np.array([0.0, 1.0, 0.0])
+    direction = direction / np.linalg.norm(direction)
+    plotter.camera_position = [tuple(centre + 2.0 * diag * direction), tuple(centre), tuple(up)]
+    plotter.reset_camera(render=False, bounds=tuple(bounds))
+
+
+def _field_range(beam_meshes: Sequence[Any], name: str) -> tuple[float, float]:
+    lo, hi = np.inf, -np.inf
+    for m in beam_meshes:
+        if m is not None and name in m.point_data:
+            v = _scalar(m, name)
+            v = v[np.isfinite(v)]
+            if v.size:
+                lo, hi = min(lo, float(v.min())), max(hi, float(v.max()))
+    if not np.isfinite(lo):
+        return 0.0, 1.0
+    return (lo, hi) if hi > lo else (lo - 0.5 * (abs(lo) or 1.0), hi + 0.5 * (abs(hi) or 1.0))
 
 
 def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: int | None = None,
-           camera: str | Sequence[float] = "iso", color_by: str = "curvature_magnitude",
+           camera: str | Sequence[float] | None = None, color_by: str = "curvature_magnitude",
            window_size: tuple[int, int] = (1280, 720), tube_scale: float = 1.0,
-           frames: Sequence[int] | None = None, progress: bool = True) -> list[Path]:
-    """Render the frames of ``out_dir``; returns the written files (movie and/or PNGs).
+           radius: float | None = None, frames: Sequence[int] | None = None,
+           framerate: float = 24.0, progress: bool = True) -> list[Path]:
+    """Render the ``.pvd`` series of ``out_dir`` off-screen; returns the written files (the
+    movie first, then the PNGs).
 
-    Without ``movie`` and ``png_every`` every frame is written as PNG to ``out_dir/frames``.
-    ``tube_scale`` multiplies the beam radius (thin beams in large models are invisible at
-    their true radius). ``camera``: one of :data:`CAMERAS` or a camera position (x, y, z).
-    ``frames``: indices of the frames to draw (default: all); frames that are neither written
-    as PNG nor part of a movie are not drawn.
+    ``movie``: ``.mp4`` (imageio-ffmpeg) or ``.gif``, one movie frame per output frame;
+    ``png_every``: every N-th frame as ``out_dir/frames/<name>_<index>.png`` (default 1 when no
+    movie is asked for). ``camera``: ``"iso"`` (default), ``"xy"``, ``"xz"``, ``"yz"`` or a
+    camera position (x, y, z); its direction from the scene centre is kept and the distance
+    chosen to frame the whole motion. ``color_by``: a beam point field (vectors by magnitude):
+    ``curvature_magnitude``, ``axial_strain``, ``displacement``, ``velocity``, ``curvature``,
+    ``arc_length``. Beam tubes have the section radius written in the frames (else
+    ``summary.json["metadata"]["beam_radius"]``, else 0.4 % of the scene diagonal), times
+    ``tube_scale``; ``radius`` overrides it. ``frames``: indices of the frames to draw (default
+    all; negative indices count from the end).
     """
+    configure_offscreen()
     import pyvista as pv
 
     pv.OFF_SCREEN = True
@@ -56,81 +174,107 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
         raise FileNotFoundError(f"{out_dir}: no frames in the .pvd series")
     if png_every is None and movie is None:
         png_every = 1
-    if png_every is not None and png_every < 1:
-        raise ValueError("png_every must be >= 1")
+    if png_every is not None and int(png_every) < 1:
+        raise ValueError(f"png_every must be >= 1 (got {png_every})")
+    if tube_scale <= 0 or (radius is not None and radius <= 0):
+        raise ValueError("tube_scale and radius must be > 0")
+    movie_path = Path(movie) if movie is not None else None
+    if movie_path is not None and movie_path.suffix.lower() not in (".mp4", ".gif"):
+        raise ValueError(f"movie must end in .mp4 or .gif (got {movie_path.name})")
+    w, h = (int(x) for x in window_size)
+    if w < 16 or h < 16:
+        raise ValueError(f"window_size too small: {window_size}")
+
     grids = [pv.read(str(p)) for _, p in run.frames]
+    beams_all = [_block(g, 0) for g in grids]
+    fields = _beam_fields(grids[0])
+    if fields and color_by not in fields:
+        raise ValueError(f"unknown beam field '{color_by}' (known: {', '.join(fields)})")
     bounds = _bounds_union(grids)
     diag = float(np.linalg.norm(bounds[1::2] - bounds[0::2])) or 1.0
+    clim = _field_range(beams_all, color_by)
+    meta_radius = _metadata_radius(run)
+    f_max = max((abs(float(c.get("normal_force") or 0.0)) for c in run.contacts), default=0.0)
+    n = len(grids)
+    selected = sorted(set(range(n)) if frames is None else {int(i) % n for i in frames})
+    if movie_path is None:
+        selected = [k for k in selected if k % int(png_every) == 0]  # type: ignore[arg-type]
+
+    plotter = pv.Plotter(off_screen=True, window_size=[w, h])
+    plotter.set_background(BACKGROUND)
     written: list[Path] = []
-    plotter = pv.Plotter(off_screen=True, window_size=list(window_size))
-    plotter.set_background("white")
-    movie_path = Path(movie) if movie is not None else None
     if movie_path is not None:
         movie_path.parent.mkdir(parents=True, exist_ok=True)
         if movie_path.suffix.lower() == ".gif":
-            plotter.open_gif(str(movie_path))
-        elif movie_path.suffix.lower() in (".mp4", ".mov", ".avi"):
-            plotter.open_movie(str(movie_path), framerate=24)
-        else:
-            raise ValueError(f"movie must end in .mp4 or .gif (got {movie_path.name})")
+            plotter.open_gif(str(movie_path), fps=framerate)
+        else:   # even sizes are kept (yuv420p needs them); odd ones are rounded up by imageio
+            plotter.open_movie(str(movie_path), framerate=framerate, quality=7,
+                               macro_block_size=2)
     frames_dir = run.directory / "frames"
-    field_range = None
-    for g in grids:
-        if color_by in g.point_data and g.n_points:
-            vals = np.asarray(g.point_data[color_by])
-            vals = np.linalg.norm(vals, axis=1) if vals.ndim == 2 else vals
-            vals = vals[np.isfinite(vals)]
-            if vals.size:
-                lo, hi = float(vals.min()), float(vals.max())
-                field_range = (min(lo, field_range[0]), max(hi, field_range[1])) if field_range \
-                    else (lo, hi)
+    bar_title = color_by if color_by != "curvature_magnitude" else "curvature magnitude [1/m]"
+    tube_mesh = None
+    transient: list[Any] = []
+    text = plotter.add_text(" ", position="upper_left", font_size=12, color="black")
+    sphere_r = None
     try:
         from tqdm import tqdm
-        it = tqdm(list(zip(run.frames, grids, strict=True)), desc="render", unit="frame",
-                  disable=not progress)
-    except ImportError:  # pragma: no cover
-        it = zip(run.frames, grids, strict=True)
-    f_max = max((abs(float(c.get("normal_force") or 0.0)) for c in run.contacts), default=0.0)
-    selected = set(range(len(grids))) if frames is None else {int(i) % len(grids) for i in frames}
-    for k, ((t, _), grid) in enumerate(it):
-        if k not in selected or (movie_path is None and k % png_every):  # type: ignore[operator]
-            continue
-        plotter.clear()
-        beams, bodies, contacts = _split(grid)
+
+        it = tqdm(selected, desc="render", unit="frame", disable=not progress)
+    except ImportError:  # pragma: no cover - tqdm is a core dependency
+        it = selected
+    for k in it:
+        grid, beams = grids[k], beams_all[k]
+        for actor in transient:
+            plotter.remove_actor(actor, render=False)
+        transient = []
         if beams is not None and beams.n_points:
-            r = np.asarray(beams.point_data.get("radius", np.full(beams.n_points, np.nan)))
-            radius = float(np.nanmax(r)) if np.isfinite(r).any() else 0.004 * diag
-            tube = beams.tube(radius=radius * tube_scale, n_sides=16)
-            if color_by in tube.point_data:
-                plotter.add_mesh(tube, scalars=color_by, clim=field_range, cmap="viridis",
-                                 scalar_bar_args={"title": color_by, "color": "black"})
+            tube, tube_r = _tubes(beams, radius, meta_radius, DEFAULT_RADIUS_FRACTION * diag, tube_scale)
+            sphere_r = max(1.5 * tube_r, 0.003 * diag)
+            if fields:
+                tube["color"] = _scalar(tube, color_by)
+            if tube_mesh is None:
+                tube_mesh = tube
+                kw: dict[str, Any] = {"color": "steelblue"}
+                if fields:
+                    kw = {"scalars": "color", "clim": clim, "cmap": "viridis",
+                          "scalar_bar_args": {"title": bar_title, "color": "black",
+                                              "fmt": "%.3g", "vertical": False,
+                                              "position_x": 0.3, "position_y": 0.04,
+                                              "width": 0.4, "height": 0.07}}
+                plotter.add_mesh(tube_mesh, smooth_shading=True, render=False, reset_camera=False,
+                                 **kw)
             else:
-                plotter.add_mesh(tube, color="steelblue")
+                tube_mesh.copy_from(tube)
+        bodies = _block(grid, 1)
         if bodies is not None and bodies.n_points:
-            plotter.add_mesh(bodies, color="orange", opacity=0.35, smooth_shading=True)
+            transient.append(plotter.add_mesh(bodies, color="orange", opacity=0.35,
+                                              smooth_shading=True, render=False,
+                                              reset_camera=False))
+        contacts = _block(grid, 2)
         if contacts is not None and contacts.n_points:
-            plotter.add_mesh(pv.PolyData(contacts.points).glyph(
-                geom=pv.Sphere(radius=0.01 * diag), scale=False, orient=False), color="red")
-            if "normal" in contacts.point_data and "normal_force" in contacts.point_data and f_max:
-                arrows = pv.PolyData(contacts.points)
-                arrows["vec"] = (np.asarray(contacts.point_data["normal"])
-                                 * np.asarray(contacts.point_data["normal_force"])[:, None]
-                                 * (0.1 * diag / f_max))
-                plotter.add_mesh(arrows.glyph(orient="vec", scale="vec", factor=1.0,
-                                              geom=pv.Arrow()), color="darkred")
-        plotter.add_text(f"t = {t:.4f} s", position="upper_left", font_size=12, color="black")
-        if isinstance(camera, str):
-            if camera not in CAMERAS:
-                raise ValueError(f"camera must be one of {CAMERAS} or a position (x, y, z)")
-            {"iso": plotter.view_isometric, "xy": plotter.view_xy, "xz": plotter.view_xz,
-             "yz": plotter.view_yz}[camera]()
-        else:
-            centre = 0.5 * (bounds[0::2] + bounds[1::2])
-            plotter.camera_position = [tuple(camera), tuple(centre), (0, 0, 1)]
-        plotter.reset_camera(bounds=bounds)
+            r_s = sphere_r if sphere_r is not None else 0.003 * diag
+            pts = pv.PolyData(np.asarray(contacts.points))
+            transient.append(plotter.add_mesh(
+                pts.glyph(geom=pv.Sphere(radius=r_s), scale=False, orient=False), color="red",
+                render=False, reset_camera=False))
+            if f_max > 0 and {"normal", "normal_force"} <= set(contacts.point_data):
+                vec = -(np.asarray(contacts.point_data["normal"], float)
+                        * np.asarray(contacts.point_data["normal_force"], float)[:, None])
+                vec = np.nan_to_num(vec) * (0.08 * diag / f_max)
+                if np.abs(vec).max() > 0:
+                    pts["force"] = vec
+                    arrows = pts.glyph(orient="force", scale="force", factor=1.0,
+                                       geom=pv.Arrow(tip_length=0.3, tip_radius=0.12,
+                                                     shaft_radius=0.04))
+                    transient.append(plotter.add_mesh(arrows, color="darkred", render=False,
+                                                      reset_camera=False))
+        text.set_text("upper_left", f"{run.name}   t = {run.frames[k][0]:.4f} s")
+        if k == selected[0]:
+            _camera(plotter, camera, bounds)
+        plotter.render()
         if movie_path is not None:
             plotter.write_frame()
-        if png_every is not None and k % png_every == 0:
+        if png_every is not None and k % int(png_every) == 0:
             frames_dir.mkdir(exist_ok=True)
             p = frames_dir / f"{run.name}_{k:06d}.png"
             plotter.screenshot(str(p))

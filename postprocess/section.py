@@ -1,97 +1,207 @@
-"""The hole-section view of the paper's Fig. 2(b): in the plane of one hole section, the bore,
-the beam's elliptical section, the contact points Q and their projections P, with the offsets
-exaggerated so that a sub-millimetre clearance is visible (FORMULATION Part II §2-§4)."""
+"""The hole-section view of the paper's Fig. 2(b): in the plane of one hole section, the bore
+circle, the beam's elliptical section, the hole points Q and their projections P on the beam
+axis, with the offsets exaggerated so that a sub-millimetre clearance is visible
+(FORMULATION Part II §2-§4).
+
+What the view needs and where it comes from:
+
+- ``contacts.csv`` (DESIGN.md) gives, per active contact point: ``gap``, ``normal_force``, the hole
+  point Q (``qx, qy, qz``), its closest point P on the beam axis (``px, py, pz``) and the ellipse
+  semi-axes ``a, b``. From these alone one can derive |Q - P| = b + gap (a consistency check,
+  done here) and the beam's tilt to the hole axis, cos(theta) = b / a (§2), but **not** the
+  picture: the section plane (origin O_k and axes e_y, e_z), the ellipse centre r_I and its
+  major-axis direction e_a are missing, and so is the bore radius R.
+- ``sections.csv`` (written by flexmbs.io for clearance joints, every section at every output)
+  supplies exactly those: ``ox, oy, oz`` (O_k), ``eyx..ezz`` (e_y, e_z), ``cy, cz`` (r_I in
+  section coordinates), ``ey_a, ez_a`` (e_a in section coordinates), ``a, b``, ``R``.
+  Without it the view is refused with the list of these columns. ``radius=`` overrides R.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .data import read_run
 
+#: the columns of sections.csv the view needs beyond contacts.csv
+SECTION_VIEW_COLUMNS = ("t", "joint", "section", "ox", "oy", "oz", "eyx", "eyy", "eyz", "ezx",
+                        "ezy", "ezz", "cy", "cz", "ey_a", "ez_a", "a", "b", "R")
 
-def section_view(out_dir: str | Path, *, joint: str | None = None, section: int | None = None,
-                 time: float | None = None, exaggeration: float | None = None,
-                 path: str | Path | None = None):  # noqa: ANN201 - returns (Path, Figure)
-    """Draw one section at the output time nearest to ``time`` (default: last); returns
-    ``(path, figure)``. Needs ``sections.csv`` (written for clearance joints).
 
-    Geometry in section coordinates (y, z) with the hole centre at the origin: bore circle of
-    radius R, beam ellipse with centre (cy, cz), major axis (ey_a, ez_a), semi-axes a, b. The
-    exaggeration factor f scales the ellipse centre offset and the gaps: the drawn centre is
-    f (cy, cz) and the drawn bore radius r_b + f (R - r_b), so the clearance appears f times
-    larger while the beam keeps its true size.
+@dataclass
+class SectionState:
+    """One hole section at one output time, in section coordinates (y, z) about the hole centre."""
+
+    joint: str
+    section: int
+    t: float
+    R: float                      #: bore radius
+    a: float                      #: ellipse semi-axes (from contacts.csv when the section is in
+    b: float                      #: contact, else sections.csv)
+    centre: np.ndarray            #: ellipse centre r_I (2,)
+    e_a: np.ndarray               #: unit major axis (2,)
+    Q: list[np.ndarray] = field(default_factory=list)      #: hole points (2,)
+    P: list[np.ndarray] = field(default_factory=list)      #: projections on the axis (2,)
+    gaps: list[float] = field(default_factory=list)
+    forces: list[float] = field(default_factory=list)
+    distances: list[float] = field(default_factory=list)   #: |Q - P| in 3D
+    ab_source: str = "sections.csv"
+
+    @property
+    def clearance(self) -> float:
+        return self.R - self.b
+
+    @property
+    def tilt(self) -> float:
+        """Angle between the beam tangent and the hole axis, arccos(b / a) (§2)."""
+        return float(np.arccos(np.clip(self.b / self.a, -1.0, 1.0)))
+
+
+def section_state(out_dir: str | Path, *, joint: str | None = None, section: int | None = None,
+                  time: float | None = None, radius: float | None = None) -> SectionState:
+    """Read one section at the output time nearest to ``time`` (default: the last output);
+    ``joint`` defaults to the first clearance joint, ``section`` to its middle section."""
+    run = read_run(out_dir)
+    if not run.sections:
+        raise FileNotFoundError(
+            f"{out_dir}: no sections.csv; the section view needs the section frame and ellipse "
+            f"({', '.join(SECTION_VIEW_COLUMNS)}), which contacts.csv does not have (it is "
+            "written for clearance joints only)")
+    missing = [c for c in SECTION_VIEW_COLUMNS if c not in run.sections[0]]
+    if missing:
+        raise ValueError(f"{out_dir}/sections.csv lacks the columns {', '.join(missing)}")
+    joints = sorted({r["joint"] for r in run.sections})
+    joint = joint or joints[0]
+    if joint not in joints:
+        raise ValueError(f"no clearance joint '{joint}' in {out_dir} (joints: {', '.join(joints)})")
+    rows = [r for r in run.sections if r["joint"] == joint]
+    times = np.array(sorted({float(r["t"]) for r in rows}))
+    t = float(times[-1] if time is None else times[np.argmin(np.abs(times - time))])
+    rows = [r for r in rows if float(r["t"]) == t]
+    secs = sorted(int(r["section"]) for r in rows)
+    section = secs[len(secs) // 2] if section is None else int(section)
+    match = [r for r in rows if int(r["section"]) == section]
+    if not match:
+        raise ValueError(f"section {section} of joint '{joint}' not found at t = {t:g} "
+                         f"(sections: {secs})")
+    s = {k: float(v) for k, v in match[0].items() if k != "joint" and v != ""}
+    origin = np.array([s["ox"], s["oy"], s["oz"]])
+    ey = np.array([s["eyx"], s["eyy"], s["eyz"]])
+    ez = np.array([s["ezx"], s["ezy"], s["ezz"]])
+    ea = np.array([s["ey_a"], s["ez_a"]])
+    ea = ea / np.linalg.norm(ea) if np.linalg.norm(ea) > 0 else np.array([1.0, 0.0])
+    R = float(radius) if radius is not None else s["R"]
+    if not R > 0:
+        raise ValueError(f"bore radius must be > 0 (got {R})")
+    st = SectionState(joint, section, t, R, s["a"], s["b"], np.array([s["cy"], s["cz"]]), ea)
+    pts = [r for r in run.contacts if r["joint"] == joint and float(r["t"]) == t
+           and int(r["section"]) == section]
+
+    def to2d(x: np.ndarray) -> np.ndarray:
+        return np.array([(x - origin) @ ey, (x - origin) @ ez])
+
+    for r in pts:
+        Q = np.array([float(r["qx"]), float(r["qy"]), float(r["qz"])])
+        P = np.array([float(r["px"]), float(r["py"]), float(r["pz"])])
+        st.Q.append(to2d(Q))
+        st.P.append(to2d(P))
+        st.gaps.append(float(r["gap"]))
+        st.forces.append(float(r["normal_force"] or 0.0))
+        st.distances.append(float(np.linalg.norm(Q - P)))
+        if r.get("a") and r.get("b"):
+            st.a, st.b, st.ab_source = float(r["a"]), float(r["b"]), "contacts.csv"
+    return st
+
+
+def default_exaggeration(st: SectionState) -> float:
+    """Drawn clearance = half the bore radius (never < 1)."""
+    return max(1.0, 0.5 * st.R / max(st.clearance, 1e-12 * st.R))
+
+
+def section_figure(out_dir: str | Path, *, joint: str | None = None, section: int | None = None,
+                   time: float | None = None, exaggeration: float | None = None,
+                   radius: float | None = None) -> tuple[Any, SectionState]:
+    """The matplotlib Figure of :func:`section_view` (not saved) and the data drawn.
+
+    Drawn in millimetres. The exaggeration factor f scales the offsets relative to the hole
+    centre: the ellipse is drawn at f r_I with its true semi-axes, the bore with radius
+    b + f (R - b), Q on the drawn bore in its true direction and P at f P; so the clearance and
+    the gaps appear f times larger while the beam keeps its size.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    run = read_run(out_dir)
-    if not run.sections:
-        raise FileNotFoundError(f"{out_dir}: no sections.csv (only clearance joints write it)")
-    rows = run.sections
-    joints = sorted({r["joint"] for r in rows})
-    joint = joint or joints[0]
-    if joint not in joints:
-        raise ValueError(f"no clearance joint '{joint}' in {out_dir} (joints: {', '.join(joints)})")
-    rows = [r for r in rows if r["joint"] == joint]
-    times = np.array(sorted({float(r["t"]) for r in rows}))
-    t = times[-1] if time is None else times[np.argmin(np.abs(times - time))]
-    rows = [r for r in rows if float(r["t"]) == t]
-    secs = sorted(int(r["section"]) for r in rows)
-    section = secs[len(secs) // 2] if section is None else section
-    match = [r for r in rows if int(r["section"]) == section]
-    if not match:
-        raise ValueError(f"section {section} of joint '{joint}' not found at t = {t} "
-                         f"(sections: {secs})")
-    s = {k: (float(v) if k not in ("joint",) else v) for k, v in match[0].items()}
-    R, a, b = s["R"], s["a"], s["b"]
-    c = np.array([s["cy"], s["cz"]])
-    ea = np.array([s["ey_a"], s["ez_a"]])
-    ea = ea / np.linalg.norm(ea) if np.linalg.norm(ea) > 0 else np.array([1.0, 0.0])
-    eb = np.array([-ea[1], ea[0]])
-    clearance = R - b
-    f = exaggeration or max(1.0, 0.5 * R / max(clearance, 1e-12))
-    origin = np.array([s["ox"], s["oy"], s["oz"]])
-    ey = np.array([s["eyx"], s["eyy"], s["eyz"]])
-    ez = np.array([s["ezx"], s["ezy"], s["ezz"]])
-
-    def to2d(x: np.ndarray) -> np.ndarray:
-        return np.array([(x - origin) @ ey, (x - origin) @ ez])
-
-    phi = np.linspace(0, 2 * np.pi, 361)
-    fig, ax = plt.subplots(figsize=(5.5, 5.5))
-    Rd = b + f * clearance
-    ax.plot(Rd * np.cos(phi), Rd * np.sin(phi), "k-", lw=1.5, label=f"bore R = {1e3 * R:.3g} mm")
-    cd = f * c
-    ell = cd[:, None] + a * np.cos(phi) * ea[:, None] + b * np.sin(phi) * eb[:, None]
-    ax.plot(ell[0], ell[1], "b-", lw=1.2,
-            label=f"beam section a = {1e3 * a:.4g} mm, b = {1e3 * b:.4g} mm")
-    ax.plot(*cd, "b+", ms=10, label="ellipse centre r_I")
-    pts = [r for r in run.contacts if r["joint"] == joint and float(r["t"]) == t
-           and int(r["section"]) == section]
-    for i, r in enumerate(pts):
-        Q = to2d(np.array([float(r["qx"]), float(r["qy"]), float(r["qz"])]))
-        P = to2d(np.array([float(r["px"]), float(r["py"]), float(r["pz"])]))
-        u = Q / np.linalg.norm(Q)
-        Qd = Rd * u                                   # Q on the drawn bore
-        Pd = f * P
-        ax.plot(*Qd, "ro", label="Q (hole point)" if i == 0 else None)
-        ax.plot(*Pd, "gs", ms=4, label="P (projection on the axis)" if i == 0 else None)
-        ax.plot([Pd[0], Qd[0]], [Pd[1], Qd[1]], "r:", lw=0.8)
-        ax.annotate(f"g = {1e6 * float(r['gap']):.3g} µm\nF = {float(r['normal_force']):.3g} N",
-                    Qd, textcoords="offset points", xytext=(8, 8), fontsize=8)
+    st = section_state(out_dir, joint=joint, section=section, time=time, radius=radius)
+    f = float(exaggeration) if exaggeration is not None else default_exaggeration(st)
+    if not f > 0:
+        raise ValueError(f"exaggeration must be > 0 (got {exaggeration})")
+    a, b, R = st.a, st.b, st.R
+    mm = 1e3                      # drawn in millimetres
+    eb = np.array([-st.e_a[1], st.e_a[0]])
+    phi = np.linspace(0.0, 2.0 * np.pi, 721)
+    fig, ax = plt.subplots(figsize=(8.6, 5.6))
+    Rd = b + f * (R - b)
+    ax.plot(mm * Rd * np.cos(phi), mm * Rd * np.sin(phi), "k-", lw=1.5,
+            label=f"bore, R = {1e3 * R:.4g} mm (drawn {1e3 * Rd:.3g} mm)")
+    ax.plot([0.0], [0.0], "k+", ms=10, label="hole centre O")
+    cd = f * st.centre
+    ell = cd[:, None] + a * np.cos(phi) * st.e_a[:, None] + b * np.sin(phi) * eb[:, None]
+    ax.plot(mm * ell[0], mm * ell[1], "b-", lw=1.2,
+            label=f"beam section: a = {1e3 * a:.5g} mm, b = {1e3 * b:.5g} mm ({st.ab_source})")
+    ax.plot([mm * cd[0]], [mm * cd[1]], "bx", ms=8, label="ellipse centre r_I")
+    axis = np.array([cd - a * st.e_a, cd + a * st.e_a]).T
+    ax.plot(mm * axis[0], mm * axis[1], "b--", lw=0.7,
+            label=f"major axis e_a (tilt {np.degrees(st.tilt):.3g}°)")
+    for i, (Q, P, g, F, ell3) in enumerate(zip(st.Q, st.P, st.gaps, st.forces, st.distances,
+                                               strict=True)):
+        u = Q / (np.linalg.norm(Q) or 1.0)
+        Qd, Pd = mm * Rd * u, mm * f * P
+        ax.plot(*Qd, "ro", ms=6, label="Q (hole point)" if i == 0 else None)
+        ax.plot(*Pd, "gs", ms=5, label="P (closest point on the beam axis)" if i == 0 else None)
+        ax.plot([Pd[0], Qd[0]], [Pd[1], Qd[1]], "r:", lw=0.9)
+        ax.annotate(f"g = {1e6 * g:.4g} µm\nF = {F:.3g} N\n|QP| = {1e3 * ell3:.5g} mm",
+                    Qd, textcoords="offset points", xytext=(10, -40 if u[1] > 0 else 8),
+                    fontsize=8, color="darkred",
+                    bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8, "lw": 0})
+    if not st.Q:
+        ax.text(0.02, 0.98, "no contact in this section", transform=ax.transAxes, va="top",
+                fontsize=9)
+    lim = 1.2 * mm * max(Rd, float(np.abs(ell).max()))
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
     ax.set_aspect("equal")
-    ax.set_xlabel("y (section) [m]")
-    ax.set_ylabel("z (section) [m]")
-    ax.set_title(f"{joint}, section {section}, t = {t:.4g} s\n"
-                 f"offsets and clearance exaggerated x{f:.3g}", fontsize=10)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.set_xlabel("y (section axis e_y) [mm]")
+    ax.set_ylabel("z (section axis e_z) [mm]")
+    ax.set_title(f"joint '{st.joint}', section {st.section}, t = {st.t:.4g} s\n"
+                 f"offsets and clearance exaggerated ×{f:.3g} "
+                 f"(clearance c = {1e3 * st.clearance:.3g} mm)", fontsize=10)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    out = Path(path) if path else run.directory / "figures" / f"section_{joint}_{section}.png"
+    return fig, st
+
+
+def section_view(out_dir: str | Path, *, joint: str | None = None, section: int | None = None,
+                 time: float | None = None, exaggeration: float | None = None,
+                 radius: float | None = None, path: str | Path | None = None) -> Path:
+    """Draw one hole section (the paper's Fig. 2(b)) at the output time nearest to ``time``
+    (default: the last output) and save it to ``path`` (default
+    ``out_dir/figures/section_<joint>_<section>.png``; the suffix selects the format). Returns
+    the path. ``radius`` overrides the bore radius of sections.csv; ``exaggeration`` defaults
+    to drawing the clearance as half the bore radius. See :func:`section_figure`."""
+    import matplotlib.pyplot as plt
+
+    fig, st = section_figure(out_dir, joint=joint, section=section, time=time,
+                             exaggeration=exaggeration, radius=radius)
+    out = (Path(path) if path is not None
+           else Path(out_dir) / "figures" / f"section_{st.joint}_{st.section}.png")
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=130)
-    return out, fig
+    fig.savefig(out, dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return out
