@@ -76,29 +76,43 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = sub.add_parser("render", help="off-screen rendering of an output folder",
                             description="Render the .pvd series of DIR off-screen (pyvista): "
-                                        "PNG frames and/or a movie.")
+                                        "PNG frames and/or a movie (docs/postprocess.md).")
     render.add_argument("directory", metavar="DIR")
     render.add_argument("--movie", metavar="FILE", help="movie file (.mp4 or .gif)")
     render.add_argument("--png-every", type=int, metavar="N",
-                        help="write every N-th frame as PNG to DIR/frames")
-    render.add_argument("--camera", default="iso", help="iso | xy | xz | yz | x,y,z position")
+                        help="write every N-th frame as PNG to DIR/frames (default: every frame "
+                             "when no --movie is given)")
+    render.add_argument("--camera", default="iso",
+                        help="iso | xy | xz | yz | x,y,z camera position (default iso)")
     render.add_argument("--color-by", default="curvature_magnitude", metavar="FIELD",
-                        help="beam point field: curvature_magnitude, axial_strain, "
-                             "displacement, velocity, ...")
+                        help="beam point field: curvature_magnitude (default), axial_strain, "
+                             "displacement, velocity, curvature, arc_length")
     render.add_argument("--tube-scale", type=float, default=1.0, metavar="F",
                         help="draw beams F times thicker than their radius")
-    render.add_argument("--size", default="1280x720", metavar="WxH")
-    render.add_argument("--quiet", action="store_true")
+    render.add_argument("--radius", type=float, metavar="R",
+                        help="tube radius [m] (default: the beam radius in the output)")
+    render.add_argument("--size", default="1280x720", metavar="WxH", help="image size in pixels")
+    render.add_argument("--fps", type=float, default=24.0, help="movie frame rate (default 24)")
+    render.add_argument("--quiet", action="store_true", help="no progress bar")
     plot = sub.add_parser("plot", help="time-history figures of an output folder",
-                          description="Write matplotlib figures (probes, contact forces, active "
-                                      "contacts) to DIR/figures.")
+                          description="Write matplotlib figures (probes, energies, contact "
+                                      "forces, active contacts, hole sections) to DIR/figures.")
     plot.add_argument("directory", metavar="DIR")
     plot.add_argument("--compare", metavar="OTHER_DIR", help="overlay a second run")
     plot.add_argument("--format", action="append", choices=("png", "svg", "pdf"),
                       help="figure format (repeatable; default png and svg)")
     plot.add_argument("--section", action="store_true",
-                      help="also draw the middle hole section of each clearance joint at the "
-                           "last output (the paper's Fig. 2(b))")
+                      help="also draw a hole section of each clearance joint (the paper's "
+                           "Fig. 2(b)); default: the middle section at the last output")
+    plot.add_argument("--joint", metavar="NAME", help="section view: only this joint")
+    plot.add_argument("--section-index", type=int, metavar="K", help="section view: section K")
+    plot.add_argument("--time", type=float, metavar="T",
+                      help="section view: the output nearest to T")
+    plot.add_argument("--radius", type=float, metavar="R",
+                      help="section view: bore radius [m] (default: sections.csv)")
+    plot.add_argument("--exaggeration", type=float, metavar="F",
+                      help="section view: factor on offsets and clearance (default: clearance "
+                           "drawn as half the bore radius)")
     sweep = sub.add_parser("sweep", help="run scenario variants "
                            f"({_NOT_AVAILABLE.split(' (')[0]})")
     sweep.add_argument("scenario", metavar="SCENARIO")
@@ -132,33 +146,59 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def cmd_postprocess(args: argparse.Namespace) -> int:
-    """``flexmbs render`` / ``flexmbs plot``: postprocess/ is imported lazily."""
+    """``flexmbs render`` / ``flexmbs plot``: postprocess/ (and pyvista/matplotlib) imported
+    lazily; a missing extra is a one-line error."""
+    import importlib.util
+
+    needed = ("pyvista", "vtk", "matplotlib") if args.command == "render" else ("matplotlib",)
+    missing = [m for m in needed if importlib.util.find_spec(m) is None]
+    if args.command == "render" and args.movie and args.movie.lower().endswith(".mp4") \
+            and importlib.util.find_spec("imageio_ffmpeg") is None:
+        missing.append("imageio-ffmpeg")
+    if missing:
+        print(f"flexmbs: error: needs {', '.join(missing)}; install them with "
+              'pip install -e ".[render]"', file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
         import postprocess
     except ImportError as exc:
-        print(f"flexmbs: error: post-processing needs pyvista and matplotlib ({exc}); "
-              'install them with pip install -e ".[render]"', file=sys.stderr)
+        print(f"flexmbs: error: cannot import postprocess ({exc}); install with "
+              'pip install -e ".[render]"', file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
         if args.command == "render":
             cam: Any = args.camera
             if "," in cam:
-                cam = tuple(float(x) for x in cam.split(","))
-            w, h = (int(x) for x in args.size.lower().split("x"))
+                try:
+                    cam = tuple(float(x) for x in cam.split(","))
+                except ValueError:
+                    raise ValueError(f"--camera: expected x,y,z numbers (got {cam})") from None
+            try:
+                w, h = (int(x) for x in args.size.lower().split("x"))
+            except ValueError:
+                raise ValueError(f"--size: expected WxH, e.g. 1280x720 (got {args.size})") from None
             files = postprocess.render(args.directory, movie=args.movie, png_every=args.png_every,
                                        camera=cam, color_by=args.color_by, window_size=(w, h),
-                                       tube_scale=args.tube_scale, progress=not args.quiet)
+                                       tube_scale=args.tube_scale, radius=args.radius,
+                                       framerate=args.fps, progress=not args.quiet)
         else:
             files = postprocess.plot(args.directory, compare=args.compare,
                                      formats=tuple(args.format or ("png", "svg")))
             if args.section:
                 run = postprocess.read_run(args.directory)
-                for joint in sorted({r["joint"] for r in run.sections}):
-                    files.append(postprocess.section_view(args.directory, joint=joint)[0])
+                joints = [args.joint] if args.joint else sorted({r["joint"] for r in run.sections})
+                if not joints:
+                    raise FileNotFoundError(f"{args.directory}: no sections.csv (only clearance "
+                                            "joints write it); nothing for --section")
+                for joint in joints:
+                    files.append(postprocess.section_view(
+                        args.directory, joint=joint, section=args.section_index, time=args.time,
+                        radius=args.radius, exaggeration=args.exaggeration))
     except (FileNotFoundError, ValueError) as exc:
         print(f"flexmbs: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    print(f"wrote {len(files)} file(s) under {Path(args.directory)}")
+    print(f"wrote {len(files)} file(s): {files[0] if files else '-'}"
+          f"{' ...' if len(files) > 1 else ''}")
     return 0
 
 

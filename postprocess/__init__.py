@@ -9,6 +9,6 @@ and matplotlib are imported lazily inside the functions.
 from .data import Run, read_run
 from .plots import plot
 from .render import render
-from .section import section_view
+from .section import section_figure, section_view
 
-__all__ = ["Run", "plot", "read_run", "render", "section_view"]
+__all__ = ["Run", "plot", "read_run", "render", "section_figure", "section_view"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -30,23 +31,52 @@ def _contact_series(run: Run) -> tuple[np.ndarray, dict[tuple[str, int], np.ndar
     return t, forces, count
 
 
-def make_figures(run: Run, compare: Run | None = None) -> dict[str, object]:
-    """matplotlib Figures by file stem (not saved)."""
+def _labels(runs: list[Run]) -> list[str]:
+    """Legend names of the runs: their folder names (with the parent when they coincide)."""
+    names = [r.label for r in runs]
+    if len(set(names)) < len(names):
+        names = [f"{r.directory.parent.name}/{r.label}" for r in runs]
+    if len(set(names)) < len(names):
+        names = [f"{r.label} #{i + 1}" for i, r in enumerate(runs)]
+    return names
+
+
+def _is_energy(column: str) -> bool:
+    return "energy" in column.lower()
+
+
+def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
+    """matplotlib Figures by file stem (not saved): ``probe_<name>`` for every probe of
+    probes.csv (vector probes: their components in one axes) except energies, ``energies``
+    (all probe columns whose name contains "energy", in joules; probes.csv does not record
+    probe types, hence the name rule), ``contacts`` (normal
+    force per hole section summed over its points, and the number of active contact points)
+    when either run has contacts. With ``compare`` the second run is overlaid dashed, in the
+    same colour per series; legends name the folders."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figs: dict[str, object] = {}
+    figs: dict[str, Any] = {}
     runs = [run] + ([compare] if compare is not None else [])
+    names = _labels(runs)
     styles = ["-", "--"]
-    for name, cols in run.probe_groups().items():
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    groups = dict(run.probe_groups())
+    if compare is not None:
+        for name, cols in compare.probe_groups().items():
+            groups.setdefault(name, cols)
+    for name, cols in groups.items():
+        if _is_energy(name):
+            continue            # all energies share one figure
         fig, ax = plt.subplots(figsize=(7, 3.5))
-        for r, ls in zip(runs, styles, strict=False):
-            for c in cols:
-                if c in r.probes:
-                    lab = c if compare is None else f"{c} ({r.label})"
-                    ax.plot(r.probes["t"], r.probes[c], ls, label=lab)
+        for r, lab_run, ls in zip(runs, names, styles, strict=False):
+            for i, c in enumerate(cols):
+                if c in r.probes and "t" in r.probes:
+                    lab = c if compare is None else f"{c} ({lab_run})"
+                    ax.plot(r.probes["t"], r.probes[c], ls, color=colours[i % len(colours)],
+                            label=lab)
         ax.set_xlabel("t [s]")
         ax.set_ylabel(name)
         ax.set_title(f"probe {name}")
@@ -54,22 +84,39 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, object]:
         ax.legend(fontsize=8)
         fig.tight_layout()
         figs[f"probe_{name}"] = fig
-    if run.contacts or (compare is not None and compare.contacts):
+    energy_cols = [c for c in groups if _is_energy(c)]
+    energy_cols = [c for name in energy_cols for c in groups[name]]
+    if energy_cols:
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        for r, lab_run, ls in zip(runs, names, styles, strict=False):
+            for i, c in enumerate(energy_cols):
+                if c in r.probes and "t" in r.probes:
+                    lab = c if compare is None else f"{c} ({lab_run})"
+                    ax.plot(r.probes["t"], r.probes[c], ls, color=colours[i % len(colours)],
+                            label=lab)
+        ax.set(xlabel="t [s]", ylabel="energy [J]", title="energies")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        figs["energies"] = fig
+    if any(r.contacts for r in runs):
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-        for r, ls in zip(runs, styles, strict=False):
-            if not r.contacts:
-                continue
+        keys = sorted({(c["joint"], int(c["section"])) for r in runs for c in r.contacts})
+        colour_of = {k: colours[i % len(colours)] for i, k in enumerate(keys)}
+        for r, lab_run, ls in zip(runs, names, styles, strict=False):
             t, forces, count = _contact_series(r)
             for (joint, sec), f in sorted(forces.items()):
-                lab = f"{joint} s{sec}" + ("" if compare is None else f" ({r.label})")
-                ax1.plot(t, f, ls, label=lab)
-            ax2.plot(t, count, ls, drawstyle="steps-post", label=r.label)
+                lab = f"{joint} s{sec}" + ("" if compare is None else f" ({lab_run})")
+                ax1.plot(t, f, ls, color=colour_of[(joint, sec)], label=lab)
+            if len(t):
+                ax2.plot(t, count, ls, drawstyle="steps-post", label=lab_run)
         ax1.set_ylabel("normal force [N]")
-        ax1.set_title("contact force per hole section")
+        ax1.set_title("contact normal force per hole section (sum over its points)")
         ax1.legend(fontsize=7, ncol=3)
         ax1.grid(True, alpha=0.3)
         ax2.set_ylabel("active contact points")
         ax2.set_xlabel("t [s]")
+        ax2.yaxis.get_major_locator().set_params(integer=True)
         ax2.legend(fontsize=8)
         ax2.grid(True, alpha=0.3)
         fig.tight_layout()

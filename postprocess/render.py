@@ -78,7 +78,7 @@ def _metadata_radius(run: Run) -> float | None:
     meta = run.summary.get("metadata") or {}
     r = meta.get("beam_radius")
     if r is None and isinstance(meta.get("beams"), list):
-        rs = [b.get("radius") for b in meta["beams"] if isinstance(b, dict) and b.get("radius")]
+        rs = [float(b["radius"]) for b in meta["beams"] if isinstance(b, dict) and b.get("radius")]
         r = max(rs) if rs else None
     try:
         return float(r) if r is not None and float(r) > 0 else None
@@ -131,6 +131,23 @@ def _camera(plotter: Any, camera: str | Sequence[float] | None, bounds: np.ndarr
     direction = direction / np.linalg.norm(direction)
     plotter.camera_position = [tuple(centre + 2.0 * diag * direction), tuple(centre), tuple(up)]
     plotter.reset_camera(render=False, bounds=tuple(bounds))
+    # reset_camera fits the bounding sphere; zoom in until the box's corners fill 85 % of the
+    # window (perspective projection of the 8 corners)
+    cam = plotter.camera
+    eye, focal = np.array(cam.position), np.array(cam.focal_point)
+    fwd = (focal - eye) / np.linalg.norm(focal - eye)
+    right = np.cross(fwd, np.array(cam.up))
+    right /= np.linalg.norm(right)
+    upv = np.cross(right, fwd)
+    corners = np.array([[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]])
+    rel = corners - eye
+    depth = np.maximum(rel @ fwd, 1e-12 * diag)
+    tan_half = np.tan(np.radians(cam.view_angle) / 2.0)
+    w, h = plotter.window_size
+    extent = max(np.max(np.abs(rel @ right) / depth) / (tan_half * w / h),
+                 np.max(np.abs(rel @ upv) / depth) / tan_half)
+    if extent > 0:
+        cam.zoom(float(np.clip(0.85 / extent, 0.2, 5.0)))
 
 
 def _field_range(beam_meshes: Sequence[Any], name: str) -> tuple[float, float]:
@@ -201,14 +218,14 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
         selected = [k for k in selected if k % int(png_every) == 0]  # type: ignore[arg-type]
 
     plotter = pv.Plotter(off_screen=True, window_size=[w, h])
-    plotter.set_background(BACKGROUND)
+    plotter.set_background(BACKGROUND)  # type: ignore[arg-type]
     written: list[Path] = []
     if movie_path is not None:
         movie_path.parent.mkdir(parents=True, exist_ok=True)
         if movie_path.suffix.lower() == ".gif":
             plotter.open_gif(str(movie_path), fps=framerate)
         else:   # even sizes are kept (yuv420p needs them); odd ones are rounded up by imageio
-            plotter.open_movie(str(movie_path), framerate=framerate, quality=7,
+            plotter.open_movie(str(movie_path), framerate=max(1, round(framerate)), quality=7,
                                macro_block_size=2)
     frames_dir = run.directory / "frames"
     bar_title = color_by if color_by != "curvature_magnitude" else "curvature magnitude [1/m]"

@@ -166,8 +166,8 @@ def section_figure(out_dir: str | Path, *, joint: str | None = None, section: in
         ax.plot(*Pd, "gs", ms=5, label="P (closest point on the beam axis)" if i == 0 else None)
         ax.plot([Pd[0], Qd[0]], [Pd[1], Qd[1]], "r:", lw=0.9)
         ax.annotate(f"g = {1e6 * g:.4g} µm\nF = {F:.3g} N\n|QP| = {1e3 * ell3:.5g} mm",
-                    Qd, textcoords="offset points", xytext=(10, -40 if u[1] > 0 else 8),
-                    fontsize=8, color="darkred",
+                    (float(Qd[0]), float(Qd[1])), textcoords="offset points",
+                    xytext=(10, -40 if u[1] > 0 else 8), fontsize=8, color="darkred",
                     bbox={"boxstyle": "round", "fc": "white", "alpha": 0.8, "lw": 0})
     if not st.Q:
         ax.text(0.02, 0.98, "no contact in this section", transform=ax.transAxes, va="top",

@@ -1,25 +1,41 @@
 """Post-processing, headless: rendered frames and movies are real images of the model, plots
-contain the expected series, the section view draws the ellipse of sections.csv."""
+contain the expected series, the section view draws the ellipse of contacts.csv."""
 
 from __future__ import annotations
 
+import csv
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-import postprocess
-from flexmbs.cli import main
+pytest.importorskip("pyvista")
+pytest.importorskip("matplotlib")
+
+import postprocess  # noqa: E402
+from flexmbs.cli import main  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+N_FRAMES = 6            # t = 0, 0.01, ..., 0.05
+BACKGROUND_CUT = 235    # a pixel with a channel below this is not the white background
+MIN_COVERAGE = 5e-3
+
+
+def _run_example(directory: Path, scenario: str) -> Path:
+    assert main(["run", str(EXAMPLES / scenario), "--t-end", "0.05", "--quiet",
+                 "--set", "simulation.output_interval=0.01", "--out", str(directory)]) == 0
+    return directory
 
 
 @pytest.fixture(scope="module")
 def sleeve_run(tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("sleeve")
-    assert main(["run", str(EXAMPLES / "curved_beam_sleeve.toml"), "--t-end", "0.02", "--quiet",
-                 "--set", "simulation.output_interval=0.005", "--out", str(d)]) == 0
-    return d
+    return _run_example(tmp_path_factory.mktemp("sleeve"), "curved_beam_sleeve.toml")
+
+
+@pytest.fixture(scope="module")
+def cantilever_run(tmp_path_factory) -> Path:
+    return _run_example(tmp_path_factory.mktemp("cantilever"), "cantilever.toml")
 
 
 def _image(path: Path) -> np.ndarray:
@@ -28,82 +44,183 @@ def _image(path: Path) -> np.ndarray:
     return np.asarray(iio.imread(path))
 
 
+def _ink(img: np.ndarray) -> np.ndarray:
+    return np.any(img[..., :3] < BACKGROUND_CUT, axis=-1)
+
+
+def _contact_rows(directory: Path) -> list[dict]:
+    with open(directory / "contacts.csv", newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+# ------------------------------------------------------------------------------------ render
 def test_render_png_frames_are_real_pictures(sleeve_run):
     """One PNG per frame, of the window size, not blank: non-background pixels cover > 0.5 % of
-    the image (the tube and the sleeve) and their centroid lies well inside the picture."""
+    the image and their centroid lies well inside the picture."""
     files = postprocess.render(sleeve_run, png_every=1, window_size=(400, 300), tube_scale=4,
                                progress=False)
-    run = postprocess.read_run(sleeve_run)
-    assert len(files) == len(run.frames) == 5
+    assert len(files) == len(postprocess.read_run(sleeve_run).frames) == N_FRAMES
     for f in files:
         img = _image(f)
         assert img.shape[:2] == (300, 400)
-        ink = np.any(img[..., :3] < 235, axis=-1)     # background is white
-        assert ink.mean() > 5e-3
+        ink = _ink(img)
+        assert ink.mean() > MIN_COVERAGE
         yc, xc = np.argwhere(ink).mean(axis=0)
         assert 0.1 * 300 < yc < 0.9 * 300 and 0.1 * 400 < xc < 0.9 * 400
+    every = postprocess.render(sleeve_run, png_every=4, window_size=(200, 150), progress=False)
+    assert [p.name[-10:] for p in every] == ["000000.png", "000004.png"]
 
 
-def test_render_gif_has_one_frame_per_output(sleeve_run, tmp_path):
-    movie = tmp_path / "m.gif"
-    files = postprocess.render(sleeve_run, movie=movie, window_size=(320, 240), progress=False)
-    assert files == [movie]
+def test_render_tube_lies_where_the_beam_is(cantilever_run):
+    """Front view (xz) of the horizontal cantilever: the tube spans most of the image width in a
+    narrow band around the middle row (the camera frames the whole motion); the scalar bar and
+    the time label are excluded by looking at the middle of the picture only."""
+    (png,) = postprocess.render(cantilever_run, png_every=1, frames=[-1], camera="xz",
+                                color_by="displacement", window_size=(480, 320), tube_scale=3,
+                                progress=False)
+    ink = _ink(_image(png))[60:240]             # between the label and the scalar bar
+    rows, cols = np.nonzero(ink)
+    assert ink.mean() > MIN_COVERAGE
+    assert cols.max() - cols.min() > 0.5 * 480
+    assert 60 + rows.mean() == pytest.approx(160, abs=40)
+    assert rows.max() - rows.min() < 40
+
+
+def test_render_mp4_and_gif_have_one_frame_per_output(sleeve_run, tmp_path):
+    import imageio.v2 as imageio
     import imageio.v3 as iio
 
-    frames = iio.imread(movie, index=None)
-    assert frames.shape[0] == 5 and frames.shape[1:3] == (240, 320)
-    assert frames.std() > 1.0   # not a uniform image
+    mp4 = tmp_path / "m.mp4"
+    assert postprocess.render(sleeve_run, movie=mp4, window_size=(320, 240), progress=False) \
+        == [mp4]
+    reader = imageio.get_reader(mp4)
+    assert reader.count_frames() == N_FRAMES
+    frame = reader.get_data(N_FRAMES - 1)
+    reader.close()
+    assert frame.shape[:2] == (240, 320)
+    assert frame.std() > 1.0 and _ink(frame).mean() > MIN_COVERAGE
+    gif = tmp_path / "m.gif"
+    postprocess.render(sleeve_run, movie=gif, window_size=(320, 240), camera="xz",
+                       progress=False)
+    frames = iio.imread(gif, index=None)
+    assert frames.shape[0] == N_FRAMES and frames.shape[1:3] == (240, 320)
+    assert frames.std() > 1.0
 
 
 def test_render_rejects_bad_options(sleeve_run, tmp_path):
     with pytest.raises(ValueError, match=r"\.mp4 or \.gif"):
-        postprocess.render(sleeve_run, movie=tmp_path / "m.avi2", progress=False)
+        postprocess.render(sleeve_run, movie=tmp_path / "m.avi", progress=False)
+    with pytest.raises(ValueError, match="unknown beam field 'nope'.*axial_strain"):
+        postprocess.render(sleeve_run, color_by="nope", progress=False)
+    with pytest.raises(ValueError, match="camera must be one of"):
+        postprocess.render(sleeve_run, camera="top", frames=[0], progress=False)
     with pytest.raises(FileNotFoundError, match="not found"):
         postprocess.render(tmp_path / "missing", progress=False)
 
 
-def test_plots_contain_the_expected_series(sleeve_run):
+# ------------------------------------------------------------------------------------- plots
+def test_plots_contain_the_expected_series(sleeve_run, cantilever_run):
     from postprocess.plots import make_figures
 
     run = postprocess.read_run(sleeve_run)
     figs = make_figures(run)
-    assert {"probe_sleeve_s", "probe_lowest_point", "probe_contact_force", "probe_energy",
-            "contacts"} <= set(figs)
+    assert set(figs) == {"probe_sleeve_s", "probe_lowest_point", "probe_contact_force",
+                         "energies", "contacts"}
     ax = figs["probe_lowest_point"].axes[0]
     assert [ln.get_label() for ln in ax.lines] == ["lowest_point_x", "lowest_point_y",
                                                    "lowest_point_z"]
-    np.testing.assert_allclose(ax.lines[2].get_ydata(), run.probes["lowest_point_z"])
-    sections_in_contact = {int(c["section"]) for c in run.contacts}
+    np.testing.assert_array_equal(ax.lines[2].get_ydata(), run.probes["lowest_point_z"])
+    assert [ln.get_label() for ln in figs["energies"].axes[0].lines] == ["energy"]
+    rows = _contact_rows(sleeve_run)
     force_ax, count_ax = figs["contacts"].axes
-    assert len(force_ax.lines) == len(sections_in_contact)
-    assert count_ax.lines[0].get_ydata().max() >= 1
-    both = make_figures(run, run)      # --compare overlays a second run
-    assert len(both["probe_sleeve_s"].axes[0].lines) == 2
-    written = postprocess.plot(sleeve_run, formats=("png",))
-    assert all(p.is_file() and p.suffix == ".png" for p in written)
+    assert {ln.get_label() for ln in force_ax.lines} == \
+        {f"sleeve s{s}" for s in {int(r["section"]) for r in rows}}
+    per_time = [sum(float(r["t"]) == t for r in rows) for t in run.probes["t"]]
+    np.testing.assert_array_equal(count_ax.lines[0].get_ydata(), per_time)
+    s0 = next(ln for ln in force_ax.lines if ln.get_label() == "sleeve s0")
+    f0 = [sum(float(r["normal_force"]) for r in rows
+              if int(r["section"]) == 0 and float(r["t"]) == t) for t in run.probes["t"]]
+    np.testing.assert_allclose(s0.get_ydata(), f0, rtol=1e-12)
+
+    other = postprocess.read_run(cantilever_run)        # --compare: a second run overlaid
+    both = make_figures(run, other)
+    labels = [ln.get_label() for ln in both["energies"].axes[0].lines]
+    assert labels == [f"energy ({sleeve_run.name})", f"energy ({cantilever_run.name})"]
+    assert both["energies"].axes[0].lines[1].get_linestyle() == "--"
+    assert "probe_tip" in both and len(both["probe_tip"].axes[0].lines) == 3
+    assert len(both["contacts"].axes[1].lines) == 2     # active points of both runs
+    same = make_figures(run, run)
+    assert len({ln.get_label() for ln in same["probe_sleeve_s"].axes[0].lines}) == 2
+
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+    written = postprocess.plot(sleeve_run, compare=cantilever_run)
+    assert {p.suffix for p in written} == {".png", ".svg"}
+    assert all(p.is_file() and p.parent == sleeve_run / "figures" for p in written)
+    with pytest.raises(ValueError, match="unknown figure format"):
+        postprocess.plot(sleeve_run, formats=("jpg",))
 
 
-def test_section_view_draws_the_ellipse_of_sections_csv(sleeve_run):
-    """The drawn ellipse has the semi-axes a, b of sections.csv (distance of its points from the
-    drawn centre ranges from b to a, 1e-9 relative)."""
-    run = postprocess.read_run(sleeve_run)
-    row = next(r for r in run.sections if int(r["section"]) == 0 and float(r["t"]) == 0.02)
-    path, fig = postprocess.section_view(sleeve_run, joint="sleeve", section=0, time=0.02)
-    assert path.is_file()
+# ----------------------------------------------------------------------------- section view
+def test_section_view_draws_the_ellipse_of_contacts_csv(sleeve_run):
+    """At a time and section in contact, the drawn ellipse has the a, b of contacts.csv (its
+    points lie between b and a from the drawn centre), Q sits on the drawn bore, and
+    |Q - P| = b + gap (contacts.csv consistency)."""
+    from postprocess.section import section_figure
+
+    rows = _contact_rows(sleeve_run)
+    row = rows[-1]
+    t, sec = float(row["t"]), int(row["section"])
+    fig, st = section_figure(sleeve_run, joint="sleeve", section=sec, time=t + 1e-4)
+    assert (st.t, st.section, st.ab_source) == (t, sec, "contacts.csv")
+    assert (st.a, st.b) == (float(row["a"]), float(row["b"]))
     ax = fig.axes[0]
     ell = next(ln for ln in ax.lines if ln.get_label().startswith("beam section"))
     centre = next(ln for ln in ax.lines if ln.get_label() == "ellipse centre r_I")
     c = np.array([centre.get_xdata()[0], centre.get_ydata()[0]])
-    d = np.hypot(ell.get_xdata() - c[0], ell.get_ydata() - c[1])
-    assert d.max() == pytest.approx(float(row["a"]), rel=1e-9)
-    assert d.min() == pytest.approx(float(row["b"]), rel=1e-6)
+    d = 1e-3 * np.hypot(ell.get_xdata() - c[0], ell.get_ydata() - c[1])     # drawn in mm
+    assert d.max() == pytest.approx(st.a, rel=1e-9)
+    assert d.min() == pytest.approx(st.b, rel=1e-5)
+    f = float(ax.get_title().split("×")[1].split()[0])
+    assert f == pytest.approx(0.5 * st.R / (st.R - st.b), rel=1e-3)      # default factor
+    bore = 1e-3 * (st.b + f * (st.R - st.b))
+    q = next(ln for ln in ax.lines if ln.get_label() == "Q (hole point)")
+    assert 1e-6 * math.hypot(q.get_xdata()[0], q.get_ydata()[0]) == pytest.approx(bore, rel=1e-3)
+    for gap, dist in zip(st.gaps, st.distances, strict=True):
+        assert dist == pytest.approx(st.b + gap, abs=1e-12)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    path = postprocess.section_view(sleeve_run, joint="sleeve", section=sec, time=t,
+                                    exaggeration=10, radius=3e-3)
+    assert path == sleeve_run / "figures" / f"section_sleeve_{sec}.png" and path.is_file()
+
+
+def test_section_view_needs_sections_csv(sleeve_run, cantilever_run):
     with pytest.raises(ValueError, match="no clearance joint 'other'"):
         postprocess.section_view(sleeve_run, joint="other")
+    with pytest.raises(ValueError, match="section 99 of joint 'sleeve' not found"):
+        postprocess.section_view(sleeve_run, section=99)
+    with pytest.raises(FileNotFoundError, match="no sections.csv.*ey_a, ez_a"):
+        postprocess.section_view(cantilever_run)
 
 
-def test_cli_render_and_plot(sleeve_run, tmp_path):
-    assert main(["render", str(sleeve_run), "--png-every", "2", "--size", "320x240",
-                 "--quiet"]) == 0
-    assert main(["plot", str(sleeve_run), "--format", "png", "--section"]) == 0
-    assert (sleeve_run / "figures" / "section_sleeve_4.png").is_file()
+# ----------------------------------------------------------------------------------------- CLI
+def test_cli_render_and_plot(sleeve_run, tmp_path, capsys, monkeypatch):
+    assert main(["render", str(sleeve_run), "--png-every", "3", "--size", "320x240",
+                 "--camera", "1,-2,1", "--quiet"]) == 0
+    assert main(["plot", str(sleeve_run), "--format", "png", "--section", "--section-index", "0",
+                 "--time", "0.02"]) == 0
+    assert (sleeve_run / "figures" / "section_sleeve_0.png").is_file()
     assert main(["plot", str(tmp_path / "nothing")]) == 2
+    assert main(["render", str(sleeve_run), "--size", "big"]) == 2
+    capsys.readouterr()
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "pyvista" else real(name, *a))
+    assert main(["render", str(sleeve_run)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'pip install -e ".[render]"' in err
