@@ -232,7 +232,7 @@ def test_small_free_vibration_has_the_fold_mode_frequency(name):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not FULL, reason="full 20 s runs (~7 min each): FLEXMBS_FULL=1")
+@pytest.mark.skipif(not FULL, reason="full 20 s runs (~5.5 min each): FLEXMBS_FULL=1")
 def test_full_runs_fold_mode_hardens_with_the_amplitude(tmp_path):
     """The default 20 s runs from the CLI. At the default push (2 N) the wire midpoint swings
     ~6 mm, and the stretch of the two spans stiffens the wire (Duffing: cubic EA/a^3): the ideal
