@@ -23,7 +23,9 @@ COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "d
 @njit
 def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, update, r_b, R, out):  # noqa: ANN001, ANN201
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
-    number of rows. ``A`` = hole body rotation (columns: hole axis, e_y, e_z)."""
+    number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
+    |Q - P| - r_b would read "open" again: the caller must reject the iterate).
+    ``A`` = hole body rotation (columns: hole axis, e_y, e_z)."""
     n = A[:, 0].copy()
     ey = A[:, 1].copy()
     ez = A[:, 2].copy()
@@ -35,7 +37,7 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, update, r_b,
         e, xi, found = section_crossing_kernel(qe, lengths, origin, n, elem_ws[k], xi_ws[k],
                                                1e-12, 30, 2.0 * R + r_b)
         if not found:
-            continue
+            return -1 - k   # no crossing near the section: the beam left the hole
         if update:
             elem_ws[k] = e
             xi_ws[k] = xi
@@ -46,6 +48,8 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, update, r_b,
         for c in range(3):
             cy += (r[c] - origin[c]) * ey[c]
             cz += (r[c] - origin[c]) * ez[c]
+        if math.hypot(cy, cz) > R:
+            return -1 - k   # the beam axis left the bore: the penetration is no longer defined
         if math.hypot(cy, cz) + a < R:
             continue   # broad phase: ellipse strictly inside the bore
         eax = ea3[0] * ey[0] + ea3[1] * ey[1] + ea3[2] * ey[2]

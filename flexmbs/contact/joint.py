@@ -21,7 +21,7 @@ import numpy as np
 
 from ..constraints.interaction import Interaction
 from ..elements.rigid_body import rotation_matrix
-from ..errors import ModelError
+from ..errors import ConvergenceError, ModelError
 from ._detect import detect_circle
 from .geometry import beam_point, closest_point, section_crossing, section_ellipse
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb
@@ -232,6 +232,13 @@ class SlidingClearanceJoint(Interaction):
         qe = np.ascontiguousarray(q[self._elem_dofs])
         m = detect_circle(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
                           update, self.beam_radius, float(self.hole.section.radius), self._rows)
+        if m < 0:
+            # a Newton iterate (or a step) pushed the beam axis through the bore wall: reject it
+            # so that the step or load increment is cut, instead of losing the contact silently
+            raise ConvergenceError(
+                f"joint '{self.name}': the beam axis left the bore at hole section {-1 - m} "
+                "(penetration larger than the clearance); use a smaller time step, more load "
+                "steps or a stiffer contact")
         out = []
         for row in self._rows[:m]:
             k, j, kind, eP = int(row[0]), int(row[1]), int(row[2]), int(row[3])
