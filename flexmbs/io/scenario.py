@@ -1124,43 +1124,27 @@ def _probe_energy(model: Model, t: Table, keypath: str, ctx: BuildContext) -> An
     return probes.EnergyProbe(t.raw["name"], quantity)
 
 
-def _probe_slide_coordinate(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
-    from . import probes
+def _joint_probe(cls_name: str, needs: str, kind: str) -> Callable[..., Any]:
+    """Builder of a probe on a joint that offers the method ``needs`` (``joint = "name"``)."""
 
-    t.allow(("name", "type", "joint"))
-    name = t.string("joint")
-    joint = ctx.joints.get(name)
-    if joint is None or not hasattr(joint, "slide_coordinate"):
-        known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, "slide_coordinate"))
-        raise ScenarioError(f"{t.key('joint')}: no sliding joint named '{name}' "
-                            f"(sliding joints: {known or 'none'})")
-    return probes.SlideCoordinateProbe(t.raw["name"], joint)
+    def build(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
+        from . import probes
 
+        t.allow(("name", "type", "joint"))
+        name = t.string("joint")
+        joint = ctx.joints.get(name)
+        if joint is None or not hasattr(joint, needs):
+            known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, needs))
+            raise ScenarioError(f"{t.key('joint')}: no {kind} joint named '{name}' "
+                                f"({kind} joints: {known or 'none'})")
+        return getattr(probes, cls_name)(t.raw["name"], joint)
 
-def _probe_joint_reaction(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
-    from . import probes
-
-    t.allow(("name", "type", "joint"))
-    name = t.string("joint")
-    joint = ctx.joints.get(name)
-    if joint is None or not hasattr(joint, "reaction_force"):
-        known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, "reaction_force"))
-        raise ScenarioError(f"{t.key('joint')}: no sliding joint named '{name}' "
-                            f"(sliding joints: {known or 'none'})")
-    return probes.JointReactionProbe(t.raw["name"], joint)
+    return build
 
 
-def _probe_contact_force(model: Model, t: Table, keypath: str, ctx: BuildContext) -> Any:
-    from . import probes
-
-    t.allow(("name", "type", "joint"))
-    name = t.string("joint")
-    joint = ctx.joints.get(name)
-    if joint is None or not hasattr(joint, "contact_force"):
-        known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, "contact_force"))
-        raise ScenarioError(f"{t.key('joint')}: no clearance joint named '{name}' "
-                            f"(clearance joints: {known or 'none'})")
-    return probes.ContactForceProbe(t.raw["name"], joint)
+_probe_slide_coordinate = _joint_probe("SlideCoordinateProbe", "slide_coordinate", "sliding")
+_probe_joint_reaction = _joint_probe("JointReactionProbe", "reaction_force", "sliding")
+_probe_contact_force = _joint_probe("ContactForceProbe", "contact_force", "clearance")
 
 
 #: ``[[probes]]`` types: builder(model, table, keypath, context) -> probe object
