@@ -22,7 +22,7 @@ import numpy as np
 from ..constraints.interaction import Interaction
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, ModelError
-from ._detect import detect_circle
+from ._detect import clearance_forces, clearance_post_step, detect_circle
 from .geometry import beam_point, closest_point, section_crossing, section_ellipse
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb
 from .pair import contact_point
@@ -65,6 +65,15 @@ def SuperellipseHole(A: float, B: float, n: float, length: float, sections: int 
     return Hole(SuperellipseSection(A, B, n), length, sections)
 
 
+#: stationary points tracked per section (a circle has at most 4; a superellipse's extra ones
+#: beyond this count are treated as first contacts at every step by the dissipative laws)
+MAX_POINTS = 8
+
+
+def _approach_of(approach: np.ndarray, k: int, j: int) -> float:
+    return float(approach[k, j]) if j < approach.shape[1] else 0.0
+
+
 class SlidingClearanceJoint(Interaction):
     """Beam through a rigid hole with clearance, penalty contact per hole section.
 
@@ -104,13 +113,17 @@ class SlidingClearanceJoint(Interaction):
                 f"{self.beam_radius:.6g}); the beam cannot pass")
         self.stations = hole.stations()
         ns = len(self.stations)
+        # state, updated after each converged step (also by the compiled integrator, in place):
         self._elem = np.zeros(ns, np.int64)     # warm starts of the section crossings
         self._xi = np.full(ns, 0.5)
-        self._approach: dict[tuple[int, int], float] = {}
-        self._active: set[tuple[int, int]] = set()
+        self._approach = np.zeros((ns, MAX_POINTS))   # -g_N' at onset, per (section, point)
+        self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
         self._frozen: list | None = None
         self._positions: dict[tuple[int, int], np.ndarray] = {}
-        self._rows = np.zeros((4 * ns, 11))    # at most 4 stationary points per section
+        self._rows = np.zeros((4 * ns, 11))    # at most 4 stationary points per circle section
+        self._K = np.zeros((4 * ns, 19, 19))
+        self._C = np.zeros((4 * ns, 19, 19))
+        self._kelem = np.zeros(4 * ns, np.int64)
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: Model) -> None:
@@ -124,6 +137,7 @@ class SlidingClearanceJoint(Interaction):
         self._elem_dofs = asm.element_dofs(self.beam)
         self._lengths = np.ascontiguousarray(self.beam.centerline.lengths, dtype=float)
         self._beam_dofs = asm.beam_dofs(self.beam)
+        self._qe = np.zeros((len(self._lengths), 12))
 
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
         self._check_initial(q0)
@@ -174,7 +188,7 @@ class SlidingClearanceJoint(Interaction):
             for k, j, kind, eP, u_Q, xiP, a, b in self._frozen:
                 res = contact_point(qb, vb, u_Q, q[self._elem_dofs[eP]], v[self._elem_dofs[eP]],
                                     self._lengths[eP], xiP, self.beam_radius, self.contact,
-                                    self.friction, self._approach.get((k, j), 0.0),
+                                    self.friction, _approach_of(self._approach, k, j),
                                     self.consistent and want_tangent)
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b))
@@ -216,7 +230,7 @@ class SlidingClearanceJoint(Interaction):
                 eP, xiP, *_ = closest_point(qe, self._lengths, Qg, e, xi)
                 res = contact_point(qb, vb, u_Q, qe[eP], v[self._elem_dofs[eP]],
                                     self._lengths[eP], xiP, r_b, self.contact, self.friction,
-                                    self._approach.get((k, j), 0.0),
+                                    _approach_of(self._approach, k, j),
                                     self.consistent and want_tangent)
                 if res.gap >= 0.0:
                     continue
@@ -233,12 +247,7 @@ class SlidingClearanceJoint(Interaction):
         m = detect_circle(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
                           update, self.beam_radius, float(self.hole.section.radius), self._rows)
         if m < 0:
-            # a Newton iterate (or a step) pushed the beam axis through the bore wall: reject it
-            # so that the step or load increment is cut, instead of losing the contact silently
-            raise ConvergenceError(
-                f"joint '{self.name}': the beam axis left the bore at hole section {-1 - m} "
-                "(penetration larger than the clearance); use a smaller time step, more load "
-                "steps or a stiffer contact")
+            self._raise_left_bore(m)
         out = []
         for row in self._rows[:m]:
             k, j, kind, eP = int(row[0]), int(row[1]), int(row[2]), int(row[3])
@@ -246,7 +255,7 @@ class SlidingClearanceJoint(Interaction):
             ed = self._elem_dofs[eP]
             res = contact_point(qb, vb, u_Q, q[ed], v[ed], self._lengths[eP], row[4],
                                 self.beam_radius, self.contact, self.friction,
-                                self._approach.get((k, j), 0.0), self.consistent and want_tangent)
+                                _approach_of(self._approach, k, j), self.consistent and want_tangent)
             if res.gap < 0.0:
                 out.append((k, j, kind, eP, res, row[8], row[9]))
         return out
@@ -262,8 +271,41 @@ class SlidingClearanceJoint(Interaction):
         self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b)
                         for k, j, kind, eP, res, a, b in self._contacts(q, v, False, False)]
 
+    def _compiled_residual(self) -> bool:
+        """The compiled joint kernels apply: circular bore, detection not frozen; the
+        consistent tangent (Python) needs the per-contact path."""
+        return (isinstance(self.hole.section, CircleSection) and self._frozen is None
+                and not self.consistent)
+
+    def _friction_parameters(self) -> tuple[float, float]:
+        f = self.friction
+        return (float(f.mu), float(f.eps_v)) if f is not None else (0.0, 1.0)
+
+    def _raise_left_bore(self, m: int) -> None:
+        # a Newton iterate (or a step) pushed the beam axis through the bore wall: reject it so
+        # that the step or load increment is cut, instead of losing the contact silently
+        raise ConvergenceError(
+            f"joint '{self.name}': the beam axis left the bore at hole section {-1 - m} "
+            "(penetration larger than the clearance); use a smaller time step, more load "
+            "steps or a stiffer contact")
+
     def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
                  r_q: np.ndarray, matrix: tuple[float, float, float] | None) -> float:
+        if self._compiled_residual():
+            mu, eps_v = self._friction_parameters()
+            m, scale = clearance_forces(
+                q, v, self._body_dofs, self._elem_dofs, self._lengths, self.hole_point,
+                self.stations, self._elem, self._xi, self.beam_radius,
+                float(self.hole.section.radius), self.contact.parameters(), mu, eps_v, self._approach,
+                self._qe, self._rows, matrix is not None, r_q, self._K, self._C, self._kelem)
+            if m < 0:
+                self._raise_left_bore(m)
+            if matrix is not None:
+                _, cC, cK = matrix
+                for i in range(m):
+                    pos = self._block_positions(asm, int(self._kelem[i]))
+                    np.add.at(asm.matrix.data, pos, (cK * self._K[i] + cC * self._C[i]).ravel())
+            return scale
         scale = 0.0
         for _k, _j, kind, eP, res, _a, _b in self._contacts(q, v, matrix is not None, False):
             sign = float(kind)
@@ -272,25 +314,39 @@ class SlidingClearanceJoint(Interaction):
             scale = max(scale, float(np.abs(res.Q_body).max()), float(np.abs(res.Q_elem).max()))
             if matrix is not None:
                 _, cC, cK = matrix
-                key = (id(asm), eP)
-                pos = self._positions.get(key)
-                if pos is None:   # matrix positions of the (body, element) block, cached
-                    idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
-                    pos = self._positions[key] = asm.positions(idx, idx)
-                np.add.at(asm.matrix.data, pos, (sign * (cK * res.K + cC * res.C)).ravel())
+                np.add.at(asm.matrix.data, self._block_positions(asm, eP),
+                          (sign * (cK * res.K + cC * res.C)).ravel())
         return scale
 
+    def _block_positions(self, asm: Assembly, eP: int) -> np.ndarray:
+        """Matrix positions of the (body, element eP) block, cached per assembly."""
+        key = (id(asm), eP)
+        pos = self._positions.get(key)
+        if pos is None:
+            idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
+            pos = self._positions[key] = asm.positions(idx, idx)
+        return pos
+
     def post_step(self, asm: Assembly, q: np.ndarray, v: np.ndarray, t: float) -> None:
-        contacts = self._contacts(q, v, False, True)
-        active = set()
-        for k, j, _kind, _eP, res, _a, _b in contacts:
-            active.add((k, j))
-            if (k, j) not in self._active:
-                self._approach[(k, j)] = -res.gap_rate   # approach velocity at onset
-        for key in list(self._approach):
-            if key not in active:
-                del self._approach[key]
-        self._active = active
+        if self._compiled_residual():
+            mu, eps_v = self._friction_parameters()
+            m = clearance_post_step(
+                q, v, self._body_dofs, self._elem_dofs, self._lengths, self.hole_point,
+                self.stations, self._elem, self._xi, self.beam_radius,
+                float(self.hole.section.radius), self.contact.parameters(), mu, eps_v, self._approach,
+                self._active, self._qe, self._rows)
+            if m < 0:
+                self._raise_left_bore(m)
+            return
+        now = np.zeros_like(self._active)
+        for k, j, _kind, _eP, res, _a, _b in self._contacts(q, v, False, True):
+            if j >= now.shape[1]:
+                continue
+            now[k, j] = True
+            if not self._active[k, j]:
+                self._approach[k, j] = -res.gap_rate   # approach velocity at onset
+        self._approach[~now] = 0.0
+        self._active[:] = now
 
     # ------------------------------------------------------------------ output
     def output(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
@@ -350,13 +406,18 @@ class SlidingClearanceJoint(Interaction):
 
     def get_state(self) -> dict[str, Any]:
         return {"elem": self._elem.tolist(), "xi": self._xi.tolist(),
-                "approach": [[k, j, val] for (k, j), val in self._approach.items()]}
+                "approach": [[int(k), int(j), float(self._approach[k, j])]
+                             for k, j in zip(*np.nonzero(self._active), strict=True)]}
 
     def set_state(self, state: dict[str, Any]) -> None:
         self._elem[:] = state["elem"]
         self._xi[:] = state["xi"]
-        self._approach = {(int(k), int(j)): float(val) for k, j, val in state["approach"]}
-        self._active = set(self._approach)
+        self._approach[:] = 0.0
+        self._active[:] = False
+        for k, j, val in state["approach"]:
+            if int(j) < self._approach.shape[1]:
+                self._approach[int(k), int(j)] = float(val)
+                self._active[int(k), int(j)] = True
 
     def __repr__(self) -> str:
         return (f"SlidingClearanceJoint({self.name!r}, beam={self.beam.name!r}, "

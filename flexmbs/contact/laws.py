@@ -6,6 +6,11 @@ Every law is a frozen keyword-only dataclass implementing :class:`ForceLaw`:
 caller at contact onset. ``f = 0`` for ``δ ≤ 0`` and ``f`` is clamped at 0 when damping would
 pull (then both derivatives are 0). ``LAWS`` maps scenario names to classes; :func:`get_law`
 builds one by name with errors naming the unknown law or the missing/invalid parameter.
+
+Every law is one special case of ``f = Kδⁿ(1 + χ δ̇/v₀) + c_d δ̇`` with ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``;
+:meth:`parameters` gives ``[K, n, χ, c_d, v_min]`` and :func:`law_force` (numba) evaluates it,
+for the Python API and the compiled integrator alike. :func:`coulomb_force` is the numba kernel of
+:class:`RegularizedCoulomb`.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from .._jit import njit
 from ..errors import ModelError
 
 __all__ = [
@@ -28,7 +34,50 @@ __all__ = [
     "RegularizedCoulomb",
     "LAWS",
     "get_law",
+    "law_force",
+    "coulomb_force",
 ]
+
+
+@njit
+def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
+    """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d δ̇`` (FORMULATION II §5), ``law`` =
+    ``[K, n, χ, c_d, v_min]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0 for ``δ ≤ 0`` and clamped at 0."""
+    if delta <= 0.0:
+        return 0.0, 0.0, 0.0
+    K, n, chi, c_d = law[0], law[1], law[2], law[3]
+    if n == 1.0:
+        fe = K * delta
+        ke = K
+    else:
+        fe = K * delta**n
+        ke = n * fe / delta
+    if chi != 0.0:
+        v0 = max(abs(approach_velocity), law[4])
+        fac = 1.0 + chi * delta_dot / v0
+        f = fe * fac + c_d * delta_dot
+        kt = ke * fac
+        ct = fe * chi / v0 + c_d
+    else:
+        f = fe + c_d * delta_dot
+        kt = ke
+        ct = c_d
+    if f <= 0.0:
+        return 0.0, 0.0, 0.0
+    return f, kt, ct
+
+
+@njit
+def coulomb_force(mu, eps_v, v_t, f_n, F, dF_dv, g):  # noqa: ANN001, ANN201
+    """Regularised Coulomb ``F = −μ f_n v_t/√(|v_t|² + ε²)`` into ``F`` (3,), ``dF_dv`` (3,3) and
+    ``g = ∂F/∂f_n`` (3,) (FORMULATION II §5)."""
+    s = math.sqrt(v_t[0] * v_t[0] + v_t[1] * v_t[1] + v_t[2] * v_t[2] + eps_v * eps_v)
+    c = -mu * f_n
+    for i in range(3):
+        g[i] = -mu * v_t[i] / s
+        F[i] = f_n * g[i]
+        for j in range(3):
+            dF_dv[i, j] = c * ((1.0 if i == j else 0.0) / s - v_t[i] * v_t[j] / s**3)
 
 
 @runtime_checkable
@@ -40,20 +89,23 @@ class ForceLaw(Protocol):
         """``(f, ∂f/∂δ, ∂f/∂δ̇)``; f ≥ 0, f = 0 for δ ≤ 0."""
         ...
 
+    def parameters(self) -> np.ndarray:
+        """``[K, n, χ, c_d, v_min]`` of the common form evaluated by :func:`law_force`."""
+        ...
+
 
 def _positive(cls: str, name: str, value: object, *, allow_zero: bool = False) -> None:
     ok = isinstance(value, (int, float, np.floating)) and not isinstance(value, bool) \
         and math.isfinite(float(value)) and (float(value) >= 0.0 if allow_zero else float(value) > 0.0)
     if not ok:
-        rel = ">= 0" if allow_zero else "> 0"
-        raise ModelError(f"{cls}: {name} must be a finite number {rel} (got {value!r})")
+        need = ">= 0" if allow_zero else "> 0"
+        raise ModelError(f"{cls}: {name} must be a finite number {need} (got {value!r})")
 
 
 def _exponent(cls: str, value: object) -> None:
     _positive(cls, "exponent", value)
     if float(value) < 1.0:  # type: ignore[arg-type]
-        raise ModelError(f"{cls}: exponent must be >= 1 (a finite contact stiffness at δ → 0) "
-                         f"(got {value!r})")
+        raise ModelError(f"{cls}: exponent must be >= 1 for a stiffening contact (got {value!r})")
 
 
 def _restitution(cls: str, value: object) -> None:
@@ -62,8 +114,20 @@ def _restitution(cls: str, value: object) -> None:
         raise ModelError(f"{cls}: restitution must be in (0, 1] (got {value!r})")
 
 
+class _CommonForm:
+    """``force`` through the compiled :func:`law_force` of :meth:`parameters`."""
+
+    def parameters(self) -> np.ndarray:  # pragma: no cover - every law overrides it
+        raise NotImplementedError
+
+    def force(self, delta: float, delta_dot: float, approach_velocity: float = 0.0
+              ) -> tuple[float, float, float]:
+        return law_force(self.parameters(), float(delta), float(delta_dot),
+                         float(approach_velocity))
+
+
 @dataclass(frozen=True, kw_only=True)
-class LinearPenalty:
+class LinearPenalty(_CommonForm):
     """Linear penalty + viscous damping ``f = kδ + c_d δ̇`` (FORMULATION II §5, Exudyn's choice)."""
 
     stiffness: float
@@ -73,18 +137,12 @@ class LinearPenalty:
         _positive("LinearPenalty", "stiffness", self.stiffness)
         _positive("LinearPenalty", "damping", self.damping, allow_zero=True)
 
-    def force(self, delta: float, delta_dot: float, approach_velocity: float = 0.0
-              ) -> tuple[float, float, float]:
-        if delta <= 0.0:
-            return 0.0, 0.0, 0.0
-        f = self.stiffness * delta + self.damping * delta_dot
-        if f <= 0.0:
-            return 0.0, 0.0, 0.0
-        return f, float(self.stiffness), float(self.damping)
+    def parameters(self) -> np.ndarray:
+        return np.array([self.stiffness, 1.0, 0.0, self.damping, 0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
-class Hertz:
+class Hertz(_CommonForm):
     """Hertz-type ``f = Kδⁿ`` (n = 3/2 point contact, ≈ 1–1.1 line-like; FORMULATION II §5)."""
 
     stiffness: float
@@ -94,31 +152,12 @@ class Hertz:
         _positive("Hertz", "stiffness", self.stiffness)
         _exponent("Hertz", self.exponent)
 
-    def force(self, delta: float, delta_dot: float, approach_velocity: float = 0.0
-              ) -> tuple[float, float, float]:
-        if delta <= 0.0:
-            return 0.0, 0.0, 0.0
-        n = float(self.exponent)
-        fe = self.stiffness * delta**n
-        return fe, n * fe / delta, 0.0
-
-
-def _dissipative(K: float, n: float, chi: float, delta: float, delta_dot: float,
-                 approach_velocity: float, v_min: float) -> tuple[float, float, float]:
-    """``f = Kδⁿ [1 + χ δ̇/δ̇⁽⁻⁾]`` with ``|δ̇⁽⁻⁾|`` floored at ``v_min``, clamped at 0."""
-    if delta <= 0.0:
-        return 0.0, 0.0, 0.0
-    v0 = max(abs(approach_velocity), v_min)
-    fe = K * delta**n
-    fac = 1.0 + chi * delta_dot / v0
-    f = fe * fac
-    if f <= 0.0:
-        return 0.0, 0.0, 0.0
-    return f, n * fe / delta * fac, fe * chi / v0
+    def parameters(self) -> np.ndarray:
+        return np.array([self.stiffness, self.exponent, 0.0, 0.0, 0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
-class HuntCrossley:
+class HuntCrossley(_CommonForm):
     """Hunt–Crossley ``f = Kδⁿ[1 + 3(1−e)/2 · δ̇/δ̇⁽⁻⁾]`` (FORMULATION II §5).
 
     ``min_approach_velocity`` guards ``δ̇⁽⁻⁾ → 0`` (resting contact): the approach velocity used is
@@ -136,15 +175,14 @@ class HuntCrossley:
         _restitution("HuntCrossley", self.restitution)
         _positive("HuntCrossley", "min_approach_velocity", self.min_approach_velocity)
 
-    def force(self, delta: float, delta_dot: float, approach_velocity: float = 0.0
-              ) -> tuple[float, float, float]:
+    def parameters(self) -> np.ndarray:
         chi = 1.5 * (1.0 - self.restitution)
-        return _dissipative(self.stiffness, float(self.exponent), chi, delta, delta_dot,
-                            approach_velocity, self.min_approach_velocity)
+        return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity],
+                        dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
-class LankaraniNikravesh:
+class LankaraniNikravesh(_CommonForm):
     """Lankarani–Nikravesh (1990) ``f = Kδⁿ[1 + 3(1−e²)/4 · δ̇/δ̇⁽⁻⁾]`` (FORMULATION II §5);
     same approach-velocity guard as :class:`HuntCrossley`."""
 
@@ -159,11 +197,10 @@ class LankaraniNikravesh:
         _restitution("LankaraniNikravesh", self.restitution)
         _positive("LankaraniNikravesh", "min_approach_velocity", self.min_approach_velocity)
 
-    def force(self, delta: float, delta_dot: float, approach_velocity: float = 0.0
-              ) -> tuple[float, float, float]:
+    def parameters(self) -> np.ndarray:
         chi = 0.75 * (1.0 - self.restitution**2)
-        return _dissipative(self.stiffness, float(self.exponent), chi, delta, delta_dot,
-                            approach_velocity, self.min_approach_velocity)
+        return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity],
+                        dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -180,11 +217,9 @@ class RegularizedCoulomb:
 
     def force(self, v_t: np.ndarray, f_n: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(F_t (3,), ∂F_t/∂v_t (3,3), ∂F_t/∂f_n (3,))``."""
-        v = np.asarray(v_t, dtype=float)
-        s = math.sqrt(float(v @ v) + self.eps_v**2)
-        g = -self.mu * v / s
-        F = f_n * g
-        dF_dv = -self.mu * f_n * (np.eye(3) / s - np.outer(v, v) / s**3)
+        F, dF_dv, g = np.empty(3), np.empty((3, 3)), np.empty(3)
+        coulomb_force(float(self.mu), float(self.eps_v), np.ascontiguousarray(v_t, dtype=float),
+                      float(f_n), F, dF_dv, g)
         return F, dF_dv, g
 
 

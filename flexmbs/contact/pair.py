@@ -23,9 +23,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
-from .laws import ForceLaw, RegularizedCoulomb
+from .laws import ForceLaw, RegularizedCoulomb, coulomb_force, law_force
 
-__all__ = ["ContactResult", "contact_point", "contact_geometry"]
+__all__ = ["ContactResult", "contact_point", "contact_geometry", "contact_force"]
 
 
 class ContactResult(NamedTuple):
@@ -175,6 +175,66 @@ def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want
     return xi, g, gdot, n, P, Q, B, W, H
 
 
+@njit
+def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu, eps_v,  # noqa: ANN001, ANN201
+                  approach_velocity, want_tangent, Qc, K, C, geo):
+    """Penalty force of one contact point and its Gauss–Newton tangent (FORMULATION II §4–§5).
+
+    ``law`` = :meth:`ForceLaw.parameters`; friction is regularised Coulomb when ``mu > 0``.
+    Writes ``Qc`` (19,) = ``Wᵀ F_H`` (external generalized force on [r_H, p, e_k]), with
+    ``want_tangent`` ``K = k_t BᵀB (+ k_t Wᵀ(∂F_t/∂f_N)Bᵀ)`` and ``C = c_t BᵀB (+ friction)``
+    (19, 19), and ``geo`` (12,) = [n, P, Q, F_H]. Returns ``(g_N, ġ_N, f_N, ξ_P)``.
+    """
+    xi, g, gdot, n, P, Q, B, W, _ = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length,
+                                                     xi0, r_b, False)
+    f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
+    F_H = np.empty(3)
+    for c in range(3):
+        F_H[c] = f * n[c]
+    friction = mu > 0.0 and f > 0.0
+    if friction:
+        vrel = np.zeros(3)
+        for c in range(3):
+            acc = 0.0
+            for j in range(7):
+                acc += W[c, j] * v_body[j]
+            for j in range(12):
+                acc += W[c, 7 + j] * v_elem[j]
+            vrel[c] = acc
+        vn = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
+        vt = vrel - vn * n
+        Ft = np.empty(3)
+        dF_dv = np.empty((3, 3))
+        dF_dfn = np.empty(3)
+        coulomb_force(mu, eps_v, vt, f, Ft, dF_dv, dF_dfn)
+        for c in range(3):
+            F_H[c] += Ft[c]
+    for j in range(19):
+        Qc[j] = W[0, j] * F_H[0] + W[1, j] * F_H[1] + W[2, j] * F_H[2]
+    for c in range(3):
+        geo[c] = n[c]
+        geo[3 + c] = P[c]
+        geo[6 + c] = Q[c]
+        geo[9 + c] = F_H[c]
+    if want_tangent:
+        for i in range(19):
+            for j in range(19):
+                bb = B[i] * B[j]
+                K[i, j] = kt * bb
+                C[i, j] = ct * bb
+        if friction:
+            # C += −Wᵀ (∂F_t/∂v_t) P_n W + c_t (Wᵀ ∂F_t/∂f_N) Bᵀ;  K += k_t (Wᵀ ∂F_t/∂f_N) Bᵀ
+            M = dF_dv - np.outer(dF_dv @ n, n)          # (∂F_t/∂v_t) P_n
+            MW = M @ W
+            WtdF = W.T @ dF_dfn
+            for i in range(19):
+                for j in range(19):
+                    C[i, j] += ct * WtdF[i] * B[j] - (W[0, i] * MW[0, j] + W[1, i] * MW[1, j]
+                                                      + W[2, i] * MW[2, j])
+                    K[i, j] += kt * WtdF[i] * B[j]
+    return g, gdot, f, xi
+
+
 def _friction_force(q_c: np.ndarray, v_c: np.ndarray, u_Q: np.ndarray, length: float, xi: float,
                     r_b: float, law: ForceLaw, friction: RegularizedCoulomb,
                     approach_velocity: float) -> np.ndarray:
@@ -209,26 +269,23 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     u_Q = np.ascontiguousarray(u_Q, dtype=float)
     q_elem = np.ascontiguousarray(q_elem, dtype=float)
     v_elem = np.ascontiguousarray(v_elem, dtype=float)
-    xi_p, g, gdot, n, P, Q, B, W, H = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem,
-                                                       float(length), float(xi), float(r_b),
-                                                       bool(consistent))
-    f, kt, ct = law.force(-g, -gdot, approach_velocity)
-    F_H = f * n
-    K = kt * np.outer(B, B)
-    C = ct * np.outer(B, B)
+    mu, eps_v = (float(friction.mu), float(friction.eps_v)) if friction is not None else (0.0, 1.0)
+    Qc, K, C, geo = np.empty(19), np.empty((19, 19)), np.empty((19, 19)), np.empty(12)
+    g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
+                                     float(r_b), law.parameters(), mu, eps_v,
+                                     float(approach_velocity), True, Qc, K, C, geo)
+    n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
     if consistent:
+        # exact geometric and damping terms of the normal force (§5), and the friction
+        # stiffness by central differences in place of its Gauss-Newton part
+        _, _, _, _, _, _, B, W, H = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem,
+                                                     float(length), float(xi), float(r_b), True)
+        _, kt, ct = law.force(-g, -gdot, approach_velocity)
         v_c = np.concatenate([v_body, v_elem])
         K += ct * np.outer(B, H @ v_c) - f * H
-    if friction is not None and f > 0.0:
-        v_c = np.concatenate([v_body, v_elem])
-        vrel = W @ v_c
-        Pn = np.eye(3) - np.outer(n, n)
-        vt = Pn @ vrel
-        Ft, dF_dv, dF_dfn = friction.force(vt, f)
-        F_H = F_H + Ft
-        WtdF = W.T @ dF_dfn
-        C += -W.T @ (dF_dv @ Pn @ W) + ct * np.outer(WtdF, B)
-        if consistent:
+        if friction is not None and f > 0.0:
+            dF_dfn = (F_H - f * n) / f                    # = F_t / f_N
+            K -= kt * np.outer(W.T @ dF_dfn, B)          # drop the Gauss-Newton friction part
             q_c = np.concatenate([q_body, q_elem])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
             for j in range(19):
@@ -241,9 +298,6 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                       - _friction_force(qm, v_c, u_Q, length, xi_p, r_b, law, friction,
                                         approach_velocity)) / (2.0 * hstep)
                 K[:, j] -= dQ
-        else:
-            K += kt * np.outer(WtdF, B)
-    Qc = W.T @ F_H
     return ContactResult(gap=float(g), normal=n, P=P, Q=Q, f_n=float(f), force_on_hole=F_H,
                          Q_body=Qc[:7], Q_elem=Qc[7:], K=K, C=C, xi=float(xi_p),
                          gap_rate=float(gdot))

@@ -205,13 +205,116 @@ def _circle_f(phi, a, b, da, db):  # noqa: ANN001, ANN202
 
 
 @njit
+def _cubic_largest_root(b, c, d):  # noqa: ANN001, ANN202
+    """Largest real root of ``m³ + b m² + c m + d`` (Cardano / trigonometric form), polished by
+    two Newton steps."""
+    p = c - b * b / 3.0
+    q = 2.0 * b * b * b / 27.0 - b * c / 3.0 + d
+    disc = 0.25 * q * q + p * p * p / 27.0
+    if disc > 0.0:
+        sq = math.sqrt(disc)
+        u = -0.5 * q + sq
+        w = -0.5 * q - sq
+        m = math.copysign(abs(u) ** (1.0 / 3.0), u) + math.copysign(abs(w) ** (1.0 / 3.0), w)
+    elif p < 0.0:
+        r = 2.0 * math.sqrt(-p / 3.0)
+        arg = 3.0 * q / (p * r)
+        arg = max(-1.0, min(1.0, arg))
+        m = r * math.cos(math.acos(arg) / 3.0)   # the largest of the three real roots
+    else:
+        m = 0.0
+    m -= b / 3.0
+    for _ in range(2):
+        f = ((m + b) * m + c) * m + d
+        df = (3.0 * m + 2.0 * b) * m + c
+        if df == 0.0:
+            break
+        m -= f / df
+    return m
+
+
+@njit
+def _quadratic_seeds(s1, s0, out, n):  # noqa: ANN001, ANN202
+    """Real roots of ``y² + s1 y + s0``; complex ones with ``|imag| ≤ 1e-6(1 + |real|)`` count
+    as real (near-double roots, polished by the caller)."""
+    disc = s1 * s1 - 4.0 * s0
+    if disc >= 0.0:
+        sq = math.sqrt(disc)
+        # stable pair: y1 = (-s1 - sign(s1) sq)/2, y2 = s0 / y1
+        y1 = -0.5 * (s1 + math.copysign(sq, s1))
+        out[n] = y1
+        out[n + 1] = s0 / y1 if y1 != 0.0 else -s1 - y1
+        return n + 2
+    re = -0.5 * s1
+    if 0.5 * math.sqrt(-disc) <= 1e-6 * (1.0 + abs(re)):
+        out[n] = re
+        return n + 1
+    return n
+
+
+@njit
+def quartic_real_roots(c4, c3, c2, c1, c0, out):  # noqa: ANN001, ANN201
+    """Real (and nearly real) roots of ``c4 t⁴ + c3 t³ + c2 t² + c1 t + c0`` into ``out`` (≥ 4),
+    returns their number. Ferrari's factorisation through the largest root of the resolvent
+    cubic; closed form, a few hundred flops (``np.roots`` costs an eigenvalue problem).
+    Degree drops when leading coefficients are ≤ 1e-300, as in ``np.roots``."""
+    if abs(c4) <= 1e-300:
+        if abs(c3) <= 1e-300:
+            if abs(c2) <= 1e-300:
+                if abs(c1) <= 1e-300:
+                    return 0
+                out[0] = -c0 / c1
+                return 1
+            return _quadratic_seeds(c1 / c2, c0 / c2, out, 0)
+        # cubic: one real root by the resolvent routine, then deflate
+        b, c, d = c2 / c3, c1 / c3, c0 / c3
+        t = _cubic_largest_root(b, c, d)
+        out[0] = t
+        return _quadratic_seeds(b + t, c + t * (b + t), out, 1)
+    a, b, c, d = c3 / c4, c2 / c4, c1 / c4, c0 / c4
+    sh = 0.25 * a
+    a2 = a * a
+    p = b - 0.375 * a2
+    q = c - 0.5 * a * b + 0.125 * a2 * a
+    r = d - 0.25 * a * c + a2 * b / 16.0 - 3.0 * a2 * a2 / 256.0
+    scale = max(abs(p), math.sqrt(abs(r)), abs(q) ** (2.0 / 3.0), 1e-300)
+    n = 0
+    if abs(q) <= 1e-14 * scale ** 1.5:
+        # biquadratic y⁴ + p y² + r: z = y²
+        z = np.empty(2)
+        nz = _quadratic_seeds(p, r, z, 0)
+        for i in range(nz):
+            if z[i] >= 0.0:
+                y = math.sqrt(z[i])
+                out[n] = y - sh
+                out[n + 1] = -y - sh
+                n += 2
+            elif -z[i] <= 1e-12 * scale:
+                out[n] = -sh
+                n += 1
+        return n
+    m = _cubic_largest_root(p, 0.25 * p * p - r, -0.125 * q * q)
+    if m <= 0.0:
+        m = 1e-300
+    w = math.sqrt(2.0 * m)
+    tmp = np.empty(4)
+    k = _quadratic_seeds(-w, 0.5 * p + m + q / (2.0 * w), tmp, 0)
+    k = _quadratic_seeds(w, 0.5 * p + m - q / (2.0 * w), tmp, k)
+    for i in range(k):
+        out[i] = tmp[i] - sh
+    return k
+
+
+@njit
 def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (FORMULATION II §3).
 
-    Closed form: quartic in ``t = tan(φ/2)``,
-    ``b d_b t⁴ + 2(a d_a + a² − b²)t³ + 2(a d_a − a² + b²)t − b d_b = 0``, roots by ``np.roots``
-    (nearly-real ones accepted), ``φ = π`` tried when ``|b d_b|`` is tiny, 3 Newton polishing steps
-    on ``f = D'``, residual check, duplicates removed. Returns ``(phi (k,), kind (k,))`` with
+    Closed form: with ``f = D′ = (b² − a²) sin φ cos φ + a d_a sin φ − b d_b cos φ`` and
+    ``t = tan((φ − φ0)/2)``, ``f (1 + t²)²`` is a quartic in t (for φ0 = 0:
+    ``b d_b t⁴ + 2(a d_a + a² − b²)t³ + 2(a d_a − a² + b²)t − b d_b``); φ0 ∈ {kπ/4} maximises
+    the leading coefficient ``f(φ0 + π)`` (no root near t = ∞), real roots by
+    :func:`quartic_real_roots` (nearly-real ones accepted), 4 Newton polishing steps on f,
+    residual check, duplicates removed. Returns ``(phi (k,), kind (k,))`` with
     ``kind = +1`` for maxima (``f' < 0``), ``−1`` for minima. Degenerate a ≈ b centred (f ≡ 0):
     no points if ``a ≤ R``, else the four axis points as maxima (uniform penetration, net force 0).
     """
@@ -224,22 +327,30 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
             return (np.array([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi]),
                     np.array([1, 1, 1, 1], dtype=np.int64))
         return np.empty(0), np.empty(0, dtype=np.int64)
-    coef = np.array([b * db, 2.0 * (a * da + a * a - b * b), 0.0,
-                     2.0 * (a * da - a * a + b * b), -b * db])
-    cmax = np.max(np.abs(coef))
-    k0 = 0
-    while k0 < 4 and abs(coef[k0]) <= 1e-300:
-        k0 += 1
+    # t = tan((φ − φ0)/2) with φ0 chosen so that f(φ0 + π) (the leading coefficient) is far
+    # from 0: no root near t = ∞, a well-conditioned quartic
+    al, be, ga = b * b - a * a, a * da, -b * db
+    phi0 = 0.0
+    best = -1.0
+    for k in range(8):
+        f_inf, _ = _circle_f(k * 0.25 * np.pi + np.pi, a, b, da, db)
+        if abs(f_inf) > best:
+            best = abs(f_inf)
+            phi0 = k * 0.25 * np.pi
+    s0 = math.sin(phi0)
+    c0 = math.cos(phi0)
+    u0 = be * s0 + ga * c0
+    u1 = 2.0 * (be * c0 - ga * s0)
+    asc = al * s0 * c0
+    acs = 2.0 * al * (c0 * c0 - s0 * s0)
+    c4, c3, c2, c1, cc0 = asc - u0, u1 - acs, -6.0 * asc, acs + u1, asc + u0
+    cmax = max(abs(c4), abs(c3), abs(c2), abs(c1), abs(cc0))
     seeds = np.empty(5)
-    ns = 0
-    if k0 < 4:
-        roots = np.roots(coef[k0:].astype(np.complex128))
-        for t in roots:
-            if abs(t.imag) <= 1e-6 * (1.0 + abs(t)):
-                seeds[ns] = 2.0 * math.atan(t.real)
-                ns += 1
-    if abs(b * db) <= 1e-8 * cmax:
-        seeds[ns] = np.pi
+    ns = quartic_real_roots(c4, c3, c2, c1, cc0, seeds)
+    for i in range(ns):
+        seeds[i] = phi0 + 2.0 * math.atan(seeds[i])
+    if abs(c4) <= 1e-8 * cmax:
+        seeds[ns] = phi0 + np.pi
         ns += 1
     phis = np.empty(ns)
     kinds = np.empty(ns, dtype=np.int64)
