@@ -1,11 +1,16 @@
 """Joints between rigid bodies, beam nodes and ground (Haug 1989 "dot-1" form; exact Hessians).
 
-Every equation is either a constant projection ``Pᵀv`` of a vector v(q) or a dot product
-``u(q)·w(q)``, where u, v, w are body points ``r + A(p)s′``, body directions ``A(p)f′``, beam
-node positions/slopes or constants. With the homogeneous rotation matrix ``(A(p)s)_k = pᵀT_k(s)p``
-(:func:`flexmbs.elements.rigid_body.point_tensor`) each such vector is a polynomial of degree ≤ 2,
-so ``∂v/∂p = 2T(s)p`` and ``∂²v_k/∂p² = 2T_k(s)`` exactly, and the Hessian of a dot product is
-``Σ_k (w_k ∂²u_k + u_k ∂²w_k) + u_qᵀw_q + w_qᵀu_q`` (the last terms give the p_a–p_b blocks).
+Every equation is ``LIN: Φ = P·(u1 − u2)`` (a constant projection) or ``DOT: Φ = (u1 − u2)·(w1 − w2)``
+of vectors u, w of five kinds: constants (ground point/direction), body points ``r + A(p)s′``,
+body directions ``A(p)f′``, beam node positions ``r`` and slopes ``r′``. With the homogeneous
+rotation matrix ``(A(p)s)_k = pᵀT_k(s)p`` (:func:`flexmbs.elements.rigid_body.point_tensor`) each
+vector is a polynomial of degree ≤ 2, so ``∂v/∂p = 2T(s)p`` and ``∂²v_k/∂p² = 2T_k(s)`` exactly,
+and the Hessian of ``a·b`` is ``Σ_k (b_k ∂²a_k + a_k ∂²b_k) + a_qᵀb_q + b_qᵀa_q``.
+
+The equations of a joint are a declarative :class:`TermTable` (built once in ``__init__``),
+evaluated by the numba kernels :func:`term_values` and :func:`term_hessian`; the Python
+``evaluate``/``hessian_lambda`` and a compiled integrator (on a :func:`concatenate_tables` of
+all joints) share these kernels.
 
 Local coordinate order (``q_local = q[c.coordinates()]``): attachment a first, then b; a rigid
 body contributes its 7 dofs ``[r, p]``, a beam node only the dofs the equations read (``r`` for
@@ -15,9 +20,11 @@ translation, ``[r, r′]`` for :class:`BeamNodeRigid`), ground nothing.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
+from .._jit import njit
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import ModelError
 from .base import Attachment, Constraint
@@ -32,166 +39,305 @@ __all__ = [
     "prismatic",
     "fixed",
     "perpendicular_pair",
+    "TermTable",
+    "term_values",
+    "term_hessian",
+    "concatenate_tables",
+    "CONST",
+    "BODY_POINT",
+    "BODY_DIR",
+    "NODE_POS",
+    "NODE_SLOPE",
+    "LIN",
+    "DOT",
 ]
 
 _AXES = ("x", "y", "z")
 # rotation about joint axis i is locked by (A_a f_a[:, i1]) · (A_b f_b[:, i2]) = 0 (Haug dot-1)
 _ROT_PAIRS = {0: (1, 2), 1: (2, 0), 2: (0, 1)}
 
+# vector kinds (TermTable.vec_kind) and equation kinds (TermTable.eq_kind)
+CONST, BODY_POINT, BODY_DIR, NODE_POS, NODE_SLOPE = 0, 1, 2, 3, 4
+LIN, DOT = 0, 1
+
 
 # ---------------------------------------------------------------------------------------------
-# vector quantities with exact first and second derivatives
-class _Vec:
-    """A 3-vector v(q_local): value, Jacobian (3, n) and Hessian blocks.
+# declarative equations
+class TermTable(NamedTuple):
+    """Equations ``LIN: Φ = P·(u1 − u2)`` / ``DOT: Φ = (u1 − u2)·(w1 − w2)`` (Haug 1989 dot-1, point).
 
-    ``blocks`` is a list of ``(offset, H)`` with H (3,4,4): ``∂²v_k/∂q²`` has ``H_k`` at
-    ``[offset:offset+4, offset:offset+4]`` (the Euler parameters of one body), zero elsewhere.
+    A vector row v is ``c`` (CONST), ``r + A(p)s′`` (BODY_POINT, ``s′ = c``, ``[r, p] =
+    q_local[o:o+7]``), ``A(p)f′`` (BODY_DIR, ``f′ = c``), ``q_local[o:o+3]`` (NODE_POS) or
+    ``q_local[o+3:o+6]`` (NODE_SLOPE), with ``o = vec_off[v]``. ``eq_vec[i] = (u1, u2, w1, w2)``
+    index rows of the same table, −1 = zero vector (w unused by LIN).
     """
 
-    __slots__ = ("val", "jac", "blocks")
-
-    def __init__(self, val: np.ndarray, jac: np.ndarray,
-                 blocks: list[tuple[int, np.ndarray]]) -> None:
-        self.val = val
-        self.jac = jac
-        self.blocks = blocks
-
-    def __sub__(self, other: _Vec) -> _Vec:
-        return _Vec(self.val - other.val, self.jac - other.jac,
-                    self.blocks + [(o, -H) for o, H in other.blocks])
+    vec_kind: np.ndarray   # int64 (nv,)
+    vec_off: np.ndarray    # int64 (nv,): local offset of the attachment's first coordinate
+    vec_c: np.ndarray      # float64 (nv, 3): c, s′ or f′; zeros for beam node kinds
+    vec_T: np.ndarray      # float64 (nv, 3, 4, 4): point_tensor(vec_c) for body kinds, else 0
+    eq_kind: np.ndarray    # int64 (ne,): LIN or DOT
+    eq_vec: np.ndarray     # int64 (ne, 4): (u1, u2, w1, w2), −1 = absent
+    eq_P: np.ndarray       # float64 (ne, 3): projection row (LIN), zeros (DOT)
 
 
-def _add_blocks(H: np.ndarray, coeff: np.ndarray, v: _Vec) -> None:
-    """H += Σ_k coeff_k ∂²v_k/∂q²."""
-    for off, T in v.blocks:
-        H[off:off + 4, off:off + 4] += np.einsum("k,kij->ij", coeff, T)
+def _empty_table() -> TermTable:
+    i, f = np.int64, np.float64
+    return TermTable(np.zeros(0, i), np.zeros(0, i), np.zeros((0, 3), f), np.zeros((0, 3, 4, 4), f),
+                     np.zeros(0, i), np.zeros((0, 4), i), np.zeros((0, 3), f))
 
 
-class _Side:
-    """One attachment placed at ``offset`` in the local coordinates."""
+class _TableBuilder:
+    """Collects (deduplicated) vector rows and equations into a :class:`TermTable`."""
 
-    def __init__(self, att: Attachment, offset: int, n_used: int) -> None:
-        self.att = att
-        self.kind = att.kind
-        self.offset = offset
-        self.n_used = n_used
-        self.T_point = point_tensor(att.point) if att.kind == "rigid_body" else None
-        self._T_dir: dict[int, np.ndarray] = {}
+    def __init__(self) -> None:
+        self._vecs: dict[tuple[int, int, bytes], int] = {}
+        self._vec_rows: list[tuple[int, int, np.ndarray]] = []
+        self._eqs: list[tuple[int, tuple[int, int, int, int], np.ndarray]] = []
 
-    def used_dofs(self) -> np.ndarray:
-        return self.att.dofs[: self.n_used]
+    def vec(self, kind: int, off: int, c: np.ndarray | None = None) -> int:
+        """Row index of vector (kind, off, c), added if new."""
+        c = np.zeros(3) if c is None else np.array(c, dtype=np.float64).reshape(3)
+        key = (kind, off, c.tobytes())
+        if key not in self._vecs:
+            self._vecs[key] = len(self._vec_rows)
+            self._vec_rows.append((kind, off, c))
+        return self._vecs[key]
 
-    def _rigid(self, q: np.ndarray, n: int, T: np.ndarray, with_r: bool) -> _Vec:
-        o = self.offset
-        p = q[o + 3:o + 7]
-        Tp = T @ p                                   # (3,4)
-        val = Tp @ p
-        jac = np.zeros((3, n))
-        jac[:, o + 3:o + 7] = 2.0 * Tp
-        if with_r:
-            val = val + q[o:o + 3]
-            jac[0, o] = jac[1, o + 1] = jac[2, o + 2] = 1.0
-        return _Vec(val, jac, [(o + 3, 2.0 * T)])
+    def point(self, att: Attachment, off: int) -> int:
+        """Global position of the attachment point (ground point, body point or node)."""
+        if att.kind == "ground":
+            return self.vec(CONST, 0, att.point)
+        if att.kind == "beam_node":
+            return self.vec(NODE_POS, off)
+        return self.vec(BODY_POINT, off, att.point)
 
-    def point(self, q: np.ndarray, n: int) -> _Vec:
-        """Global position of the attachment point."""
-        o = self.offset
-        if self.kind == "ground":
-            return _Vec(np.array(self.att.point), np.zeros((3, n)), [])
-        if self.kind == "beam_node":
-            jac = np.zeros((3, n))
-            jac[0, o] = jac[1, o + 1] = jac[2, o + 2] = 1.0
-            return _Vec(q[o:o + 3].copy(), jac, [])
-        assert self.T_point is not None
-        return self._rigid(q, n, self.T_point, with_r=True)
-
-    def direction(self, q: np.ndarray, n: int, f: np.ndarray, key: int) -> _Vec:
-        """Global components of the body vector f (rigid) or the global vector f (ground)."""
-        if self.kind == "ground":
-            return _Vec(np.array(f, dtype=float), np.zeros((3, n)), [])
-        if self.kind != "rigid_body":
+    def direction(self, att: Attachment, off: int, f: np.ndarray) -> int:
+        """Global components of body vector f (rigid body) or of the global vector f (ground)."""
+        if att.kind == "ground":
+            return self.vec(CONST, 0, f)
+        if att.kind != "rigid_body":
             raise ModelError("a beam node has no frame")  # guarded at construction
-        T = self._T_dir.get(key)
-        if T is None:
-            T = self._T_dir[key] = point_tensor(f)
-        return self._rigid(q, n, T, with_r=False)
+        return self.vec(BODY_DIR, off, f)
 
-    def axis(self, q: np.ndarray, n: int, k: int) -> _Vec:
-        return self.direction(q, n, self.att.frame[:, k], key=k)
+    def lin(self, P: np.ndarray, u1: int, u2: int) -> None:
+        """One LIN equation per row of P."""
+        for row in np.atleast_2d(np.asarray(P, dtype=np.float64)):
+            self._eqs.append((LIN, (u1, u2, -1, -1), row.copy()))
 
-    def slope(self, q: np.ndarray, n: int) -> _Vec:
-        """Beam node slope r′ (needs ``n_used == 6``)."""
-        o = self.offset
-        jac = np.zeros((3, n))
-        jac[0, o + 3] = jac[1, o + 4] = jac[2, o + 5] = 1.0
-        return _Vec(q[o + 3:o + 6].copy(), jac, [])
+    def dot(self, u1: int, u2: int, w1: int, w2: int) -> None:
+        self._eqs.append((DOT, (u1, u2, w1, w2), np.zeros(3)))
+
+    def build(self) -> TermTable:
+        t = _empty_table()
+        if self._vec_rows:
+            c = np.array([r[2] for r in self._vec_rows])
+            body = np.array([r[0] in (BODY_POINT, BODY_DIR) for r in self._vec_rows])
+            t = t._replace(vec_kind=np.array([r[0] for r in self._vec_rows], dtype=np.int64),
+                           vec_off=np.array([r[1] for r in self._vec_rows], dtype=np.int64),
+                           vec_c=c, vec_T=np.ascontiguousarray(point_tensor(c) * body[:, None, None, None]))
+        if self._eqs:
+            t = t._replace(eq_kind=np.array([e[0] for e in self._eqs], dtype=np.int64),
+                           eq_vec=np.array([e[1] for e in self._eqs], dtype=np.int64),
+                           eq_P=np.array([e[2] for e in self._eqs]))
+        return t
 
 
-def _n_used(att: Attachment, need_slope: bool = False) -> int:
-    if att.kind == "rigid_body":
-        return 7
-    if att.kind == "beam_node":
-        return 6 if need_slope else 3
-    return 0
+def concatenate_tables(tables: list[TermTable]) -> tuple[TermTable, np.ndarray]:
+    """One table of all equations and ``eq_ptr`` (equations of ``tables[k]`` = ``eq_ptr[k]:eq_ptr[k+1]``).
+
+    ``eq_vec`` is shifted to the concatenated vector rows; ``vec_off`` stays local to each
+    constraint's ``q_local``.
+    """
+    eq_ptr = np.zeros(len(tables) + 1, dtype=np.int64)
+    eq_ptr[1:] = np.cumsum([t.eq_kind.size for t in tables], dtype=np.int64)
+    if not tables:
+        return _empty_table(), eq_ptr
+    shift = np.cumsum([0] + [t.vec_kind.size for t in tables[:-1]], dtype=np.int64)
+    fields = {f: np.ascontiguousarray(np.concatenate([getattr(t, f) for t in tables]))
+              for f in TermTable._fields}
+    fields["eq_vec"] = np.ascontiguousarray(np.concatenate(
+        [np.where(t.eq_vec >= 0, t.eq_vec + s, -1) for t, s in zip(tables, shift, strict=True)]),
+        dtype=np.int64)
+    return TermTable(**fields), eq_ptr
 
 
-# A term is ("lin", P (m,3), v) -> P v  or  ("dot", u, w) -> u·w (one equation).
-_Term = tuple
+# ---------------------------------------------------------------------------------------------
+# kernels
+@njit
+def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarray,
+          col: np.ndarray, ncol: np.ndarray) -> None:
+    """Slots s = (u1, u2, w1, w2) of equation i: ``val[s] = v(q)``, ``∂v/∂q[:, col[s] + j] = G[s, :, j]``."""
+    for s in range(4):
+        v = table.eq_vec[i, s]
+        col[s] = 0
+        ncol[s] = 0
+        if v < 0:
+            for k in range(3):
+                val[s, k] = 0.0
+            continue
+        kind = table.vec_kind[v]
+        o = table.vec_off[v]
+        if kind == CONST:
+            for k in range(3):
+                val[s, k] = table.vec_c[v, k]
+        elif kind == NODE_POS or kind == NODE_SLOPE:
+            c0 = o if kind == NODE_POS else o + 3
+            col[s] = c0
+            ncol[s] = 3
+            for k in range(3):
+                val[s, k] = q[c0 + k]
+                for j in range(3):
+                    G[s, k, j] = 1.0 if j == k else 0.0
+        else:  # BODY_POINT r + A(p)s′ or BODY_DIR A(p)f′: (A c)_k = pᵀT_k p, ∂/∂p = 2T_k p
+            jp = 3 if kind == BODY_POINT else 0
+            col[s] = o + 3 - jp
+            ncol[s] = jp + 4
+            for k in range(3):
+                for j in range(jp):
+                    G[s, k, j] = 1.0 if j == k else 0.0
+                acc = q[o + k] if kind == BODY_POINT else 0.0
+                for a in range(4):
+                    ta = 0.0
+                    for b in range(4):
+                        ta += table.vec_T[v, k, a, b] * q[o + 3 + b]
+                    G[s, k, jp + a] = 2.0 * ta
+                    acc += ta * q[o + 3 + a]
+                val[s, k] = acc
+
+
+@njit
+def _weights(table: TermTable, i: int, val: np.ndarray, wt: np.ndarray) -> float:
+    """Φ_i, and wt with ``∂Φ_i/∂q = Σ_s wt[s]·∂v_s/∂q`` (LIN: ±P; DOT: ±(w1 − w2), ±(u1 − u2))."""
+    phi = 0.0
+    if table.eq_kind[i] == LIN:
+        for k in range(3):
+            P = table.eq_P[i, k]
+            phi += P * (val[0, k] - val[1, k])
+            wt[0, k] = P
+            wt[1, k] = -P
+            wt[2, k] = 0.0
+            wt[3, k] = 0.0
+    else:
+        for k in range(3):
+            a = val[0, k] - val[1, k]
+            b = val[2, k] - val[3, k]
+            phi += a * b
+            wt[0, k] = b
+            wt[1, k] = -b
+            wt[2, k] = a
+            wt[3, k] = -a
+    return phi
+
+
+@njit
+def term_values(table: TermTable, e0: int, e1: int, q_local: np.ndarray, phi: np.ndarray,
+                jac: np.ndarray) -> None:
+    """Haug 1989 dot-1/point constraints: ``phi[i−e0] = Φ_i``, ``jac[i−e0] = ∂Φ_i/∂q`` for e0 ≤ i < e1."""
+    val = np.empty((4, 3))
+    wt = np.empty((4, 3))
+    G = np.empty((4, 3, 7))
+    col = np.empty(4, dtype=np.int64)
+    ncol = np.empty(4, dtype=np.int64)
+    n = jac.shape[1]
+    for i in range(e0, e1):
+        r = i - e0
+        _load(table, i, q_local, val, G, col, ncol)
+        phi[r] = _weights(table, i, val, wt)
+        for j in range(n):
+            jac[r, j] = 0.0
+        for s in range(4):
+            for j in range(ncol[s]):
+                acc = 0.0
+                for k in range(3):
+                    acc += wt[s, k] * G[s, k, j]
+                jac[r, col[s] + j] += acc
+
+
+@njit
+def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: np.ndarray,
+                 H: np.ndarray) -> None:
+    """Haug 1989 dot-1/point constraints: ``H = Σ_i lam[i−e0] ∂²Φ_i/∂q²`` (exactly symmetric)."""
+    val = np.empty((4, 3))
+    wt = np.empty((4, 3))
+    G = np.empty((4, 3, 7))
+    col = np.empty(4, dtype=np.int64)
+    ncol = np.empty(4, dtype=np.int64)
+    n = H.shape[0]
+    for a in range(n):
+        for b in range(n):
+            H[a, b] = 0.0
+    for i in range(e0, e1):
+        li = lam[i - e0]
+        if li == 0.0:
+            continue
+        _load(table, i, q_local, val, G, col, ncol)
+        _weights(table, i, val, wt)
+        for s in range(4):  # Σ_k wt_k ∂²v_k/∂p² = 2 Σ_k wt_k T_k on the body's p block
+            v = table.eq_vec[i, s]
+            if v < 0 or (table.vec_kind[v] != BODY_POINT and table.vec_kind[v] != BODY_DIR):
+                continue
+            o = table.vec_off[v] + 3
+            for a in range(4):
+                for b in range(4):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += wt[s, k] * table.vec_T[v, k, a, b]
+                    H[o + a, o + b] += 2.0 * li * acc
+        if table.eq_kind[i] == DOT:  # u_qᵀw_q + w_qᵀu_q, u = u1 − u2, w = w1 − w2
+            for su in range(2):
+                for sw in range(2, 4):
+                    c = li if (su == 0) == (sw == 2) else -li
+                    for x in range(ncol[su]):
+                        for y in range(ncol[sw]):
+                            acc = 0.0
+                            for k in range(3):
+                                acc += G[su, k, x] * G[sw, k, y]
+                            acc *= c
+                            H[col[su] + x, col[sw] + y] += acc
+                            H[col[sw] + y, col[su] + x] += acc
+    for a in range(n):  # mirrored entries may be summed in a different order: symmetrise exactly
+        for b in range(a + 1, n):
+            h = 0.5 * (H[a, b] + H[b, a])
+            H[a, b] = h
+            H[b, a] = h
+
+
+def _n_used(att: Attachment) -> int:
+    """Local coordinates a point/direction of the attachment reads (body [r, p], node r, ground)."""
+    return {"rigid_body": 7, "beam_node": 3}.get(att.kind, 0)
 
 
 class _TermConstraint(Constraint):
-    """Constraint whose equations are linear projections and dot products of _Vec quantities."""
+    """Constraint whose equations are the :class:`TermTable` ``self.table``."""
 
+    table: TermTable
     _coords: np.ndarray
     _n: int
 
     def coordinates(self) -> np.ndarray:
         return self._coords
 
-    def _terms(self, q: np.ndarray) -> list[_Term]:
-        raise NotImplementedError
+    def _q(self, q_local: np.ndarray) -> np.ndarray:
+        q = np.ascontiguousarray(q_local, dtype=np.float64)
+        if q.shape != (self._n,):
+            raise ValueError(f"{self.name}: q_local needs shape ({self._n},) (got {q.shape})")
+        return q
 
     def evaluate(self, q_local: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-        q = np.asarray(q_local, dtype=float)
-        phi = np.empty(self.n_equations)
-        jac = np.empty((self.n_equations, self._n))
-        i = 0
-        for term in self._terms(q):
-            if term[0] == "lin":
-                _, P, v = term
-                m = P.shape[0]
-                phi[i:i + m] = P @ v.val
-                jac[i:i + m] = P @ v.jac
-                i += m
-            else:
-                _, u, w = term
-                phi[i] = u.val @ w.val
-                jac[i] = w.val @ u.jac + u.val @ w.jac
-                i += 1
+        m = self.n_equations
+        phi = np.empty(m)
+        jac = np.empty((m, self._n))
+        term_values(self.table, 0, m, self._q(q_local), phi, jac)
         return phi, jac
 
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
-        q = np.asarray(q_local, dtype=float)
-        lam = np.asarray(lam, dtype=float)
-        H = np.zeros((self._n, self._n))
-        i = 0
-        for term in self._terms(q):
-            if term[0] == "lin":
-                _, P, v = term
-                m = P.shape[0]
-                _add_blocks(H, P.T @ lam[i:i + m], v)
-                i += m
-            else:
-                _, u, w = term
-                li = lam[i]
-                i += 1
-                if li == 0.0:
-                    continue
-                _add_blocks(H, li * w.val, u)
-                _add_blocks(H, li * u.val, w)
-                if u.jac.any() and w.jac.any():
-                    C = li * (u.jac.T @ w.jac)
-                    H += C + C.T
+        m = self.n_equations
+        lam = np.ascontiguousarray(lam, dtype=np.float64).reshape(-1)
+        if lam.shape != (m,):
+            raise ValueError(f"{self.name}: lam needs shape ({m},) (got {lam.shape})")
+        H = np.empty((self._n, self._n))
+        term_hessian(self.table, 0, m, self._q(q_local), lam, H)
         return H
 
 
@@ -265,37 +411,28 @@ class GenericJoint(_TermConstraint):
         self.rotation = ro
         self.a = a
         self.b = b
-        na = _n_used(a)
-        self._sa = _Side(a, 0, na)
-        self._sb = _Side(b, na, _n_used(b))
-        self._n = na + self._sb.n_used
-        self._coords = np.concatenate([self._sa.used_dofs(), self._sb.used_dofs()])
-        self._tr_axes = [k for k in range(3) if tr[k]]
-        self._rot_axes = [k for k in range(3) if ro[k]]
+        na, nb = _n_used(a), _n_used(b)
+        self._n = na + nb
+        self._coords = np.concatenate([a.dofs[:na], b.dofs[:nb]])
+        tr_axes = [k for k in range(3) if tr[k]]
+        rot_axes = [k for k in range(3) if ro[k]]
         self.global_translation = all(tr) and (a.is_ground or b.is_ground)
-        if self.global_translation:
-            self._P = np.eye(3)
-        elif b.is_ground:
-            self._P = np.ascontiguousarray(b.frame[:, self._tr_axes].T)
-        else:
-            self._P = None
-        self.n_equations = len(self._tr_axes) + len(self._rot_axes)
-        self.equation_labels = ([_AXES[k] for k in self._tr_axes]
-                                + [f"rot_{_AXES[k]}" for k in self._rot_axes])
-
-    def _terms(self, q: np.ndarray) -> list[_Term]:
-        n, sa, sb = self._n, self._sa, self._sb
-        terms: list[_Term] = []
-        if self._tr_axes:
-            d = sa.point(q, n) - sb.point(q, n)
-            if self._P is not None:
-                terms.append(("lin", self._P, d))
+        self.n_equations = len(tr_axes) + len(rot_axes)
+        self.equation_labels = ([_AXES[k] for k in tr_axes] + [f"rot_{_AXES[k]}" for k in rot_axes])
+        tb = _TableBuilder()
+        if tr_axes:
+            xa, xb = tb.point(a, 0), tb.point(b, na)
+            if self.global_translation:
+                tb.lin(np.eye(3), xa, xb)
+            elif b.is_ground:
+                tb.lin(b.frame[:, tr_axes].T, xa, xb)
             else:
-                terms.extend(("dot", sb.axis(q, n, k), d) for k in self._tr_axes)
-        for k in self._rot_axes:
+                for k in tr_axes:
+                    tb.dot(tb.direction(b, na, b.frame[:, k]), -1, xa, xb)
+        for k in rot_axes:
             ia, ib = _ROT_PAIRS[k]
-            terms.append(("dot", sa.axis(q, n, ia), sb.axis(q, n, ib)))
-        return terms
+            tb.dot(tb.direction(a, 0, a.frame[:, ia]), -1, tb.direction(b, na, b.frame[:, ib]), -1)
+        self.table = tb.build()
 
 
 def spherical(name: str, a: Attachment, b: Attachment) -> GenericJoint:
@@ -348,16 +485,14 @@ class BeamNodeSpherical(_TermConstraint):
         self.name = name
         self.node = node
         self.body = body
-        self._sa = _Side(node, 0, 3)
-        self._sb = _Side(body, 3, _n_used(body))
-        self._n = 3 + self._sb.n_used
-        self._coords = np.concatenate([self._sa.used_dofs(), self._sb.used_dofs()])
+        nb = _n_used(body)
+        self._n = 3 + nb
+        self._coords = np.concatenate([node.dofs[:3], body.dofs[:nb]])
         self.n_equations = 3
         self.equation_labels = ["x", "y", "z"]
-
-    def _terms(self, q: np.ndarray) -> list[_Term]:
-        n = self._n
-        return [("lin", np.eye(3), self._sa.point(q, n) - self._sb.point(q, n))]
+        tb = _TableBuilder()
+        tb.lin(np.eye(3), tb.point(node, 0), tb.point(body, 3))
+        self.table = tb.build()
 
 
 class BeamNodeRigid(_TermConstraint):
@@ -384,12 +519,17 @@ class BeamNodeRigid(_TermConstraint):
         self.node = node
         self.body = body
         self.normals_body = N.copy()
-        self._sa = _Side(node, 0, 6)
-        self._sb = _Side(body, 6, _n_used(body))
-        self._n = 6 + self._sb.n_used
-        self._coords = np.concatenate([self._sa.used_dofs(), self._sb.used_dofs()])
+        nb = _n_used(body)
+        self._n = 6 + nb
+        self._coords = np.concatenate([node.dofs[:6], body.dofs[:nb]])
         self.n_equations = 5
         self.equation_labels = ["x", "y", "z", "slope_n1", "slope_n2"]
+        tb = _TableBuilder()
+        tb.lin(np.eye(3), tb.point(node, 0), tb.point(body, 6))
+        g = tb.vec(NODE_SLOPE, 0)
+        for j in range(2):
+            tb.dot(tb.direction(body, 6, N[:, j]), -1, g, -1)
+        self.table = tb.build()
 
     @classmethod
     def from_configuration(cls, name: str, node: Attachment, body: Attachment,
@@ -417,10 +557,3 @@ class BeamNodeRigid(_TermConstraint):
         if at_node:
             body = replace(body, point=A.T @ (q_node[:3] - origin))
         return cls(name, node, body, normals)
-
-    def _terms(self, q: np.ndarray) -> list[_Term]:
-        n, sa, sb = self._n, self._sa, self._sb
-        g = sa.slope(q, n)
-        return [("lin", np.eye(3), sa.point(q, n) - sb.point(q, n)),
-                ("dot", sb.direction(q, n, self.normals_body[:, 0], key=100), g),
-                ("dot", sb.direction(q, n, self.normals_body[:, 1], key=101), g)]
