@@ -16,10 +16,12 @@ after each converged step.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from .._jit import njit
 from ..elements import ancf_cable as cable
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError
@@ -36,8 +38,162 @@ class SimulationStopped(FlexmbsError):
     """The simulation cannot continue (e.g. a sliding body reached the end of its beam)."""
 
 
-def _third_derivatives(L: float) -> np.ndarray:
-    return np.array([12.0 / L**3, 6.0 / L**2, -12.0 / L**3, 6.0 / L**2])
+@njit
+def _shape_x(xi, L):  # noqa: ANN001, ANN202
+    """Hermite S1..S4 and their x-derivatives (as :func:`flexmbs.elements.ancf_cable.shape_functions`)."""
+    x2 = xi * xi
+    x3 = x2 * xi
+    S = np.array([1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3,
+                  L * (x3 - x2)])
+    dS = np.array([(6.0 * x2 - 6.0 * xi) / L, 1.0 - 4.0 * xi + 3.0 * x2, (6.0 * xi - 6.0 * x2) / L,
+                   3.0 * x2 - 2.0 * xi])
+    ddS = np.array([(12.0 * xi - 6.0) / L**2, (6.0 * xi - 4.0) / L, (6.0 - 12.0 * xi) / L**2,
+                    (6.0 * xi - 2.0) / L])
+    return S, dS, ddS
+
+
+@njit
+def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
+    """Φ and Φ_q of the sliding joint on one element (Sugiyama et al. 2003, FORMULATION II §7).
+
+    ``ql = [r_H, p, e_k (12), s]`` (20); ``T`` (3, 3, 4, 4) = point tensors of the hole point
+    u_C and the body axes y, z (``(A w)_k = pᵀT_k(w)p``); ``n_eq`` = 3 (ring) or 5
+    (cylindrical). Writes ``phi`` (n_eq,) and ``jac`` (n_eq, 20)."""
+    p = ql[3:7]
+    S, dS, ddS = _shape_x((ql[19] - start) / L, L)
+    for i in range(n_eq):
+        for j in range(20):
+            jac[i, j] = 0.0
+    Tp = np.empty((3, 3, 4))        # T_k(w) p for w = u, y, z
+    Aw = np.empty((3, 3))
+    for w in range(3):
+        for k in range(3):
+            acc = 0.0
+            for a in range(4):
+                ta = 0.0
+                for b in range(4):
+                    ta += T[w, k, a, b] * p[b]
+                Tp[w, k, a] = ta
+                acc += ta * p[a]
+            Aw[w, k] = acc
+    r = np.zeros(3)
+    r1 = np.zeros(3)
+    r2 = np.zeros(3)
+    for m in range(4):
+        for c in range(3):
+            e = ql[7 + 3 * m + c]
+            r[c] += S[m] * e
+            r1[c] += dS[m] * e
+            r2[c] += ddS[m] * e
+    for c in range(3):
+        phi[c] = ql[c] + Aw[0, c] - r[c]
+        jac[c, c] = 1.0
+        for a in range(4):
+            jac[c, 3 + a] = 2.0 * Tp[0, c, a]
+        for m in range(4):
+            jac[c, 7 + 3 * m + c] = -S[m]
+        jac[c, 19] = -r1[c]
+    if n_eq == 5:
+        for i in range(2):
+            w = 1 + i
+            phi[3 + i] = Aw[w, 0] * r1[0] + Aw[w, 1] * r1[1] + Aw[w, 2] * r1[2]
+            for a in range(4):
+                jac[3 + i, 3 + a] = 2.0 * (r1[0] * Tp[w, 0, a] + r1[1] * Tp[w, 1, a]
+                                           + r1[2] * Tp[w, 2, a])
+            for m in range(4):
+                for c in range(3):
+                    jac[3 + i, 7 + 3 * m + c] = dS[m] * Aw[w, c]
+            jac[3 + i, 19] = Aw[w, 0] * r2[0] + Aw[w, 1] * r2[1] + Aw[w, 2] * r2[2]
+
+
+@njit
+def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
+    """``H = Σ_i λ_i ∂²Φ_i/∂q²`` (20, 20) of :func:`sliding_values` (exact, symmetric)."""
+    p = ql[3:7]
+    S, dS, ddS = _shape_x((ql[19] - start) / L, L)
+    d3 = np.array([12.0 / L**3, 6.0 / L**2, -12.0 / L**3, 6.0 / L**2])
+    r1 = np.zeros(3)
+    r2 = np.zeros(3)
+    r3 = np.zeros(3)
+    for m in range(4):
+        for c in range(3):
+            e = ql[7 + 3 * m + c]
+            r1[c] += dS[m] * e
+            r2[c] += ddS[m] * e
+            r3[c] += d3[m] * e
+    for i in range(20):
+        for j in range(20):
+            H[i, j] = 0.0
+    for a in range(4):
+        for b in range(4):
+            acc = 0.0
+            for k in range(3):
+                acc += lam[k] * T[0, k, a, b]
+            H[3 + a, 3 + b] = 2.0 * acc
+    for m in range(4):
+        for c in range(3):
+            H[7 + 3 * m + c, 19] = -dS[m] * lam[c]
+    H[19, 19] = -(lam[0] * r2[0] + lam[1] * r2[1] + lam[2] * r2[2])
+    if n_eq == 5:
+        for i in range(2):
+            mu = lam[3 + i]
+            if mu == 0.0:
+                continue
+            Tw = T[1 + i]
+            Bw = np.zeros((3, 4))        # ∂(A w)/∂p = 2 T(w) p
+            aw = np.zeros(3)
+            for k in range(3):
+                for a in range(4):
+                    acc = 0.0
+                    for b in range(4):
+                        acc += Tw[k, a, b] * p[b]
+                    Bw[k, a] = 2.0 * acc
+                    aw[k] += acc * p[a]
+            for a in range(4):
+                for b in range(4):
+                    H[3 + a, 3 + b] += mu * 2.0 * (r1[0] * Tw[0, a, b] + r1[1] * Tw[1, a, b]
+                                                   + r1[2] * Tw[2, a, b])
+                for m in range(4):
+                    for c in range(3):
+                        H[3 + a, 7 + 3 * m + c] += mu * Bw[c, a] * dS[m]
+                H[3 + a, 19] += mu * (Bw[0, a] * r2[0] + Bw[1, a] * r2[1] + Bw[2, a] * r2[2])
+            for m in range(4):
+                for c in range(3):
+                    H[7 + 3 * m + c, 19] += mu * ddS[m] * aw[c]
+            H[19, 19] += mu * (aw[0] * r3[0] + aw[1] * r3[1] + aw[2] * r3[2])
+    for a in range(4):          # symmetric off-diagonal blocks
+        for j in range(7, 20):
+            H[j, 3 + a] = H[3 + a, j]
+    for j in range(7, 19):
+        H[19, j] = H[j, 19]
+
+
+@njit
+def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, mu, eps_v, f_axial):  # noqa: ANN001, ANN201
+    """Generalized force on s, ``Q_s = |r′|(f_ax − μ N tanh(ṡ/ε_v))``, N = |λ_pos,⊥| (FORMULATION
+    II §7). Returns ``(Q_s, ∂Q_s/∂λ_pos (3,), ∂Q_s/∂ṡ, |r′|, t (3,), r″ (3,), dS (4,))``."""
+    _, dS, ddS = _shape_x((s - start) / L, L)
+    r1 = np.zeros(3)
+    r2 = np.zeros(3)
+    for m in range(4):
+        for c in range(3):
+            r1[c] += dS[m] * q_elem[3 * m + c]
+            r2[c] += ddS[m] * q_elem[3 * m + c]
+    nr = math.sqrt(r1[0] * r1[0] + r1[1] * r1[1] + r1[2] * r1[2])
+    t = r1 / nr
+    Qs = nr * f_axial
+    dQ_dlam = np.zeros(3)
+    dQ_dsd = 0.0
+    if mu > 0.0:
+        lt = lam_pos[0] * t[0] + lam_pos[1] * t[1] + lam_pos[2] * t[2]
+        lperp = lam_pos - lt * t
+        N = math.sqrt(lperp[0] * lperp[0] + lperp[1] * lperp[1] + lperp[2] * lperp[2])
+        th = math.tanh(s_rate / eps_v)
+        Qs -= nr * mu * N * th
+        if N > 0.0:
+            dQ_dlam = -nr * mu * th * (lperp / N)
+        dQ_dsd = -nr * mu * N * (1.0 - th * th) / eps_v
+    return Qs, dQ_dlam, dQ_dsd, nr, t, r2, dS
 
 
 class _SlidingConstraint(Constraint):
@@ -48,73 +204,33 @@ class _SlidingConstraint(Constraint):
         self.name = joint.name
         self.n_equations = 3 if joint.variant == "ring" else 5
         self.equation_labels = ["x", "y", "z", "align_1", "align_2"][: self.n_equations]
-        self.version = 0
+
+    @property
+    def version(self) -> int:
+        """Changes when the coordinates change (the assembly then re-maps its positions)."""
+        return self.joint.element
 
     def coordinates(self) -> np.ndarray:
         j = self.joint
         return np.concatenate([j._body_dofs, j._elem_dofs[j.element], [j._s_dof]])
 
-    def _kinematics(self, ql: np.ndarray):  # noqa: ANN202
-        j = self.joint
-        rH, p, e, s = ql[:3], ql[3:7], ql[7:19].reshape(4, 3), ql[19]
-        k = j.element
-        L = j._lengths[k]
-        xi = (s - j._starts[k]) / L
-        S, dS, ddS = (np.asarray(x).reshape(4) for x in cable.shape_functions(np.array(xi), np.array(L)))
-        d3 = _third_derivatives(L)
-        return rH, p, e, S, dS, ddS, d3
-
     def evaluate(self, q_local: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
         j = self.joint
-        rH, p, e, S, dS, ddS, _ = self._kinematics(q_local)
-        A = rotation_matrix(p)
-        r = S @ e
-        r1 = dS @ e
-        r2 = ddS @ e
+        k = j.element
         m = self.n_equations
-        phi = np.zeros(m)
-        jac = np.zeros((m, 20))
-        phi[:3] = rH + A @ j.hole_point - r
-        jac[:3, :3] = np.eye(3)
-        jac[:3, 3:7] = 2.0 * (j._T_u @ p)
-        jac[:3, 7:19] = -np.kron(S, np.eye(3))
-        jac[:3, 19] = -r1
-        if m == 5:
-            for i, (w, Tw) in enumerate(((j._y_body, j._T_y), (j._z_body, j._T_z))):
-                aw = A @ w
-                phi[3 + i] = aw @ r1
-                jac[3 + i, 3:7] = r1 @ (2.0 * (Tw @ p))
-                jac[3 + i, 7:19] = np.kron(dS, aw)
-                jac[3 + i, 19] = aw @ r2
+        phi = np.empty(m)
+        jac = np.empty((m, 20))
+        sliding_values(np.ascontiguousarray(q_local, dtype=float), float(j._lengths[k]),
+                       float(j._starts[k]), j._T_all, m, phi, jac)
         return phi, jac
 
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
         j = self.joint
-        rH, p, e, S, dS, ddS, d3 = self._kinematics(q_local)
-        H = np.zeros((20, 20))
-        lp = lam[:3]
-        r1 = dS @ e
-        r2 = ddS @ e
-        r3 = d3 @ e
-        H[3:7, 3:7] += 2.0 * np.einsum("k,kij->ij", lp, j._T_u)
-        H[7:19, 19] += -np.kron(dS, lp)
-        H[19, 19] += -lp @ r2
-        if self.n_equations == 5:
-            A = rotation_matrix(p)
-            for mu, w, Tw in zip(lam[3:5], (j._y_body, j._z_body), (j._T_y, j._T_z), strict=True):
-                if mu == 0.0:
-                    continue
-                Bw = 2.0 * (Tw @ p)                           # d(A w)/dp, 3x4
-                aw = A @ w
-                H[3:7, 3:7] += mu * 2.0 * np.einsum("k,kij->ij", r1, Tw)
-                H[3:7, 7:19] += mu * Bw.T @ np.kron(dS, np.eye(3))
-                H[3:7, 19] += mu * Bw.T @ r2
-                H[7:19, 19] += mu * np.kron(ddS, aw)
-                H[19, 19] += mu * aw @ r3
-        # symmetrise the off-diagonal blocks written once above
-        H[7:19, 3:7] = H[3:7, 7:19].T
-        H[19, 3:7] = H[3:7, 19]
-        H[19, 7:19] = H[7:19, 19]
+        k = j.element
+        H = np.empty((20, 20))
+        sliding_hessian(np.ascontiguousarray(q_local, dtype=float), float(j._lengths[k]),
+                        float(j._starts[k]), j._T_all, self.n_equations,
+                        np.ascontiguousarray(lam, dtype=float), H)
         return H
 
 
@@ -155,12 +271,13 @@ class SlidingJoint(Interaction):
         self._T_u = point_tensor(self.hole_point)
         self._T_y = point_tensor(self._y_body)
         self._T_z = point_tensor(self._z_body)
+        self._T_all = np.ascontiguousarray(np.stack([self._T_u, self._T_y, self._T_z]))
         self.s0 = s0
         self.friction = float(friction)
         self.friction_velocity = float(friction_velocity)
         self.axial_force = None if axial_force is None else as_time_function(axial_force)
-        self.element = 0
-        self._constraint = _SlidingConstraint(self)
+        self._element = np.zeros(1, np.int64)   # current element (state; updated in place,
+        self._constraint = _SlidingConstraint(self)   # also by the compiled integrator)
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: Model) -> None:
@@ -244,37 +361,19 @@ class SlidingJoint(Interaction):
         if self.friction == 0.0 and self.axial_force is None:
             return 0.0
         k = self.element
-        L = self._lengths[k]
-        s = q[self._s_dof]
-        xi = np.array((s - self._starts[k]) / L)
-        _, dS, _ = (np.asarray(a).reshape(4) for a in cable.shape_functions(xi, np.array(L)))
-        r1 = dS @ q[self._elem_dofs[k]].reshape(4, 3)
-        nr = float(np.linalg.norm(r1))
-        tvec = r1 / nr
         rows = asm.multiplier_rows(self._constraint)
-        lp = lam[rows[:3]]
+        qe = np.ascontiguousarray(q[self._elem_dofs[k]])
         f_ax = self.axial_force(t) if self.axial_force is not None else 0.0
-        Qs = nr * f_ax
-        dQ_dlam = np.zeros(3)
-        dQ_dsd = 0.0
-        if self.friction > 0.0:
-            lperp = lp - (lp @ tvec) * tvec
-            N = float(np.linalg.norm(lperp))
-            sd = v[self._s_dof]
-            th = np.tanh(sd / self.friction_velocity)
-            Qs -= nr * self.friction * N * th
-            if N > 0:
-                dQ_dlam = -nr * self.friction * th * (lperp / N)
-            dQ_dsd = -nr * self.friction * N * (1 - th * th) / self.friction_velocity
+        Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = sliding_axial_force(
+            qe, float(self._lengths[k]), float(self._starts[k]), float(q[self._s_dof]),
+            float(v[self._s_dof]), np.ascontiguousarray(lam[rows[:3]]), self.friction,
+            self.friction_velocity, float(f_ax))
         r_q[self._s_dof] -= Qs
         if matrix is not None:
             cM, cC, cK = matrix
             sd = np.array([self._s_dof])
             # Q_s = |r'| F_t: exact derivative of |r'| (element coordinates and s); the
             # friction part neglects the change of direction of the tangent in N = |lam_perp|
-            e = q[self._elem_dofs[k]].reshape(4, 3)
-            _, _, ddS = (np.asarray(a).reshape(4) for a in cable.shape_functions(xi, np.array(L)))
-            r2 = ddS @ e
             Ft = Qs / nr
             asm.add_to_matrix(sd, self._elem_dofs[k], (-cK * Ft * np.kron(dS, tvec))[None, :])
             asm.add_to_matrix(sd, sd, np.array([[-cK * Ft * (tvec @ r2) - cC * dQ_dsd]]))
@@ -288,10 +387,7 @@ class SlidingJoint(Interaction):
             raise SimulationStopped(
                 f"joint '{self.name}': body '{self.body.name}' reached the end of beam "
                 f"'{self.beam.name}' at t = {t:.6g} s (s = {s:.6g}, beam length {self._total:.6g})")
-        k = self._locate(s)
-        if k != self.element:
-            self.element = k
-            self._constraint.version += 1
+        self.element = self._locate(s)
 
     def slide_coordinate(self, q: np.ndarray) -> float:
         return float(q[self._s_dof])
@@ -302,12 +398,20 @@ class SlidingJoint(Interaction):
         rows = asm.multiplier_rows(self._constraint)
         return -lam[rows[:3]]
 
+    @property
+    def element(self) -> int:
+        """Index of the beam element holding the slide point (updated after each step)."""
+        return int(self._element[0])
+
+    @element.setter
+    def element(self, k: int) -> None:
+        self._element[0] = k
+
     def get_state(self) -> dict[str, Any]:
         return {"element": int(self.element)}
 
     def set_state(self, state: dict[str, Any]) -> None:
         self.element = int(state["element"])
-        self._constraint.version += 1
 
     def __repr__(self) -> str:
         return (f"SlidingJoint({self.name!r}, beam={self.beam.name!r}, body={self.body.name!r}, "
