@@ -181,7 +181,7 @@ class _PythonStepper:
     def invalidate(self) -> None:
         self.newton.invalidate()
 
-    def advance(self, h: float, n_steps: int, t0: float) -> None:
+    def advance(self, h: float, n_steps: int, t0: float) -> int:
         """One step from t0 (``n_steps`` is 1); on failure the state is restored."""
         am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
         st = self.state
@@ -200,6 +200,14 @@ class _PythonStepper:
                                                                saved.a, saved.lam)
             raise _StepFailure(0, str(exc)) from None
         st.a[:] = a_star + (1 - af) / (1 - am) * st.qdd
+        return 1
+
+    def finish_chunk(self) -> None:
+        """Interaction state after the converged step (may stop the run)."""
+        st = self.state
+        asm = self.step.asm
+        for obj in asm.model.interactions:
+            obj.post_step(asm, st.q, st.v, st.t)
 
     def totals(self) -> tuple[int, int, int]:
         t = self.newton.total
@@ -213,105 +221,104 @@ class _StepFailure(Exception):
 
 
 class _CompiledStepper:
-    """Fast path for beams + linear constraints: whole runs of steps (up to the next output)
-    execute in numba (:func:`flexmbs.solvers._compiled.alpha_run`); Python is re-entered
-    only to refresh the Jacobian (assembly + SuperLU) and at output times."""
+    """Fast path: whole runs of steps (up to the next output) execute in numba
+    (:func:`flexmbs.solvers._compiled.alpha_run`: residual, Jacobian refresh, bordered banded LU,
+    post-step update, all compiled); Python is re-entered only at output times and on failure.
+    Applies when :func:`flexmbs.compiled.compile_model` packs the model."""
 
-    def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
+    def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State,
+                 packed: tuple) -> None:
+        from .. import compiled as cm
         from . import _compiled as cc
+        from ._bordered import BorderedBandedLU, border_indices
 
-        self.cc = cc
+        self.cc, self.cm = cc, cm
         self.asm = asm
         self.o = options.newton
         self.am, self.af, self.gamma, self.beta = options.parameters()
         self.state = state
-        self.grp = asm.groups[0]
+        self.model, self.functions = packed
         n, m = asm.n_coords, asm.n_mult
-        self.f_ext = np.zeros(n)
-        self.lin = asm.lin_matrix
-        self.lin_rhs = np.zeros(m)
         self.r = np.zeros(n + m)
         self.rhs = np.zeros(n + m)
         self.dx = np.zeros(n + m)
         self.a_star = np.zeros(n)
         self.backup = np.zeros((5, n + m))
-        self.info = np.zeros(7)
-        self.r_q = np.zeros(n)
-        self.r_lam = np.zeros(m)
-        self.band = cc.BandedLU(asm.matrix)
-        self.have_factor = False
-        self._no_matrix = np.zeros((0, 12, 12))
-        self.constant_loads = not asm.f_timed and not asm.lin_functions
-        self.factorizations = self.evaluations = 0
+        self.info = np.zeros(cc.INFO_SIZE)
+        self.info[cc.INFO_KSCALE] = asm.stiffness_scale
+        self.data = np.zeros_like(asm.matrix.data)
+        self.lu = BorderedBandedLU(asm.matrix, border_indices(asm))
+        self.stopped: Exception | None = None
 
     @staticmethod
-    def applicable(asm: Assembly) -> bool:
-        return (len(asm.groups) == 1 and not asm.model.bodies and not asm.nonlinear
-                and not asm.model.interactions and not asm.body_loads)
+    def pack(asm: Assembly) -> tuple | None:
+        """(compiled model, time functions), or None when the model has no compiled form."""
+        from .. import compiled as cm
+
+        model, functions, _reason = cm.compile_model(asm)
+        return None if model is None else (model, functions)
 
     def max_chunk(self) -> int:
-        return 1_000_000 if self.constant_loads else 1
+        return 1_000_000
 
     def invalidate(self) -> None:
-        self.have_factor = False
+        self.info[self.cc.INFO_HAVE] = 0.0
 
-    def _refresh(self, h: float, t: float) -> None:
-        am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
-        s = beta * h * h
-        bp = (1 - am) / (h * h * beta * (1 - af))
-        gp = gamma / (h * beta)
-        st = self.state
-        self.asm.evaluate(st.q, st.v, st.qdd, st.lam, t, self.r_q, self.r_lam,
-                          matrix=(s * bp, s * gp, s))
-        self.evaluations += 1
-        self.factorizations += 1
-        self.have_factor = self.band.factorize(self.asm.matrix.data)
-        if not self.have_factor:
-            raise _StepFailure(0, "the iteration matrix is singular (a coordinate without mass "
-                                  "or stiffness, or dependent constraints)")
+    def _failure_reason(self) -> str:
+        cc, info = self.cc, self.info
+        code = int(info[cc.INFO_CODE])
+        err = self.model.error
+        if code == self.cm.ERR_LEFT_BORE:
+            joints = [j for j in self.asm.model.interactions
+                      if type(j).__name__ == "SlidingClearanceJoint"]
+            return (f"joint '{joints[int(err[1])].name}': the beam axis left the bore at hole "
+                    f"section {int(err[2])} (penetration larger than the clearance); use a "
+                    "smaller time step, more load steps or a stiffer contact")
+        if code == cc.ERR_SINGULAR:
+            return ("the iteration matrix is singular (a coordinate without mass or stiffness, "
+                    f"or dependent constraints; zero pivot {int(info[cc.INFO_PIVOT])})")
+        return (f"Newton did not converge in {int(info[cc.INFO_IT])} iterations (scaled error "
+                f"{info[cc.INFO_ERR]:.3g}, 1 = tolerance; worst equation: "
+                f"{self.asm.describe_coordinate(int(info[cc.INFO_WORST]))})")
 
-    def advance(self, h: float, n_steps: int, t0: float) -> None:
-        asm, st, o, g = self.asm, self.state, self.o, self.grp
-        t1 = t0 + h   # loads are evaluated at the end of the (first) step: constant if chunked
-        asm.external_force(t1, self.f_ext)
-        self.lin_rhs[:] = asm.lin_rhs0
-        for row, fn in asm.lin_functions:
-            self.lin_rhs[row] += fn(t1)
-        ctol = o.constraint_tolerance * asm.length_scale
-        scalar = 1 if g.options.bending == "scalar" else 0
-        resume = False
-        done = 0
-        refreshes = 0
-        while True:
-            floor = o.roundoff_factor * 2.2e-16 * asm.stiffness_scale * asm.length_scale
-            b = self.band
-            status = self.cc.alpha_run(
-                n_steps - done, resume, h, self.am, self.af, self.gamma, self.beta, st.q, st.v,
-                st.qdd, st.a, st.lam, self.backup, self.f_ext, g.dofs, g.qe, g.ve, g.props,
-                g.rest, scalar, g.force, g.mass, self.lin.indptr, self.lin.indices,
-                self.lin.data, self.lin_rhs, b.ab, b.kl, b.ku, b.piv, b.perm, self.have_factor,
-                b.work, self.r, self.rhs, self.dx, self.a_star,
-                o.max_iterations, not o.modified, o.relative_tolerance, ctol, floor,
-                o.refresh_ratio, o.refresh_iterations, self.info, self._no_matrix)
-            done += int(self.info[4])
-            self.evaluations += int(self.info[4])
-            if int(self.info[4]) > 0:
-                refreshes = 0   # refresh count of the current step only
-            if status == self.cc.STATUS_CONVERGED:
-                return
-            if status == self.cc.STATUS_REFRESH and refreshes <= 2 * o.max_iterations:
-                self._refresh(h, t0 + (done + 1) * h)
-                refreshes += 1
-                resume = True
-                continue
-            self.have_factor = False
-            raise _StepFailure(done, (
-                f"Newton did not converge in {int(self.info[0])} iterations (scaled error "
-                f"{self.info[2]:.3g}, 1 = tolerance; worst equation: "
-                f"{asm.describe_coordinate(int(self.info[3]))})"))
+    def advance(self, h: float, n_steps: int, t0: float) -> int:
+        from ..constraints.sliding import SimulationStopped
+
+        asm, st, o, cc = self.asm, self.state, self.o, self.cc
+        fv = self.cm.time_function_values(self.functions, t0, h, n_steps)
+        self.cm.push_state(self.model, asm)
+        status = cc.alpha_run(
+            int(n_steps), float(h), self.am, self.af, self.gamma, self.beta, st.q, st.v, st.qdd, st.a,
+            st.lam, self.backup, self.model, fv, self.lu.factor, self.data, self.r, self.rhs,
+            self.dx, self.a_star, int(o.max_iterations), not o.modified,
+            float(o.relative_tolerance), float(o.constraint_tolerance * asm.length_scale),
+            float(o.roundoff_factor * 2.2e-16 * asm.length_scale), float(o.refresh_ratio),
+            float(o.refresh_iterations), self.info)
+        self.cm.pull_state(self.model, asm)
+        asm.stiffness_scale = float(self.info[cc.INFO_KSCALE])
+        done = int(self.info[cc.INFO_DONE])
+        if status == cc.STATUS_CONVERGED:
+            return done
+        if status == cc.STATUS_STOPPED:
+            j = [j for j in asm.model.interactions
+                 if type(j).__name__ == "SlidingJoint"][int(self.model.error[1])]
+            s = float(st.q[j._s_dof])
+            self.stopped = SimulationStopped(
+                f"joint '{j.name}': body '{j.body.name}' reached the end of beam "
+                f"'{j.beam.name}' at t = {t0 + done * h:.6g} s (s = {s:.6g}, beam length "
+                f"{j._total:.6g})")
+            return done
+        self.invalidate()
+        raise _StepFailure(done, self._failure_reason())
+
+    def finish_chunk(self) -> None:
+        if self.stopped is not None:
+            exc, self.stopped = self.stopped, None
+            raise exc
 
     def totals(self) -> tuple[int, int, int]:
-        return int(self.info[5]), self.factorizations, self.evaluations
+        cc, info = self.cc, self.info
+        return int(info[cc.INFO_TOTAL]), int(info[cc.INFO_FACT]), int(info[cc.INFO_RES])
 
 
 def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: float,
@@ -335,8 +342,10 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     out_dt = output_interval if output_interval is not None else dt
     if not out_dt > 0:
         raise ModelError(f"output_interval must be > 0 (got {output_interval})")
-    use_compiled = options.compiled and _CompiledStepper.applicable(asm)
-    stepper = (_CompiledStepper if use_compiled else _PythonStepper)(asm, options, state)
+    packed = _CompiledStepper.pack(asm) if options.compiled else None
+    stepper: _PythonStepper | _CompiledStepper = (
+        _CompiledStepper(asm, options, state, packed) if packed is not None
+        else _PythonStepper(asm, options, state))
     stats = IntegrationStats()
     h_nom = dt
     h = dt
@@ -364,8 +373,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             h_matrix = h_step
         t_start = state.t
         try:
-            stepper.advance(h_step, n_chunk, t_start)
-            done = n_chunk
+            done = stepper.advance(h_step, n_chunk, t_start)
         except _StepFailure as exc:
             done = exc.done
             stats.steps += done
@@ -388,10 +396,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             if ok_since_cut >= options.grow_after:
                 h = min(2 * h, h_nom)
                 ok_since_cut = 0
-        for obj in asm.model.interactions:
-            post = getattr(obj, "post_step", None)
-            if post is not None:
-                post(asm, state.q, state.v, state.t)
+        stepper.finish_chunk()
         if state.t == t_out:
             k_out += 1
             if observer is not None:

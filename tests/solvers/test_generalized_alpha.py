@@ -1,14 +1,13 @@
 """Generalized-alpha paths and step control: the compiled fast path and the general Python path
-agree, HHT, prescribed motion, step cut-back, divergence diagnostics; banded LU solves."""
+agree, HHT, prescribed motion, step cut-back, divergence diagnostics (the bordered banded LU has
+its own tests in test_bordered.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 
 import flexmbs as fm
-from flexmbs.solvers._compiled import BandedLU
 from tests.conftest import straight_beam
 
 
@@ -87,18 +86,3 @@ def test_divergence_names_the_worst_equation():
         fm.simulate(model, t_end=0.1, dt=0.05, integrator=integ)
     # the partial history (initial state) travels with the exception
     assert exc.value.partial_result.t[0] == 0.0
-
-
-def test_banded_lu_matches_dense_solve(rng):
-    """Random banded saddle-point matrix (zero diagonal block): partial pivoting handles it."""
-    n, m = 40, 5
-    K = sp.random(n, n, density=0.1, random_state=3).toarray()
-    K = K + K.T + 10 * np.eye(n)
-    K[np.abs(np.subtract.outer(np.arange(n), np.arange(n))) > 6] = 0.0
-    C = np.zeros((m, n))
-    C[np.arange(m), rng.choice(n, m, replace=False)] = 1.0
-    A = sp.csc_matrix(np.block([[K, C.T], [C, np.zeros((m, m))]]))
-    lu = BandedLU(A)
-    assert lu.factorize(A.data)
-    b = rng.standard_normal(n + m)
-    assert np.allclose(A @ lu.solve(b), b, atol=1e-12)
