@@ -41,8 +41,8 @@ def main() -> int:
     R = float(j.hole.section.radius)
 
     def detect() -> int:
-        return detect_circle(qe, j._lengths, centre, A, j.stations, j._elem, j._xi, False,
-                             j.beam_radius, R, j._rows)
+        return detect_circle(qe, j._lengths, centre, A, j.stations, j._elem, j._xi, j._elem_out,
+                             j._xi_out, j.beam_radius, R, j._rows)
 
     n_active = detect()
     row = j._rows[0]

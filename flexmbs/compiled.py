@@ -42,7 +42,7 @@ from .constraints.sliding import (
     sliding_hessian,
     sliding_values,
 )
-from .contact._detect import clearance_forces, clearance_post_step
+from .contact._detect import N_COLS, clearance_forces, clearance_update
 from .contact.joint import SlidingClearanceJoint
 from .contact.sections import CircleSection
 from .elements import ancf_cable as cable
@@ -156,10 +156,14 @@ class ClearancePart(NamedTuple):
     eps_v: np.ndarray
     elem_ws: np.ndarray              # (nj, max_ns) state: warm starts
     xi_ws: np.ndarray
-    approach: np.ndarray             # (nj, max_ns, P) state: approach velocities
-    active: np.ndarray               # (nj, max_ns, P) state
+    approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
+    active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
+    psi: np.ndarray                  # (nj, max_ns, P)
     qe: np.ndarray                   # (max_ne, 12) work
-    rows: np.ndarray                 # (4 max_ns, 11) work
+    rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
+    count: np.ndarray                # (nj,) their number
+    elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
+    xi_out: np.ndarray
     K: np.ndarray                    # (0, 19, 19): no tangent in the residual
     kelem: np.ndarray                # (0,)
 
@@ -463,7 +467,9 @@ def _pack_clearance(joints: list[SlidingClearanceJoint]) -> ClearancePart:
         _pad([j._xi for j in joints], (), 0.5, float),
         _pad([j._approach for j in joints], (width,), 0.0, float),
         _pad([j._active for j in joints], (width,), False, np.bool_),
-        np.zeros((max_ne, 12)), np.zeros((4 * max_ns, 11)), np.zeros((0, 19, 19)),
+        _pad([j._psi for j in joints], (width,), 0.0, float),
+        np.zeros((max_ne, 12)), np.zeros((nj, 4 * max_ns, N_COLS)), np.zeros(nj, np.int64),
+        np.zeros((nj, max_ns), np.int64), np.zeros((nj, max_ns)), np.zeros((0, 19, 19)),
         np.zeros(0, np.int64))
 
 
@@ -479,6 +485,7 @@ def push_state(model: CompiledModel, asm: Assembly) -> None:
         c.xi_ws[i, :ns] = j._xi
         c.approach[i, :ns] = j._approach
         c.active[i, :ns] = j._active
+        c.psi[i, :ns] = j._psi
 
 
 def pull_state(model: CompiledModel, asm: Assembly) -> None:
@@ -493,6 +500,7 @@ def pull_state(model: CompiledModel, asm: Assembly) -> None:
         j._xi[:] = c.xi_ws[i, :ns]
         j._approach[:] = c.approach[i, :ns]
         j._active[:] = c.active[i, :ns]
+        j._psi[:] = c.psi[i, :ns]
 
 
 def time_function_values(functions: list[TimeFunction], t0: float, h: float,
@@ -685,11 +693,13 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
     for j in range(cl.r_b.size):
         ne_j = cl.n_elem[j]
         ns = cl.n_sec[j]
-        cnt, sc = clearance_forces(
+        cnt, _, sc = clearance_forces(
             q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
-            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.r_b[j], cl.R[j],
-            cl.law[j], cl.mu[j], cl.eps_v[j], cl.approach[j, :ns], cl.qe, cl.rows, False, r,
+            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
+            cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
+            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], False, r,
             cl.K, cl.K, cl.kelem)
+        cl.count[j] = cnt
         if cnt < 0:
             model.error[0] = ERR_LEFT_BORE
             model.error[1] = j
@@ -702,8 +712,9 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
 
 @njit
 def post_step(model, q, v):  # noqa: ANN001, ANN201
-    """Interaction state after a converged step (as the joints' ``post_step``); returns an
-    error code (0: none)."""
+    """Interaction state after a converged step (as the joints' ``post_step``); must follow a
+    :func:`residual` evaluation at this ``(q, v)`` (whose contact detection it reuses). Returns
+    an error code (0: none)."""
     sl = model.sliding
     for j in range(sl.s_dof.size):
         s = q[sl.s_dof[j]]
@@ -714,20 +725,15 @@ def post_step(model, q, v):  # noqa: ANN001, ANN201
         ne_j = sl.n_elem[j]
         k = np.searchsorted(sl.starts[j, :ne_j], s, side="right") - 1
         sl.element[j] = min(max(k, 0), ne_j - 1)
+    # contacts: from the last residual evaluation, which was at the converged state
     cl = model.clearance
     for j in range(cl.r_b.size):
-        ne_j = cl.n_elem[j]
         ns = cl.n_sec[j]
-        err = clearance_post_step(
-            q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
-            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.r_b[j], cl.R[j],
-            cl.law[j], cl.mu[j], cl.eps_v[j], cl.approach[j, :ns], cl.active[j, :ns], cl.qe,
-            cl.rows)
-        if err < 0:
-            model.error[0] = ERR_LEFT_BORE
-            model.error[1] = j
-            model.error[2] = -1 - err
-            return ERR_LEFT_BORE
+        for k in range(ns):
+            cl.elem_ws[j, k] = cl.elem_out[j, k]
+            cl.xi_ws[j, k] = cl.xi_out[j, k]
+        clearance_update(cl.rows[j], cl.count[j], cl.approach[j, :ns], cl.active[j, :ns],
+                         cl.psi[j, :ns])
     return 0
 
 
@@ -894,15 +900,17 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
     for j in range(cl.r_b.size):
         ne_j = cl.n_elem[j]
         ns = cl.n_sec[j]
-        cnt, _ = clearance_forces(
+        m, cnt, _ = clearance_forces(
             q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
-            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.r_b[j], cl.R[j],
-            cl.law[j], cl.mu[j], cl.eps_v[j], cl.approach[j, :ns], cl.qe, cl.rows, True,
+            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
+            cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
+            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], True,
             model.scratch, jp.cl_K, jp.cl_C, jp.cl_elem)
-        if cnt < 0:
+        cl.count[j] = m
+        if m < 0:
             model.error[0] = ERR_LEFT_BORE
             model.error[1] = j
-            model.error[2] = -1 - cnt
+            model.error[2] = -1 - m
             return kscale, ERR_LEFT_BORE
         for i in range(cnt):
             pos = jp.cl_pos[j, jp.cl_elem[i]]

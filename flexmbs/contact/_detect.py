@@ -20,16 +20,23 @@ from .geometry import beam_point, closest_point_kernel, section_crossing_kernel,
 from .pair import contact_force
 from .sections import circle_stationary_points
 
-#: columns of a candidate row
-COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth")
+#: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
+COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
+        "gap_rate")
+N_COLS = len(COLS)
+#: two contact points of one section are the same contact from one step to the next if the
+#: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
+MATCH_ANGLE = 0.5
 
 
 @njit
-def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, update, r_b, R, out):  # noqa: ANN001, ANN201
+def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out, r_b, R, out):  # noqa: ANN001, ANN201
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
-    ``A`` = hole body rotation (columns: hole axis, e_y, e_z)."""
+    ``A`` = hole body rotation (columns: hole axis, e_y, e_z). The section crossings start at
+    the warm starts ``(elem_ws, xi_ws)`` and are written to ``(elem_out, xi_out)`` (the same
+    arrays to update the warm starts)."""
     n = A[:, 0].copy()
     ey = A[:, 1].copy()
     ez = A[:, 2].copy()
@@ -42,9 +49,8 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, update, r_b,
                                                1e-12, 30, 2.0 * R + r_b)
         if not found:
             return -1 - k   # no crossing near the section: the beam left the hole
-        if update:
-            elem_ws[k] = e
-            xi_ws[k] = xi
+        elem_out[k] = e
+        xi_out[k] = xi
         r, rx, _ = beam_point(qe, lengths, e, xi)
         a, b, ea3, _, _ = section_ellipse(rx, n, ey, ez, r_b)
         cy = 0.0
@@ -92,8 +98,87 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, update, r_b,
             row[8] = a
             row[9] = b
             row[10] = depth
+            row[11] = math.atan2(y, x)
+            row[12] = 0.0
+            row[13] = 0.0
             count += 1
     return count
+
+
+@njit
+def _angle_distance(a, b):  # noqa: ANN001, ANN202
+    d = abs(a - b) % (2.0 * np.pi)
+    return min(d, 2.0 * np.pi - d)
+
+
+@njit
+def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN201
+    """Approach velocity stored for the contact of section k nearest to section angle ``psi``
+    (within :data:`MATCH_ANGLE`), 0 for a new contact."""
+    best = MATCH_ANGLE
+    val = 0.0
+    for s in range(active.shape[1]):
+        if active[k, s]:
+            d = _angle_distance(psi_track[k, s], psi)
+            if d < best:
+                best = d
+                val = approach[k, s]
+    return val
+
+
+@njit
+def clearance_update(rows, m, approach, active, psi_track):  # noqa: ANN001, ANN201
+    """Contact state after a converged step from the candidate rows of the converged state
+    (with ``gap`` and ``gap_rate``): every penetrating point is matched to the nearest tracked
+    contact of its section (section angle, greedy by distance, within :data:`MATCH_ANGLE`) and
+    keeps its approach velocity; a new one stores ``−ġ_N`` (approach velocity at onset, used by
+    the dissipative laws); tracked contacts not found are released."""
+    P = active.shape[1]
+    taken = np.zeros(P, dtype=np.bool_)
+    new_app = np.zeros(P)
+    new_psi = np.zeros(P)
+    for k in range(active.shape[0]):
+        idx = np.empty(m, dtype=np.int64)
+        nc = 0
+        for i in range(m):
+            if int(rows[i, 0]) == k and rows[i, 12] < 0.0:
+                idx[nc] = i
+                nc += 1
+        if nc == 0 and not np.any(active[k]):
+            continue
+        taken[:] = False
+        slot_of = np.full(nc, -1, dtype=np.int64)
+        while True:   # greedy matching, nearest pair first
+            best = MATCH_ANGLE
+            bi = -1
+            bs = -1
+            for c in range(nc):
+                if slot_of[c] >= 0:
+                    continue
+                for s in range(P):
+                    if active[k, s] and not taken[s]:
+                        d = _angle_distance(psi_track[k, s], rows[idx[c], 11])
+                        if d < best:
+                            best = d
+                            bi = c
+                            bs = s
+            if bi < 0:
+                break
+            slot_of[bi] = bs
+            taken[bs] = True
+        for c in range(min(nc, P)):
+            i = idx[c]
+            new_psi[c] = rows[i, 11]
+            new_app[c] = approach[k, slot_of[c]] if slot_of[c] >= 0 else -rows[i, 13]
+        for s in range(P):
+            if s < min(nc, P):
+                approach[k, s] = new_app[s]
+                psi_track[k, s] = new_psi[s]
+                active[k, s] = True
+            else:
+                approach[k, s] = 0.0
+                psi_track[k, s] = 0.0
+                active[k, s] = False
 
 
 @njit
@@ -109,14 +194,15 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
 
 @njit
 def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913
-                     r_b, R, law, mu, eps_v, approach, qe, rows, want_tangent, r_q,
-                     K_out, C_out, elem_out):
+                     elem_out, xi_out, r_b, R, law, mu, eps_v, approach, active, psi_track, qe,
+                     rows, want_tangent, r_q, K_out, C_out, elem_k):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
-    sections at the warm starts (not updated), penalty force of every penetrating point (sign
-    +1 at maxima, −1 at minima, §3) subtracted from ``r_q``. With ``want_tangent`` the signed
+    sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
+    of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
+    each candidate row gets its ``gap`` and ``gap_rate``. With ``want_tangent`` the signed
     Gauss–Newton blocks (19×19, local [r_H, p, e_k]) go to ``K_out``/``C_out`` and the element
-    to ``elem_out``. Returns ``(count, scale)``; ``count = −1 − k`` if the beam axis left the
-    bore at section k."""
+    to ``elem_k``. Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left
+    the bore at section k."""
     qb, A, centre = _frame(q, body_dofs, hole_point)
     vb = np.empty(7)
     for i in range(7):
@@ -125,9 +211,10 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     for e in range(ne):
         for k in range(12):
             qe[e, k] = q[elem_dofs[e, k]]
-    m = detect_circle(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, False, r_b, R, rows)
+    m = detect_circle(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out,
+                      r_b, R, rows)
     if m < 0:
-        return m, 0.0
+        return m, 0, 0.0
     Qc = np.empty(19)
     K = np.empty((19, 19))
     C = np.empty((19, 19))
@@ -138,15 +225,18 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     scale = 0.0
     for i in range(m):
         row = rows[i]
-        k, j, eP = int(row[0]), int(row[1]), int(row[3])
+        k, eP = int(row[0]), int(row[3])
         sign = row[2]
         for c in range(3):
             u_Q[c] = (A[0, c] * (row[5] - qb[0]) + A[1, c] * (row[6] - qb[1])
                       + A[2, c] * (row[7] - qb[2]))
         for c in range(12):
             ve[c] = v[elem_dofs[eP, c]]
-        g, _, _, _ = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law, mu,
-                                   eps_v, approach[k, j], want_tangent, Qc, K, C, geo)
+        v_app = tracked_approach(approach, active, psi_track, k, row[11])
+        g, gdot, _, _ = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law, mu,
+                                      eps_v, v_app, want_tangent, Qc, K, C, geo)
+        row[12] = g
+        row[13] = gdot
         if g >= 0.0:
             continue
         for c in range(7):
@@ -161,51 +251,23 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
                 for b in range(19):
                     K_out[count, a, b] = sign * K[a, b]
                     C_out[count, a, b] = sign * C[a, b]
-            elem_out[count] = eP
+            elem_k[count] = eP
         count += 1
-    return count, scale
+    return m, count, scale
 
 
 @njit
 def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,  # noqa: ANN001, ANN201, PLR0913
-                        xi_ws, r_b, R, law, mu, eps_v, approach, active, qe, rows):
-    """After a converged step: warm starts of the section crossings moved to the new state, the
-    approach velocity ``−ġ_N`` stored at the onset of every contact point (dissipative laws),
-    released for points no longer in contact. Returns 0, or ``−1 − k`` (axis left the bore)."""
-    qb, A, centre = _frame(q, body_dofs, hole_point)
-    vb = np.empty(7)
-    for i in range(7):
-        vb[i] = v[body_dofs[i]]
-    ne = elem_dofs.shape[0]
-    for e in range(ne):
-        for k in range(12):
-            qe[e, k] = q[elem_dofs[e, k]]
-    m = detect_circle(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, True, r_b, R, rows)
+                        xi_ws, r_b, R, law, mu, eps_v, approach, active, psi_track, qe, rows,
+                        scratch):
+    """After a converged step: warm starts of the section crossings moved to the new state and
+    the contacts tracked (:func:`clearance_update`). Returns 0, or ``−1 − k`` (axis left the
+    bore). ``scratch`` receives the (discarded) residual."""
+    m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
+                               xi_ws, elem_ws, xi_ws, r_b, R, law, mu, eps_v, approach, active,
+                               psi_track, qe, rows, False, scratch, np.empty((0, 19, 19)),
+                               np.empty((0, 19, 19)), np.empty(0, np.int64))
     if m < 0:
         return m
-    Qc = np.empty(19)
-    K = np.empty((19, 19))
-    geo = np.empty(12)
-    ve = np.empty(12)
-    u_Q = np.empty(3)
-    now = np.zeros(active.shape, dtype=np.bool_)
-    for i in range(m):
-        row = rows[i]
-        k, j, eP = int(row[0]), int(row[1]), int(row[3])
-        for c in range(3):
-            u_Q[c] = (A[0, c] * (row[5] - qb[0]) + A[1, c] * (row[6] - qb[1])
-                      + A[2, c] * (row[7] - qb[2]))
-        for c in range(12):
-            ve[c] = v[elem_dofs[eP, c]]
-        g, gdot, _, _ = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law, mu,
-                                      eps_v, approach[k, j], False, Qc, K, K, geo)
-        if g < 0.0:
-            now[k, j] = True
-            if not active[k, j]:
-                approach[k, j] = -gdot
-    for k in range(active.shape[0]):
-        for j in range(active.shape[1]):
-            if not now[k, j]:
-                approach[k, j] = 0.0
-            active[k, j] = now[k, j]
+    clearance_update(rows, m, approach, active, psi_track)
     return 0

@@ -22,7 +22,14 @@ import numpy as np
 from ..constraints.interaction import Interaction
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, ModelError
-from ._detect import clearance_forces, clearance_post_step, detect_circle
+from ._detect import (
+    N_COLS,
+    clearance_forces,
+    clearance_post_step,
+    clearance_update,
+    detect_circle,
+    tracked_approach,
+)
 from .geometry import beam_point, closest_point, section_crossing, section_ellipse
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb
 from .pair import contact_point
@@ -65,13 +72,9 @@ def SuperellipseHole(A: float, B: float, n: float, length: float, sections: int 
     return Hole(SuperellipseSection(A, B, n), length, sections)
 
 
-#: stationary points tracked per section (a circle has at most 4; a superellipse's extra ones
+#: contact points tracked per section (a circle has at most 4; a superellipse's extra ones
 #: beyond this count are treated as first contacts at every step by the dissipative laws)
 MAX_POINTS = 8
-
-
-def _approach_of(approach: np.ndarray, k: int, j: int) -> float:
-    return float(approach[k, j]) if j < approach.shape[1] else 0.0
 
 
 class SlidingClearanceJoint(Interaction):
@@ -116,11 +119,16 @@ class SlidingClearanceJoint(Interaction):
         # state, updated after each converged step (also by the compiled integrator, in place):
         self._elem = np.zeros(ns, np.int64)     # warm starts of the section crossings
         self._xi = np.full(ns, 0.5)
-        self._approach = np.zeros((ns, MAX_POINTS))   # -g_N' at onset, per (section, point)
+        # tracked contacts per section (identity: section angle of the hole point, FORMULATION
+        # II §3): approach velocity -g_N' at onset, section angle, in use
+        self._approach = np.zeros((ns, MAX_POINTS))
+        self._psi = np.zeros((ns, MAX_POINTS))
         self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
         self._frozen: list | None = None
         self._positions: dict[tuple[int, int], np.ndarray] = {}
-        self._rows = np.zeros((4 * ns, 11))    # at most 4 stationary points per circle section
+        self._rows = np.zeros((4 * ns, N_COLS))  # at most 4 stationary points per circle section
+        self._elem_out = np.zeros(ns, np.int64)  # crossings of the last evaluation
+        self._xi_out = np.zeros(ns)
         self._K = np.zeros((4 * ns, 19, 19))
         self._C = np.zeros((4 * ns, 19, 19))
         self._kelem = np.zeros(4 * ns, np.int64)
@@ -176,8 +184,12 @@ class SlidingClearanceJoint(Interaction):
         return [(self._body_dofs, np.concatenate([self._body_dofs, self._beam_dofs]))]
 
     # ------------------------------------------------------------------ detection + forces
+    def _approach_for(self, k: int, psi: float) -> float:
+        return tracked_approach(self._approach, self._active, self._psi, int(k), float(psi))
+
     def _contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
-        """(section, index, kind, elem, ContactResult, a, b) for every penetrating point.
+        """(section, index, kind, elem, ContactResult, a, b, psi) for every penetrating point
+        (psi: section angle of the hole point).
 
         With ``self._frozen`` (a list from :meth:`freeze_detection`) the detected hole points
         (body coordinates), elements and kinds are reused: the residual is then exactly the
@@ -185,13 +197,13 @@ class SlidingClearanceJoint(Interaction):
         if self._frozen is not None:
             qb, vb = q[self._body_dofs], v[self._body_dofs]
             out = []
-            for k, j, kind, eP, u_Q, xiP, a, b in self._frozen:
+            for k, j, kind, eP, u_Q, xiP, a, b, psi in self._frozen:
                 res = contact_point(qb, vb, u_Q, q[self._elem_dofs[eP]], v[self._elem_dofs[eP]],
                                     self._lengths[eP], xiP, self.beam_radius, self.contact,
-                                    self.friction, _approach_of(self._approach, k, j),
+                                    self.friction, self._approach_for(k, psi),
                                     self.consistent and want_tangent)
                 if res.gap < 0.0:
-                    out.append((k, j, kind, eP, res, a, b))
+                    out.append((k, j, kind, eP, res, a, b, psi))
             return out
         if isinstance(self.hole.section, CircleSection):
             return self._contacts_circle(q, v, want_tangent, update)
@@ -226,15 +238,15 @@ class SlidingClearanceJoint(Interaction):
                 if cand.depth <= 0.0:
                     continue
                 Qg = origin + cand.Q[0] * ey + cand.Q[1] * ez
+                psi = math.atan2(cand.Q[1], cand.Q[0])
                 u_Q = A.T @ (Qg - qb[:3])
                 eP, xiP, *_ = closest_point(qe, self._lengths, Qg, e, xi)
                 res = contact_point(qb, vb, u_Q, qe[eP], v[self._elem_dofs[eP]],
                                     self._lengths[eP], xiP, r_b, self.contact, self.friction,
-                                    _approach_of(self._approach, k, j),
-                                    self.consistent and want_tangent)
+                                    self._approach_for(k, psi), self.consistent and want_tangent)
                 if res.gap >= 0.0:
                     continue
-                out.append((k, j, cand.kind, eP, res, a, b))
+                out.append((k, j, cand.kind, eP, res, a, b, psi))
         return out
 
     def _contacts_circle(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
@@ -244,20 +256,22 @@ class SlidingClearanceJoint(Interaction):
         vb = v[self._body_dofs]
         A, centre, *_ = self._frames(qb)
         qe = np.ascontiguousarray(q[self._elem_dofs])
+        e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
         m = detect_circle(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
-                          update, self.beam_radius, float(self.hole.section.radius), self._rows)
+                          e_out, x_out, self.beam_radius, float(self.hole.section.radius),
+                          self._rows)
         if m < 0:
             self._raise_left_bore(m)
         out = []
-        for row in self._rows[:m]:
+        for row in self._rows[:m].copy():
             k, j, kind, eP = int(row[0]), int(row[1]), int(row[2]), int(row[3])
             u_Q = A.T @ (row[5:8] - qb[:3])
             ed = self._elem_dofs[eP]
             res = contact_point(qb, vb, u_Q, q[ed], v[ed], self._lengths[eP], row[4],
                                 self.beam_radius, self.contact, self.friction,
-                                _approach_of(self._approach, k, j), self.consistent and want_tangent)
+                                self._approach_for(k, row[11]), self.consistent and want_tangent)
             if res.gap < 0.0:
-                out.append((k, j, kind, eP, res, row[8], row[9]))
+                out.append((k, j, kind, eP, res, row[8], row[9], float(row[11])))
         return out
 
     def freeze_detection(self, q: np.ndarray | None, v: np.ndarray | None = None) -> None:
@@ -268,8 +282,8 @@ class SlidingClearanceJoint(Interaction):
         v = np.zeros_like(q) if v is None else v
         qb = q[self._body_dofs]
         A = rotation_matrix(qb[3:7])
-        self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b)
-                        for k, j, kind, eP, res, a, b in self._contacts(q, v, False, False)]
+        self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b, psi)
+                        for k, j, kind, eP, res, a, b, psi in self._contacts(q, v, False, False)]
 
     def _compiled_residual(self) -> bool:
         """The compiled joint kernels apply: circular bore, detection not frozen; the
@@ -293,21 +307,22 @@ class SlidingClearanceJoint(Interaction):
                  r_q: np.ndarray, matrix: tuple[float, float, float] | None) -> float:
         if self._compiled_residual():
             mu, eps_v = self._friction_parameters()
-            m, scale = clearance_forces(
+            m, count, scale = clearance_forces(
                 q, v, self._body_dofs, self._elem_dofs, self._lengths, self.hole_point,
-                self.stations, self._elem, self._xi, self.beam_radius,
-                float(self.hole.section.radius), self.contact.parameters(), mu, eps_v, self._approach,
-                self._qe, self._rows, matrix is not None, r_q, self._K, self._C, self._kelem)
+                self.stations, self._elem, self._xi, self._elem_out, self._xi_out,
+                self.beam_radius, float(self.hole.section.radius), self.contact.parameters(), mu,
+                eps_v, self._approach, self._active, self._psi, self._qe, self._rows,
+                matrix is not None, r_q, self._K, self._C, self._kelem)
             if m < 0:
                 self._raise_left_bore(m)
             if matrix is not None:
                 _, cC, cK = matrix
-                for i in range(m):
+                for i in range(count):
                     pos = self._block_positions(asm, int(self._kelem[i]))
                     np.add.at(asm.matrix.data, pos, (cK * self._K[i] + cC * self._C[i]).ravel())
             return scale
         scale = 0.0
-        for _k, _j, kind, eP, res, _a, _b in self._contacts(q, v, matrix is not None, False):
+        for _k, _j, kind, eP, res, *_ in self._contacts(q, v, matrix is not None, False):
             sign = float(kind)
             r_q[self._body_dofs] -= sign * res.Q_body
             r_q[self._elem_dofs[eP]] -= sign * res.Q_elem
@@ -333,26 +348,22 @@ class SlidingClearanceJoint(Interaction):
             m = clearance_post_step(
                 q, v, self._body_dofs, self._elem_dofs, self._lengths, self.hole_point,
                 self.stations, self._elem, self._xi, self.beam_radius,
-                float(self.hole.section.radius), self.contact.parameters(), mu, eps_v, self._approach,
-                self._active, self._qe, self._rows)
+                float(self.hole.section.radius), self.contact.parameters(), mu, eps_v,
+                self._approach, self._active, self._psi, self._qe, self._rows, np.zeros_like(q))
             if m < 0:
                 self._raise_left_bore(m)
             return
-        now = np.zeros_like(self._active)
-        for k, j, _kind, _eP, res, _a, _b in self._contacts(q, v, False, True):
-            if j >= now.shape[1]:
-                continue
-            now[k, j] = True
-            if not self._active[k, j]:
-                self._approach[k, j] = -res.gap_rate   # approach velocity at onset
-        self._approach[~now] = 0.0
-        self._active[:] = now
+        contacts = self._contacts(q, v, False, True)
+        rows = np.zeros((len(contacts), N_COLS))
+        for i, (k, _j, _kind, _eP, res, _a, _b, psi) in enumerate(contacts):
+            rows[i, [0, 11, 12, 13]] = k, psi, res.gap, res.gap_rate
+        clearance_update(rows, len(contacts), self._approach, self._active, self._psi)
 
     # ------------------------------------------------------------------ output
     def output(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
                t: float) -> list[dict[str, Any]]:
         rows = []
-        for k, j, kind, _eP, res, a, b in self._contacts(q, v, False, False):
+        for k, j, kind, _eP, res, a, b, _psi in self._contacts(q, v, False, False):
             rows.append({
                 "t": t, "joint": self.name, "section": k, "point": j, "gap": res.gap,
                 "normal_force": float(kind) * res.f_n, "qx": res.Q[0], "qy": res.Q[1],
@@ -400,24 +411,27 @@ class SlidingClearanceJoint(Interaction):
     def contact_force(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total contact force on the hole body (global components)."""
         F = np.zeros(3)
-        for _k, _j, kind, _eP, res, _a, _b in self._contacts(q, v, False, False):
+        for _k, _j, kind, _eP, res, *_ in self._contacts(q, v, False, False):
             F += float(kind) * res.force_on_hole
         return F
 
     def get_state(self) -> dict[str, Any]:
+        """Warm starts and tracked contacts ``[section, slot, approach velocity, angle]``."""
         return {"elem": self._elem.tolist(), "xi": self._xi.tolist(),
-                "approach": [[int(k), int(j), float(self._approach[k, j])]
-                             for k, j in zip(*np.nonzero(self._active), strict=True)]}
+                "approach": [[int(k), int(s), float(self._approach[k, s]), float(self._psi[k, s])]
+                             for k, s in zip(*np.nonzero(self._active), strict=True)]}
 
     def set_state(self, state: dict[str, Any]) -> None:
         self._elem[:] = state["elem"]
         self._xi[:] = state["xi"]
         self._approach[:] = 0.0
+        self._psi[:] = 0.0
         self._active[:] = False
-        for k, j, val in state["approach"]:
-            if int(j) < self._approach.shape[1]:
-                self._approach[int(k), int(j)] = float(val)
-                self._active[int(k), int(j)] = True
+        for k, s, val, *psi in state["approach"]:
+            if int(s) < self._approach.shape[1] and psi:   # (older checkpoints: no angle)
+                self._approach[int(k), int(s)] = float(val)
+                self._psi[int(k), int(s)] = float(psi[0])
+                self._active[int(k), int(s)] = True
 
     def __repr__(self) -> str:
         return (f"SlidingClearanceJoint({self.name!r}, beam={self.beam.name!r}, "
