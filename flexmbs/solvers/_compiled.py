@@ -18,6 +18,7 @@ import numpy as np
 from .._jit import njit
 from ..compiled import ERR_END_OF_BEAM, jacobian, post_step, residual
 from ._bordered import bordered_factorize, bordered_solve
+from .newton import renew_jacobian
 
 STATUS_CONVERGED = 0   # all steps done
 STATUS_FAILED = 2      # the current step failed and was restored to its start
@@ -28,8 +29,9 @@ ERR_SINGULAR = 100
 
 #: ``info`` entries
 (INFO_IT, INFO_PREV, INFO_ERR, INFO_WORST, INFO_DONE, INFO_TOTAL, INFO_CODE, INFO_HAVE,
- INFO_KSCALE, INFO_FACT, INFO_RES, INFO_PIVOT) = range(12)
-INFO_SIZE = 12
+ INFO_KSCALE, INFO_FACT, INFO_RES, INFO_PIVOT, INFO_CYC_STEPS, INFO_CYC_ITS, INFO_STEP_ITS,
+ INFO_RENEW) = range(16)
+INFO_SIZE = 16
 
 
 @njit
@@ -57,7 +59,7 @@ def _restore(backup, q, v, qdd, a, lam):  # noqa: ANN001, ANN202
 @njit
 def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model, fv, factor,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
               data, r, rhs, dx, a_star, max_it, full_newton, rtol, ctol, floor_factor,
-              refresh_ratio, refresh_iterations, info):
+              refresh_ratio, refresh_iterations, refresh_cost, keep_acceleration, info):
     """Up to ``n_steps`` gen-alpha steps of size ``h``: predictor, modified-Newton iterations
     (Jacobian refreshed in place when needed), corrector, post-step update; ``fv[k]`` holds
     the time-function values at the end of step k of this call. ``info`` (float, INFO_SIZE)
@@ -65,6 +67,8 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
     the stiffness scale of the rounding floor (INFO_KSCALE) and counters (factorisations,
     residual evaluations, iterations); per call: iterations of the current step, errors, worst
     equation, steps completed, error code (``flexmbs.compiled.ERR_*`` or ERR_SINGULAR).
+    Refresh rules: within a step, when modified Newton contracts too slowly (:func:`_slow`);
+    between steps, the renewal rule (:func:`flexmbs.solvers.newton.renew_jacobian`).
     Returns a ``STATUS_*``."""
     n = q.size
     m = lam.size
@@ -84,14 +88,19 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
         for i in range(m):
             backup[4, i] = lam[i]
         for i in range(n):
-            # predictor of Arnold & Brüls: q''_{n+1} = 0, lam = lam_n. (q''_n as the guess
-            # saves ~1 iteration per step but triggers more Jacobian refreshes.)
+            # predictor: Arnold & Brüls' q''_{n+1} = 0, or q''_{n+1} = q''_n (q, v consistent
+            # with it through beta', gamma'); lam = lam_n
             a_star[i] = (af * qdd[i] - am * a[i]) / (1 - am)
             q[i] += h * v[i] + h * h * ((0.5 - beta) * a[i] + beta * a_star[i])
             v[i] += h * ((1 - gamma) * a[i] + gamma * a_star[i])
-            qdd[i] = 0.0
+            if keep_acceleration:
+                q[i] += qdd[i] / bp
+                v[i] += (gp / bp) * qdd[i]
+            else:
+                qdd[i] = 0.0
         info[INFO_IT] = 0.0
         info[INFO_PREV] = np.inf
+        info[INFO_STEP_ITS] = 0.0
         refreshes = 0
         status = -1
         while status < 0:
@@ -126,6 +135,7 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
                 status = STATUS_CONVERGED
                 break
             if info[INFO_HAVE] == 0.0 or full_newton or (
+                    info[INFO_IT] == 0 and info[INFO_RENEW] != 0.0) or (
                     info[INFO_IT] > 0 and _slow(err, info[INFO_PREV], refresh_ratio,
                                                 refresh_iterations)):
                 # Jacobian at the current iterate (poor contraction with the old one)
@@ -149,6 +159,10 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
                     status = STATUS_FAILED
                     break
                 info[INFO_HAVE] = 1.0
+                info[INFO_RENEW] = 0.0
+                info[INFO_CYC_STEPS] = 0.0
+                info[INFO_CYC_ITS] = 0.0
+                info[INFO_STEP_ITS] = 0.0
             for i in range(n):
                 rhs[i] = -s * r[i]
             for i in range(m):
@@ -162,6 +176,7 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
             for i in range(m):
                 lam[i] += dx[n + i] / s
             info[INFO_IT] += 1.0
+            info[INFO_STEP_ITS] += 1.0
             info[INFO_TOTAL] += 1.0
             info[INFO_PREV] = err
         if status == STATUS_FAILED:
@@ -169,6 +184,11 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
             return STATUS_FAILED
         for i in range(n):
             a[i] = a_star[i] + c_corr * qdd[i]
+        info[INFO_CYC_STEPS] += 1.0
+        info[INFO_CYC_ITS] += info[INFO_STEP_ITS]
+        if renew_jacobian(info[INFO_STEP_ITS], info[INFO_CYC_STEPS], info[INFO_CYC_ITS],
+                          refresh_cost):
+            info[INFO_RENEW] = 1.0
         code = post_step(model, q, v)
         if code == 0:
             info[INFO_DONE] += 1.0

@@ -27,7 +27,10 @@ class GeneralizedAlpha:
     ``rho_inf`` is the spectral radius at infinite frequency (1: no numerical damping;
     0.8 default). ``scheme="hht"`` uses alpha_m = 0 and needs rho_inf in [0.5, 1].
     Newton defaults to modified Newton (factorisation reused while it contracts).
-    On Newton failure the step is halved (``adaptive``) down to ``min_step``, then grows back.
+    ``predictor``: Newton starts from ``q''_{n+1} = 0`` (``"zero_acceleration"``, Arnold &
+    Brüls) or from ``q''_{n+1} = q''_n`` (``"constant_acceleration"``), with q and v consistent
+    with it. On Newton failure the step is halved (``adaptive``) down to ``min_step``, then
+    grows back. ``compiled``: run the compiled path when the model allows it.
     """
 
     rho_inf: float = 0.8
@@ -37,8 +40,12 @@ class GeneralizedAlpha:
     min_step: float = 0.0            # 0: dt / 1024
     grow_after: int = 10             # successful steps before the step is doubled back
     compiled: bool = True            # compiled Newton loop when the model allows it
+    predictor: Literal["zero_acceleration", "constant_acceleration"] = "constant_acceleration"
 
     def __post_init__(self) -> None:
+        if self.predictor not in ("zero_acceleration", "constant_acceleration"):
+            raise ModelError(f"unknown predictor '{self.predictor}' (known: zero_acceleration, "
+                             "constant_acceleration)")
         if not 0.0 <= self.rho_inf <= 1.0:
             raise ModelError(f"rho_inf must be in [0, 1] (got {self.rho_inf})")
         if self.scheme == "hht" and self.rho_inf < 0.5:
@@ -171,6 +178,7 @@ class _PythonStepper:
 
     def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
         self.am, self.af, self.gamma, self.beta = options.parameters()
+        self.keep_acceleration = options.predictor == "constant_acceleration"
         self.newton = Newton(options.newton, asm.length_scale)
         self.step = _AlphaStep(asm, state)
         self.state = state
@@ -186,13 +194,17 @@ class _PythonStepper:
         am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
         st = self.state
         saved = st.copy()
-        # predictor (Arnold & Brüls): q'' = 0, lam = lam_n
+        # predictor: q'' = 0 (Arnold & Brüls) or q'' = q''_n; lam = lam_n
+        bp, gp = (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta)
         a_star = (af * st.qdd - am * st.a) / (1 - am)
         st.q += h * st.v + h * h * ((0.5 - beta) * st.a + beta * a_star)
         st.v += h * ((1 - gamma) * st.a + gamma * a_star)
-        st.qdd[:] = 0.0
-        self.step.setup(t0 + h, (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta),
-                        beta * h * h)
+        if self.keep_acceleration:
+            st.q += st.qdd / bp
+            st.v += (gp / bp) * st.qdd
+        else:
+            st.qdd[:] = 0.0
+        self.step.setup(t0 + h, bp, gp, beta * h * h)
         try:
             self.newton.solve(self.step)
         except ConvergenceError as exc:
@@ -236,6 +248,7 @@ class _CompiledStepper:
         self.asm = asm
         self.o = options.newton
         self.am, self.af, self.gamma, self.beta = options.parameters()
+        self.keep_acceleration = options.predictor == "constant_acceleration"
         self.state = state
         self.model, self.functions = packed
         n, m = asm.n_coords, asm.n_mult
@@ -293,7 +306,7 @@ class _CompiledStepper:
             self.dx, self.a_star, int(o.max_iterations), not o.modified,
             float(o.relative_tolerance), float(o.constraint_tolerance * asm.length_scale),
             float(o.roundoff_factor * 2.2e-16 * asm.length_scale), float(o.refresh_ratio),
-            float(o.refresh_iterations), self.info)
+            float(o.refresh_iterations), float(o.refresh_cost), self.keep_acceleration, self.info)
         self.cm.pull_state(self.model, asm)
         asm.stiffness_scale = float(self.info[cc.INFO_KSCALE])
         done = int(self.info[cc.INFO_DONE])
