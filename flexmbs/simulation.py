@@ -182,16 +182,19 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         qs.append(s.q.copy())
         vs.append(s.v.copy())
         ls.append(s.lam.copy())
-        if record_energy:
-            for k, val in asm.energies(s.q, s.v).items():
+        energy = asm.energies(s.q, s.v) if record_energy or writer is not None else None
+        if record_energy and energy is not None:
+            for k, val in energy.items():
                 energies.setdefault(k, []).append(val)
+        values = np.concatenate([np.asarray(p.evaluate(asm, s), float).reshape(-1)
+                                 for p in probes] + [np.zeros(0)])
         if probes:
-            probe_rows.append(np.concatenate(
-                [np.asarray(p.evaluate(asm, s), float).reshape(-1) for p in probes]))
+            probe_rows.append(values)
         # a resumed run starts at the checkpoint, which the folder already holds
         if writer is not None and (resume_t is None or s.t > resume_t):
             writer.write(s, contacts=interaction_outputs(asm, s),
-                         sections=interaction_sections(asm, s),
+                         sections=interaction_sections(asm, s), probe_values=values,
+                         energy=energy,
                          checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm)})
         if observer is not None:
             observer(s)

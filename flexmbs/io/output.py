@@ -10,7 +10,10 @@ Files (every one valid after every output, so a run that stops early leaves read
 - ``probes.csv``: ``t,<probe columns>``, one row per output, flushed after each row;
 - ``contacts.csv``: ``t,joint,section,point,gap,normal_force,qx,qy,qz,px,py,pz,a,b``, one row
   per active contact (header written even if there is none; missing keys are empty fields);
-- ``checkpoint.npz``: the latest state (:mod:`flexmbs.io.checkpoint`);
+- ``checkpoint.npz``: the state of an output time (:mod:`flexmbs.io.checkpoint`): of the last
+  output when the run ends (any status), and during the run at most every
+  ``checkpoint_interval`` seconds of wall time (a checkpoint costs a few milliseconds; the
+  outputs after it are dropped by ``--resume``);
 - ``summary.json``: written at start (``status: "running"``) and at the end (``completed``,
   ``failed: <reason>`` or ``interrupted``).
 
@@ -91,7 +94,9 @@ class OutputWriter:
 
     ``asm`` is the :class:`~flexmbs.assembly.Assembly`; ``metadata`` (scenario path, solver
     settings, ...) is stored under ``summary.json["metadata"]``. ``write_vtu=False`` skips the
-    VTU series, ``checkpoints=False`` the checkpoint. Each :meth:`write` is one output time.
+    VTU series, ``checkpoints=False`` the checkpoint (written at most every
+    ``checkpoint_interval`` s of wall time, and for the last output at the end). Each
+    :meth:`write` is one output time.
     ``resume_at=t`` appends to the folder of an earlier run whose outputs up to ``t`` are kept
     (the CSV headers must match; the initial energy is taken from its ``summary.json``).
     """
@@ -99,13 +104,17 @@ class OutputWriter:
     def __init__(self, directory: str | os.PathLike, name: str, asm: Any, *,
                  probes: Sequence[Probe] = (), write_vtu: bool = True, checkpoints: bool = True,
                  metadata: dict | None = None, samples_per_element: int = 8,
-                 vtu_encoding: str = "binary", resume_at: float | None = None) -> None:
+                 vtu_encoding: str = "binary", resume_at: float | None = None,
+                 checkpoint_interval: float = 10.0) -> None:
         self.directory = Path(directory)
         self.name = str(name)
         self.asm = asm
         self.probes = list(probes)
         self.metadata = dict(metadata or {})
         self.checkpoints = bool(checkpoints)
+        self.checkpoint_interval = float(checkpoint_interval)
+        self._pending_checkpoint: tuple[Any, dict] | None = None
+        self._last_checkpoint = -math.inf
         for p in self.probes:
             p.check(asm)
         self.probe_columns = probe_columns(self.probes)
@@ -176,6 +185,13 @@ class OutputWriter:
         self._files.append(f)
         return f, len(rows)
 
+    def _write_checkpoint(self) -> None:
+        """The checkpoint of the last output, if not written yet."""
+        if self._pending_checkpoint is not None:
+            state, extra = self._pending_checkpoint
+            save_checkpoint(self.checkpoint_path, state, extra=extra)
+            self._pending_checkpoint = None
+
     def _close_files(self) -> None:
         for f in self._files:
             f.close()
@@ -185,17 +201,22 @@ class OutputWriter:
 
     # ------------------------------------------------------------------ per output
     def write(self, state: Any, *, contacts: Sequence[dict] | None = None,
-              checkpoint_extra: dict | None = None, sections: Sequence[dict] | None = None) -> None:
-        """Record one output time: VTU frame, probe row, contact rows, checkpoint."""
+              checkpoint_extra: dict | None = None, sections: Sequence[dict] | None = None,
+              probe_values: np.ndarray | None = None, energy: dict | None = None) -> None:
+        """Record one output time: VTU frame, probe row, contact rows, checkpoint.
+        ``probe_values`` (the probes' columns) and ``energy`` (:meth:`Assembly.energies`) may
+        be passed when the caller has them already."""
         if self.finished:
             raise ValueError("OutputWriter.write after finish()")
         t = float(state.t)
         contacts = list(contacts or [])
         if self.series is not None and self.frames is not None:
             self.series.write(t, self.frames(state, contacts=contacts))
-        row = [_fmt(t)]
-        for p in self.probes:
-            row.extend(_fmt(float(x)) for x in np.asarray(p.evaluate(self.asm, state)).reshape(-1))
+        if probe_values is None:
+            probe_values = np.concatenate(
+                [np.asarray(p.evaluate(self.asm, state), float).reshape(-1) for p in self.probes]
+                + [np.zeros(0)])
+        row = [_fmt(t)] + [_fmt(float(x)) for x in probe_values]
         csv.writer(self._probe_file).writerow(row)
         self._probe_file.flush()
         if contacts:
@@ -212,8 +233,13 @@ class OutputWriter:
             self._section_file.flush()
         if self.checkpoints:
             extra = {"output_step": self.n_outputs, **(checkpoint_extra or {})}
-            save_checkpoint(self.checkpoint_path, state, extra=extra)
-        energy = self.asm.energies(state.q, state.v)
+            self._pending_checkpoint = (state.copy(), extra)
+            now = time.perf_counter()
+            if now - self._last_checkpoint >= self.checkpoint_interval:
+                self._write_checkpoint()
+                self._last_checkpoint = now
+        if energy is None:
+            energy = self.asm.energies(state.q, state.v)
         if self.initial_energy is None:
             self.initial_energy = energy
         self.final_energy = energy
@@ -273,6 +299,7 @@ class OutputWriter:
         if self.finished:
             return
         self.status = " ".join(str(status).split())   # one line
+        self._write_checkpoint()
         self._close_files()
         self.finished = True
         self._write_summary(stats=stats, wall_time=wall_time, energy_balance=energy_balance)

@@ -188,6 +188,21 @@ def test_checkpoint_is_latest_state(run):
     assert extra["output_step"] == 4
 
 
+def test_checkpoint_interval_bounds_the_cost_and_the_end_is_always_saved(tmp_path):
+    """Checkpoints are written at most every ``checkpoint_interval`` s of wall time (here: only
+    the first output) and for the last output when the writer finishes."""
+    model, _, _ = cantilever_and_pendulum(2)
+    asm = Assembly(model)
+    st = _initial(asm)
+    with OutputWriter(tmp_path, "x", asm, checkpoint_interval=1e9) as w:
+        for k in range(3):
+            st.t = 0.01 * k
+            w.write(st)
+            assert load_checkpoint(tmp_path / "checkpoint.npz")[0].t == 0.0
+    st_ck, extra = load_checkpoint(tmp_path / "checkpoint.npz")
+    assert st_ck.t == 0.02 and extra["output_step"] == 2
+
+
 # ------------------------------------------------------------------------------- failures
 def _initial(asm):
     q, v = asm.initial_state()
