@@ -705,7 +705,17 @@ class Assembly:
 
     # ================================================================== energies
     def energies(self, q: np.ndarray, v: np.ndarray) -> dict[str, float]:
-        """Kinetic, strain and gravitational potential energy (zero at the reference)."""
+        """Kinetic, strain and gravitational potential energy (zero at the reference); the last
+        state's values are kept (output, probes and results ask for the same state)."""
+        key = (q.tobytes(), v.tobytes())
+        cached = getattr(self, "_energy_cache", None)
+        if cached is not None and cached[0] == key:
+            return dict(cached[1])
+        out = self._energies(q, v)
+        self._energy_cache = (key, out)
+        return dict(out)
+
+    def _energies(self, q: np.ndarray, v: np.ndarray) -> dict[str, float]:
         kin = 0.0
         strain = 0.0
         for grp in self.groups:

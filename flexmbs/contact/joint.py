@@ -125,6 +125,7 @@ class SlidingClearanceJoint(Interaction):
         self._psi = np.zeros((ns, MAX_POINTS))
         self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
         self._frozen: list | None = None
+        self._contact_cache: tuple | None = None
         self._positions: dict[tuple[int, int], np.ndarray] = {}
         self._rows = np.zeros((4 * ns, N_COLS))  # at most 4 stationary points per circle section
         self._elem_out = np.zeros(ns, np.int64)  # crossings of the last evaluation
@@ -189,7 +190,21 @@ class SlidingClearanceJoint(Interaction):
 
     def _contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
         """(section, index, kind, elem, ContactResult, a, b, psi) for every penetrating point
-        (psi: section angle of the hole point).
+        (psi: section angle of the hole point); the result for the last state is kept (output
+        rows, section records and probes ask for the same state)."""
+        if want_tangent or update or self._frozen is not None:
+            return self._detect_contacts(q, v, want_tangent, update)
+        key = (q.tobytes(), v.tobytes(), self._elem.tobytes(), self._xi.tobytes(),
+               self._approach.tobytes(), self._psi.tobytes(), self._active.tobytes(),
+               self.contact, self.friction)
+        if self._contact_cache is not None and self._contact_cache[0] == key:
+            return self._contact_cache[1]
+        out = self._detect_contacts(q, v, False, False)
+        self._contact_cache = (key, out)
+        return out
+
+    def _detect_contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
+        """:meth:`_contacts` without the cache.
 
         With ``self._frozen`` (a list from :meth:`freeze_detection`) the detected hole points
         (body coordinates), elements and kinds are reused: the residual is then exactly the

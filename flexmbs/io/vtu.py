@@ -201,8 +201,11 @@ def _atomic_write_text(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary") -> Path:
-    """Write ``mesh`` as a VTK XML UnstructuredGrid (atomically: temp file + rename).
+def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary",
+              atomic: bool = True) -> Path:
+    """Write ``mesh`` as a VTK XML UnstructuredGrid (``atomic``: temp file + rename; a series
+    writes each frame to a new file that its ``.pvd`` lists only once complete, so it skips
+    the rename).
 
     ``encoding="binary"`` (inline base64, exact bits) or ``"ascii"`` (shortest round-trip
     decimal, also exact)."""
@@ -239,7 +242,10 @@ def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     out.append(_data_array("offsets", offs, binary))
     out.append(_data_array("types", types, binary))
     out.append("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
-    _atomic_write_text(path, "".join(out))
+    if atomic:
+        _atomic_write_text(path, "".join(out))
+    else:
+        path.write_text("".join(out), encoding="utf-8")
     return path
 
 
@@ -288,7 +294,7 @@ class VTUSeries:
         if self.closed:
             raise ValueError(f"VTUSeries {self.pvd_path} is closed")
         fname = f"{self.name}_{self.step:06d}.vtu"
-        path = write_vtu(self.vtu_dir / fname, mesh, encoding=self.encoding)
+        path = write_vtu(self.vtu_dir / fname, mesh, encoding=self.encoding, atomic=False)
         self.entries.append((float(t), f"{self.vtu_subdir}/{fname}"))
         self._write_pvd()
         return path
@@ -480,6 +486,17 @@ class FrameBuilder:
             gi, sl = asm.beam_slices[id(beam)]
             self.beams.append(_BeamSampler(bi, dofs, S, ref, cum[e] + xi_tab[k] * L[e],
                                            e * (spe + 1) + k, seg.astype(np.int64), gi, sl, xi_tab))
+        # per-frame constants: sliced reference data, element dofs, radius and cell arrays
+        self._beam_const = []
+        for b in self.beams:
+            beam = model.beams[b.index]
+            nseg = b.segments.shape[0]
+            self._beam_const.append((
+                self._beam_rest(b), asm.element_dofs(beam),
+                np.full(b.S.shape[0], np.nan if beam.radius is None else float(beam.radius)),
+                {"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
+                 "beam_id": np.full(nseg, b.index, np.int32),
+                 "body_id": np.full(nseg, -1, np.int32)}))
         self.bodies = []
         for bi, body in enumerate(model.bodies):
             pts, tri = body_surface(body)
@@ -501,24 +518,18 @@ class FrameBuilder:
         ns = b.S.shape[0]
         x = np.einsum("pk,pkc->pc", b.S, q[b.dofs].reshape(ns, 4, 3))
         vel = np.einsum("pk,pkc->pc", b.S, v[b.dofs].reshape(ns, 4, 3))
-        rest, options = self._beam_rest(b)
-        beam = self.asm.model.beams[b.index]
-        qe = q[self.asm.element_dofs(beam)]
-        eps, K = cable.axial_strain_and_curvature(qe, rest, options, b.xi)
+        (rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
+        eps, K = cable.axial_strain_and_curvature(q[elem_dofs], rest, options, b.xi)
         eps = eps.reshape(-1)[b.flat]
         K = K.reshape(-1, 3)[b.flat]
-        nseg = b.segments.shape[0]
         return VTUMesh(
             x, [(VTK_LINE, b.segments)],
             point_data={"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc,
                         "axial_strain": eps, "curvature": K,
                         "curvature_magnitude": np.linalg.norm(K, axis=1),
                         # section radius (for tubes: ParaView Tube "vary radius by scalar")
-                        "radius": np.full(x.shape[0], np.nan if beam.radius is None
-                                          else float(beam.radius))},
-            cell_data={"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
-                       "beam_id": np.full(nseg, b.index, np.int32),
-                       "body_id": np.full(nseg, -1, np.int32)})
+                        "radius": radius},
+            cell_data=cells)
 
     def body_mesh(self, i: int, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         bi, d, pts, tri, ref = self.bodies[i]
