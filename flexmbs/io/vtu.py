@@ -37,6 +37,7 @@ from __future__ import annotations
 import base64
 import os
 import re
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -255,16 +256,23 @@ class VTUSeries:
         with VTUSeries(out_dir / "run.pvd") as series:
             series.write(t, mesh)      # vtu/run_000000.vtu, then run.pvd rewritten
 
-    The ``.pvd`` is valid after construction (empty collection) and after every write. Stale
-    frames ``<name>_NNNNNN.vtu`` of an earlier run in the same folder are removed on creation.
+    The ``.pvd`` is valid after construction (empty collection) and after every write: it is
+    rewritten (atomically) after each of the first frames, then at most every
+    ``pvd_interval`` seconds of wall time, and with every frame on :meth:`close` (a long series
+    would otherwise rewrite an ever longer index per frame). Stale frames
+    ``<name>_NNNNNN.vtu`` of an earlier run in the same folder are removed on creation.
 
     ``resume_at=t`` continues an existing series instead (a resumed run): the frames of the
     ``.pvd`` at times ``<= t`` are kept, later ones (and their files) are removed, and new
     frames are appended after them.
     """
 
+    #: frames after which the index is rewritten each time, whatever ``pvd_interval``
+    EAGER_FRAMES = 10
+
     def __init__(self, pvd_path: str | os.PathLike, *, vtu_subdir: str = "vtu",
-                 encoding: str = "binary", resume_at: float | None = None) -> None:
+                 encoding: str = "binary", resume_at: float | None = None,
+                 pvd_interval: float = 1.0) -> None:
         if encoding not in ("binary", "ascii"):
             raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
         self.pvd_path = Path(pvd_path)
@@ -282,6 +290,9 @@ class VTUSeries:
             if stale.fullmatch(f.name) and f.name not in keep:
                 f.unlink()
         self.closed = False
+        self.pvd_interval = float(pvd_interval)
+        self._pvd_written = time.perf_counter()
+        self._pvd_stale = False
         self._write_pvd()
 
     @property
@@ -296,7 +307,10 @@ class VTUSeries:
         fname = f"{self.name}_{self.step:06d}.vtu"
         path = write_vtu(self.vtu_dir / fname, mesh, encoding=self.encoding, atomic=False)
         self.entries.append((float(t), f"{self.vtu_subdir}/{fname}"))
-        self._write_pvd()
+        self._pvd_stale = True
+        if (len(self.entries) <= self.EAGER_FRAMES
+                or time.perf_counter() - self._pvd_written >= self.pvd_interval):
+            self._write_pvd()
         return path
 
     def _write_pvd(self) -> None:
@@ -307,8 +321,12 @@ class VTUSeries:
                      for t, f in self.entries)
         lines.append("</Collection>\n</VTKFile>\n")
         _atomic_write_text(self.pvd_path, "".join(lines))
+        self._pvd_written = time.perf_counter()
+        self._pvd_stale = False
 
     def close(self) -> None:
+        if not self.closed and self._pvd_stale:
+            self._write_pvd()
         self.closed = True
 
     def __enter__(self) -> VTUSeries:

@@ -24,6 +24,7 @@ from flexmbs.io.vtu import (
     VTUMesh,
     VTUSeries,
     build_frame,
+    read_pvd,
     write_vtu,
 )
 from flexmbs.simulation import beam_positions
@@ -294,3 +295,19 @@ def test_series_is_valid_after_every_write_and_readable_by_vtk(tmp_path, rng, en
         np.testing.assert_array_equal(grid.cell_data["body_id"], mesh.cell_data["body_id"])
         np.testing.assert_array_equal(grid.field_data["time"], [t])
         assert grid.n_cells == mesh.n_cells
+
+
+def test_long_series_rewrites_its_index_at_most_every_interval(tmp_path, rng):
+    """After the first EAGER_FRAMES frames the .pvd index is rewritten at most every
+    pvd_interval seconds (here: never during the run); it stays valid, lists a prefix of the
+    frames, and lists them all once the series is closed."""
+    model, _ = _full_model()
+    asm = Assembly(model)
+    mesh = build_frame(asm, deformed_state(asm, rng, 0.0))
+    n = VTUSeries.EAGER_FRAMES + 5
+    with VTUSeries(tmp_path / "run.pvd", pvd_interval=1e9) as series:
+        for i in range(n):
+            series.write(0.01 * i, mesh)
+            listed = read_pvd(tmp_path / "run.pvd")
+            assert len(listed) == min(i + 1, VTUSeries.EAGER_FRAMES)
+    assert [t for t, _ in read_pvd(tmp_path / "run.pvd")] == pytest.approx(0.01 * np.arange(n))
