@@ -81,6 +81,8 @@ class SimulationSettings:
     redundant_constraints: str = "error"       #: "error" | "drop"
     load_steps: int = 1                        #: initial load increments of the static solver
     static_stabilizer: float = 0.0             #: mass-proportional stabiliser c_s [1/s^2]
+    predictor: str = "constant_acceleration"   #: Newton start of each step
+    compiled: bool = True                      #: compiled integrator when the model allows it
     newton: dict[str, Any] = field(default_factory=dict)  #: NewtonOptions overrides
 
     def newton_options(self, *, static: bool = False) -> NewtonOptions:
@@ -111,7 +113,9 @@ class Scenario:
             return None
         return GeneralizedAlpha(rho_inf=sim.rho_inf, scheme=sim.integrator,  # type: ignore[arg-type]
                                 newton=sim.newton_options(), adaptive=sim.adaptive,
-                                min_step=sim.min_step or 0.0)
+                                min_step=sim.min_step or 0.0,
+                                predictor=sim.predictor,  # type: ignore[arg-type]
+                                compiled=sim.compiled)
 
     def static_options(self) -> StaticOptions:
         """Options of the static solver (``integrator = "static"`` or ``initial_static``)."""
@@ -532,13 +536,15 @@ def _kind(t: Table, registry: Mapping[str, Any], what: str) -> str:
 
 # ------------------------------------------------------------------------------------ simulation
 _NEWTON_KEYS = {"max_iterations": "int", "relative_tolerance": "pos", "constraint_tolerance": "pos",
-                "modified": "bool", "line_search": "bool"}
+                "modified": "bool", "line_search": "bool", "refresh_ratio": "ratio",
+                "refresh_iterations": "pos", "refresh_cost": "pos"}
+PREDICTORS = ("constant_acceleration", "zero_acceleration")
 
 
 def _simulation(t: Table) -> SimulationSettings:
     t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval",
              "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
-             "static_stabilizer",
+             "static_stabilizer", "predictor", "compiled",
              "newton"))
     integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
     static = integrator == "static"
@@ -563,7 +569,7 @@ def _simulation(t: Table) -> SimulationSettings:
             if not nt.has(k):
                 continue
             newton[k] = (nt.integer(k, ge=1) if kind == "int" else nt.boolean(k) if kind == "bool"
-                         else nt.number(k, gt=0))
+                         else nt.number(k, gt=0, lt=1) if kind == "ratio" else nt.number(k, gt=0))
     return SimulationSettings(
         t_end=t_end, dt=dt, integrator=integrator, rho_inf=rho_inf,
         gravity=tuple(float(x) for x in gravity),  # type: ignore[arg-type]
@@ -571,7 +577,9 @@ def _simulation(t: Table) -> SimulationSettings:
         adaptive=t.boolean("adaptive", True), min_step=min_step,
         redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
         load_steps=t.integer("load_steps", 1, ge=1),
-        static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0), newton=newton)
+        static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0),
+        predictor=t.choice("predictor", PREDICTORS, "constant_acceleration", what="predictor"),
+        compiled=t.boolean("compiled", True), newton=newton)
 
 
 # ------------------------------------------------------------------------------------ beams

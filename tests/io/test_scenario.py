@@ -113,6 +113,9 @@ def test_overrides_scalar_nested_and_array_entry_by_name():
         "beams[rod].geometry.line.end=[2.0, 0, 0]",   # bracket form, nested inline table
         "constraints.0.node=last",                    # array entry by index
         "simulation.integrator = hht",
+        "simulation.predictor=zero_acceleration",
+        "simulation.compiled=false",
+        "simulation.newton.refresh_cost=8.0",
     ])
     assert sc.simulation.dt == 2e-4
     rod = sc.model.beams[0]
@@ -121,7 +124,10 @@ def test_overrides_scalar_nested_and_array_entry_by_name():
     assert sc.probes[0].quantity == "velocity"
     opts = sc.integrator_options()
     assert opts.scheme == "hht" and opts.newton.max_iterations == 40 and not opts.newton.modified
-    assert sc.raw["simulation"]["newton"] == {"max_iterations": 40, "modified": False}
+    assert opts.predictor == "zero_acceleration" and not opts.compiled
+    assert opts.newton.refresh_cost == 8.0
+    assert sc.raw["simulation"]["newton"] == {"max_iterations": 40, "modified": False,
+                                              "refresh_cost": 8.0}
     assert sc.raw["beams"][0]["elements"] == 8
 
 
