@@ -84,7 +84,8 @@ CASES = [
     ("newton_refresh_cost", SIM + "newton = { refresh_cost = -1 }\n",
      "simulation.newton.refresh_cost: expected a number > 0, got -1"),
     ("unknown_predictor", SIM + "predictor = 'linear'\n",
-     "simulation.predictor: expected one of"),
+     "simulation.predictor: unknown predictor 'linear' (known: constant_acceleration, "
+     "zero_acceleration)"),
     ("compiled_not_bool", SIM + "compiled = 'yes'\n",
      "simulation.compiled: expected true or false, got 'yes'"),
     ("initial_static_not_bool", SIM + "initial_static = 1\n",
