@@ -9,10 +9,10 @@ interpolates ``r(xi) = P0 H1 + L T0 H2 + P1 H3 + L T1 H4`` with the unit-interva
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from ..errors import GeometryError
 
@@ -361,8 +361,7 @@ def _clean_points(p: FloatArray, closed: bool) -> FloatArray:
     return p
 
 
-def _gauss_arc(deriv: CubicSpline | CubicHermiteSpline, ua: FloatArray,
-               ub: FloatArray) -> FloatArray:
+def _gauss_arc(deriv: Any, ua: FloatArray, ub: FloatArray) -> FloatArray:
     """int_ua^ub |c'(u)| du with 5-point Gauss, element-wise."""
     h = ub - ua
     u = ua[:, None] + h[:, None] * GAUSS_XI[None, :]
@@ -373,6 +372,9 @@ def _gauss_arc(deriv: CubicSpline | CubicHermiteSpline, ua: FloatArray,
 def _resample(p: FloatArray, t: FloatArray | None, closed: bool,
               n_elem: int) -> tuple[FloatArray, FloatArray]:
     """Nodes and unit tangents at equal spline arc length (FORMULATION §4 step 1)."""
+    # imported here: scipy.interpolate costs ~0.5 s of start-up for every command
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
     pk = np.vstack([p, p[:1]]) if closed else p
     if t is None:
         # chord-length parametrised interpolating cubic spline (C2)
