@@ -1,18 +1,20 @@
-"""Cost of the clearance-joint narrow phase on a realistic state of Example 1.
+"""Where a step of Example 1 goes: unit costs of the compiled integrator, and the step model.
 
-Loads examples/curved_beam_sleeve.toml, integrates 0.05 s, then times (after warm-up):
-the compiled detection of all 9 hole sections (crossing, ellipse, broad phase, stationary points,
-closest-point projection), one contact-point evaluation (gap, force, consistent tangent), the
-joint's residual contribution with and without the tangent, the whole assembled residual, and
-the wall time per step of a 0.1 s run.
+Loads examples/curved_beam_sleeve.toml (with clearance) and the clearance-free variant,
+integrates 0.05 s, then times inside numba (no Python dispatch; best of 7 repeats of 300
+calls) the pieces a compiled step is made of: the residual (and its clearance-joint part: the
+detection of all hole sections and the forces of the penetrating points), the iteration matrix,
+the bordered banded factorisation and one solve. A 0.5 s run then gives the counts per step
+(residuals, iterations = solves, refreshes), and ``counts x unit costs`` is compared with the
+measured time per step (the rest is the predictor, corrector, post-step and Python per chunk).
 
-    python benchmarks/contact.py
+    python benchmarks/contact.py [--t-end 0.5]
 """
 
 from __future__ import annotations
 
-import sys
-import timeit
+import argparse
+import time
 from pathlib import Path
 
 import numpy as np
@@ -20,63 +22,105 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _us(f, n: int = 2000) -> float:  # noqa: ANN001
-    return 1e6 * min(timeit.repeat(f, number=n, repeat=3)) / n
+def _best(fn, args, n: int = 300) -> float:  # noqa: ANN001
+    """Best of 7 repeats, microseconds per call."""
+    fn(*args, 3)
+    best = np.inf
+    for _ in range(7):
+        t0 = time.perf_counter()
+        fn(*args, n)
+        best = min(best, (time.perf_counter() - t0) / n * 1e6)
+    return best
 
 
-def main() -> int:
-    import flexmbs as fm  # noqa: I001
-    from flexmbs.contact._detect import detect_circle
-    from flexmbs.contact.pair import contact_point
+def main(argv: list[str] | None = None) -> int:
+    import flexmbs as fm
+    from flexmbs import compiled as cm
+    from flexmbs._jit import njit
+    from flexmbs.assembly import Assembly
+    from flexmbs.contact._detect import clearance_forces
     from flexmbs.io.scenario import load_scenario
+    from flexmbs.solvers._bordered import (
+        BorderedBandedLU,
+        border_indices,
+        bordered_factorize,
+        bordered_solve,
+    )
 
-    sc = load_scenario(ROOT / "examples" / "curved_beam_sleeve.toml")
-    res = fm.simulate(sc.model, t_end=0.05, dt=1e-4, record_energy=False, output_interval=0.05)
-    asm, st = res.assembly, res.final_state
-    (j,) = sc.model.interactions
-    n, m = asm.n_coords, asm.n_mult
-    qb = st.q[j._body_dofs]
-    A, centre, *_ = j._frames(qb)
-    qe = np.ascontiguousarray(st.q[j._elem_dofs])
-    R = float(j.hole.section.radius)
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--t-end", type=float, default=0.5)
+    args = ap.parse_args(argv)
 
-    def detect() -> int:
-        return detect_circle(qe, j._lengths, centre, A, j.stations, j._elem, j._xi, j._elem_out,
-                             j._xi_out, j.beam_radius, R, j._rows)
+    @njit
+    def loop_residual(m, q, v, qdd, lam, fv, r, n):  # noqa: ANN001, ANN202
+        for _ in range(n):
+            cm.residual(m, q, v, qdd, lam, fv, r)
 
-    n_active = detect()
-    row = j._rows[0]
-    eP = int(row[3])
-    u_Q = A.T @ (row[5:8] - qb[:3])
-    ed = j._elem_dofs[eP]
+    @njit
+    def loop_clearance(m, q, v, r, n):  # noqa: ANN001, ANN202
+        cl = m.clearance
+        ne, ns = cl.n_elem[0], cl.n_sec[0]
+        for _ in range(n):
+            clearance_forces(q, v, cl.body[0], cl.elem_dofs[0, :ne], cl.lengths[0, :ne],
+                             cl.hole_point[0], cl.stations[0, :ns], cl.elem_ws[0, :ns],
+                             cl.xi_ws[0, :ns], cl.elem_out[0, :ns], cl.xi_out[0, :ns], cl.r_b[0],
+                             cl.R[0], cl.law[0], cl.mu[0], cl.eps_v[0], cl.approach[0, :ns],
+                             cl.active[0, :ns], cl.psi[0, :ns], cl.qe, cl.rows[0], False, r, cl.K,
+                             cl.K, cl.kelem)
 
-    def pair(consistent: bool) -> object:
-        return contact_point(qb, st.v[j._body_dofs], u_Q, st.q[ed], st.v[ed], j._lengths[eP],
-                             row[4], j.beam_radius, j.contact, None, 0.0, consistent)
+    @njit
+    def loop_jacobian(m, q, v, qdd, lam, fv, data, n):  # noqa: ANN001, ANN202
+        for _ in range(n):
+            cm.jacobian(m, q, v, qdd, lam, fv, 1.0, 0.05, 1e-8, data)
 
-    rq, rl = np.zeros(n), np.zeros(m)
-    t_detect = _us(detect)
-    t_pair = _us(lambda: pair(False))
-    t_pair_c = _us(lambda: pair(True))
-    t_joint = _us(lambda: j.evaluate(asm, st.q, st.v, st.lam, 0.05, rq, None))
-    t_eval = _us(lambda: asm.evaluate(st.q, st.v, st.qdd, st.lam, 0.05, rq, rl))
-    sc2 = load_scenario(ROOT / "examples" / "curved_beam_sleeve.toml")
-    run = fm.simulate(sc2.model, t_end=0.1, dt=1e-4, record_energy=False, output_interval=0.1)
-    s = run.stats
-    print(f"Example 1 state at t = 0.05 s: {len(j.stations)} sections, {n_active} penetrating "
-          "contact points")
-    print(f"{'detection of all sections (compiled)':48s} {t_detect:8.2f} us "
-          f"({t_detect / len(j.stations):.2f} us per section)")
-    print(f"{'one contact point, Gauss-Newton tangent':48s} {t_pair:8.2f} us")
-    print(f"{'one contact point, consistent tangent':48s} {t_pair_c:8.2f} us")
-    print(f"{'joint residual (detection + active points)':48s} {t_joint:8.2f} us "
-          f"({(t_joint - t_detect) / max(n_active, 1):.1f} us per active point)")
-    print(f"{'assembled residual (beam, body, joint)':48s} {t_eval:8.2f} us")
-    print(f"{'0.1 s run':48s} {1e6 * run.wall_time / s.steps:8.1f} us/step, "
-          f"{s.newton_iterations / s.steps:.2f} Newton iterations/step, {s.factorizations} "
-          "factorisations")
+    @njit
+    def loop_factorize(f, data, n):  # noqa: ANN001, ANN202
+        for _ in range(n):
+            bordered_factorize(f, data)
+
+    @njit
+    def loop_solve(f, b, x, n):  # noqa: ANN001, ANN202
+        for _ in range(n):
+            bordered_solve(f, b, x)
+
+    print(f"Example 1 (16 elements, 9 hole sections): compiled unit costs [us], best of 7; "
+          f"counts per step over {args.t_end} s at h = 1e-4")
+    print(f"{'model':20s} {'residual':>9s} {'(joint)':>8s} {'matrix':>8s} {'factor':>8s} "
+          f"{'solve':>7s} | {'res/st':>6s} {'it/st':>6s} {'ref/st':>7s} | {'model':>7s} "
+          f"{'measured':>9s} us/step")
+    for toml in ("curved_beam_sleeve.toml", "curved_beam_sleeve_ideal.toml"):
+        sc = load_scenario(ROOT / "examples" / toml)
+        asm = Assembly(sc.model)
+        res = fm.simulate(asm, t_end=0.05, dt=1e-4, output_interval=0.05, record_energy=False)
+        st = res.final_state
+        m, fns, _ = cm.compile_model(asm)
+        cm.push_state(m, asm)
+        fv = cm.time_function_values(fns, st.t, 1e-4, 1)[0]
+        r = np.zeros(asm.n_total)
+        x = np.zeros_like(r)
+        data = np.zeros_like(asm.matrix.data)
+        cm.jacobian(m, st.q, st.v, st.qdd, st.lam, fv, 1.0, 0.05, 1e-8, data)
+        lu = BorderedBandedLU(asm.matrix, border_indices(asm))
+        lu.factorize(data)
+        u_res = _best(loop_residual, (m, st.q, st.v, st.qdd, st.lam, fv, r))
+        u_joint = (_best(loop_clearance, (m, st.q, st.v, r)) if m.clearance.r_b.size
+                   else float("nan"))
+        u_jac = _best(loop_jacobian, (m, st.q, st.v, st.qdd, st.lam, fv, data))
+        u_fac = _best(loop_factorize, (lu.factor, data))
+        u_sol = _best(loop_solve, (lu.factor, r, x))
+        run = fm.simulate(load_scenario(ROOT / "examples" / toml).model, t_end=args.t_end,
+                          dt=1e-4, output_interval=args.t_end, record_energy=False)
+        s = run.stats
+        per = s.residual_evaluations / s.steps, s.newton_iterations / s.steps, \
+            s.factorizations / s.steps
+        model = per[0] * u_res + per[1] * u_sol + per[2] * (u_jac + u_fac)
+        print(f"{sc.name:20s} {u_res:9.1f} {u_joint:8.1f} {u_jac:8.1f} {u_fac:8.1f} {u_sol:7.1f} "
+              f"| {per[0]:6.2f} {per[1]:6.2f} {per[2]:7.3f} | {model:7.1f} "
+              f"{1e6 * run.wall_time / s.steps:9.1f}")
+    print(f"(band: n_a = {lu.n_band}, kl = ku = {lu.kl}, border n_b = {lu.n_border}; "
+          "'measured' includes numba cache loading on the first run of a process)")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())
