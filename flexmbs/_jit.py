@@ -9,6 +9,8 @@ from __future__ import annotations
 import os
 from typing import Any
 
+import numpy as np
+
 try:  # pragma: no cover - exercised implicitly
     if os.environ.get("FLEXMBS_DISABLE_JIT", "") == "1":
         raise ImportError
@@ -32,4 +34,10 @@ def njit(*args: Any, **kwargs: Any) -> Any:
     return _njit(*args, **kwargs)
 
 
-__all__ = ["njit", "HAVE_NUMBA"]
+#: Runtime booleans for compiled callers. A literal ``True``/``False`` (or int) argument of a call
+#: from compiled code makes numba compile a separate specialisation of the callee
+#: (``Literal[bool]``), one more copy of its machine code; ``FLAG[0]``/``FLAG[1]`` (and
+#: ``np.int64(n)``) are typed like the values a Python caller passes.
+FLAG = np.array([False, True])
+
+__all__ = ["njit", "HAVE_NUMBA", "FLAG"]

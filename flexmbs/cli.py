@@ -311,6 +311,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                 return EXIT_BAD_INPUT
         else:
             out = Path(args.out) if args.out is not None else Path("out") / sc.name
+        if not quiet:
+            from .solvers._compiled import kernels_cached
+
+            if not kernels_cached():
+                print("flexmbs: first run here: compiling the numba kernels (once, about 2-3 "
+                      "minutes; cached for later runs)", file=sys.stderr, flush=True)
         asm = Assembly(sc.model, redundant_constraints=sim.redundant_constraints)
         metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": _overrides(args),
                     "integrator_name": sim.integrator, "initial_static": sim.initial_static}

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from ._jit import njit
+from ._jit import FLAG, njit
 from .constraints.joints import (
     BeamNodeRigid,
     BeamNodeSpherical,
@@ -46,7 +46,7 @@ from .contact._detect import N_COLS, clearance_forces, clearance_update
 from .contact.joint import SlidingClearanceJoint
 from .contact.sections import CircleSection
 from .elements import ancf_cable as cable
-from .elements.rigid_body import _g, _inertial_kernel, point_tensor
+from .elements.rigid_body import _g, _inertial_kernel, _mm, point_tensor
 
 if TYPE_CHECKING:  # pragma: no cover
     from .assembly import Assembly
@@ -597,7 +597,7 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
         for k in range(12):
             bm.qe[e, k] = q[bm.dofs[e, k]]
             bm.ve[e, k] = v[bm.dofs[e, k]]
-    cable._internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, False, False, bm.force,
+    cable._internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[0], FLAG[0], bm.force,
                            bm.empty, bm.empty)
     for e in range(ne):
         for i in range(12):
@@ -697,7 +697,7 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
             q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
             cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
             cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
-            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], False, r,
+            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], FLAG[0], r,
             cl.K, cl.K, cl.kelem)
         cl.count[j] = cnt
         if cnt < 0:
@@ -741,7 +741,7 @@ def post_step(model, q, v):  # noqa: ANN001, ANN201
 def _body_mass_pp(J, p, out):  # noqa: ANN001, ANN202
     """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (FORMULATION I §5)."""
     G = _g(p)
-    JG = J @ G
+    JG = _mm(J, G)
     for a in range(4):
         for b in range(4):
             acc = 0.0
@@ -766,7 +766,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
         for k in range(12):
             bm.qe[e, k] = q[bm.dofs[e, k]]
             bm.ve[e, k] = v[bm.dofs[e, k]]
-    cable._internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, True, True, bm.force,
+    cable._internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[1], FLAG[1], bm.force,
                            jp.stiff, jp.damp)
     kscale = 0.0
     for e in range(ne):
@@ -904,7 +904,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
             q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
             cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
             cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
-            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], True,
+            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], FLAG[1],
             model.scratch, jp.cl_K, jp.cl_C, jp.cl_elem)
         cl.count[j] = m
         if m < 0:

@@ -295,7 +295,7 @@ class SlidingJoint(Interaction):
         self._body_dofs = asm.body_dofs(self.body)
         self._elem_dofs = asm.element_dofs(self.beam)
         self._s_dof = int(extra_dofs[0])
-        self._lengths = np.asarray(self.beam.centerline.lengths, float)
+        self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._starts = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
         self._total = float(np.sum(self._lengths))
         self._beam_dofs = asm.beam_dofs(self.beam)

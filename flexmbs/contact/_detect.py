@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import FLAG, njit
 from ..elements.rigid_body import _rotation_single
 from .geometry import beam_point, closest_point_kernel, section_crossing_kernel, section_ellipse
 from .pair import contact_force
@@ -46,7 +46,7 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi
         for c in range(3):
             origin[c] = centre[c] + stations[k] * n[c]
         e, xi, found = section_crossing_kernel(qe, lengths, origin, n, elem_ws[k], xi_ws[k],
-                                               1e-12, 30, 2.0 * R + r_b)
+                                               1e-12, np.int64(30), 2.0 * R + r_b)
         if not found:
             return -1 - k   # no crossing near the section: the beam left the hole
         elem_out[k] = e
@@ -85,7 +85,7 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi
             Q = np.empty(3)
             for c in range(3):
                 Q[c] = origin[c] + R * (x / rho) * ey[c] + R * (y / rho) * ez[c]
-            eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13, 30)
+            eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13, np.int64(30))
             row = out[count]
             row[0] = k
             row[1] = j
@@ -188,7 +188,10 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
     for i in range(7):
         qb[i] = q[body_dofs[i]]
     A = _rotation_single(qb[3:7])
-    centre = qb[0:3] + A @ hole_point
+    centre = np.empty(3)
+    for c in range(3):
+        centre[c] = qb[c] + A[c, 0] * hole_point[0] + A[c, 1] * hole_point[1] \
+            + A[c, 2] * hole_point[2]
     return qb, A, centre
 
 
@@ -265,7 +268,7 @@ def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, station
     bore). ``scratch`` receives the (discarded) residual."""
     m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
                                xi_ws, elem_ws, xi_ws, r_b, R, law, mu, eps_v, approach, active,
-                               psi_track, qe, rows, False, scratch, np.empty((0, 19, 19)),
+                               psi_track, qe, rows, FLAG[0], scratch, np.empty((0, 19, 19)),
                                np.empty((0, 19, 19)), np.empty(0, np.int64))
     if m < 0:
         return m

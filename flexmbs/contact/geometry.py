@@ -117,6 +117,15 @@ def _dot(a, b):  # noqa: ANN001, ANN202
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
+@njit(inline="always")
+def _cross(a, b):  # noqa: ANN001, ANN202
+    out = np.empty(3)
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+    return out
+
+
 @njit
 def _phi_at(q_e, lengths, origin, normal, s):  # noqa: ANN001, ANN202
     n = q_e.shape[0]
@@ -246,12 +255,12 @@ def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
     """
     t = tangent_vec / math.sqrt(_dot(tangent_vec, tangent_vec))
     c = abs(_dot(t, normal))
-    eb = np.cross(t, normal)
+    eb = _cross(t, normal)
     sn = math.sqrt(_dot(eb, eb))
     if sn < 1e-10:
         return r_b, r_b, e_y.copy(), e_z.copy(), c
     eb = eb / sn
-    ea = np.cross(normal, eb)
+    ea = _cross(normal, eb)
     a = r_b / c if c > 0.0 else np.inf
     return a, r_b, ea, eb, c
 

@@ -144,7 +144,8 @@ class SlidingClearanceJoint(Interaction):
     def bind(self, asm: Assembly, extra_dofs: np.ndarray) -> None:
         self._body_dofs = asm.body_dofs(self.body)
         self._elem_dofs = asm.element_dofs(self.beam)
-        self._lengths = np.ascontiguousarray(self.beam.centerline.lengths, dtype=float)
+        # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
+        self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._beam_dofs = asm.beam_dofs(self.beam)
         self._qe = np.zeros((len(self._lengths), 12))
 
@@ -155,7 +156,8 @@ class SlidingClearanceJoint(Interaction):
     def _frames(self, qb: np.ndarray):  # noqa: ANN202
         A = rotation_matrix(qb[3:7])
         centre = qb[:3] + A @ self.hole_point
-        return A, centre, A[:, 0], A[:, 1], A[:, 2]
+        axes = np.ascontiguousarray(A.T)
+        return A, centre, axes[0], axes[1], axes[2]
 
     def _check_initial(self, q0: np.ndarray) -> None:
         """The beam must cross every section plane inside the bore, and fit (no jamming)."""

@@ -89,13 +89,9 @@ def _interp(w, q):  # noqa: ANN001, ANN202
 
 
 @njit
-def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):  # noqa: ANN001, ANN201
-    """Gap kinematics of one contact (FORMULATION II §4–§5), numba kernel.
-
-    Returns ``(xi, g, gdot, n, P, Q, B (19,), W (3,19), H (19,19))`` with ``W = ∂(x_Q − x_P)/∂q_c``
-    at fixed ξ, ``B = nᵀW = ∂g_N/∂q_c``, and (if ``want_hessian``) the consistent
-    ``H = ∂²g_N/∂q_c²`` of §5 including the ξ_P variation and the Euler-parameter Hessian.
-    """
+def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa: ANN001, ANN202
+    """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
+    rx, rxx, ell)``; see :func:`contact_geometry`."""
     p = q_body[3:7]
     T = _point_tensor(u_Q)
     Bp = np.zeros((3, 4))
@@ -152,26 +148,52 @@ def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want
             acc -= S[m] * v_elem[3 * m + c]
         vrel[c] = acc
     gdot = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
+    return xi, g, gdot, n, P, Q, B, W, T, dS, rx, rxx, ell
+
+
+@njit
+def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
+    """The consistent ``∂²g_N/∂q_c²`` (19, 19) of §5 (ξ_P variation, Euler-parameter part)."""
     H = np.zeros((19, 19))
-    if want_hessian:
-        Pn = np.eye(3) - np.outer(n, n)
-        PW = Pn @ W
-        H += (W.T @ PW) / ell
-        for i in range(4):
-            for j in range(4):
-                acc = 0.0
-                for k in range(3):
-                    acc += n[k] * T[k, i, j]
-                H[3 + i, 3 + j] += 2.0 * acc
-        a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
-        den = a11 - ell * (n[0] * rxx[0] + n[1] * rxx[1] + n[2] * rxx[2])
-        w = np.zeros(19)
+    for i in range(19):
         for j in range(19):
-            w[j] = rx[0] * W[0, j] + rx[1] * W[1, j] + rx[2] * W[2, j]
-        for m in range(4):
+            acc = 0.0
             for c in range(3):
-                w[7 + 3 * m + c] += ell * dS[m] * n[c]
-        H -= np.outer(w, w) / (ell * den)
+                acc += W[c, i] * W[c, j]
+            bi = n[0] * W[0, i] + n[1] * W[1, i] + n[2] * W[2, i]
+            bj = n[0] * W[0, j] + n[1] * W[1, j] + n[2] * W[2, j]
+            H[i, j] = (acc - bi * bj) / ell            # Wᵀ(I − nnᵀ)W / ℓ
+    for i in range(4):
+        for j in range(4):
+            acc = 0.0
+            for k in range(3):
+                acc += n[k] * T[k, i, j]
+            H[3 + i, 3 + j] += 2.0 * acc
+    a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
+    den = a11 - ell * (n[0] * rxx[0] + n[1] * rxx[1] + n[2] * rxx[2])
+    w = np.zeros(19)
+    for j in range(19):
+        w[j] = rx[0] * W[0, j] + rx[1] * W[1, j] + rx[2] * W[2, j]
+    for m in range(4):
+        for c in range(3):
+            w[7 + 3 * m + c] += ell * dS[m] * n[c]
+    for i in range(19):
+        for j in range(19):
+            H[i, j] -= w[i] * w[j] / (ell * den)
+    return H
+
+
+@njit
+def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):  # noqa: ANN001, ANN201
+    """Gap kinematics of one contact (FORMULATION II §4–§5), numba kernel.
+
+    Returns ``(xi, g, gdot, n, P, Q, B (19,), W (3,19), H (19,19))`` with ``W = ∂(x_Q − x_P)/∂q_c``
+    at fixed ξ, ``B = nᵀW = ∂g_N/∂q_c``, and (if ``want_hessian``) the consistent
+    ``H = ∂²g_N/∂q_c²`` of §5 including the ξ_P variation and the Euler-parameter Hessian.
+    """
+    xi, g, gdot, n, P, Q, B, W, T, dS, rx, rxx, ell = _kinematics(
+        q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b)
+    H = _gap_hessian(n, W, T, dS, rx, rxx, ell) if want_hessian else np.zeros((19, 19))
     return xi, g, gdot, n, P, Q, B, W, H
 
 
@@ -185,8 +207,8 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
     ``want_tangent`` ``K = k_t BᵀB (+ k_t Wᵀ(∂F_t/∂f_N)Bᵀ)`` and ``C = c_t BᵀB (+ friction)``
     (19, 19), and ``geo`` (12,) = [n, P, Q, F_H]. Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
-    xi, g, gdot, n, P, Q, B, W, _ = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length,
-                                                     xi0, r_b, False)
+    xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
+                                                            length, xi0, r_b)
     f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
     F_H = np.empty(3)
     for c in range(3):
@@ -224,9 +246,17 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
                 C[i, j] = ct * bb
         if friction:
             # C += −Wᵀ (∂F_t/∂v_t) P_n W + c_t (Wᵀ ∂F_t/∂f_N) Bᵀ;  K += k_t (Wᵀ ∂F_t/∂f_N) Bᵀ
-            M = dF_dv - np.outer(dF_dv @ n, n)          # (∂F_t/∂v_t) P_n
-            MW = M @ W
-            WtdF = W.T @ dF_dfn
+            M = np.empty((3, 3))                      # (∂F_t/∂v_t) P_n
+            for a in range(3):
+                dn = dF_dv[a, 0] * n[0] + dF_dv[a, 1] * n[1] + dF_dv[a, 2] * n[2]
+                for b in range(3):
+                    M[a, b] = dF_dv[a, b] - dn * n[b]
+            MW = np.zeros((3, 19))
+            WtdF = np.zeros(19)
+            for j in range(19):
+                for a in range(3):
+                    MW[a, j] = M[a, 0] * W[0, j] + M[a, 1] * W[1, j] + M[a, 2] * W[2, j]
+                WtdF[j] = W[0, j] * dF_dfn[0] + W[1, j] * dF_dfn[1] + W[2, j] * dF_dfn[2]
             for i in range(19):
                 for j in range(19):
                     C[i, j] += ct * WtdF[i] * B[j] - (W[0, i] * MW[0, j] + W[1, i] * MW[1, j]

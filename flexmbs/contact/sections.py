@@ -265,12 +265,12 @@ def quartic_real_roots(c4, c3, c2, c1, c0, out):  # noqa: ANN001, ANN201
                     return 0
                 out[0] = -c0 / c1
                 return 1
-            return _quadratic_seeds(c1 / c2, c0 / c2, out, 0)
+            return _quadratic_seeds(c1 / c2, c0 / c2, out, np.int64(0))
         # cubic: one real root by the resolvent routine, then deflate
         b, c, d = c2 / c3, c1 / c3, c0 / c3
         t = _cubic_largest_root(b, c, d)
         out[0] = t
-        return _quadratic_seeds(b + t, c + t * (b + t), out, 1)
+        return _quadratic_seeds(b + t, c + t * (b + t), out, np.int64(1))
     a, b, c, d = c3 / c4, c2 / c4, c1 / c4, c0 / c4
     sh = 0.25 * a
     a2 = a * a
@@ -282,7 +282,7 @@ def quartic_real_roots(c4, c3, c2, c1, c0, out):  # noqa: ANN001, ANN201
     if abs(q) <= 1e-14 * scale ** 1.5:
         # biquadratic y⁴ + p y² + r: z = y²
         z = np.empty(2)
-        nz = _quadratic_seeds(p, r, z, 0)
+        nz = _quadratic_seeds(p, r, z, np.int64(0))
         for i in range(nz):
             if z[i] >= 0.0:
                 y = math.sqrt(z[i])
@@ -298,7 +298,7 @@ def quartic_real_roots(c4, c3, c2, c1, c0, out):  # noqa: ANN001, ANN201
         m = 1e-300
     w = math.sqrt(2.0 * m)
     tmp = np.empty(4)
-    k = _quadratic_seeds(-w, 0.5 * p + m + q / (2.0 * w), tmp, 0)
+    k = _quadratic_seeds(-w, 0.5 * p + m + q / (2.0 * w), tmp, np.int64(0))
     k = _quadratic_seeds(w, 0.5 * p + m - q / (2.0 * w), tmp, k)
     for i in range(k):
         out[i] = tmp[i] - sh

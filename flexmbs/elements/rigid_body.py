@@ -352,6 +352,48 @@ def _ghat(y):  # noqa: ANN001, ANN202
     return H
 
 
+@njit(inline="always")
+def _mm(A, B):  # noqa: ANN001, ANN202
+    """A B for small matrices (explicit loops: numba's ``@`` goes through BLAS wrappers)."""
+    out = np.zeros((A.shape[0], B.shape[1]))
+    for i in range(A.shape[0]):
+        for k in range(A.shape[1]):
+            a = A[i, k]
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+    return out
+
+
+@njit(inline="always")
+def _tmm(A, B):  # noqa: ANN001, ANN202
+    """Aᵀ B for small matrices."""
+    out = np.zeros((A.shape[1], B.shape[1]))
+    for k in range(A.shape[0]):
+        for i in range(A.shape[1]):
+            a = A[k, i]
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+    return out
+
+
+@njit(inline="always")
+def _mv(A, x):  # noqa: ANN001, ANN202
+    out = np.zeros(A.shape[0])
+    for i in range(A.shape[0]):
+        for k in range(A.shape[1]):
+            out[i] += A[i, k] * x[k]
+    return out
+
+
+@njit(inline="always")
+def _tmv(A, x):  # noqa: ANN001, ANN202
+    out = np.zeros(A.shape[1])
+    for k in range(A.shape[0]):
+        for i in range(A.shape[1]):
+            out[i] += A[k, i] * x[k]
+    return out
+
+
 @njit
 def _inertial_kernel(mass, inertia, p, pd, qdd, out_r, out_dq, out_dv):  # noqa: ANN001, ANN202
     nb = mass.size
@@ -361,18 +403,18 @@ def _inertial_kernel(mass, inertia, p, pd, qdd, out_r, out_dq, out_dv):  # noqa:
         Gd = _g(pd[bi])
         pdd = qdd[bi, 3:]
         Gpdd = _g(pdd)
-        JG = J @ G
-        GJG = G.T @ JG
-        JGd = J @ Gd
-        GdJGd = Gd.T @ JGd
-        JGpdd = JG @ pdd
-        Gd_p = Gd @ p[bi]
-        JGd_p = J @ Gd_p
+        JG = _mm(J, G)
+        GJG = _tmm(G, JG)
+        JGd = _mm(J, Gd)
+        GdJGd = _tmm(Gd, JGd)
+        JGpdd = _mv(JG, pdd)
+        Gd_p = _mv(Gd, p[bi])
+        JGd_p = _mv(J, Gd_p)
         for c in range(3):
             out_r[bi, c] = mass[bi] * qdd[bi, c]
-        rp = 4.0 * (GJG @ pdd) - 8.0 * (Gd.T @ JGd_p)
-        dq = 4.0 * (_ghat(JGpdd) - G.T @ (J @ Gpdd)) - 8.0 * GdJGd
-        dv = -8.0 * (_ghat(JGd_p) - Gd.T @ JG)
+        rp = 4.0 * _mv(GJG, pdd) - 8.0 * _tmv(Gd, JGd_p)
+        dq = 4.0 * (_ghat(JGpdd) - _tmm(G, _mm(J, Gpdd))) - 8.0 * GdJGd
+        dv = -8.0 * (_ghat(JGd_p) - _tmm(Gd, JG))
         out_dq[bi, :, :] = 0.0
         out_dv[bi, :, :] = 0.0
         for i in range(4):

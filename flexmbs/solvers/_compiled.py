@@ -34,6 +34,15 @@ ERR_SINGULAR = 100
 INFO_SIZE = 16
 
 
+def kernels_cached() -> bool:
+    """Whether numba's on-disk cache holds a compiled :func:`alpha_run` (else the first run
+    compiles the kernels, a one-time cost of a few minutes)."""
+    try:
+        return bool(alpha_run._cache._cache_file._load_index())
+    except Exception:   # no numba, caching disabled, or numba internals changed  # noqa: BLE001
+        return True
+
+
 @njit
 def _slow(err, err_prev, ratio, max_more):  # noqa: ANN001, ANN202
     """Modified Newton contracts too slowly: rate above ``ratio`` or more than ``max_more``
