@@ -530,13 +530,7 @@ def _bodies(b, q, v, qdd, fv, r):  # noqa: ANN001, ANN202
     nb = b.dofs.shape[0]
     if nb == 0:
         return scale
-    for i in range(nb):
-        for k in range(4):
-            b.p[i, k] = q[b.dofs[i, 3 + k]]
-            b.pd[i, k] = v[b.dofs[i, 3 + k]]
-        for k in range(7):
-            b.qdd[i, k] = qdd[b.dofs[i, k]]
-    _inertial_kernel(b.mass, b.inertia, b.p, b.pd, b.qdd, b.res, b.dq, b.dv)
+    _body_inertia(b, q, v, qdd)
     for i in range(nb):
         for k in range(7):
             r[b.dofs[i, k]] += b.res[i, k]
@@ -575,6 +569,90 @@ def _bodies(b, q, v, qdd, fv, r):  # noqa: ANN001, ANN202
     return scale
 
 
+@njit(inline="always")
+def _gather_beam(bm, q, v):  # noqa: ANN001, ANN202
+    for e in range(bm.dofs.shape[0]):
+        for k in range(12):
+            bm.qe[e, k] = q[bm.dofs[e, k]]
+            bm.ve[e, k] = v[bm.dofs[e, k]]
+
+
+@njit(inline="always")
+def _body_inertia(b, q, v, qdd):  # noqa: ANN001, ANN202
+    """Gather [p, p', q''] of every body and evaluate the inertial residual and its derivatives."""
+    for i in range(b.dofs.shape[0]):
+        for k in range(4):
+            b.p[i, k] = q[b.dofs[i, 3 + k]]
+            b.pd[i, k] = v[b.dofs[i, 3 + k]]
+        for k in range(7):
+            b.qdd[i, k] = qdd[b.dofs[i, k]]
+    _inertial_kernel(b.mass, b.inertia, b.p, b.pd, b.qdd, b.res, b.dq, b.dv)
+
+
+@njit(inline="always")
+def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
+    """Φ, Φ_q of joint c into ``tm.phi``, ``tm.jac``; returns (first coordinate, coordinates,
+    first equation, end of equations)."""
+    c0 = tm.coord_ptr[c]
+    nloc = tm.coord_ptr[c + 1] - c0
+    for k in range(nloc):
+        tm.ql[k] = q[tm.coords[c0 + k]]
+    e0 = tm.eq_ptr[c]
+    e1 = tm.eq_ptr[c + 1]
+    term_values(tm.table, e0, e1, tm.ql[:nloc], tm.phi, tm.jac[:, :nloc])
+    return c0, nloc, e0, e1
+
+
+@njit(inline="always")
+def _sliding_constraint(sl, j, q):  # noqa: ANN001, ANN202
+    """Φ, Φ_q of sliding joint j on its current element; returns (element, its dofs, s dof,
+    equations)."""
+    k = sl.element[j]
+    ed = sl.elem_dofs[j, k]
+    for a in range(7):
+        sl.ql[a] = q[sl.body[j, a]]
+    for a in range(12):
+        sl.ql[7 + a] = q[ed[a]]
+    sd = sl.s_dof[j]
+    sl.ql[19] = q[sd]
+    ne_j = sl.n_eq[j]
+    sliding_values(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.phi, sl.jac)
+    return k, ed, sd, ne_j
+
+
+@njit(inline="always")
+def _sliding_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
+    """Axial and friction force on s of sliding joint j (:func:`sliding_axial_force`)."""
+    lp = np.zeros(3)
+    for a in range(3):
+        if sl.rows[j, a] >= 0:
+            lp[a] = lam[sl.rows[j, a]]
+    f_ax = fv[sl.fn[j]] if sl.fn[j] >= 0 else 0.0
+    return sliding_axial_force(sl.ql[7:19], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp,
+                               sl.mu[j], sl.eps_v[j], f_ax)
+
+
+@njit(inline="always")
+def _clearance(model, j, q, v, want_tangent, r, K, C, elem):  # noqa: ANN001, ANN202
+    """:func:`clearance_forces` of clearance joint j; records the candidates' count and, if the
+    beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
+    cl = model.clearance
+    ne_j = cl.n_elem[j]
+    ns = cl.n_sec[j]
+    m, cnt, sc = clearance_forces(
+        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
+        cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
+        cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
+        cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
+        r, K, C, elem)
+    cl.count[j] = m
+    if m < 0:
+        model.error[0] = ERR_LEFT_BORE
+        model.error[1] = j
+        model.error[2] = -1 - m
+    return m, cnt, sc
+
+
 @njit
 def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR0912, PLR0915
     """``r = [r_q; r_lam]`` of the dynamic equations (see the module docstring); returns
@@ -593,10 +671,7 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
     # ---- beams
     bm = model.beam
     ne = bm.dofs.shape[0]
-    for e in range(ne):
-        for k in range(12):
-            bm.qe[e, k] = q[bm.dofs[e, k]]
-            bm.ve[e, k] = v[bm.dofs[e, k]]
+    _gather_beam(bm, q, v)
     cable._internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[0], FLAG[0], bm.force,
                            bm.empty, bm.empty)
     for e in range(ne):
@@ -637,13 +712,7 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
     # ---- joints (term tables)
     tm = model.term
     for c in range(tm.coord_ptr.size - 1):
-        c0 = tm.coord_ptr[c]
-        nloc = tm.coord_ptr[c + 1] - c0
-        for k in range(nloc):
-            tm.ql[k] = q[tm.coords[c0 + k]]
-        e0 = tm.eq_ptr[c]
-        e1 = tm.eq_ptr[c + 1]
-        term_values(tm.table, e0, e1, tm.ql[:nloc], tm.phi, tm.jac[:, :nloc])
+        c0, nloc, e0, e1 = _term_constraint(tm, c, q)
         for i in range(e0, e1):
             row = tm.rows[i]
             if row < 0:
@@ -655,16 +724,7 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
     # ---- sliding joints (no clearance)
     sl = model.sliding
     for j in range(sl.s_dof.size):
-        k = sl.element[j]
-        ed = sl.elem_dofs[j, k]
-        for a in range(7):
-            sl.ql[a] = q[sl.body[j, a]]
-        for a in range(12):
-            sl.ql[7 + a] = q[ed[a]]
-        sd = sl.s_dof[j]
-        sl.ql[19] = q[sd]
-        ne_j = sl.n_eq[j]
-        sliding_values(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.phi, sl.jac)
+        k, ed, sd, ne_j = _sliding_constraint(sl, j, q)
         for i in range(ne_j):
             row = sl.rows[j, i]
             if row < 0:
@@ -677,33 +737,15 @@ def residual(model, q, v, qdd, lam, fv, r):  # noqa: ANN001, ANN201, C901, PLR09
                 r[ed[a]] += sl.jac[i, 7 + a] * lr
             r[sd] += sl.jac[i, 19] * lr
         if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
-            lp = np.zeros(3)
-            for a in range(3):
-                if sl.rows[j, a] >= 0:
-                    lp[a] = lam[sl.rows[j, a]]
-            f_ax = fv[sl.fn[j]] if sl.fn[j] >= 0 else 0.0
-            Qs, _, _, _, _, _, _ = sliding_axial_force(
-                sl.ql[7:19], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp, sl.mu[j],
-                sl.eps_v[j], f_ax)
+            Qs, _, _, _, _, _, _ = _sliding_force(sl, j, k, sd, q, v, lam, fv)
             r[sd] -= Qs
             if abs(Qs) > scale:
                 scale = abs(Qs)
     # ---- clearance joints
     cl = model.clearance
     for j in range(cl.r_b.size):
-        ne_j = cl.n_elem[j]
-        ns = cl.n_sec[j]
-        cnt, _, sc = clearance_forces(
-            q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
-            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
-            cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
-            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], FLAG[0], r,
-            cl.K, cl.K, cl.kelem)
-        cl.count[j] = cnt
-        if cnt < 0:
-            model.error[0] = ERR_LEFT_BORE
-            model.error[1] = j
-            model.error[2] = -1 - cnt
+        m, _, sc = _clearance(model, j, q, v, FLAG[0], r, cl.K, cl.K, cl.kelem)
+        if m < 0:
             return scale, ERR_LEFT_BORE
         if sc > scale:
             scale = sc
@@ -762,10 +804,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
     # ---- beams
     bm = model.beam
     ne = bm.dofs.shape[0]
-    for e in range(ne):
-        for k in range(12):
-            bm.qe[e, k] = q[bm.dofs[e, k]]
-            bm.ve[e, k] = v[bm.dofs[e, k]]
+    _gather_beam(bm, q, v)
     cable._internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[1], FLAG[1], bm.force,
                            jp.stiff, jp.damp)
     kscale = 0.0
@@ -781,13 +820,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
     b = model.body
     nb = b.dofs.shape[0]
     if nb > 0:
-        for i in range(nb):
-            for k in range(4):
-                b.p[i, k] = q[b.dofs[i, 3 + k]]
-                b.pd[i, k] = v[b.dofs[i, 3 + k]]
-            for k in range(7):
-                b.qdd[i, k] = qdd[b.dofs[i, k]]
-        _inertial_kernel(b.mass, b.inertia, b.p, b.pd, b.qdd, b.res, b.dq, b.dv)
+        _body_inertia(b, q, v, qdd)
         Mpp = np.empty((4, 4))
         for i in range(nb):
             _body_mass_pp(b.inertia[i], b.p[i], Mpp)
@@ -827,13 +860,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
     # ---- joints (term tables)
     tm = model.term
     for c in range(tm.coord_ptr.size - 1):
-        c0 = tm.coord_ptr[c]
-        nloc = tm.coord_ptr[c + 1] - c0
-        for k in range(nloc):
-            tm.ql[k] = q[tm.coords[c0 + k]]
-        e0 = tm.eq_ptr[c]
-        e1 = tm.eq_ptr[c + 1]
-        term_values(tm.table, e0, e1, tm.ql[:nloc], tm.phi, tm.jac[:, :nloc])
+        c0, nloc, e0, e1 = _term_constraint(tm, c, q)
         w = jp.term_jptr[c]
         for i in range(e0, e1):
             row = tm.rows[i]
@@ -854,16 +881,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
     sl = model.sliding
     lfull = np.zeros(5)
     for j in range(sl.s_dof.size):
-        k = sl.element[j]
-        ed = sl.elem_dofs[j, k]
-        for a in range(7):
-            sl.ql[a] = q[sl.body[j, a]]
-        for a in range(12):
-            sl.ql[7 + a] = q[ed[a]]
-        sd = sl.s_dof[j]
-        sl.ql[19] = q[sd]
-        ne_j = sl.n_eq[j]
-        sliding_values(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.phi, sl.jac)
+        k, ed, sd, ne_j = _sliding_constraint(sl, j, q)
         for i in range(ne_j):
             row = sl.rows[j, i]
             lfull[i] = lam[row] if row >= 0 else 0.0
@@ -878,14 +896,7 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
             for c in range(20):
                 data[jp.sl_hess[j, k, 20 * a + c]] += cK * jp.sl_H[a, c]
         if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
-            lp = np.zeros(3)
-            for a in range(3):
-                if sl.rows[j, a] >= 0:
-                    lp[a] = lam[sl.rows[j, a]]
-            f_ax = fv[sl.fn[j]] if sl.fn[j] >= 0 else 0.0
-            Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = sliding_axial_force(
-                sl.ql[7:19], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp, sl.mu[j],
-                sl.eps_v[j], f_ax)
+            Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = _sliding_force(sl, j, k, sd, q, v, lam, fv)
             Ft = Qs / nr
             for m in range(4):
                 for c in range(3):
@@ -898,19 +909,9 @@ def jacobian(model, q, v, qdd, lam, fv, cM, cC, cK, data):  # noqa: ANN001, ANN2
     # ---- clearance joints (Gauss-Newton contact tangent)
     cl = model.clearance
     for j in range(cl.r_b.size):
-        ne_j = cl.n_elem[j]
-        ns = cl.n_sec[j]
-        m, cnt, _ = clearance_forces(
-            q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
-            cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
-            cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
-            cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], FLAG[1],
-            model.scratch, jp.cl_K, jp.cl_C, jp.cl_elem)
-        cl.count[j] = m
+        m, cnt, _ = _clearance(model, j, q, v, FLAG[1], model.scratch, jp.cl_K, jp.cl_C,
+                               jp.cl_elem)
         if m < 0:
-            model.error[0] = ERR_LEFT_BORE
-            model.error[1] = j
-            model.error[2] = -1 - m
             return kscale, ERR_LEFT_BORE
         for i in range(cnt):
             pos = jp.cl_pos[j, jp.cl_elem[i]]
