@@ -45,7 +45,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from exudyn_models import _quiet_settings, exudyn_available  # noqa: E402
+from exudyn_models import exudyn_available  # noqa: E402
 from sliding import (  # noqa: E402
     ARC_LENGTH,
     CASE,
@@ -54,6 +54,7 @@ from sliding import (  # noqa: E402
     S_LOW,
     _section,
     analytic_period,
+    exudyn_settings,
     passages,
     run_exudyn,
 )
@@ -174,37 +175,13 @@ def build_exudyn_planar(e_factor: float = 1.0, *, constrain_rotation: bool = Fal
     return mbs, sensors, np.array(offsets), nodes
 
 
-def _settings(h: float, t_end: float, record: bool, tol: float):
-    """The solver settings of ``sliding.run_exudyn`` (same values, same order)."""
-    import exudyn as exu  # noqa: F401
-    s = _quiet_settings("EigenSparse")
-    s.solution.sensors.active = bool(record)
-    s.solution.sensors.writePeriod = 1e-3
-    n_steps = int(round(t_end / h))
-    ti = s.timeIntegration
-    ti.startTime, ti.endTime, ti.numberOfSteps, ti.initialStepSize = 0.0, n_steps * h, n_steps, h
-    ti.adaptiveStep = False
-    ti.automaticStepSize = False
-    ga = ti.generalizedAlpha
-    ga.spectralRadius = 0.8
-    ga.useIndex2Constraints = False
-    ga.useNewmark = False
-    ga.computeInitialAccelerations = True
-    nw = ti.newton
-    nw.useModifiedNewton = True
-    nw.relativeTolerance = tol
-    nw.absoluteTolerance = tol    # residualMode=1: increment test, absTol = relTol
-    nw.residualMode = 1
-    return s, n_steps
-
-
 def run_exudyn_planar(e_factor: float, h: float, t_end: float, *, constrain_rotation: bool = False,
                       gravity: float | None = None, joint_active: bool = True,
                       tol: float = 1e-8) -> dict:
     import exudyn as exu
     mbs, sensors, offsets, nodes = build_exudyn_planar(
         e_factor, constrain_rotation=constrain_rotation, gravity=gravity, joint_active=joint_active)
-    s, n_steps = _settings(h, t_end, True, tol)
+    s, n_steps = exudyn_settings(h, t_end, True, tol)
     t0 = time.perf_counter()
     ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha, storeSolver=True)
     wall = time.perf_counter() - t0

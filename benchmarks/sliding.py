@@ -205,10 +205,10 @@ def _build_exudyn(e_factor: float):
     return mbs, sensors, np.array(offsets)
 
 
-def run_exudyn(e_factor: float, h: float, t_end: float, record: bool = True, *, tol: float = 1e-8,
-               modified_newton: bool = True) -> dict:
-    import exudyn as exu
-    mbs, sensors, offsets = _build_exudyn(e_factor)
+def exudyn_settings(h: float, t_end: float, record: bool, tol: float,
+                    modified_newton: bool = True) -> tuple:
+    """Exudyn's solver settings of the comparison (generalized-alpha rho_inf = 0.8, fixed step,
+    index 3, EigenSparse, increment test residualMode=1 with absTol = relTol): (settings, steps)."""
     s = _quiet_settings("EigenSparse")
     s.solution.sensors.active = bool(record)
     s.solution.sensors.writePeriod = 1e-3
@@ -227,6 +227,14 @@ def run_exudyn(e_factor: float, h: float, t_end: float, record: bool = True, *, 
     nw.relativeTolerance = tol
     nw.absoluteTolerance = tol    # residualMode=1: increment test, absTol = relTol
     nw.residualMode = 1
+    return s, n_steps
+
+
+def run_exudyn(e_factor: float, h: float, t_end: float, record: bool = True, *, tol: float = 1e-8,
+               modified_newton: bool = True) -> dict:
+    import exudyn as exu
+    mbs, sensors, offsets = _build_exudyn(e_factor)
+    s, n_steps = exudyn_settings(h, t_end, record, tol, modified_newton)
     t0 = time.perf_counter()
     ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha, storeSolver=True)
     wall = time.perf_counter() - t0
