@@ -454,6 +454,14 @@ def print_info(sc: Any, asm: Any, file: TextIO) -> None:
         p(f"  {k:22s} {_fmt(v)}")
     opts_i = sc.integrator_options()
     p(f"  solver                 {opts_i if opts_i is not None else sc.static_options()}")
+    if opts_i is not None:
+        from .compiled import compile_model
+
+        packed, _, reason = compile_model(asm)
+        path = ("compiled (whole steps in numba)" if packed is not None and opts_i.compiled
+                else "Python Newton loop (compiled = false)" if packed is not None
+                else f"Python Newton loop: {reason}")
+        p(f"  integrator path        {path}")
 
 
 def cmd_info(args: argparse.Namespace) -> int:

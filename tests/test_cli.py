@@ -90,6 +90,9 @@ def test_info_prints_model(capsys):
     assert "clamp1: clamp rod.node[0], 5 equations" in text
     assert "probes (2)" in text and "tip_x, tip_y, tip_z" in text
     assert "dropped redundant equations (0)" in text and "GeneralizedAlpha(" in text
+    assert "integrator path        compiled" in text
+    assert main(["info", CANTILEVER, "--set", "simulation.compiled=false"]) == EXIT_OK
+    assert "Python Newton loop (compiled = false)" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("args, expected", [
