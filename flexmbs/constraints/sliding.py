@@ -23,6 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements import ancf_cable as cable
+from ..elements.ancf_cable import shape_xi
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError
 from ..loads import TimeFunction, as_time_function
@@ -41,15 +42,8 @@ class SimulationStopped(FlexmbsError):
 @njit
 def _shape_x(xi, L):  # noqa: ANN001, ANN202
     """Hermite S1..S4 and their x-derivatives (as :func:`flexmbs.elements.ancf_cable.shape_functions`)."""
-    x2 = xi * xi
-    x3 = x2 * xi
-    S = np.array([1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3,
-                  L * (x3 - x2)])
-    dS = np.array([(6.0 * x2 - 6.0 * xi) / L, 1.0 - 4.0 * xi + 3.0 * x2, (6.0 * xi - 6.0 * x2) / L,
-                   3.0 * x2 - 2.0 * xi])
-    ddS = np.array([(12.0 * xi - 6.0) / L**2, (6.0 * xi - 4.0) / L, (6.0 - 12.0 * xi) / L**2,
-                    (6.0 * xi - 2.0) / L])
-    return S, dS, ddS
+    S, dS, ddS = shape_xi(xi, L)
+    return S, dS / L, ddS / (L * L)
 
 
 @njit

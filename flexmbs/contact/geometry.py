@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..elements.ancf_cable import shape_xi
 
 __all__ = [
     "beam_point",
@@ -38,30 +39,6 @@ __all__ = [
 @njit(inline="always")
 def _clip(x, lo, hi):  # noqa: ANN001, ANN202
     return lo if x < lo else (hi if x > hi else x)
-
-
-@njit
-def shape_xi(xi, length):  # noqa: ANN001, ANN201
-    """Hermite shape functions S1..S4 and their ξ-derivatives (FORMULATION II §0), 3 arrays (4,)."""
-    L = length
-    x2 = xi * xi
-    x3 = x2 * xi
-    S = np.empty(4)
-    dS = np.empty(4)
-    ddS = np.empty(4)
-    S[0] = 1.0 - 3.0 * x2 + 2.0 * x3
-    S[1] = L * (xi - 2.0 * x2 + x3)
-    S[2] = 3.0 * x2 - 2.0 * x3
-    S[3] = L * (x3 - x2)
-    dS[0] = 6.0 * x2 - 6.0 * xi
-    dS[1] = L * (1.0 - 4.0 * xi + 3.0 * x2)
-    dS[2] = 6.0 * xi - 6.0 * x2
-    dS[3] = L * (3.0 * x2 - 2.0 * xi)
-    ddS[0] = 12.0 * xi - 6.0
-    ddS[1] = L * (6.0 * xi - 4.0)
-    ddS[2] = 6.0 - 12.0 * xi
-    ddS[3] = L * (6.0 * xi - 2.0)
-    return S, dS, ddS
 
 
 @njit

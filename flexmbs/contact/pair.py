@@ -23,6 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
+from ..elements.ancf_cable import shape_xi
 from .laws import ForceLaw, RegularizedCoulomb, coulomb_force, law_force
 
 __all__ = ["ContactResult", "contact_point", "contact_geometry", "contact_force"]
@@ -68,18 +69,6 @@ def _point_tensor(u):  # noqa: ANN001, ANN202
 
 
 @njit
-def _shape(xi, L):  # noqa: ANN001, ANN202
-    x2 = xi * xi
-    x3 = x2 * xi
-    S = np.array([1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3,
-                  L * (x3 - x2)])
-    dS = np.array([6.0 * x2 - 6.0 * xi, L * (1.0 - 4.0 * xi + 3.0 * x2), 6.0 * xi - 6.0 * x2,
-                   L * (3.0 * x2 - 2.0 * xi)])
-    ddS = np.array([12.0 * xi - 6.0, L * (6.0 * xi - 4.0), 6.0 - 12.0 * xi, L * (6.0 * xi - 2.0)])
-    return S, dS, ddS
-
-
-@njit
 def _interp(w, q):  # noqa: ANN001, ANN202
     out = np.zeros(3)
     for m in range(4):
@@ -106,7 +95,7 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     # closest-point projection on this element (extrapolating the cubic)
     xi = xi0
     for _ in range(30):
-        S, dS, ddS = _shape(xi, length)
+        S, dS, ddS = shape_xi(xi, length)
         r = _interp(S, q_elem)
         rx = _interp(dS, q_elem)
         rxx = _interp(ddS, q_elem)
@@ -121,7 +110,7 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
         xi = max(-1.0, min(2.0, xi + step))
         if abs(step) < 1e-15:
             break
-    S, dS, ddS = _shape(xi, length)
+    S, dS, ddS = shape_xi(xi, length)
     P = _interp(S, q_elem)
     rx = _interp(dS, q_elem)
     rxx = _interp(ddS, q_elem)

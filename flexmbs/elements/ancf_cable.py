@@ -28,6 +28,7 @@ __all__ = [
     "CableProperties",
     "CableRest",
     "shape_functions",
+    "shape_xi",
     "rest_state",
     "mass_matrix",
     "gravity_force",
@@ -131,6 +132,30 @@ def shape_functions(xi: np.ndarray, length: np.ndarray
                    3.0 * x2 - 2.0 * xi], axis=-1)
     ddS = np.stack([(12.0 * xi - 6.0) / L**2, (6.0 * xi - 4.0) / L, (6.0 - 12.0 * xi) / L**2,
                     (6.0 * xi - 2.0) / L], axis=-1)
+    return S, dS, ddS
+
+
+@njit
+def shape_xi(xi, length):  # noqa: ANN001, ANN201
+    """Hermite shape functions S1..S4 and their ξ-derivatives (FORMULATION II §0), 3 arrays (4,)."""
+    L = length
+    x2 = xi * xi
+    x3 = x2 * xi
+    S = np.empty(4)
+    dS = np.empty(4)
+    ddS = np.empty(4)
+    S[0] = 1.0 - 3.0 * x2 + 2.0 * x3
+    S[1] = L * (xi - 2.0 * x2 + x3)
+    S[2] = 3.0 * x2 - 2.0 * x3
+    S[3] = L * (x3 - x2)
+    dS[0] = 6.0 * x2 - 6.0 * xi
+    dS[1] = L * (1.0 - 4.0 * xi + 3.0 * x2)
+    dS[2] = 6.0 * xi - 6.0 * x2
+    dS[3] = L * (3.0 * x2 - 2.0 * xi)
+    ddS[0] = 12.0 * xi - 6.0
+    ddS[1] = L * (6.0 * xi - 4.0)
+    ddS[2] = 6.0 - 12.0 * xi
+    ddS[3] = L * (6.0 * xi - 2.0)
     return S, dS, ddS
 
 
