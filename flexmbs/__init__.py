@@ -10,7 +10,7 @@ Short public API (see DESIGN.md, "Python API")::
     result = fm.simulate(model, t_end=1.0, dt=1e-3)
 """
 
-from .constraints.sliding import SimulationStopped, SlidingJoint
+from .constraints.sliding import SlidingJoint
 from .contact.joint import CircleHole, Hole, SlidingClearanceJoint, SuperellipseHole
 from .contact.laws import Hertz, HuntCrossley, LankaraniNikravesh, LinearPenalty, RegularizedCoulomb
 from .elements.ancf_cable import CableOptions
@@ -21,6 +21,7 @@ from .errors import (
     ModelError,
     RedundantConstraintError,
     ScenarioError,
+    SimulationStopped,
 )
 from .geometry.curves import Centerline, arc, line, polyline
 from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction

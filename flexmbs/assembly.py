@@ -15,40 +15,56 @@ refill writes ``data`` in place through precomputed position maps.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from . import _scatter as sc
+from . import driver
 from .constraints.base import Attachment, Constraint
-from .constraints.joints import BeamNodeRigid, EulerParameterNormalization, GenericJoint
+from .constraints.joints import (
+    BeamNodeRigid,
+    EulerParameterNormalization,
+    GenericJoint,
+    joint_pattern,
+    pack_norms,
+    pack_terms,
+)
+from .constraints.linear import linear_pattern, pack_linear
+from .constraints.sliding import pack_sliding, sliding_pattern
+from .contact.joint import clearance_pattern, pack_clearance
 from .elements import ancf_cable as cable
 from .elements import rigid_body as rb
-from .errors import ModelError, RedundantConstraintError
-from .loads import TimeFunction
+from .errors import FlexmbsError, ModelError, RedundantConstraintError
+from .loads import TimeFunction, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
-
-_DIAG = np.arange(12)
+from .terms import FunctionTable, dynamic_mode, static_mode
 
 
 @dataclass
-class _BeamGroup:
-    """All elements (of possibly several beams) sharing one CableOptions: one kernel call."""
+class BeamGroup:
+    """Beams sharing one CableOptions: one packed part, one kernel call."""
 
     options: cable.CableOptions
     beams: list[Beam]
-    dofs: np.ndarray            # (ne, 12) global coordinate indices
-    props: cable.CableProperties
-    rest: object                # cable.CableRest
-    mass: np.ndarray            # (ne, 12, 12)
-    mass_flat: np.ndarray       # (ne, 144) view
-    pos: np.ndarray | None = None   # (ne, 144) CSC data positions
-    qe: np.ndarray | None = None
-    ve: np.ndarray | None = None
-    force: np.ndarray | None = None
-    stiff: np.ndarray | None = None
-    damp: np.ndarray | None = None
+    part: cable.BeamPart
+
+    @property
+    def dofs(self) -> np.ndarray:
+        return self.part.dofs
+
+    @property
+    def props(self) -> cable.CableProperties:
+        return self.part.props
+
+    @property
+    def rest(self) -> cable.CableRest:
+        return self.part.rest
+
+    @property
+    def mass(self) -> np.ndarray:
+        return self.part.mass
 
 
 @dataclass
@@ -57,10 +73,10 @@ class _NonlinearRows:
     coords: np.ndarray          # (nc,) global coordinate indices
     keep: np.ndarray            # equation indices kept (redundant ones dropped)
     rows: np.ndarray            # multiplier indices of kept equations (len(keep),)
-    pos_jac: np.ndarray | None = None
-    pos_jacT: np.ndarray | None = None
-    pos_hess: np.ndarray | None = None
-    version: int = 0
+
+
+#: the term kinds of interactions: (pattern, packer) of the owning module
+_INTERACTION_KINDS = ("sliding", "clearance")
 
 
 class Assembly:
@@ -72,11 +88,11 @@ class Assembly:
             raise ModelError("redundant_constraints must be 'error' or 'drop'")
         self.model = model
         self._number_coordinates()
-        self._build_beams()
-        self._build_bodies()
+        self._group_specs = self._beam_groups()
         self._build_constraints(redundant_constraints, rank_tolerance)
         self._build_loads()
         self._build_pattern()
+        self._pack()
         self.length_scale = self._length_scale()
         self.stiffness_scale = 0.0
         n, m = self.n_coords, self.n_mult
@@ -100,10 +116,10 @@ class Assembly:
             self.body_offset[id(body)] = off
             labels.extend((f"body '{body.name}'", c) for c in ("x", "y", "z", "e0", "e1", "e2", "e3"))
             off += 7
-        self.extra_dofs: dict[int, np.ndarray] = {}
+        self._extra_dofs: dict[int, np.ndarray] = {}
         for obj in m.interactions:
             names = obj.extra_labels()
-            self.extra_dofs[id(obj)] = np.arange(off, off + len(names), dtype=np.int64)
+            self._extra_dofs[id(obj)] = np.arange(off, off + len(names), dtype=np.int64)
             labels.extend((f"joint '{obj.name}'", c) for c in names)
             off += len(names)
         self.n_coords = off
@@ -122,7 +138,7 @@ class Assembly:
             v0[o:o + 3] = body.velocity
             v0[o + 3:o + 7] = rb.pdot_from_omega_global(p, body.angular_velocity)
         for obj in m.interactions:
-            d = self.extra_dofs[id(obj)]
+            d = self._extra_dofs[id(obj)]
             obj.bind(self, d)
             q0[d] = obj.initial_extra(q0)
         self.q_ref = q0
@@ -145,6 +161,9 @@ class Assembly:
         conn = beam.connectivity
         return (o + 6 * conn[:, :, None] + np.arange(6)[None, None, :]).reshape(-1, 12)
 
+    def extra_dofs(self, owner: object) -> np.ndarray:
+        return self._extra_dofs[id(owner)]
+
     def describe_coordinate(self, i: int) -> str:
         if i < self.n_coords:
             obj, c = self._coord_labels[i]
@@ -153,18 +172,19 @@ class Assembly:
         return self.multiplier_labels[j] if j < len(self.multiplier_labels) else f"equation {i}"
 
     # ================================================================== beams
-    def _build_beams(self) -> None:
+    def _beam_groups(self) -> list[tuple[cable.CableOptions, list[Beam], np.ndarray,
+                                         cable.CableProperties]]:
+        """(options, beams, element dofs, section resultants per element) per CableOptions."""
         groups: dict[cable.CableOptions, list[Beam]] = {}
         for beam in self.model.beams:
             groups.setdefault(beam.options, []).append(beam)
-        self.groups: list[_BeamGroup] = []
+        out = []
         self.beam_slices: dict[int, tuple[int, slice]] = {}
         for gi, (opts, beams) in enumerate(groups.items()):
             dofs, L, EA, EI, rA, dA, dB, e0 = [], [], [], [], [], [], [], []
             start = 0
             for beam in beams:
-                d = self.element_dofs(beam)
-                dofs.append(d)
+                dofs.append(self.element_dofs(beam))
                 ne = beam.n_elem
                 st = beam.stiffness
                 L.append(np.asarray(beam.centerline.lengths, float))
@@ -176,31 +196,13 @@ class Assembly:
                 e0.append(np.full(ne, beam.reference_axial_strain))
                 self.beam_slices[id(beam)] = (gi, slice(start, start + ne))
                 start += ne
-            D = np.ascontiguousarray(np.vstack(dofs), dtype=np.int64)
             props = cable.CableProperties(
                 length=np.concatenate(L), axial_stiffness=np.concatenate(EA),
                 bending_stiffness=np.concatenate(EI), mass_per_length=np.concatenate(rA),
                 axial_damping=np.concatenate(dA), bending_damping=np.concatenate(dB),
                 reference_axial_strain=np.concatenate(e0))
-            rest = cable.rest_state(np.ascontiguousarray(self.q_ref[D]), props, opts)
-            mass = np.ascontiguousarray(cable.mass_matrix(props))
-            ne = D.shape[0]
-            self.groups.append(_BeamGroup(
-                opts, beams, D, props, rest, mass, mass.reshape(ne, 144),
-                qe=np.zeros((ne, 12)), ve=np.zeros((ne, 12)), force=np.zeros((ne, 12)),
-                stiff=np.zeros((ne, 12, 12)), damp=np.zeros((ne, 12, 12))))
-
-    # ================================================================== bodies
-    def _build_bodies(self) -> None:
-        bodies = self.model.bodies
-        nb = len(bodies)
-        self.body_dof_table = np.array([self.body_dofs(b) for b in bodies], dtype=np.int64).reshape(nb, 7)
-        self.body_mass = np.array([b.mass for b in bodies], float)
-        self.body_inertia = np.array([b.inertia for b in bodies], float).reshape(nb, 3, 3)
-        self._br = np.zeros((nb, 7))
-        self._bdq = np.zeros((nb, 7, 7))
-        self._bdv = np.zeros((nb, 7, 7))
-        self._bM = np.zeros((nb, 7, 7))
+            out.append((opts, beams, np.ascontiguousarray(np.vstack(dofs), dtype=np.int64), props))
+        return out
 
     # ================================================================== constraints
     def _attachment(self, obj: object, point: np.ndarray | None, frame: np.ndarray | None) -> Attachment:
@@ -358,6 +360,9 @@ class Assembly:
         self.n_mult = row
         self.multiplier_labels = multiplier_labels
         self.n_total = self.n_coords + self.n_mult
+        self._rows_of = {id(nl.constraint): nl for nl in self.nonlinear}
+        self._interaction_constraints = {id(c) for obj in self.model.interactions
+                                         for c in obj.constraints()}
 
     # ================================================================== loads
     def _build_loads(self) -> None:
@@ -365,27 +370,26 @@ class Assembly:
         g = self.model.gravity
         f_const = np.zeros(n)
         self.gravity_vector = np.zeros(n)
-        for grp in self.groups:
-            Qg = cable.gravity_force(grp.props, g)
-            np.add.at(self.gravity_vector, grp.dofs, Qg)
+        for _, _, gdofs, gprops in self._group_specs:
+            np.add.at(self.gravity_vector, gdofs, cable.gravity_force(gprops, g))
         for body in self.model.bodies:
             d = self.body_dofs(body)
             self.gravity_vector[d[:3]] += body.mass * g
         f_const += self.gravity_vector
         timed: list[tuple[np.ndarray, np.ndarray, TimeFunction]] = []
-        body_loads: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, TimeFunction]] = []
+        body_loads: list[tuple[RigidBody, np.ndarray, np.ndarray, np.ndarray | None, TimeFunction]] = []
         for load in self.model.loads:
             idx: np.ndarray
             vals: np.ndarray
             if load.kind == "distributed":
                 beam: Beam = load.target  # type: ignore[assignment]
                 gi, sl = self.beam_slices[id(beam)]
-                grp = self.groups[gi]
-                props = cable.CableProperties(*[np.asarray(a)[sl] for a in grp.props])
+                _, _, gdofs, gprops = self._group_specs[gi]
+                props = cable.CableProperties(*[np.asarray(a)[sl] for a in gprops])
                 Q = cable.distributed_force(props, load.force)
-                idx, vals = grp.dofs[sl].ravel(), Q.ravel()
+                idx, vals = gdofs[sl].ravel(), Q.ravel()
             elif isinstance(load.target, RigidBody):
-                body_loads.append((self.body_dofs(load.target), load.point, load.force, load.moment,
+                body_loads.append((load.target, load.point, load.force, load.moment,
                                    load.function))
                 continue
             else:
@@ -421,89 +425,75 @@ class Assembly:
         self.f_timed = timed
         self.body_loads = body_loads
 
-    def external_force(self, t: float, out: np.ndarray, load_factor: float = 1.0) -> None:
-        """out = Q_ext(t) (state-independent part; body point loads are added in evaluate)."""
-        np.multiply(self.f_const, load_factor, out=out)
-        for idx, vals, fn in self.f_timed:
-            np.add.at(out, idx, load_factor * fn(t) * vals)
+    # ================================================================== pattern and packing
+    def _interactions_of(self, kind: str) -> list[Any]:
+        return [obj for obj in self.model.interactions if obj.term_kind == kind]
 
-    # ================================================================== pattern
     def _build_pattern(self) -> None:
+        """CSC pattern: the union of the blocks every term kind reserves (built once)."""
         N = self.n_total
         n = self.n_coords
-        keys_parts = [np.arange(N, dtype=np.int64) * (N + 1)]   # full diagonal
-        contributions = []
-
-        def key(r: np.ndarray, c: np.ndarray) -> np.ndarray:
-            return (c.astype(np.int64) * N + r.astype(np.int64))
-
-        for grp in self.groups:
-            d = grp.dofs
-            k = key(np.repeat(d, 12, axis=1), np.tile(d, (1, 12)))
-            keys_parts.append(k.ravel())
-            contributions.append(("group", grp, k))
-        bd = self.body_dof_table
-        if bd.size:
-            kb = key(np.repeat(bd, 7, axis=1), np.tile(bd, (1, 7)))
-            keys_parts.append(kb.ravel())
-            contributions.append(("bodies", None, kb))
-        lr, lc, _ = self._lin_coo
-        klin = key(n + lr, lc)
-        klinT = key(lc, n + lr)
-        keys_parts += [klin, klinT]
+        blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        for _, _, gdofs, _ in self._group_specs:
+            blocks += cable.beam_pattern(gdofs)
+        blocks += rb.bodies_pattern(self.model.bodies, self)
+        blocks += linear_pattern(self.lin_matrix, n)
         for nl in self.nonlinear:
-            c = nl.coords
-            rows = n + nl.rows
-            kj = key(np.repeat(rows, c.size), np.tile(c, rows.size))
-            kt = key(np.tile(c, rows.size), np.repeat(rows, c.size))
-            kh = key(np.repeat(c, c.size), np.tile(c, c.size))
-            keys_parts += [kj, kt, kh]
-            contributions.append(("nl", nl, (kj, kt, kh)))
-        for obj in self.model.interactions:
-            for rows_i, cols_i in obj.pattern_blocks():
-                rr, cc = np.meshgrid(np.asarray(rows_i, np.int64), np.asarray(cols_i, np.int64),
-                                     indexing="ij")
-                keys_parts += [key(rr.ravel(), cc.ravel()), key(cc.ravel(), rr.ravel())]
-        for nl in self.nonlinear:   # interaction constraints: their multipliers x reserved coords
-            c = nl.constraint
-            if hasattr(c, "version"):
-                for obj in self.model.interactions:
-                    if c in obj.constraints():
-                        for _, cols_i in obj.pattern_blocks():
-                            cc = np.asarray(cols_i, np.int64)
-                            rows = n + nl.rows
-                            keys_parts += [key(np.repeat(rows, cc.size), np.tile(cc, rows.size)),
-                                           key(np.tile(cc, rows.size), np.repeat(rows, cc.size))]
-        ukeys = np.unique(np.concatenate(keys_parts))
+            if id(nl.constraint) in self._interaction_constraints:
+                continue
+            blocks += joint_pattern(nl.coords, self.multiplier_rows(nl.constraint), n)
+        for obj in self._interactions_of("sliding"):
+            blocks += sliding_pattern(obj, self)
+        for obj in self._interactions_of("clearance"):
+            blocks += clearance_pattern(obj, self)
+        keys = [np.arange(N, dtype=np.int64) * (N + 1)]   # the full diagonal
+        for rows, cols in blocks:
+            r = np.asarray(rows, np.int64)
+            c = np.asarray(cols, np.int64)
+            keys.append((c[None, :] * N + r[:, None]).ravel())
+        ukeys = np.unique(np.concatenate(keys))
         self._ukeys = ukeys
         cols = ukeys // N
         rows = ukeys % N
         indptr = np.zeros(N + 1, np.int64)
         np.add.at(indptr, cols + 1, 1)
         indptr = np.cumsum(indptr)
-        self._data = np.zeros(ukeys.size)
-        self.matrix = sp.csc_matrix((self._data, rows.astype(np.int32), indptr.astype(np.int32)),
-                                    shape=(N, N))
+        self.matrix = sp.csc_matrix((np.zeros(ukeys.size), rows.astype(np.int32),
+                                     indptr.astype(np.int32)), shape=(N, N))
         self._data = self.matrix.data  # the array the matrix really holds
-
-        def pos(k: np.ndarray) -> np.ndarray:
-            return np.ascontiguousarray(np.searchsorted(ukeys, k), dtype=np.int64)
-
-        for kind, obj, k in contributions:
-            if kind == "group":
-                obj.pos = pos(k).reshape(-1, 144)
-            elif kind == "bodies":
-                self._body_pos = pos(k).reshape(-1, 49)
-            else:
-                kj, kt, kh = k
-                obj.pos_jac = pos(kj)
-                obj.pos_jacT = pos(kt)
-                obj.pos_hess = pos(kh)
-        # constant entries (linear constraint rows)
-        self._const_data = np.zeros_like(self._data)
-        np.add.at(self._const_data, pos(klin), self._lin_coo[2])
-        np.add.at(self._const_data, pos(klinT), self._lin_coo[2])
         self.nnz = ukeys.size
+
+    def _pack(self) -> None:
+        """Every term kind packs itself (:mod:`flexmbs.terms`) into the system the driver sums."""
+        fns = FunctionTable()
+        self.functions = fns
+        self.groups: list[BeamGroup] = []
+        for opts, beams, gdofs, props in self._group_specs:
+            pos = np.array([self.positions(d, d) for d in gdofs], np.int64).reshape(-1, 144)
+            self.groups.append(BeamGroup(opts, beams,
+                                         cable.pack_beams(gdofs, props, opts, self.q_ref, pos)))
+        parts = [g.part for g in self.groups]
+        if not parts:   # a homogeneous, non-empty tuple for the compiled driver
+            parts = [cable.pack_beams(np.zeros((0, 12), np.int64), cable.empty_properties(),
+                                      cable.CableOptions(), self.q_ref, np.zeros((0, 144)))]
+        norms = [nl.constraint for nl in self.nonlinear
+                 if isinstance(nl.constraint, EulerParameterNormalization)]
+        terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]
+        self.joint_lists = {k: self._interactions_of(k) for k in _INTERACTION_KINDS}
+        fn_rows = [row for row, _ in self.lin_functions]
+        fn_idx = [fns(fn) for _, fn in self.lin_functions]
+        self.system = driver.SystemPart(
+            self.n_coords, self.n_mult, tuple(parts),
+            rb.pack_bodies(self.model.bodies, self.body_loads, self, fns),
+            pack_loads(self.f_const, self.f_timed, fns),
+            pack_linear(self.lin_matrix, self.lin_rhs0, fn_rows, fn_idx, self),
+            pack_norms(norms, self), pack_terms(terms, self),
+            pack_sliding(self.joint_lists["sliding"], self, fns),
+            pack_clearance(self.joint_lists["clearance"], self, self.n_total),
+            np.zeros(3, np.int64))
+        self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
+        self.body_dof_table = self.system.bodies.dofs
+        self._r = np.zeros(self.n_total)
 
     def _length_scale(self) -> float:
         pts = [b.centerline.points for b in self.model.beams] + [
@@ -519,99 +509,89 @@ class Assembly:
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
         return self.q_ref.copy(), self.v_init.copy()
 
+    def python_interactions(self) -> list[Any]:
+        """Interactions evaluated by their Python path now (no compiled form); the clearance
+        joints among them are switched off in the packed system."""
+        enabled = self.system.clearance.enabled
+        out = [obj for obj in self._python_terms]
+        for i, obj in enumerate(self.joint_lists["clearance"]):
+            enabled[i] = obj.compiled_form()
+            if not enabled[i]:
+                out.append(obj)
+        return out
+
+    def compiled_reason(self) -> str:
+        """Why the compiled Newton loop cannot run this model now ("" if it can)."""
+        for obj in self.python_interactions():
+            return (f"joint '{obj.name}' has no compiled form now ({obj!r}: superellipse bore, "
+                    "frozen detection or the consistent contact tangent); the Python Newton loop "
+                    "evaluates it")
+        return ""
+
+    def error_exception(self, code: int, q: np.ndarray, t: float) -> FlexmbsError:
+        """The exception of an error code of the driver (names the joint)."""
+        err = self.system.error
+        kind = driver.KIND_OF_ERROR.get(int(code))
+        if kind is None:
+            return FlexmbsError(f"internal error code {code}")
+        return self.joint_lists[kind][int(err[1])].error(int(code), int(err[2]), q, t)
+
     def evaluate(self, q: np.ndarray, v: np.ndarray, qdd: np.ndarray | None, lam: np.ndarray,
                  t: float, r_q: np.ndarray, r_lam: np.ndarray, *,
                  matrix: tuple[float, float, float] | None = None, load_factor: float = 1.0,
                  with_damping: bool = True) -> float:
         """Fill ``r_q``, ``r_lam`` (and, with ``matrix=(cM, cC, cK)``, the iteration matrix in
-        ``self.matrix``). ``qdd=None`` means statics (no inertia). Returns the force scale used by
-        the convergence test: the largest single force entering the residual."""
-        want = matrix is not None
-        self.external_force(t, r_q, load_factor)
-        np.negative(r_q, out=r_q)
-        scale = float(np.abs(r_q).max()) if r_q.size else 0.0
-        if want:
-            cM, cC, cK = matrix  # type: ignore[misc]
-            data = self._data
-            data[:] = self._const_data
-            kscale = 0.0
-        for grp in self.groups:
-            sc.gather(q, grp.dofs, grp.qe)
-            if with_damping:
-                sc.gather(v, grp.dofs, grp.ve)
-            else:
-                grp.ve.fill(0.0)
-            cable.internal_forces(grp.qe, grp.ve, grp.props, grp.rest, grp.options, grp.force,
-                                  grp.stiff if want else None, grp.damp if want else None)
-            scale = max(scale, sc.scatter_add(r_q, grp.dofs, grp.force, 1.0))
-            if qdd is not None:
-                scale = max(scale, sc.scatter_mass_times(r_q, grp.dofs, grp.mass, qdd))
-            if want:
-                ne = grp.dofs.shape[0]
-                kscale = max(kscale, float(np.abs(grp.stiff[:, _DIAG, _DIAG]).max()))
-                if qdd is not None or cM != 0.0:   # statics: cM is the optional stabiliser
-                    sc.scatter_matrix(data, grp.pos, grp.stiff.reshape(ne, 144),
-                                      grp.damp.reshape(ne, 144), grp.mass_flat, cK, cC, cM)
-                else:
-                    sc.scatter_matrix_kc(data, grp.pos, grp.stiff.reshape(ne, 144),
-                                         grp.damp.reshape(ne, 144), cK, cC)
-        nb = self.body_dof_table.shape[0]
-        if nb:
-            bd = self.body_dof_table
-            p = q[bd[:, 3:]]
-            if qdd is not None:
-                rb.inertial_residual(self.body_mass, self.body_inertia, p, v[bd[:, 3:]], qdd[bd],
-                                     self._br, self._bdq, self._bdv)
-                r_q[bd] += self._br   # body coordinates are distinct: no accumulation needed
-                scale = max(scale, float(np.abs(self._br).max()))
-                if want:
-                    self._bM[:] = rb.mass_matrix(self.body_mass, self.body_inertia, p)
-                    blk = cM * self._bM + cC * self._bdv + cK * self._bdq
-                    np.add.at(data, self._body_pos, blk.reshape(nb, 49))
-            elif want and cM != 0.0:   # statics with the mass-proportional stabiliser
-                blk = cM * rb.mass_matrix(self.body_mass, self.body_inertia, p)
-                np.add.at(data, self._body_pos, blk.reshape(nb, 49))
-            for dofs, point, force, moment, fn in self.body_loads:
-                f = load_factor * fn(t)
-                pb = q[dofs[3:]][None, :]
-                Q, dQ = rb.applied_force(pb, point[None, :], (f * force)[None, :])
-                if moment is not None:
-                    Qm, dQm = rb.applied_torque_global(pb, (f * moment)[None, :])
-                    Q, dQ = Q + Qm, dQ + dQm
-                r_q[dofs] -= Q[0]
-                scale = max(scale, float(np.abs(Q).max()))
-                if want:
-                    pos = self._body_pos[np.flatnonzero(bd[:, 0] == dofs[0])[0]]
-                    data[pos] -= cK * dQ[0].ravel()
-        # constraints
-        if self.m_lin:
-            r_q += self.lin_matrix_T @ lam[:self.m_lin]
-            r_lam[:self.m_lin] = self.lin_matrix @ q - self.lin_rhs0
-            for row, fn in self.lin_functions:
-                # prescribed motion ramps with the load factor in statics, like the loads
-                r_lam[row] -= load_factor * fn(t)
-        for nl in self.nonlinear:
-            c = nl.constraint
-            if getattr(c, "version", 0) != nl.version:
-                self._update_positions(nl)
-            ql = q[nl.coords]
-            phi, jac = c.evaluate(ql, t)
-            lam_full = np.zeros(c.n_equations)
-            lam_full[nl.keep] = lam[nl.rows]
-            jk = jac[nl.keep]
-            r_lam[nl.rows] = phi[nl.keep]
-            r_q[nl.coords] += jk.T @ lam[nl.rows]
-            if want:
-                data[nl.pos_jac] += jk.ravel()
-                data[nl.pos_jacT] += jk.ravel()
-                data[nl.pos_hess] += cK * c.hessian_lambda(ql, lam_full, t).ravel()
-        for obj in self.model.interactions:
+        ``self.matrix``) through :mod:`flexmbs.driver`, then add the interactions that have no
+        compiled form. ``qdd=None`` means statics (no inertia; ``cM`` is then the optional
+        stabiliser). Returns the force scale used by the convergence test: the largest single
+        force entering the residual."""
+        n = self.n_coords
+        if qdd is None:
+            mode = static_mode(load_factor, damping=with_damping)
+            acc = np.zeros(n)
+        else:
+            mode = dynamic_mode()
+            mode[0] = load_factor
+            mode[2] = 1.0 if with_damping else 0.0
+            acc = qdd
+        python = self.python_interactions()
+        fv = self.functions.values(t)
+        q = np.ascontiguousarray(q, dtype=float)
+        v = np.ascontiguousarray(v, dtype=float)
+        lam = np.ascontiguousarray(lam, dtype=float)
+        scale, code = driver.residual(self.system, q, v, acc, lam, fv, mode, self._r)
+        if code:
+            raise self.error_exception(code, q, t)
+        r_q[:] = self._r[:n]
+        r_lam[:] = self._r[n:]
+        if matrix is not None:
+            cM, cC, cK = matrix
+            kscale, code = driver.jacobian(self.system, q, v, acc, lam, fv, mode, float(cM),
+                                           float(cC), float(cK), self._data)
+            if code:
+                raise self.error_exception(code, q, t)
+            if kscale > 0:
+                self.stiffness_scale = kscale
+        for obj in python:
             scale = max(scale, obj.evaluate(self, q, v, lam, t, r_q, matrix))
-        if want and kscale > 0:
-            self.stiffness_scale = kscale
         return scale
 
-    # ---------------------------------------------------------------- helpers for interactions
+    def post_step(self, q: np.ndarray, v: np.ndarray, t: float) -> None:
+        """Interaction state after a converged step (may raise :class:`SimulationStopped`)."""
+        python = self.python_interactions()
+        q = np.ascontiguousarray(q, dtype=float)
+        v = np.ascontiguousarray(v, dtype=float)
+        lam = np.zeros(self.n_mult)
+        _, code = driver.residual(self.system, q, v, np.zeros_like(q), lam,
+                                  self.functions.values(t), dynamic_mode(), self._r)
+        if not code:
+            code = driver.post_step(self.system, q, v)
+        if code:
+            raise self.error_exception(code, q, t)
+        for obj in python:
+            obj.post_step(q, v, t)
+
+    # ---------------------------------------------------------------- DofMap / MatrixSink
     def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """CSC data positions of the (rows[i], cols[j]) block (must be in the pattern)."""
         N = self.n_total
@@ -625,48 +605,41 @@ class Assembly:
         """Add a dense block to the iteration matrix being assembled (rows/cols global)."""
         np.add.at(self._data, self.positions(rows, cols), np.asarray(block, float).ravel())
 
-    def multiplier_rows(self, constraint: Constraint) -> np.ndarray:
-        """Multiplier indices (into lam) of the kept equations of ``constraint``."""
-        for nl in self.nonlinear:
-            if nl.constraint is constraint:
-                out = np.full(constraint.n_equations, -1, np.int64)
-                out[nl.keep] = nl.rows
-                return out
-        raise ModelError(f"constraint '{constraint.name}' is not part of this assembly")
+    def multiplier_rows(self, constraint: object) -> np.ndarray:
+        """Multiplier indices (into lam) of the equations of ``constraint``, −1 if dropped."""
+        nl = self._rows_of.get(id(constraint))
+        if nl is None:
+            return np.full(getattr(constraint, "n_equations", 0), -1, np.int64)
+        out = np.full(nl.constraint.n_equations, -1, np.int64)
+        out[nl.keep] = nl.rows
+        return out
 
-    def _update_positions(self, nl: _NonlinearRows) -> None:
-        c = nl.constraint
-        nl.coords = np.asarray(c.coordinates(), np.int64)
-        rows = self.n_coords + nl.rows
-        cc = nl.coords
-        nl.pos_jac = self.positions(rows, cc)
-        nl.pos_jacT = self.positions(cc, rows).reshape(cc.size, rows.size).T.ravel()
-        nl.pos_hess = self.positions(cc, cc)
-        nl.version = getattr(c, "version", 0)
+    def _matrix_at(self, q: np.ndarray, t: float, cM: float) -> sp.csc_matrix:
+        """The iteration matrix with ``cM`` M and no stiffness (Φ_q in its borders)."""
+        n = self.n_coords
+        data = np.zeros_like(self._data)
+        q = np.ascontiguousarray(q, dtype=float)
+        zeros = np.zeros(n)
+        self.python_interactions()
+        driver.jacobian(self.system, q, zeros, zeros, np.zeros(self.n_mult),
+                        self.functions.values(t), dynamic_mode(), cM, 0.0, 0.0, data)
+        return sp.csc_matrix((data, self.matrix.indices, self.matrix.indptr), shape=self.matrix.shape)
 
     def constraint_jacobian(self, q: np.ndarray, t: float = 0.0) -> sp.csr_matrix:
-        """Phi_q as a sparse (n_mult, n_coords) matrix."""
-        lin = self.lin_matrix.tocoo()
-        rows, cols, vals = [lin.row], [lin.col], [lin.data]
-        for nl in self.nonlinear:
-            _, jac = nl.constraint.evaluate(q[nl.coords], t)
-            jk = jac[nl.keep]
-            rows.append(np.repeat(nl.rows, nl.coords.size))
-            cols.append(np.tile(nl.coords, nl.rows.size))
-            vals.append(jk.ravel())
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(self.n_mult, self.n_coords))
+        """Phi_q as a sparse (n_mult, n_coords) matrix (the driver's matrix border)."""
+        n = self.n_coords
+        return sp.csr_matrix(self._matrix_at(q, t, 0.0)[n:, :n])
 
     def constraint_values(self, q: np.ndarray, t: float) -> np.ndarray:
-        out = np.zeros(self.n_mult)
-        if self.m_lin:
-            out[:self.m_lin] = self.lin_matrix @ q - self.lin_rhs0
-            for row, fn in self.lin_functions:
-                out[row] -= fn(t)
-        for nl in self.nonlinear:
-            phi, _ = nl.constraint.evaluate(q[nl.coords], t)
-            out[nl.rows] = phi[nl.keep]
-        return out
+        """Phi(q, t) (the driver's constraint residual)."""
+        n = self.n_coords
+        q = np.ascontiguousarray(q, dtype=float)
+        zeros = np.zeros(n)
+        self.python_interactions()
+        r = np.zeros(self.n_total)
+        driver.residual(self.system, q, zeros, zeros, np.zeros(self.n_mult),
+                        self.functions.values(t), dynamic_mode(), r)
+        return r[n:].copy()
 
     def constraint_time_terms(self, q: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
         """Right-hand side of the acceleration-level constraints,
@@ -680,28 +653,12 @@ class Assembly:
         if self.m_lin:
             for row, fn in self.lin_functions:
                 out[row] += fn.d2(t)
-        for nl in self.nonlinear:
-            _, phi_tt = nl.constraint.time_derivatives(q[nl.coords], t)
-            out[nl.rows] -= phi_tt[nl.keep]
         return out
 
     def mass_matrix(self, q: np.ndarray) -> sp.csr_matrix:
-        rows, cols, vals = [], [], []
-        for grp in self.groups:
-            d = grp.dofs
-            rows.append(np.repeat(d, 12, axis=1).ravel())
-            cols.append(np.tile(d, (1, 12)).ravel())
-            vals.append(grp.mass_flat.ravel())
-        bd = self.body_dof_table
-        if bd.size:
-            M = rb.mass_matrix(self.body_mass, self.body_inertia, q[bd[:, 3:]])
-            rows.append(np.repeat(bd, 7, axis=1).ravel())
-            cols.append(np.tile(bd, (1, 7)).ravel())
-            vals.append(M.ravel())
-        if not rows:
-            return sp.csr_matrix((self.n_coords, self.n_coords))
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(self.n_coords, self.n_coords))
+        """M(q) (the driver's matrix with cM = 1 and no stiffness)."""
+        n = self.n_coords
+        return sp.csr_matrix(self._matrix_at(q, 0.0, 1.0)[:n, :n])
 
     # ================================================================== energies
     def energies(self, q: np.ndarray, v: np.ndarray) -> dict[str, float]:
@@ -722,9 +679,8 @@ class Assembly:
             ve = v[grp.dofs]
             kin += 0.5 * float(np.einsum("ei,eij,ej->", ve, grp.mass, ve))
             strain += float(np.sum(cable.strain_energy(q[grp.dofs], grp.props, grp.rest, grp.options)))
-        bd = self.body_dof_table
-        if bd.size:
-            vv = v[bd]
-            kin += float(np.sum(rb.kinetic_energy(self.body_mass, self.body_inertia, q[bd[:, 3:]], vv)))
+        bp = self.system.bodies
+        if bp.dofs.size:
+            kin += float(np.sum(rb.kinetic_energy(bp.mass, bp.inertia, q[bp.dofs[:, 3:]], v[bp.dofs])))
         grav = -float(self.gravity_vector @ (q - self.q_ref))
         return {"kinetic": kin, "strain": strain, "gravity": grav, "total": kin + strain + grav}

@@ -455,11 +455,9 @@ def print_info(sc: Any, asm: Any, file: TextIO) -> None:
     opts_i = sc.integrator_options()
     p(f"  solver                 {opts_i if opts_i is not None else sc.static_options()}")
     if opts_i is not None:
-        from .compiled import compile_model
-
-        packed, _, reason = compile_model(asm)
-        path = ("compiled (whole steps in numba)" if packed is not None and opts_i.compiled
-                else "Python Newton loop (compiled = false)" if packed is not None
+        reason = asm.compiled_reason()
+        path = ("compiled (whole steps in numba)" if not reason and opts_i.compiled
+                else "Python Newton loop (compiled = false)" if not reason
                 else f"Python Newton loop: {reason}")
         p(f"  integrator path        {path}")
 

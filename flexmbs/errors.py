@@ -25,3 +25,8 @@ class ConvergenceError(FlexmbsError):
 
 class RedundantConstraintError(ModelError):
     """The constraint Jacobian is rank deficient; the message lists the dependent equations."""
+
+
+class SimulationStopped(FlexmbsError):
+    """The simulation cannot continue (e.g. a sliding body reached the end of its beam); the
+    steps before stand."""

@@ -9,10 +9,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from ._jit import njit
 from .errors import ModelError
+from .terms import LOAD_FACTOR
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .terms import FunctionTable
 
 
 class TimeFunction:
@@ -146,3 +152,41 @@ def as_time_function(f: TimeFunction | Callable[[float], float] | float | None) 
     if callable(f):
         return Function(f)
     raise ModelError(f"not a time function: {f!r} (give a number, a callable f(t) or a TimeFunction)")
+
+
+# ---------------------------------------------------------------------------------------------
+# the external-load term of the assembler (flexmbs.terms)
+class LoadsPart(NamedTuple):
+    """State-independent external forces: constant (gravity, constant loads) and timed."""
+
+    f_const: np.ndarray              # (n,) constant generalized forces
+    idx: np.ndarray                  # timed loads, flattened: coordinate, value, time function
+    val: np.ndarray
+    fn: np.ndarray
+
+
+def pack_loads(f_const: np.ndarray, timed: list, functions: FunctionTable) -> LoadsPart:
+    """``timed``: (coordinates, values, time function) per load."""
+    idx = [np.asarray(i, np.int64).ravel() for i, _, _ in timed]
+    val = [np.asarray(v, float).ravel() for _, v, _ in timed]
+    fn = [np.full(i.size, functions(f), np.int64) for i, (_, _, f) in zip(idx, timed, strict=True)]
+    cat = np.concatenate
+    return LoadsPart(np.ascontiguousarray(f_const, dtype=float),
+                     cat(idx) if idx else np.zeros(0, np.int64),
+                     cat(val) if val else np.zeros(0), cat(fn) if fn else np.zeros(0, np.int64))
+
+
+@njit
+def loads_residual(ld, fv, mode, r):  # noqa: ANN001, ANN201
+    """Initialises ``r_q = −λ Q_ext(t)`` (λ: load factor); returns max |r_q|."""
+    lf = mode[LOAD_FACTOR]
+    n = ld.f_const.size
+    for i in range(n):
+        r[i] = -lf * ld.f_const[i]
+    for k in range(ld.idx.size):
+        r[ld.idx[k]] -= lf * fv[ld.fn[k]] * ld.val[k]
+    scale = 0.0
+    for i in range(n):
+        if abs(r[i]) > scale:
+            scale = abs(r[i])
+    return scale

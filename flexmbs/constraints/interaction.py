@@ -1,29 +1,43 @@
 """Interactions: joints and contacts that own state, extra coordinates or force terms.
 
 An interaction (a sliding joint, a clearance joint) is attached to the model with
-``model.add_joint(...)``. The assembly numbers its extra coordinates (e.g. the arc-length
-coordinate ``s`` of a sliding joint) after the rigid bodies, asks it for constraints and force
-terms every Newton iteration, and calls :meth:`Interaction.post_step` after each converged step,
-where detection state (element indices, warm starts, active sets) is updated.
+``model.add_joint(...)``, which calls :meth:`Interaction.validate`. The assembler numbers its
+extra coordinates (e.g. the arc-length coordinate ``s`` of a sliding joint) after the rigid
+bodies and tells it its numbering through :meth:`Interaction.bind` (a :class:`~flexmbs.terms.DofMap`,
+never the concrete assembler). Its equations are a term kind of the assembler
+(``term_kind``: the module that owns the kind packs all interactions of that kind and states
+their residual and Jacobian as compiled kernels, :mod:`flexmbs.terms`). An interaction that has
+no compiled form at the moment (:meth:`compiled_form` false) is evaluated through
+:meth:`evaluate` and :meth:`post_step` instead.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
+from ..errors import FlexmbsError, ModelError
 from .base import Constraint
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..assembly import Assembly
     from ..model import Model
+    from ..terms import DofMap
+
+
+class MatrixSink(Protocol):
+    """Where a Python-path interaction adds its derivatives."""
+
+    def add_to_matrix(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
+        """Add a dense block to the iteration matrix being assembled (rows/cols global)."""
 
 
 class Interaction:
     """Base class: every hook has a do-nothing default."""
 
     name: str = "interaction"
+    #: the assembler term kind that evaluates it ("sliding", "clearance")
+    term_kind: ClassVar[str] = ""
 
     def validate(self, model: Model) -> None:
         """Check the definition against the model (called by ``model.add_joint``)."""
@@ -32,7 +46,7 @@ class Interaction:
         """Names of extra coordinates (one per entry) appended to q by the assembly."""
         return []
 
-    def bind(self, asm: Assembly, extra_dofs: np.ndarray) -> None:
+    def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
         """Learn the global indices (called once the DOF map exists)."""
 
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
@@ -42,20 +56,23 @@ class Interaction:
     def constraints(self) -> list[Constraint]:
         return []
 
-    def pattern_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """(rows, cols) index sets whose couplings (both ways) the sparse pattern must reserve;
-        the multipliers of :meth:`constraints` are coupled with every ``cols`` set."""
-        return []
+    def compiled_form(self) -> bool:
+        """Whether the kernels of its term kind evaluate it now (else :meth:`evaluate`)."""
+        return True
 
-    def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
+    def evaluate(self, sink: MatrixSink, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
                  r_q: np.ndarray, matrix: tuple[float, float, float] | None) -> float:
-        """Add force terms to ``r_q`` (residual convention: minus external forces) and, with
-        ``matrix = (cM, cC, cK)``, their derivatives through ``asm.add_to_matrix``. Returns
-        the largest force entering the residual (for the convergence test)."""
-        return 0.0
+        """Python path: add force terms to ``r_q`` (residual convention: minus external forces)
+        and, with ``matrix = (cM, cC, cK)``, their derivatives through ``sink.add_to_matrix``.
+        Returns the largest force entering the residual (for the convergence test)."""
+        raise ModelError(f"interaction '{self.name}' has no Python evaluation")
 
-    def post_step(self, asm: Assembly, q: np.ndarray, v: np.ndarray, t: float) -> None:
-        """Update internal state after a converged step."""
+    def post_step(self, q: np.ndarray, v: np.ndarray, t: float) -> None:
+        """Python path: update internal state after a converged step."""
+
+    def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
+        """The exception for an error code its kernels reported."""
+        return FlexmbsError(f"joint '{self.name}': error {code} ({detail})")
 
     def get_state(self) -> dict[str, Any]:
         """Internal state for checkpoints (JSON-compatible)."""
@@ -64,7 +81,7 @@ class Interaction:
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore :meth:`get_state`."""
 
-    def output(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
+    def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
                t: float) -> list[dict[str, Any]]:
         """Contact points (dicts of the contacts.csv columns) for output."""
         return []

@@ -20,7 +20,7 @@ translation, ``[r, r′]`` for :class:`BeamNodeRigid`), ground nothing.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -28,6 +28,9 @@ from .._jit import njit
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import ModelError
 from .base import Attachment, Constraint
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..terms import DofMap
 
 __all__ = [
     "EulerParameterNormalization",
@@ -363,8 +366,8 @@ class EulerParameterNormalization(Constraint):
         return self._coords
 
     def evaluate(self, q_local: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-        p = np.asarray(q_local, dtype=float)
-        return np.array([p @ p - 1.0]), 2.0 * p[None, :]
+        p = np.ascontiguousarray(q_local, dtype=float)
+        return np.array([euler_norm(p)]), 2.0 * p[None, :]
 
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
         return 2.0 * float(np.asarray(lam).reshape(-1)[0]) * np.eye(4)
@@ -557,3 +560,178 @@ class BeamNodeRigid(_TermConstraint):
         if at_node:
             body = replace(body, point=A.T @ (q_node[:3] - origin))
         return cls(name, node, body, normals)
+
+
+# ---------------------------------------------------------------------------------------------
+# the joint terms of the assembler (flexmbs.terms)
+@njit
+def euler_norm(p):  # noqa: ANN001, ANN201
+    """Haug 1989, FORMULATION I §5: ``Φ^p = pᵀp − 1`` (its gradient is ``2p``, its Hessian ``2I``)."""
+    return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - 1.0
+
+
+class NormPart(NamedTuple):
+    """Euler-parameter normalisation of every body."""
+
+    coords: np.ndarray               # (k, 4) Euler parameters of a body
+    rows: np.ndarray                 # (k,) multiplier
+    pos_jac: np.ndarray              # (k, 4) positions of Φ_q, Φ_qᵀ, and the Hessian diagonal
+    pos_jacT: np.ndarray
+    pos_hess: np.ndarray
+    p: np.ndarray                    # work (4,)
+
+
+class TermPart(NamedTuple):
+    """All joints of term tables (:class:`TermTable`), concatenated."""
+
+    table: TermTable
+    eq_ptr: np.ndarray               # (nc + 1,) equations of constraint c
+    coord_ptr: np.ndarray            # (nc + 1,) coordinates of constraint c in ``coords``
+    coords: np.ndarray
+    rows: np.ndarray                 # (n_eq,) multiplier of each equation, −1 if dropped
+    jptr: np.ndarray                 # (nc + 1,) into pos_jac / pos_jacT (kept rows × coords)
+    pos_jac: np.ndarray
+    pos_jacT: np.ndarray
+    hptr: np.ndarray                 # (nc + 1,) into pos_hess (coords × coords)
+    pos_hess: np.ndarray
+    ql: np.ndarray                   # work
+    phi: np.ndarray
+    jac: np.ndarray
+    H: np.ndarray
+    lam: np.ndarray
+
+
+def joint_pattern(coords: np.ndarray, rows: np.ndarray, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Φ_q (kept rows × coordinates), its transpose, and the Hessian block."""
+    kept = n + rows[rows >= 0]
+    return [(kept, coords), (coords, kept), (coords, coords)]
+
+
+def _kept_positions(dofs: DofMap, coords: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+    n = dofs.n_coords
+    kept = n + rows[rows >= 0]
+    jac = dofs.positions(kept, coords)
+    jacT = dofs.positions(coords, kept).reshape(coords.size, kept.size).T.ravel()
+    return jac, jacT, dofs.positions(coords, coords)
+
+
+def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> NormPart:
+    k = len(constraints)
+    coords = np.array([c.coordinates() for c in constraints], dtype=np.int64).reshape(k, 4)
+    rows = np.array([dofs.multiplier_rows(c)[0] for c in constraints], dtype=np.int64)
+    pj, pt, ph = [], [], []
+    for c, r in zip(coords, rows, strict=True):
+        j, t, h = _kept_positions(dofs, c, np.array([r]))
+        pj.append(j)
+        pt.append(t)
+        ph.append(h.reshape(4, 4).diagonal().copy())
+    i64 = np.int64
+    return NormPart(coords, rows, np.array(pj, i64).reshape(k, 4), np.array(pt, i64).reshape(k, 4),
+                    np.array(ph, i64).reshape(k, 4), np.zeros(4))
+
+
+def pack_terms(constraints: list, dofs: DofMap) -> TermPart:
+    """Joints whose equations are a :class:`TermTable` (``c.table``)."""
+    table, eq_ptr = concatenate_tables([c.table for c in constraints])
+    coords = [np.asarray(c.coordinates(), np.int64) for c in constraints]
+    rows = [np.asarray(dofs.multiplier_rows(c), np.int64) for c in constraints]
+    nc = len(constraints)
+    cptr = np.zeros(nc + 1, np.int64)
+    cptr[1:] = np.cumsum([c.size for c in coords])
+    jptr = np.zeros(nc + 1, np.int64)
+    hptr = np.zeros(nc + 1, np.int64)
+    pj, pt, ph = [], [], []
+    for i, (c, r) in enumerate(zip(coords, rows, strict=True)):
+        j, t, h = _kept_positions(dofs, c, r)
+        pj.append(j)
+        pt.append(t)
+        ph.append(h)
+        jptr[i + 1] = jptr[i] + j.size
+        hptr[i + 1] = hptr[i] + h.size
+    max_nl = max((c.size for c in coords), default=0)
+    max_ne = int(np.max(np.diff(eq_ptr), initial=0))
+    cat = np.concatenate
+    i64 = np.int64
+    return TermPart(table, np.ascontiguousarray(eq_ptr, i64), cptr,
+                    cat(coords) if coords else np.zeros(0, i64),
+                    cat(rows) if rows else np.zeros(0, i64), jptr,
+                    cat(pj).astype(i64) if pj else np.zeros(0, i64),
+                    cat(pt).astype(i64) if pt else np.zeros(0, i64), hptr,
+                    cat(ph).astype(i64) if ph else np.zeros(0, i64), np.zeros(max_nl),
+                    np.zeros(max_ne), np.zeros((max_ne, max_nl)), np.zeros((max_nl, max_nl)),
+                    np.zeros(max_ne))
+
+
+@njit
+def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
+    """``r_λ = pᵀp − 1``, ``r_p += 2p λ`` of every body."""
+    for i in range(nm.rows.size):
+        row = nm.rows[i]
+        for k in range(4):
+            nm.p[k] = q[nm.coords[i, k]]
+        r[n + row] = euler_norm(nm.p)
+        for k in range(4):
+            r[nm.coords[i, k]] += 2.0 * nm.p[k] * lam[row]
+
+
+@njit
+def norms_jacobian(nm, q, lam, cK, data):  # noqa: ANN001, ANN201
+    for i in range(nm.rows.size):
+        lr = lam[nm.rows[i]]
+        for k in range(4):
+            pk = q[nm.coords[i, k]]
+            data[nm.pos_jac[i, k]] += 2.0 * pk
+            data[nm.pos_jacT[i, k]] += 2.0 * pk
+            data[nm.pos_hess[i, k]] += cK * 2.0 * lr
+
+
+@njit(inline="always")
+def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
+    """Φ, Φ_q of joint c into ``tm.phi``, ``tm.jac``; returns (first coordinate, coordinates,
+    first equation, end of equations)."""
+    c0 = tm.coord_ptr[c]
+    nloc = tm.coord_ptr[c + 1] - c0
+    for k in range(nloc):
+        tm.ql[k] = q[tm.coords[c0 + k]]
+    e0 = tm.eq_ptr[c]
+    e1 = tm.eq_ptr[c + 1]
+    term_values(tm.table, e0, e1, tm.ql[:nloc], tm.phi, tm.jac[:, :nloc])
+    return c0, nloc, e0, e1
+
+
+@njit
+def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
+    """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every joint of the term tables."""
+    for c in range(tm.coord_ptr.size - 1):
+        c0, nloc, e0, e1 = _term_constraint(tm, c, q)
+        for i in range(e0, e1):
+            row = tm.rows[i]
+            if row < 0:
+                continue
+            r[n + row] = tm.phi[i - e0]
+            lr = lam[row]
+            for k in range(nloc):
+                r[tm.coords[c0 + k]] += tm.jac[i - e0, k] * lr
+
+
+@njit
+def terms_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
+    """Φ_q, Φ_qᵀ and ``cK Σ λ_i ∂²Φ_i/∂q²`` of every joint of the term tables."""
+    for c in range(tm.coord_ptr.size - 1):
+        c0, nloc, e0, e1 = _term_constraint(tm, c, q)
+        w = tm.jptr[c]
+        for i in range(e0, e1):
+            row = tm.rows[i]
+            tm.lam[i - e0] = lam[row] if row >= 0 else 0.0
+            if row < 0:
+                continue
+            for k in range(nloc):
+                data[tm.pos_jac[w]] += tm.jac[i - e0, k]
+                data[tm.pos_jacT[w]] += tm.jac[i - e0, k]
+                w += 1
+        H = tm.H[:nloc, :nloc]
+        term_hessian(tm.table, e0, e1, tm.ql[:nloc], tm.lam, H)
+        h0 = tm.hptr[c]
+        for a in range(nloc):
+            for k in range(nloc):
+                data[tm.pos_hess[h0 + a * nloc + k]] += cK * H[a, k]

@@ -17,7 +17,7 @@ after each converged step.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -25,18 +25,14 @@ from .._jit import njit
 from ..elements import ancf_cable as cable
 from ..elements.ancf_cable import shape_xi
 from ..elements.rigid_body import point_tensor, rotation_matrix
-from ..errors import FlexmbsError, ModelError
+from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
 from .base import Constraint
 from .interaction import Interaction
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..assembly import Assembly
     from ..model import Beam, Model, RigidBody
-
-
-class SimulationStopped(FlexmbsError):
-    """The simulation cannot continue (e.g. a sliding body reached the end of its beam)."""
+    from ..terms import DofMap, FunctionTable
 
 
 @njit
@@ -199,11 +195,6 @@ class _SlidingConstraint(Constraint):
         self.n_equations = 3 if joint.variant == "ring" else 5
         self.equation_labels = ["x", "y", "z", "align_1", "align_2"][: self.n_equations]
 
-    @property
-    def version(self) -> int:
-        """Changes when the coordinates change (the assembly then re-maps its positions)."""
-        return self.joint.element
-
     def coordinates(self) -> np.ndarray:
         j = self.joint
         return np.concatenate([j._body_dofs, j._elem_dofs[j.element], [j._s_dof]])
@@ -238,6 +229,8 @@ class SlidingJoint(Interaction):
     coefficient, regularised with ``friction_velocity``) and ``axial_force`` (N on the body
     along the tangent, number or time function) are optional.
     """
+
+    term_kind = "sliding"
 
     def __init__(self, beam: Beam, body: RigidBody, *, name: str | None = None,
                  hole_point=(0.0, 0.0, 0.0), axis=(1.0, 0.0, 0.0),
@@ -285,14 +278,14 @@ class SlidingJoint(Interaction):
     def extra_labels(self) -> list[str]:
         return ["s"]
 
-    def bind(self, asm: Assembly, extra_dofs: np.ndarray) -> None:
-        self._body_dofs = asm.body_dofs(self.body)
-        self._elem_dofs = asm.element_dofs(self.beam)
+    def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
+        self._body_dofs = dofs.body_dofs(self.body)
+        self._elem_dofs = dofs.element_dofs(self.beam)
         self._s_dof = int(extra_dofs[0])
         self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._starts = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
         self._total = float(np.sum(self._lengths))
-        self._beam_dofs = asm.beam_dofs(self.beam)
+        self._beam_dofs = dofs.beam_dofs(self.beam)
 
     def _hole_centre(self, q: np.ndarray) -> np.ndarray:
         qb = q[self._body_dofs]
@@ -343,53 +336,20 @@ class SlidingJoint(Interaction):
     def constraints(self) -> list[Constraint]:
         return [self._constraint]
 
-    def pattern_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        # body and s couple with every beam coordinate (the current element moves along the
-        # beam); element-element blocks are already in the pattern, so no beam x beam block
-        own = np.concatenate([self._body_dofs, [self._s_dof]])
-        return [(own, np.concatenate([own, self._beam_dofs]))]
-
-    # ------------------------------------------------------------------ forces on s
-    def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
-                 r_q: np.ndarray, matrix: tuple[float, float, float] | None) -> float:
-        if self.friction == 0.0 and self.axial_force is None:
-            return 0.0
-        k = self.element
-        rows = asm.multiplier_rows(self._constraint)
-        qe = np.ascontiguousarray(q[self._elem_dofs[k]])
-        f_ax = self.axial_force(t) if self.axial_force is not None else 0.0
-        Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = sliding_axial_force(
-            qe, float(self._lengths[k]), float(self._starts[k]), float(q[self._s_dof]),
-            float(v[self._s_dof]), np.ascontiguousarray(lam[rows[:3]]), self.friction,
-            self.friction_velocity, float(f_ax))
-        r_q[self._s_dof] -= Qs
-        if matrix is not None:
-            cM, cC, cK = matrix
-            sd = np.array([self._s_dof])
-            # Q_s = |r'| F_t: exact derivative of |r'| (element coordinates and s); the
-            # friction part neglects the change of direction of the tangent in N = |lam_perp|
-            Ft = Qs / nr
-            asm.add_to_matrix(sd, self._elem_dofs[k], (-cK * Ft * np.kron(dS, tvec))[None, :])
-            asm.add_to_matrix(sd, sd, np.array([[-cK * Ft * (tvec @ r2) - cC * dQ_dsd]]))
-            asm.add_to_matrix(sd, asm.n_coords + rows[:3], -dQ_dlam[None, :])
-        return abs(Qs)
-
-    # ------------------------------------------------------------------ state
-    def post_step(self, asm: Assembly, q: np.ndarray, v: np.ndarray, t: float) -> None:
+    def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
+        """The exception for an error code of :func:`sliding_post_step`."""
         s = float(q[self._s_dof])
-        if s < 0.0 or s > self._total:
-            raise SimulationStopped(
-                f"joint '{self.name}': body '{self.body.name}' reached the end of beam "
-                f"'{self.beam.name}' at t = {t:.6g} s (s = {s:.6g}, beam length {self._total:.6g})")
-        self.element = self._locate(s)
+        return SimulationStopped(
+            f"joint '{self.name}': body '{self.body.name}' reached the end of beam "
+            f"'{self.beam.name}' at t = {t:.6g} s (s = {s:.6g}, beam length {self._total:.6g})")
 
     def slide_coordinate(self, q: np.ndarray) -> float:
         return float(q[self._s_dof])
 
-    def reaction_force(self, asm: Assembly, lam: np.ndarray) -> np.ndarray:
+    def reaction_force(self, dofs: DofMap, lam: np.ndarray) -> np.ndarray:
         """Constraint force of the joint on the body at the hole centre (global components):
         ``-lam_pos`` (the body equation reads ``m r'' + lam_pos = F``)."""
-        rows = asm.multiplier_rows(self._constraint)
+        rows = dofs.multiplier_rows(self._constraint)
         return -lam[rows[:3]]
 
     @property
@@ -410,3 +370,205 @@ class SlidingJoint(Interaction):
     def __repr__(self) -> str:
         return (f"SlidingJoint({self.name!r}, beam={self.beam.name!r}, body={self.body.name!r}, "
                 f"variant={self.variant!r}, friction={self.friction})")
+
+
+# ---------------------------------------------------------------------------------------------
+# the sliding-joint term of the assembler (flexmbs.terms)
+#: error code of :func:`sliding_post_step`: the slide coordinate left the beam
+ERR_END_OF_BEAM = 2
+
+
+class SlidingPart(NamedTuple):
+    body: np.ndarray                 # (nj, 7)
+    elem_dofs: np.ndarray            # (nj, max_ne, 12)
+    lengths: np.ndarray              # (nj, max_ne)
+    starts: np.ndarray               # (nj, max_ne)
+    n_elem: np.ndarray               # (nj,)
+    total: np.ndarray                # (nj,) beam length
+    s_dof: np.ndarray                # (nj,)
+    T: np.ndarray                    # (nj, 3, 3, 4, 4) point tensors of u_C, y, z
+    n_eq: np.ndarray                 # (nj,) 3 ring, 5 cylindrical
+    rows: np.ndarray                 # (nj, 5) multipliers, −1 dropped
+    mu: np.ndarray
+    eps_v: np.ndarray
+    fn: np.ndarray                   # (nj,) axial-force time function, −1 none
+    element: np.ndarray              # (nj,) state: current element
+    pos_jac: np.ndarray              # (nj, max_ne, 5, 20) per element; −1 for dropped rows
+    pos_jacT: np.ndarray
+    pos_hess: np.ndarray             # (nj, max_ne, 400)
+    pos_s_elem: np.ndarray           # (nj, max_ne, 12): friction / axial force row of s
+    pos_ss: np.ndarray               # (nj,)
+    pos_s_lam: np.ndarray            # (nj, 3)
+    ql: np.ndarray                   # work (20,)
+    phi: np.ndarray
+    jac: np.ndarray
+    H: np.ndarray
+    lam: np.ndarray
+
+
+def _pad(arrays: list[np.ndarray], tail: tuple[int, ...], fill: float, dtype: type) -> np.ndarray:
+    """Stack arrays ``(n_i, *tail)`` into ``(len, max n_i, *tail)``, padded with ``fill``."""
+    n = max((a.shape[0] for a in arrays), default=0)
+    out = np.full((len(arrays), n) + tail, fill, dtype=dtype)
+    for i, a in enumerate(arrays):
+        out[i, :a.shape[0]] = np.asarray(a).reshape((a.shape[0],) + tail)
+    return out
+
+
+def sliding_pattern(joint: SlidingJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Body and s couple with every beam coordinate (the current element moves along the beam),
+    both ways; the joint's multipliers with all of them."""
+    own = np.concatenate([joint._body_dofs, [joint._s_dof]])
+    cols = np.concatenate([own, joint._beam_dofs])
+    rows = dofs.multiplier_rows(joint._constraint)
+    mult = dofs.n_coords + rows[rows >= 0]
+    return [(own, cols), (cols, own), (mult, cols), (cols, mult)]
+
+
+def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTable) -> SlidingPart:
+    nj = len(joints)
+    n = dofs.n_coords
+    rows = np.full((nj, 5), -1, np.int64)
+    max_el = max((len(j._lengths) for j in joints), default=0)
+    pj = np.full((nj, max_el, 5, 20), -1, np.int64)
+    pt = np.full((nj, max_el, 5, 20), -1, np.int64)
+    ph = np.zeros((nj, max_el, 400), np.int64)
+    pse = np.zeros((nj, max_el, 12), np.int64)
+    pss = np.zeros(nj, np.int64)
+    psl = np.zeros((nj, 3), np.int64)
+    for i, j in enumerate(joints):
+        r = dofs.multiplier_rows(j._constraint)
+        rows[i, :r.size] = r
+        kept = np.flatnonzero(r >= 0)
+        sd = np.array([j._s_dof])
+        for k in range(len(j._lengths)):
+            cc = np.concatenate([j._body_dofs, j._elem_dofs[k], sd])
+            if kept.size:
+                rr = n + r[kept]
+                pj[i, k, kept] = dofs.positions(rr, cc).reshape(kept.size, 20)
+                pt[i, k, kept] = dofs.positions(cc, rr).reshape(20, kept.size).T
+            ph[i, k] = dofs.positions(cc, cc)
+            pse[i, k] = dofs.positions(sd, j._elem_dofs[k])
+        pss[i] = dofs.positions(sd, sd)[0]
+        if (j.friction > 0.0 or j.axial_force is not None) and np.all(r[:3] >= 0):
+            psl[i] = dofs.positions(sd, n + r[:3])
+    i64, c = np.int64, np.ascontiguousarray
+    part = SlidingPart(
+        c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
+        _pad([j._elem_dofs for j in joints], (12,), 0, np.int64),
+        _pad([j._lengths for j in joints], (), 1.0, float),
+        _pad([j._starts for j in joints], (), 0.0, float),
+        np.array([len(j._lengths) for j in joints], i64),
+        np.array([j._total for j in joints], float), np.array([j._s_dof for j in joints], i64),
+        c(np.array([j._T_all for j in joints], float).reshape(nj, 3, 3, 4, 4)),
+        np.array([j._constraint.n_equations for j in joints], i64), rows,
+        np.array([j.friction for j in joints], float),
+        np.array([j.friction_velocity for j in joints], float),
+        np.array([-1 if j.axial_force is None else functions(j.axial_force) for j in joints], i64),
+        np.array([j.element for j in joints], i64), pj, pt, ph, pse, pss, psl,
+        np.zeros(20), np.zeros(5), np.zeros((5, 20)), np.zeros((20, 20)), np.zeros(5))
+    for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
+        j._element = part.element[i:i + 1]
+    return part
+
+
+@njit(inline="always")
+def _joint_values(sl, j, q):  # noqa: ANN001, ANN202
+    """Φ, Φ_q of sliding joint j on its current element; returns (element, its dofs, s dof,
+    equations)."""
+    k = sl.element[j]
+    ed = sl.elem_dofs[j, k]
+    for a in range(7):
+        sl.ql[a] = q[sl.body[j, a]]
+    for a in range(12):
+        sl.ql[7 + a] = q[ed[a]]
+    sd = sl.s_dof[j]
+    sl.ql[19] = q[sd]
+    ne_j = sl.n_eq[j]
+    sliding_values(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.phi, sl.jac)
+    return k, ed, sd, ne_j
+
+
+@njit(inline="always")
+def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
+    """Axial and friction force on s of sliding joint j (:func:`sliding_axial_force`)."""
+    lp = np.zeros(3)
+    for a in range(3):
+        if sl.rows[j, a] >= 0:
+            lp[a] = lam[sl.rows[j, a]]
+    f_ax = fv[sl.fn[j]] if sl.fn[j] >= 0 else 0.0
+    return sliding_axial_force(sl.ql[7:19], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp,
+                               sl.mu[j], sl.eps_v[j], f_ax)
+
+
+@njit
+def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
+    """``r_λ = Φ``, ``r_q += Φ_qᵀλ``, ``r_s −= Q_s`` of every sliding joint; returns max |Q_s|."""
+    scale = 0.0
+    for j in range(sl.s_dof.size):
+        k, ed, sd, ne_j = _joint_values(sl, j, q)
+        for i in range(ne_j):
+            row = sl.rows[j, i]
+            if row < 0:
+                continue
+            r[n + row] = sl.phi[i]
+            lr = lam[row]
+            for a in range(7):
+                r[sl.body[j, a]] += sl.jac[i, a] * lr
+            for a in range(12):
+                r[ed[a]] += sl.jac[i, 7 + a] * lr
+            r[sd] += sl.jac[i, 19] * lr
+        if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
+            Qs, _, _, _, _, _, _ = _joint_force(sl, j, k, sd, q, v, lam, fv)
+            r[sd] -= Qs
+            if abs(Qs) > scale:
+                scale = abs(Qs)
+    return scale
+
+
+@njit
+def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
+    """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the derivatives of Q_s: the exact derivative of
+    |r′| (element coordinates and s); the friction part neglects the change of direction of the
+    tangent in N = |λ_⊥|."""
+    for j in range(sl.s_dof.size):
+        k, ed, sd, ne_j = _joint_values(sl, j, q)
+        for i in range(ne_j):
+            row = sl.rows[j, i]
+            sl.lam[i] = lam[row] if row >= 0 else 0.0
+            if row < 0:
+                continue
+            for a in range(20):
+                data[sl.pos_jac[j, k, i, a]] += sl.jac[i, a]
+                data[sl.pos_jacT[j, k, i, a]] += sl.jac[i, a]
+        sliding_hessian(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.lam[:ne_j], sl.H)
+        for a in range(20):
+            for c in range(20):
+                data[sl.pos_hess[j, k, 20 * a + c]] += cK * sl.H[a, c]
+        if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
+            Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = _joint_force(sl, j, k, sd, q, v, lam, fv)
+            Ft = Qs / nr
+            for m in range(4):
+                for c in range(3):
+                    data[sl.pos_s_elem[j, k, 3 * m + c]] -= cK * Ft * dS[m] * tvec[c]
+            data[sl.pos_ss[j]] += -cK * Ft * (tvec[0] * r2[0] + tvec[1] * r2[1]
+                                              + tvec[2] * r2[2]) - cC * dQ_dsd
+            if sl.rows[j, 0] >= 0 and sl.rows[j, 1] >= 0 and sl.rows[j, 2] >= 0:
+                for a in range(3):
+                    data[sl.pos_s_lam[j, a]] -= dQ_dlam[a]
+
+
+@njit
+def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
+    """Current element of every slide coordinate after a converged step; ``ERR_END_OF_BEAM``
+    (joint in ``error[1]``) when s left its beam."""
+    for j in range(sl.s_dof.size):
+        s = q[sl.s_dof[j]]
+        if s < 0.0 or s > sl.total[j] or math.isnan(s):
+            error[0] = ERR_END_OF_BEAM
+            error[1] = j
+            return ERR_END_OF_BEAM
+        ne_j = sl.n_elem[j]
+        k = np.searchsorted(sl.starts[j, :ne_j], s, side="right") - 1
+        sl.element[j] = min(max(k, 0), ne_j - 1)
+    return 0

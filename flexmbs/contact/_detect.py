@@ -11,11 +11,12 @@ Q and its closest-point projection (:func:`detect_circle`); then the penalty for
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from .._jit import FLAG, njit
-from ..elements.rigid_body import _rotation_single
+from ..elements.rigid_body import rotation
 from .geometry import beam_point, closest_point_kernel, section_crossing_kernel, section_ellipse
 from .pair import contact_force
 from .sections import circle_stationary_points
@@ -187,7 +188,7 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
     qb = np.empty(7)
     for i in range(7):
         qb[i] = q[body_dofs[i]]
-    A = _rotation_single(qb[3:7])
+    A = rotation(qb[3:7])
     centre = np.empty(3)
     for c in range(3):
         centre[c] = qb[c] + A[c, 0] * hole_point[0] + A[c, 1] * hole_point[1] \
@@ -274,3 +275,110 @@ def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, station
         return m
     clearance_update(rows, m, approach, active, psi_track)
     return 0
+
+
+# ---------------------------------------------------------------------------------------------
+# the clearance-joint term of the assembler (flexmbs.terms): all clearance joints
+#: error code: the beam axis left the bore (joint in ``error[1]``, section in ``error[2]``)
+ERR_LEFT_BORE = 1
+
+
+class ClearancePart(NamedTuple):
+    body: np.ndarray                 # (nj, 7)
+    elem_dofs: np.ndarray            # (nj, max_ne, 12)
+    n_elem: np.ndarray
+    lengths: np.ndarray              # (nj, max_ne)
+    hole_point: np.ndarray           # (nj, 3)
+    stations: np.ndarray             # (nj, max_ns)
+    n_sec: np.ndarray
+    r_b: np.ndarray
+    R: np.ndarray
+    law: np.ndarray                  # (nj, 5)
+    mu: np.ndarray
+    eps_v: np.ndarray
+    enabled: np.ndarray              # (nj,) evaluated here (else by the joint's Python path)
+    elem_ws: np.ndarray              # (nj, max_ns) state: warm starts
+    xi_ws: np.ndarray
+    approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
+    active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
+    psi: np.ndarray                  # (nj, max_ns, P)
+    pos: np.ndarray                  # (nj, max_ne, 361): (body, element) blocks
+    qe: np.ndarray                   # work (max_ne, 12)
+    rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
+    count: np.ndarray                # (nj,) their number
+    elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
+    xi_out: np.ndarray
+    K: np.ndarray                    # work (4 max_ns, 19, 19)
+    C: np.ndarray
+    kelem: np.ndarray                # work (4 max_ns,)
+    no_K: np.ndarray                 # (0, 19, 19): no tangent in the residual
+    no_elem: np.ndarray              # (0,)
+    scratch: np.ndarray              # (n + m,) residual written while assembling the matrix
+
+
+@njit(inline="always")
+def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, error):  # noqa: ANN001, ANN202
+    """:func:`clearance_forces` of clearance joint j; records the candidates' count and, if the
+    beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
+    ne_j = cl.n_elem[j]
+    ns = cl.n_sec[j]
+    m, cnt, sc = clearance_forces(
+        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
+        cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
+        cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
+        cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
+        r, K, C, elem)
+    cl.count[j] = m
+    if m < 0:
+        error[0] = ERR_LEFT_BORE
+        error[1] = j
+        error[2] = -1 - m
+    return m, cnt, sc
+
+
+@njit
+def clearance_residual(cl, q, v, r, error):  # noqa: ANN001, ANN201
+    """Contact forces of every (enabled) clearance joint subtracted from ``r_q``; returns
+    ``(scale, error code)``."""
+    scale = 0.0
+    for j in range(cl.r_b.size):
+        if not cl.enabled[j]:
+            continue
+        m, _, sc = _joint_forces(cl, j, q, v, FLAG[0], r, cl.no_K, cl.no_K, cl.no_elem, error)
+        if m < 0:
+            return scale, ERR_LEFT_BORE
+        if sc > scale:
+            scale = sc
+    return scale, 0
+
+
+@njit
+def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201
+    """Gauss–Newton contact tangent ``cK K + cC C`` of every (enabled) clearance joint."""
+    for j in range(cl.r_b.size):
+        if not cl.enabled[j]:
+            continue
+        m, cnt, _ = _joint_forces(cl, j, q, v, FLAG[1], cl.scratch, cl.K, cl.C, cl.kelem, error)
+        if m < 0:
+            return ERR_LEFT_BORE
+        for i in range(cnt):
+            pos = cl.pos[j, cl.kelem[i]]
+            for a in range(19):
+                for c in range(19):
+                    data[pos[19 * a + c]] += cK * cl.K[i, a, c] + cC * cl.C[i, a, c]
+    return 0
+
+
+@njit
+def clearance_post_step_all(cl):  # noqa: ANN001, ANN201
+    """After a converged step (following a residual at that state, whose detection it reuses):
+    warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`)."""
+    for j in range(cl.r_b.size):
+        if not cl.enabled[j]:
+            continue
+        ns = cl.n_sec[j]
+        for k in range(ns):
+            cl.elem_ws[j, k] = cl.elem_out[j, k]
+            cl.xi_ws[j, k] = cl.xi_out[j, k]
+        clearance_update(cl.rows[j], cl.count[j], cl.approach[j, :ns], cl.active[j, :ns],
+                         cl.psi[j, :ns])

@@ -19,13 +19,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..constraints.interaction import Interaction
+from ..constraints.interaction import Interaction, MatrixSink
 from ..elements.rigid_body import rotation_matrix
-from ..errors import ConvergenceError, ModelError
+from ..errors import ConvergenceError, FlexmbsError, ModelError
 from ._detect import (
+    ERR_LEFT_BORE,
     N_COLS,
-    clearance_forces,
-    clearance_post_step,
+    ClearancePart,
     clearance_update,
     detect_circle,
     tracked_approach,
@@ -36,8 +36,8 @@ from .pair import contact_point
 from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..assembly import Assembly
     from ..model import Beam, Model, RigidBody
+    from ..terms import DofMap
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,8 @@ class SlidingClearanceJoint(Interaction):
     the converged solution; Newton converges linearly in the sliding direction.
     """
 
+    term_kind = "clearance"
+
     def __init__(self, beam: Beam, body: RigidBody, *, hole: Hole,
                  contact: ForceLaw | None = None, friction: RegularizedCoulomb | None = None,
                  hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
@@ -126,13 +128,9 @@ class SlidingClearanceJoint(Interaction):
         self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
-        self._positions: dict[tuple[int, int], np.ndarray] = {}
         self._rows = np.zeros((4 * ns, N_COLS))  # at most 4 stationary points per circle section
         self._elem_out = np.zeros(ns, np.int64)  # crossings of the last evaluation
         self._xi_out = np.zeros(ns)
-        self._K = np.zeros((4 * ns, 19, 19))
-        self._C = np.zeros((4 * ns, 19, 19))
-        self._kelem = np.zeros(4 * ns, np.int64)
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: Model) -> None:
@@ -141,13 +139,12 @@ class SlidingClearanceJoint(Interaction):
         if self.body not in model.bodies:
             raise ModelError(f"joint '{self.name}': the body is not part of the model")
 
-    def bind(self, asm: Assembly, extra_dofs: np.ndarray) -> None:
-        self._body_dofs = asm.body_dofs(self.body)
-        self._elem_dofs = asm.element_dofs(self.beam)
+    def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
+        self._body_dofs = dofs.body_dofs(self.body)
+        self._elem_dofs = dofs.element_dofs(self.beam)
         # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
         self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
-        self._beam_dofs = asm.beam_dofs(self.beam)
-        self._qe = np.zeros((len(self._lengths), 12))
+        self._beam_dofs = dofs.beam_dofs(self.beam)
 
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
         self._check_initial(q0)
@@ -182,9 +179,6 @@ class SlidingClearanceJoint(Interaction):
                     f"{k} (ellipse semi-axis {a:.6g} > bore {R_in:.6g}: jamming); align the hole "
                     "axis with the beam")
             self._elem[k], self._xi[k] = e, xi
-
-    def pattern_blocks(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        return [(self._body_dofs, np.concatenate([self._body_dofs, self._beam_dofs]))]
 
     # ------------------------------------------------------------------ detection + forces
     def _approach_for(self, k: int, psi: float) -> float:
@@ -302,9 +296,10 @@ class SlidingClearanceJoint(Interaction):
         self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b, psi)
                         for k, j, kind, eP, res, a, b, psi in self._contacts(q, v, False, False)]
 
-    def _compiled_residual(self) -> bool:
-        """The compiled joint kernels apply: circular bore, detection not frozen; the
-        consistent tangent (Python) needs the per-contact path."""
+    def compiled_form(self) -> bool:
+        """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): circular
+        bore, detection not frozen, Gauss–Newton tangent; else the per-contact Python path of
+        :meth:`evaluate` does."""
         return (isinstance(self.hole.section, CircleSection) and self._frozen is None
                 and not self.consistent)
 
@@ -313,31 +308,20 @@ class SlidingClearanceJoint(Interaction):
         return (float(f.mu), float(f.eps_v)) if f is not None else (0.0, 1.0)
 
     def _raise_left_bore(self, m: int) -> None:
-        # a Newton iterate (or a step) pushed the beam axis through the bore wall: reject it so
-        # that the step or load increment is cut, instead of losing the contact silently
-        raise ConvergenceError(
-            f"joint '{self.name}': the beam axis left the bore at hole section {-1 - m} "
+        raise self.error(ERR_LEFT_BORE, -1 - m, np.zeros(0), 0.0)
+
+    def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
+        """A Newton iterate (or a step) pushed the beam axis through the bore wall at section
+        ``detail``: the iterate is rejected so that the step or load increment is cut, instead
+        of losing the contact silently."""
+        return ConvergenceError(
+            f"joint '{self.name}': the beam axis left the bore at hole section {detail} "
             "(penetration larger than the clearance); use a smaller time step, more load "
             "steps or a stiffer contact")
 
-    def evaluate(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
+    def evaluate(self, sink: MatrixSink, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float,
                  r_q: np.ndarray, matrix: tuple[float, float, float] | None) -> float:
-        if self._compiled_residual():
-            mu, eps_v = self._friction_parameters()
-            m, count, scale = clearance_forces(
-                q, v, self._body_dofs, self._elem_dofs, self._lengths, self.hole_point,
-                self.stations, self._elem, self._xi, self._elem_out, self._xi_out,
-                self.beam_radius, float(self.hole.section.radius), self.contact.parameters(), mu,
-                eps_v, self._approach, self._active, self._psi, self._qe, self._rows,
-                matrix is not None, r_q, self._K, self._C, self._kelem)
-            if m < 0:
-                self._raise_left_bore(m)
-            if matrix is not None:
-                _, cC, cK = matrix
-                for i in range(count):
-                    pos = self._block_positions(asm, int(self._kelem[i]))
-                    np.add.at(asm.matrix.data, pos, (cK * self._K[i] + cC * self._C[i]).ravel())
-            return scale
+        """Per-contact Python path (joints without a compiled form, :meth:`compiled_form`)."""
         scale = 0.0
         for _k, _j, kind, eP, res, *_ in self._contacts(q, v, matrix is not None, False):
             sign = float(kind)
@@ -346,30 +330,12 @@ class SlidingClearanceJoint(Interaction):
             scale = max(scale, float(np.abs(res.Q_body).max()), float(np.abs(res.Q_elem).max()))
             if matrix is not None:
                 _, cC, cK = matrix
-                np.add.at(asm.matrix.data, self._block_positions(asm, eP),
-                          (sign * (cK * res.K + cC * res.C)).ravel())
+                idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
+                sink.add_to_matrix(idx, idx, sign * (cK * res.K + cC * res.C))
         return scale
 
-    def _block_positions(self, asm: Assembly, eP: int) -> np.ndarray:
-        """Matrix positions of the (body, element eP) block, cached per assembly."""
-        key = (id(asm), eP)
-        pos = self._positions.get(key)
-        if pos is None:
-            idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
-            pos = self._positions[key] = asm.positions(idx, idx)
-        return pos
-
-    def post_step(self, asm: Assembly, q: np.ndarray, v: np.ndarray, t: float) -> None:
-        if self._compiled_residual():
-            mu, eps_v = self._friction_parameters()
-            m = clearance_post_step(
-                q, v, self._body_dofs, self._elem_dofs, self._lengths, self.hole_point,
-                self.stations, self._elem, self._xi, self.beam_radius,
-                float(self.hole.section.radius), self.contact.parameters(), mu, eps_v,
-                self._approach, self._active, self._psi, self._qe, self._rows, np.zeros_like(q))
-            if m < 0:
-                self._raise_left_bore(m)
-            return
+    def post_step(self, q: np.ndarray, v: np.ndarray, t: float) -> None:
+        """Per-contact Python path: warm starts and tracked contacts at the converged state."""
         contacts = self._contacts(q, v, False, True)
         rows = np.zeros((len(contacts), N_COLS))
         for i, (k, _j, _kind, _eP, res, _a, _b, psi) in enumerate(contacts):
@@ -377,7 +343,7 @@ class SlidingClearanceJoint(Interaction):
         clearance_update(rows, len(contacts), self._approach, self._active, self._psi)
 
     # ------------------------------------------------------------------ output
-    def output(self, asm: Assembly, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
+    def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
                t: float) -> list[dict[str, Any]]:
         rows = []
         for k, j, kind, _eP, res, a, b, _psi in self._contacts(q, v, False, False):
@@ -454,3 +420,63 @@ class SlidingClearanceJoint(Interaction):
         return (f"SlidingClearanceJoint({self.name!r}, beam={self.beam.name!r}, "
                 f"body={self.body.name!r}, hole={type(self.hole.section).__name__}, "
                 f"sections={len(self.stations)}, law={self.contact!r})")
+
+
+# ---------------------------------------------------------------------------------------------
+# the clearance-joint term of the assembler (flexmbs.terms)
+def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The hole body couples with every coordinate of the beam (contacts move along it)."""
+    cols = np.concatenate([joint._body_dofs, joint._beam_dofs])
+    return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
+
+
+def _pad(arrays: list[np.ndarray], tail: tuple[int, ...], fill: float, dtype: type) -> np.ndarray:
+    n = max((a.shape[0] for a in arrays), default=0)
+    out = np.full((len(arrays), n) + tail, fill, dtype=dtype)
+    for i, a in enumerate(arrays):
+        out[i, :a.shape[0]] = np.asarray(a).reshape((a.shape[0],) + tail)
+    return out
+
+
+def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int) -> ClearancePart:
+    """All clearance joints; their state arrays become views of the packed ones."""
+    nj = len(joints)
+    max_ne = max((len(j._lengths) for j in joints), default=0)
+    max_ns = max((len(j.stations) for j in joints), default=0)
+    fr = [j._friction_parameters() for j in joints]
+    pos = np.zeros((nj, max_ne, 361), np.int64)
+    for i, j in enumerate(joints):
+        for k in range(len(j._lengths)):
+            idx = np.concatenate([j._body_dofs, j._elem_dofs[k]])
+            pos[i, k] = dofs.positions(idx, idx)
+    i64, c = np.int64, np.ascontiguousarray
+    part = ClearancePart(
+        c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
+        _pad([j._elem_dofs for j in joints], (12,), 0, np.int64),
+        np.array([len(j._lengths) for j in joints], i64),
+        _pad([j._lengths for j in joints], (), 1.0, float),
+        c(np.array([j.hole_point for j in joints], float).reshape(nj, 3)),
+        _pad([j.stations for j in joints], (), 0.0, float),
+        np.array([len(j.stations) for j in joints], i64),
+        np.array([j.beam_radius for j in joints], float),
+        np.array([j.hole.section.bounding_radius() for j in joints], float),
+        c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),
+        np.array([m for m, _ in fr], float), np.array([e for _, e in fr], float),
+        np.array([j.compiled_form() for j in joints], dtype=np.bool_),
+        _pad([j._elem for j in joints], (), 0, np.int64),
+        _pad([j._xi for j in joints], (), 0.5, float),
+        _pad([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
+        _pad([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
+        _pad([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
+        pos, np.zeros((max_ne, 12)), np.zeros((nj, 4 * max_ns, N_COLS)), np.zeros(nj, i64),
+        np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)), np.zeros((4 * max_ns, 19, 19)),
+        np.zeros((4 * max_ns, 19, 19)), np.zeros(4 * max_ns, i64), np.zeros((0, 19, 19)),
+        np.zeros(0, i64), np.zeros(n_total))
+    for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
+        ns = len(j.stations)
+        j._elem = part.elem_ws[i, :ns]
+        j._xi = part.xi_ws[i, :ns]
+        j._approach = part.approach[i, :ns]
+        j._active = part.active[i, :ns]
+        j._psi = part.psi[i, :ns]
+    return part

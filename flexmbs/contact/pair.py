@@ -11,8 +11,7 @@ generalized forces (the caller subtracts them from the residual), ``K = −∂Q/
 ``C = −∂Q/∂q̇_c`` are the matrices to *add* to the iteration matrix. The rotation is the
 homogeneous ``A(p)`` of :mod:`flexmbs.elements.rigid_body`, so ``∂(A u)/∂p = 2T(u)p`` (Haug's
 B(p, u), :func:`~flexmbs.elements.rigid_body.point_jacobian`) and ``∂²(A u)_k/∂p² = 2T_k(u)``
-(:func:`~flexmbs.elements.rigid_body.point_tensor`) hold exactly; the kernel re-implements them
-in numba (checked against rigid_body in the tests).
+(:func:`~flexmbs.elements.rigid_body.point_tensor_of`) hold exactly.
 """
 
 from __future__ import annotations
@@ -24,6 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements.ancf_cable import shape_xi
+from ..elements.rigid_body import point_tensor_of
 from .laws import ForceLaw, RegularizedCoulomb, coulomb_force, law_force
 
 __all__ = ["ContactResult", "contact_point", "contact_geometry", "contact_force"]
@@ -47,28 +47,6 @@ class ContactResult(NamedTuple):
 
 
 @njit
-def _point_tensor(u):  # noqa: ANN001, ANN202
-    """``T_k(u)`` (3,4,4) with ``(A(p)u)_k = pᵀT_k p`` (same as rigid_body.point_tensor)."""
-    T = np.zeros((3, 4, 4))
-    Sk = np.zeros((3, 3))
-    Sk[0, 1] = -u[2]
-    Sk[0, 2] = u[1]
-    Sk[1, 0] = u[2]
-    Sk[1, 2] = -u[0]
-    Sk[2, 0] = -u[1]
-    Sk[2, 1] = u[0]
-    for k in range(3):
-        T[k, 0, 0] = u[k]
-        for i in range(3):
-            T[k, i + 1, i + 1] -= u[k]
-            T[k, k + 1, i + 1] += u[i]
-            T[k, i + 1, k + 1] += u[i]
-            T[k, 0, i + 1] = -Sk[k, i]
-            T[k, i + 1, 0] = -Sk[k, i]
-    return T
-
-
-@njit
 def _interp(w, q):  # noqa: ANN001, ANN202
     out = np.zeros(3)
     for m in range(4):
@@ -82,7 +60,7 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
     rx, rxx, ell)``; see :func:`contact_geometry`."""
     p = q_body[3:7]
-    T = _point_tensor(u_Q)
+    T = point_tensor_of(u_Q)
     Bp = np.zeros((3, 4))
     Q = q_body[0:3].copy()
     for k in range(3):

@@ -21,7 +21,8 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import FLAG, njit
+from ..terms import WITH_DAMPING, WITH_INERTIA
 
 __all__ = [
     "CableOptions",
@@ -644,3 +645,104 @@ def axial_strain_and_curvature(q_e: np.ndarray, rest: CableRest, options: CableO
         metric = mu_ref
     K = np.cross(a, b) / (la * la * metric)[..., None]
     return eps, K
+
+
+# ---------------------------------------------------------------------------------------------
+# the beam term of the assembler (flexmbs.terms): all elements of beams sharing CableOptions
+class BeamPart(NamedTuple):
+    """One group of cable elements (same :class:`CableOptions`), packed for the kernels."""
+
+    dofs: np.ndarray                 # (n_elem, 12) global coordinates
+    pos: np.ndarray                  # (n_elem, 144) matrix positions of the element blocks
+    props: CableProperties
+    rest: CableRest
+    scalar: int                      # 1: scalar-curvature bending (CableOptions.bending)
+    mass: np.ndarray                 # (n_elem, 12, 12) consistent mass (constant)
+    qe: np.ndarray                   # work (n_elem, 12): q, q̇ of the elements, Q_int
+    ve: np.ndarray
+    force: np.ndarray
+    stiff: np.ndarray                # work (n_elem, 12, 12): ∂Q_int/∂q, ∂Q_int/∂q̇
+    damp: np.ndarray
+    empty: np.ndarray                # (0, 12, 12): no tangent in the residual
+
+
+def beam_pattern(element_dofs: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The 12×12 block of every element."""
+    return [(d, d) for d in element_dofs]
+
+
+def pack_beams(element_dofs: np.ndarray, props: CableProperties, options: CableOptions,
+               q_ref: np.ndarray, positions: np.ndarray) -> BeamPart:
+    """``element_dofs`` (n_elem, 12), the section resultants per element, the reference
+    coordinates (global vector) and the matrix positions (n_elem, 144) of the element blocks."""
+    D = np.ascontiguousarray(element_dofs, dtype=np.int64)
+    ne = D.shape[0]
+    rest = rest_state(np.ascontiguousarray(q_ref[D]), props, options) if ne else _empty_rest()
+    return BeamPart(
+        D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, 144), props, rest,
+        1 if options.bending == "scalar" else 0, np.ascontiguousarray(mass_matrix(props)),
+        np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12, 12)),
+        np.zeros((ne, 12, 12)), np.zeros((0, 12, 12)))
+
+
+def _empty_rest() -> CableRest:
+    z1, z2 = np.zeros(0), np.zeros((0, 1))
+    return CableRest(z1, np.zeros((0, 12)), np.zeros(1), z2, z2, z2, np.zeros((0, 1, 4)),
+                     np.zeros(1), z2, z2, np.zeros((0, 1, 4)), np.zeros((0, 1, 4)),
+                     np.zeros((0, 1, 3)), z2, z1)
+
+
+def empty_properties() -> CableProperties:
+    return CableProperties(*(np.zeros(0) for _ in CableProperties._fields))
+
+
+@njit(inline="always")
+def _gather(bm, q, v, mode):  # noqa: ANN001, ANN202
+    damping = mode[WITH_DAMPING] != 0.0
+    for e in range(bm.dofs.shape[0]):
+        for k in range(12):
+            bm.qe[e, k] = q[bm.dofs[e, k]]
+            bm.ve[e, k] = v[bm.dofs[e, k]] if damping else 0.0
+
+
+@njit
+def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
+    """``r_q += Q_int(q, q̇) (+ M q̈ with inertia)`` of the elements (FORMULATION I §1.2, §1.4);
+    returns the largest single force (an element force entry or a row of M q̈)."""
+    _gather(bm, q, v, mode)
+    _internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[0], FLAG[0], bm.force,
+                     bm.empty, bm.empty)
+    inertia = mode[WITH_INERTIA] != 0.0
+    scale = 0.0
+    for e in range(bm.dofs.shape[0]):
+        for i in range(12):
+            s = bm.force[e, i]
+            if abs(s) > scale:
+                scale = abs(s)
+            if inertia:
+                acc = 0.0
+                for j in range(12):
+                    acc += bm.mass[e, i, j] * qdd[bm.dofs[e, j]]
+                if abs(acc) > scale:
+                    scale = abs(acc)
+                s += acc
+            r[bm.dofs[e, i]] += s
+    return scale
+
+
+@njit
+def beam_jacobian(bm, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into the CSC ``data``; returns the largest
+    diagonal stiffness entry (the scale of the rounding floor of the convergence test)."""
+    _gather(bm, q, v, mode)
+    _internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[1], FLAG[1], bm.force,
+                     bm.stiff, bm.damp)
+    kscale = 0.0
+    for e in range(bm.dofs.shape[0]):
+        for i in range(12):
+            if abs(bm.stiff[e, i, i]) > kscale:
+                kscale = abs(bm.stiff[e, i, i])
+            for j in range(12):
+                data[bm.pos[e, 12 * i + j]] += (cK * bm.stiff[e, i, j] + cC * bm.damp[e, i, j]
+                                                + cM * bm.mass[e, i, j])
+    return kscale

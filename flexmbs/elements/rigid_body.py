@@ -21,19 +21,27 @@ All functions are stateless and batched: a leading axis ``nb`` over bodies (or a
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, NamedTuple
+
 import numpy as np
 
 from .._jit import njit
+from ..terms import LOAD_FACTOR, WITH_INERTIA
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..terms import DofMap, FunctionTable
 
 __all__ = [
     "skew",
     "normalize",
     "rotation_matrix",
+    "rotation",
     "e_matrix",
     "g_matrix",
     "g_hat",
     "e_hat",
     "point_tensor",
+    "point_tensor_of",
     "point_tensor_contract",
     "point_jacobian",
     "quaternion_from_matrix",
@@ -48,6 +56,11 @@ __all__ = [
     "applied_force",
     "applied_torque_global",
     "applied_torque_body",
+    "BodiesPart",
+    "pack_bodies",
+    "bodies_pattern",
+    "bodies_residual",
+    "bodies_jacobian",
 ]
 
 
@@ -73,18 +86,16 @@ def normalize(p: np.ndarray) -> np.ndarray:
 
 
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """FORMULATION I §5, homogeneous form ``A = E Gᵀ = (e0² − eᵀe)I + 2(eeᵀ + e0ẽ)`` (...,3,3)."""
+    """FORMULATION I §5, homogeneous form ``A = E Gᵀ = (e0² − eᵀe)I + 2(eeᵀ + e0ẽ)`` (...,3,3);
+    batched over the kernel :func:`rotation`."""
     p = np.asarray(p, dtype=float)
-    if p.shape == (4,):   # the common single-body case, compiled
-        return _rotation_single(p)
-    e0 = p[..., 0]
-    e = p[..., 1:]
-    A = 2.0 * (e[..., :, None] * e[..., None, :] + e0[..., None, None] * skew(e))
-    d = e0 * e0 - np.einsum("...i,...i->...", e, e)
-    A[..., 0, 0] += d
-    A[..., 1, 1] += d
-    A[..., 2, 2] += d
-    return A
+    if p.shape == (4,):
+        return rotation(np.ascontiguousarray(p))
+    flat = np.ascontiguousarray(p.reshape(-1, 4))
+    out = np.empty((flat.shape[0], 3, 3))
+    for i in range(flat.shape[0]):
+        out[i] = rotation(flat[i])
+    return out.reshape(p.shape[:-1] + (3, 3))
 
 
 def e_matrix(p: np.ndarray) -> np.ndarray:
@@ -129,35 +140,36 @@ def e_hat(y: np.ndarray) -> np.ndarray:
     return out
 
 
-def _point_tensor_loop(s: np.ndarray) -> np.ndarray:
-    """Reference construction of ``point_tensor`` (used once to build the linear basis)."""
-    s = np.asarray(s, dtype=float)
-    T = np.zeros(s.shape[:-1] + (3, 4, 4))
-    S = skew(s)
+@njit
+def point_tensor_of(u):  # noqa: ANN001, ANN201
+    """Symmetric ``T_k(u)`` (3, 4, 4) with ``(A(p)u)_k = pᵀT_k(u)p`` for every p (A homogeneous).
+
+    Derivation [D]: ``Au = (e0² − eᵀe) u + 2e(eᵀu) + 2e0 (e × u)``, read off term by term.
+    """
+    T = np.zeros((3, 4, 4))
     for k in range(3):
-        sk = s[..., k]
-        T[..., k, 0, 0] = sk
+        T[k, 0, 0] = u[k]
         for i in range(3):
-            T[..., k, i + 1, i + 1] -= sk
-            # 2 e_k (eᵀ s), split symmetrically
-            T[..., k, k + 1, i + 1] += s[..., i]
-            T[..., k, i + 1, k + 1] += s[..., i]
-            # 2 e0 (e × s)_k = −2 e0 (s̃ e)_k
-            T[..., k, 0, i + 1] = -S[..., k, i]
-            T[..., k, i + 1, 0] = -S[..., k, i]
+            T[k, i + 1, i + 1] -= u[k]
+            # 2 e_k (eᵀ u), split symmetrically
+            T[k, k + 1, i + 1] += u[i]
+            T[k, i + 1, k + 1] += u[i]
+    # 2 e0 (e × u)_k: (e × u)_k = Σ_i (−ũ)_ki e_i
+    for k, i, sgn, j in ((0, 1, 1.0, 2), (0, 2, -1.0, 1), (1, 0, -1.0, 2), (1, 2, 1.0, 0),
+                         (2, 0, 1.0, 1), (2, 1, -1.0, 0)):
+        T[k, 0, i + 1] = sgn * u[j]
+        T[k, i + 1, 0] = sgn * u[j]
     return T
 
 
-_T_BASIS = _point_tensor_loop(np.eye(3))   # T(e_i), i = 0..2: T(s) = Σ s_i T(e_i)
-
-
 def point_tensor(s: np.ndarray) -> np.ndarray:
-    """Symmetric ``T_k(s)`` (...,3,4,4) with ``(A(p)s)_k = pᵀT_k(s)p`` for every p (A homogeneous).
-
-    Derivation [D]: ``As = (e0² − eᵀe) s + 2e(eᵀs) + 2e0 (e × s)``, read off term by term;
-    T is linear in s, so it is evaluated from a precomputed basis.
-    """
-    return np.tensordot(np.asarray(s, dtype=float), _T_BASIS, axes=([-1], [0]))
+    """``T_k(s)`` (...,3,4,4) of :func:`point_tensor_of`, batched."""
+    s = np.asarray(s, dtype=float)
+    flat = np.ascontiguousarray(s.reshape(-1, 3))
+    out = np.empty((flat.shape[0], 3, 4, 4))
+    for i in range(flat.shape[0]):
+        out[i] = point_tensor_of(flat[i])
+    return out.reshape(s.shape[:-1] + (3, 4, 4))
 
 
 def point_tensor_contract(s: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -243,13 +255,16 @@ def _gjg(inertia: np.ndarray, Ga: np.ndarray, Gb: np.ndarray) -> np.ndarray:
 
 def mass_matrix(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray) -> np.ndarray:
     """FORMULATION I §5: ``M = diag(m I3, 4 GᵀJ′G)`` (nb,7,7); singular along p (see Φ^p)."""
-    mass = np.asarray(mass, dtype=float)
-    nb = mass.shape[0]
-    M = np.zeros((nb, 7, 7))
-    for i in range(3):
-        M[:, i, i] = mass
-    G = g_matrix(p)
-    M[:, 3:, 3:] = 4.0 * _gjg(inertia, G, G)
+    mass = np.ascontiguousarray(mass, dtype=float)
+    inertia = np.ascontiguousarray(inertia, dtype=float)
+    p = np.ascontiguousarray(p, dtype=float)
+    M = np.zeros((mass.shape[0], 7, 7))
+    Mpp = np.empty((4, 4))
+    for b in range(mass.shape[0]):
+        for i in range(3):
+            M[b, i, i] = mass[b]
+        rotational_mass(inertia[b], p[b], Mpp)
+        M[b, 3:, 3:] = Mpp
     return M
 
 
@@ -270,34 +285,9 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
                      out_r, out_dq, out_dv)
 
 
-def inertial_residual_numpy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: np.ndarray,
-                            qdd: np.ndarray, out_r: np.ndarray, out_dq: np.ndarray,
-                            out_dv: np.ndarray) -> None:
-    """Vectorised numpy version of :func:`inertial_residual` (the reference the tests compare
-    the compiled kernel with)."""
-    mass = np.asarray(mass, dtype=float)
-    pdd = qdd[:, 3:]
-    G = g_matrix(p)
-    Gd = g_matrix(pd)
-    Gpdd = g_matrix(pdd)
-    GJG = _gjg(inertia, G, G)
-    GdJGd = _gjg(inertia, Gd, Gd)
-    JGpdd = np.einsum("bij,bjk,bk->bi", inertia, G, pdd)
-    Gd_p = np.einsum("bij,bj->bi", Gd, p)              # = −Gṗ = −ω′/2
-    JGd_p = np.einsum("bij,bj->bi", inertia, Gd_p)
-
-    out_r[:, :3] = mass[:, None] * qdd[:, :3]
-    out_r[:, 3:] = (4.0 * np.einsum("bij,bj->bi", GJG, pdd)
-                    - 8.0 * np.einsum("bji,bj->bi", Gd, JGd_p))
-
-    out_dq.fill(0.0)
-    out_dq[:, 3:, 3:] = 4.0 * (g_hat(JGpdd) - _gjg(inertia, G, Gpdd)) - 8.0 * GdJGd
-    out_dv.fill(0.0)
-    out_dv[:, 3:, 3:] = -8.0 * (g_hat(JGd_p) - _gjg(inertia, Gd, G))
-
-
 @njit
-def _rotation_single(p):  # noqa: ANN001, ANN202
+def rotation(p):  # noqa: ANN001, ANN201
+    """``A(p)`` (3, 3), the homogeneous rotation matrix of FORMULATION I §5 (the one statement)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
     d = e0 * e0 - e1 * e1 - e2 * e2 - e3 * e3
     A = np.empty((3, 3))
@@ -441,27 +431,40 @@ def applied_force(p: np.ndarray, s: np.ndarray, F: np.ndarray) -> tuple[np.ndarr
     ``B = ∂(As′)/∂p`` of the homogeneous A, so ``Q·δq = F·δx_P`` holds exactly to first order
     for every δq (not only tangent ones); it differs from ``2Gᵀ(s′ × AᵀF)`` by a multiple of p.
     Returns ``Q`` (nb,7) and ``dQ_dq`` (nb,7,7) with p-p block ``2 C(s′, F)`` (symmetric).
+    Batched wrapper of the kernels :func:`point_force_p` / :func:`point_force_dp`.
     """
-    F = np.asarray(F, dtype=float)
-    C = point_tensor_contract(s, F)
+    F = np.ascontiguousarray(F, dtype=float)
+    T = np.ascontiguousarray(point_tensor(np.broadcast_to(np.asarray(s, float), F.shape)))
+    p = np.ascontiguousarray(p, dtype=float)
     nb = F.shape[0]
-    Q = np.empty((nb, 7))
-    Q[:, :3] = F
-    Q[:, 3:] = 2.0 * np.einsum("bij,bj->bi", C, p)
+    Q = np.zeros((nb, 7))
     dQ = np.zeros((nb, 7, 7))
-    dQ[:, 3:, 3:] = 2.0 * C
+    Qp = np.empty(4)
+    dQp = np.empty((4, 4))
+    for b in range(nb):
+        Q[b, :3] = F[b]
+        point_force_p(T[b], F[b], 1.0, p[b], Qp)
+        point_force_dp(T[b], F[b], 1.0, dQp)
+        Q[b, 3:] = Qp
+        dQ[b, 3:, 3:] = dQp
     return Q, dQ
 
 
 def applied_torque_global(p: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Global torque n: ``Q_p = 2Eᵀn = 2Ê(n)p`` (FORMULATION I §5); returns (Q, dQ_dq)."""
-    n = np.asarray(n, dtype=float)
-    Eh = e_hat(n)
+    """Global torque n: ``Q_p = 2Eᵀn = 2Ê(n)p`` (FORMULATION I §5); returns (Q, dQ_dq).
+    Batched wrapper of the kernels :func:`torque_p` / :func:`torque_dp`."""
+    n = np.ascontiguousarray(n, dtype=float)
+    p = np.ascontiguousarray(p, dtype=float)
     nb = n.shape[0]
     Q = np.zeros((nb, 7))
-    Q[:, 3:] = 2.0 * np.einsum("bij,bj->bi", Eh, p)
     dQ = np.zeros((nb, 7, 7))
-    dQ[:, 3:, 3:] = 2.0 * Eh
+    Qp = np.empty(4)
+    dQp = np.empty((4, 4))
+    for b in range(nb):
+        torque_p(n[b], 1.0, p[b], Qp)
+        torque_dp(n[b], 1.0, dQp)
+        Q[b, 3:] = Qp
+        dQ[b, 3:, 3:] = dQp
     return Q, dQ
 
 
@@ -475,3 +478,205 @@ def applied_torque_body(p: np.ndarray, n_body: np.ndarray) -> tuple[np.ndarray, 
     dQ = np.zeros((nb, 7, 7))
     dQ[:, 3:, 3:] = 2.0 * Gh
     return Q, dQ
+
+
+# ---------------------------------------------------------------------------------------------
+# kernels shared by every path (one statement of each equation)
+@njit
+def rotational_mass(J, p, out):  # noqa: ANN001, ANN201
+    """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (FORMULATION I §5)."""
+    G = _g(p)
+    JG = _mm(J, G)
+    for a in range(4):
+        for b in range(4):
+            acc = 0.0
+            for k in range(3):
+                acc += G[k, a] * JG[k, b]
+            out[a, b] = 4.0 * acc
+
+
+@njit
+def point_force_p(T, F, f, p, out):  # noqa: ANN001, ANN201
+    """``Q_p = 2 f C(s′, F) p`` with ``C = Σ_k F_k T_k(s′)`` (FORMULATION I §5, applied force)."""
+    for a in range(4):
+        acc = 0.0
+        for b in range(4):
+            cab = 0.0
+            for c in range(3):
+                cab += F[c] * T[c, a, b]
+            acc += cab * p[b]
+        out[a] = 2.0 * f * acc
+
+
+@njit
+def point_force_dp(T, F, f, out):  # noqa: ANN001, ANN201
+    """``∂Q_p/∂p = 2 f C(s′, F)`` (4, 4) of :func:`point_force_p`."""
+    for a in range(4):
+        for b in range(4):
+            cab = 0.0
+            for c in range(3):
+                cab += F[c] * T[c, a, b]
+            out[a, b] = 2.0 * f * cab
+
+
+@njit
+def torque_p(n, f, p, out):  # noqa: ANN001, ANN201
+    """Global torque f·n: ``Q_p = 2 f Eᵀn = 2 f Ê(n)p``, ``Ê(n) = [[0, −nᵀ], [n, ñ]]`` (FORMULATION I §5)."""
+    out[0] = -2.0 * f * (n[0] * p[1] + n[1] * p[2] + n[2] * p[3])
+    out[1] = 2.0 * f * (n[0] * p[0] - n[2] * p[2] + n[1] * p[3])
+    out[2] = 2.0 * f * (n[1] * p[0] + n[2] * p[1] - n[0] * p[3])
+    out[3] = 2.0 * f * (n[2] * p[0] - n[1] * p[1] + n[0] * p[2])
+
+
+@njit
+def torque_dp(n, f, out):  # noqa: ANN001, ANN201
+    """``∂Q_p/∂p = 2 f Ê(n)`` (4, 4) of :func:`torque_p`."""
+    e = np.zeros(4)
+    col = np.empty(4)
+    for b in range(4):
+        e[:] = 0.0
+        e[b] = 1.0
+        torque_p(n, f, e, col)
+        for a in range(4):
+            out[a, b] = col[a]
+
+
+# ---------------------------------------------------------------------------------------------
+# the rigid-body term of the assembler (flexmbs.terms): inertia and body loads
+class BodiesPart(NamedTuple):
+    """All rigid bodies and the loads applied at body points, packed for the kernels."""
+
+    dofs: np.ndarray                 # (nb, 7) [r, p]
+    mass: np.ndarray                 # (nb,)
+    inertia: np.ndarray              # (nb, 3, 3)
+    pos: np.ndarray                  # (nb, 49) matrix positions of the body blocks
+    load_body: np.ndarray            # (nl,) body of each load
+    load_T: np.ndarray               # (nl, 3, 4, 4) point tensor of the load point
+    load_force: np.ndarray           # (nl, 3) global force (per unit of its time function)
+    load_moment: np.ndarray          # (nl, 3) global moment (zeros: none)
+    load_fn: np.ndarray              # (nl,) time-function index
+    p: np.ndarray                    # work (nb, 4): p, ṗ, q̈, r, ∂r/∂q, ∂r/∂q̇, M_pp
+    pd: np.ndarray
+    qdd: np.ndarray                  # (nb, 7)
+    res: np.ndarray                  # (nb, 7)
+    dq: np.ndarray                   # (nb, 7, 7)
+    dv: np.ndarray
+    Mpp: np.ndarray                  # (4, 4)
+    Q: np.ndarray                    # (4,) generalized force on p (work)
+    Q2: np.ndarray                   # (4,)
+
+
+def bodies_pattern(bodies: list, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The 7×7 block of every body."""
+    return [(dofs.body_dofs(b), dofs.body_dofs(b)) for b in bodies]
+
+
+def pack_bodies(bodies: list, loads: list, dofs: DofMap, functions: FunctionTable) -> BodiesPart:
+    """``loads``: (body, point (body frame), force, moment or None, time function) per load."""
+    nb, nl = len(bodies), len(loads)
+    index = {id(b): i for i, b in enumerate(bodies)}
+    table = np.array([dofs.body_dofs(b) for b in bodies], dtype=np.int64).reshape(nb, 7)
+    pos = np.array([dofs.positions(d, d) for d in table], dtype=np.int64).reshape(nb, 49)
+    c = np.ascontiguousarray
+    return BodiesPart(
+        c(table), np.array([b.mass for b in bodies], float),
+        c(np.array([b.inertia for b in bodies], float).reshape(nb, 3, 3)), c(pos),
+        np.array([index[id(b)] for b, *_ in loads], dtype=np.int64),
+        c(point_tensor(np.array([pt for _, pt, *_ in loads], float).reshape(nl, 3))),
+        c(np.array([f for _, _, f, _, _ in loads], float).reshape(nl, 3)),
+        c(np.array([np.zeros(3) if m is None else m for _, _, _, m, _ in loads], float)
+          .reshape(nl, 3)),
+        np.array([functions(fn) for *_, fn in loads], dtype=np.int64),
+        np.zeros((nb, 4)), np.zeros((nb, 4)), np.zeros((nb, 7)), np.zeros((nb, 7)),
+        np.zeros((nb, 7, 7)), np.zeros((nb, 7, 7)), np.zeros((4, 4)), np.zeros(4), np.zeros(4))
+
+
+@njit(inline="always")
+def _gather_inertia(b, q, v, qdd):  # noqa: ANN001, ANN202
+    """Gather [p, ṗ, q̈] of every body and evaluate the inertial residual and its derivatives."""
+    for i in range(b.dofs.shape[0]):
+        for k in range(4):
+            b.p[i, k] = q[b.dofs[i, 3 + k]]
+            b.pd[i, k] = v[b.dofs[i, 3 + k]]
+        for k in range(7):
+            b.qdd[i, k] = qdd[b.dofs[i, k]]
+    _inertial_kernel(b.mass, b.inertia, b.p, b.pd, b.qdd, b.res, b.dq, b.dv)
+
+
+@njit
+def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
+    """``r_q += M q̈ − Q_v`` (with inertia) ``− Q_ext`` of the body loads (FORMULATION I §5);
+    returns the largest single force."""
+    scale = 0.0
+    nb = b.dofs.shape[0]
+    if nb == 0:
+        return scale
+    if mode[WITH_INERTIA] != 0.0:
+        _gather_inertia(b, q, v, qdd)
+        for i in range(nb):
+            for k in range(7):
+                r[b.dofs[i, k]] += b.res[i, k]
+                if abs(b.res[i, k]) > scale:
+                    scale = abs(b.res[i, k])
+    p = np.empty(4)
+    for i in range(b.load_body.size):
+        d = b.dofs[b.load_body[i]]
+        f = mode[LOAD_FACTOR] * fv[b.load_fn[i]]
+        for k in range(4):
+            p[k] = q[d[3 + k]]
+        for c in range(3):
+            F = f * b.load_force[i, c]
+            r[d[c]] -= F
+            if abs(F) > scale:
+                scale = abs(F)
+        point_force_p(b.load_T[i], b.load_force[i], f, p, b.Q)
+        mo = b.load_moment[i]
+        if mo[0] != 0.0 or mo[1] != 0.0 or mo[2] != 0.0:
+            torque_p(mo, f, p, b.Q2)
+            for k in range(4):
+                b.Q[k] += b.Q2[k]
+        for k in range(4):
+            r[d[3 + k]] -= b.Q[k]
+            if abs(b.Q[k]) > scale:
+                scale = abs(b.Q[k])
+    return scale
+
+
+@njit
+def bodies_jacobian(b, q, v, qdd, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """``cM M + cC ∂r/∂q̇ + cK ∂r/∂q`` of :func:`bodies_residual` into the CSC ``data`` (without
+    inertia, e.g. in statics, only ``cM M``: the optional mass-proportional stabiliser)."""
+    nb = b.dofs.shape[0]
+    if nb == 0:
+        return
+    inertia = mode[WITH_INERTIA] != 0.0
+    if inertia:
+        _gather_inertia(b, q, v, qdd)
+    if inertia or cM != 0.0:
+        for i in range(nb):
+            for k in range(4):
+                b.p[i, k] = q[b.dofs[i, 3 + k]]
+            rotational_mass(b.inertia[i], b.p[i], b.Mpp)
+            for r in range(7):
+                for c in range(7):
+                    val = 0.0
+                    if inertia:
+                        val = cC * b.dv[i, r, c] + cK * b.dq[i, r, c]
+                    if r < 3 and r == c:
+                        val += cM * b.mass[i]
+                    elif r >= 3 and c >= 3:
+                        val += cM * b.Mpp[r - 3, c - 3]
+                    data[b.pos[i, 7 * r + c]] += val
+    for i in range(b.load_body.size):
+        f = mode[LOAD_FACTOR] * fv[b.load_fn[i]]
+        pos = b.pos[b.load_body[i]]
+        point_force_dp(b.load_T[i], b.load_force[i], f, b.Mpp)
+        for a in range(4):
+            for c in range(4):
+                data[pos[7 * (3 + a) + 3 + c]] -= cK * b.Mpp[a, c]
+        mo = b.load_moment[i]
+        if mo[0] != 0.0 or mo[1] != 0.0 or mo[2] != 0.0:
+            torque_dp(mo, f, b.Mpp)
+            for a in range(4):
+                for c in range(4):
+                    data[pos[7 * (3 + a) + 3 + c]] -= cK * b.Mpp[a, c]

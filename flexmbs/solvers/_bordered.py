@@ -320,7 +320,8 @@ def border_indices(asm: Assembly) -> np.ndarray:
     coordinates, nonlinear multipliers, and linear multipliers touching a border coordinate."""
     n = asm.n_coords
     coords = np.concatenate([asm.body_dof_table.ravel()]
-                            + [np.asarray(d, np.int64) for d in asm.extra_dofs.values()])
+                            + [np.asarray(asm.extra_dofs(obj), np.int64)
+                               for obj in asm.model.interactions])
     in_border = np.zeros(n, bool)
     in_border[coords] = True
     parts = [coords] + [n + np.asarray(nl.rows, np.int64) for nl in asm.nonlinear]

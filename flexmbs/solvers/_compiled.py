@@ -1,10 +1,10 @@
 """Compiled inner loop of generalized-alpha: runs of whole steps in numba.
 
 One call of :func:`alpha_run` performs, for up to ``n_steps`` steps, the predictor, the
-modified-Newton iterations (residual :func:`flexmbs.compiled.residual`, convergence test,
-Jacobian refresh :func:`flexmbs.compiled.jacobian` + :func:`~flexmbs.solvers._bordered.bordered_factorize`
+modified-Newton iterations (residual :func:`flexmbs.driver.residual`, convergence test,
+Jacobian refresh :func:`flexmbs.driver.jacobian` + :func:`~flexmbs.solvers._bordered.bordered_factorize`
 when modified Newton contracts too slowly, solve with the bordered banded LU factors), the
-corrector and the interactions' post-step update (:func:`flexmbs.compiled.post_step`). Python is
+corrector and the interactions' post-step update (:func:`flexmbs.driver.post_step`). Python is
 re-entered only at output times and on failure, so a step costs what compiled code costs. The
 arithmetic and the convergence test are those of :mod:`flexmbs.solvers.newton` and
 :mod:`flexmbs.solvers.generalized_alpha`; the tests run both paths on the same problems
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from ..compiled import ERR_END_OF_BEAM, jacobian, post_step, residual
+from ..driver import ERR_END_OF_BEAM, jacobian, post_step, residual
 from ._bordered import bordered_factorize, bordered_solve
 from .newton import renew_jacobian
 
@@ -24,7 +24,7 @@ STATUS_CONVERGED = 0   # all steps done
 STATUS_FAILED = 2      # the current step failed and was restored to its start
 STATUS_STOPPED = 3     # a step converged, then an interaction stopped the run (end of a beam)
 
-#: error code of a singular iteration matrix (the others are flexmbs.compiled.ERR_*)
+#: error code of a singular iteration matrix (the others are flexmbs.driver.ERR_*)
 ERR_SINGULAR = 100
 
 #: ``info`` entries
@@ -68,14 +68,14 @@ def _restore(backup, q, v, qdd, a, lam):  # noqa: ANN001, ANN202
 @njit
 def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model, fv, factor,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
               data, r, rhs, dx, a_star, max_it, full_newton, rtol, ctol, floor_factor,
-              refresh_ratio, refresh_iterations, refresh_cost, keep_acceleration, info):
+              refresh_ratio, refresh_iterations, refresh_cost, keep_acceleration, mode, info):
     """Up to ``n_steps`` gen-alpha steps of size ``h``: predictor, modified-Newton iterations
     (Jacobian refreshed in place when needed), corrector, post-step update; ``fv[k]`` holds
     the time-function values at the end of step k of this call. ``info`` (float, INFO_SIZE)
     carries between calls whether a factorisation is held (INFO_HAVE; set 0 when h changes),
     the stiffness scale of the rounding floor (INFO_KSCALE) and counters (factorisations,
     residual evaluations, iterations); per call: iterations of the current step, errors, worst
-    equation, steps completed, error code (``flexmbs.compiled.ERR_*`` or ERR_SINGULAR).
+    equation, steps completed, error code (``flexmbs.driver.ERR_*`` or ERR_SINGULAR).
     Refresh rules: within a step, when modified Newton contracts too slowly (:func:`_slow`);
     between steps, the renewal rule (:func:`flexmbs.solvers.newton.renew_jacobian`).
     Returns a ``STATUS_*``."""
@@ -113,7 +113,7 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
         refreshes = 0
         status = -1
         while status < 0:
-            scale, code = residual(model, q, v, qdd, lam, fvk, r)
+            scale, code = residual(model, q, v, qdd, lam, fvk, mode, r)
             info[INFO_RES] += 1.0
             if code != 0:
                 info[INFO_CODE] = code
@@ -151,7 +151,7 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
                 if refreshes > 2 * max_it:
                     status = STATUS_FAILED
                     break
-                kscale, code = jacobian(model, q, v, qdd, lam, fvk, s * bp, s * gp, s, data)
+                kscale, code = jacobian(model, q, v, qdd, lam, fvk, mode, s * bp, s * gp, s, data)
                 if code != 0:
                     info[INFO_CODE] = code
                     status = STATUS_FAILED

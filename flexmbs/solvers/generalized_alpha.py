@@ -217,9 +217,7 @@ class _PythonStepper:
     def finish_chunk(self) -> None:
         """Interaction state after the converged step (may stop the run)."""
         st = self.state
-        asm = self.step.asm
-        for obj in asm.model.interactions:
-            obj.post_step(asm, st.q, st.v, st.t)
+        self.step.asm.post_step(st.q, st.v, st.t)
 
     def totals(self) -> tuple[int, int, int]:
         t = self.newton.total
@@ -234,23 +232,23 @@ class _StepFailure(Exception):
 
 class _CompiledStepper:
     """Fast path: whole runs of steps (up to the next output) execute in numba
-    (:func:`flexmbs.solvers._compiled.alpha_run`: residual, Jacobian refresh, bordered banded LU,
-    post-step update, all compiled); Python is re-entered only at output times and on failure.
-    Applies when :func:`flexmbs.compiled.compile_model` packs the model."""
+    (:func:`flexmbs.solvers._compiled.alpha_run`: the driver's residual, Jacobian refresh,
+    bordered banded LU, post-step update, all compiled); Python is re-entered only at output
+    times and on failure. Applies when every term has a compiled form
+    (:meth:`Assembly.compiled_reason` is empty)."""
 
-    def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State,
-                 packed: tuple) -> None:
-        from .. import compiled as cm
+    def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
+        from ..terms import dynamic_mode
         from . import _compiled as cc
         from ._bordered import BorderedBandedLU, border_indices
 
-        self.cc, self.cm = cc, cm
+        self.cc = cc
         self.asm = asm
         self.o = options.newton
         self.am, self.af, self.gamma, self.beta = options.parameters()
         self.keep_acceleration = options.predictor == "constant_acceleration"
         self.state = state
-        self.model, self.functions = packed
+        self.mode = dynamic_mode()
         n, m = asm.n_coords, asm.n_mult
         self.r = np.zeros(n + m)
         self.rhs = np.zeros(n + m)
@@ -263,14 +261,6 @@ class _CompiledStepper:
         self.lu = BorderedBandedLU(asm.matrix, border_indices(asm))
         self.stopped: Exception | None = None
 
-    @staticmethod
-    def pack(asm: Assembly) -> tuple | None:
-        """(compiled model, time functions), or None when the model has no compiled form."""
-        from .. import compiled as cm
-
-        model, functions, _reason = cm.compile_model(asm)
-        return None if model is None else (model, functions)
-
     def max_chunk(self) -> int:
         return 1_000_000
 
@@ -280,46 +270,32 @@ class _CompiledStepper:
     def _failure_reason(self) -> str:
         cc, info = self.cc, self.info
         code = int(info[cc.INFO_CODE])
-        err = self.model.error
-        if code == self.cm.ERR_LEFT_BORE:
-            joints = [j for j in self.asm.model.interactions
-                      if type(j).__name__ == "SlidingClearanceJoint"]
-            return (f"joint '{joints[int(err[1])].name}': the beam axis left the bore at hole "
-                    f"section {int(err[2])} (penetration larger than the clearance); use a "
-                    "smaller time step, more load steps or a stiffer contact")
         if code == cc.ERR_SINGULAR:
             return ("the iteration matrix is singular (a coordinate without mass or stiffness, "
                     f"or dependent constraints; zero pivot {int(info[cc.INFO_PIVOT])})")
+        if code != 0:
+            return str(self.asm.error_exception(code, self.state.q, self.state.t))
         return (f"Newton did not converge in {int(info[cc.INFO_IT])} iterations (scaled error "
                 f"{info[cc.INFO_ERR]:.3g}, 1 = tolerance; worst equation: "
                 f"{self.asm.describe_coordinate(int(info[cc.INFO_WORST]))})")
 
     def advance(self, h: float, n_steps: int, t0: float) -> int:
-        from ..constraints.sliding import SimulationStopped
-
         asm, st, o, cc = self.asm, self.state, self.o, self.cc
-        fv = self.cm.time_function_values(self.functions, t0, h, n_steps)
-        self.cm.push_state(self.model, asm)
+        fv = asm.functions.table(t0, h, n_steps)
         status = cc.alpha_run(
             int(n_steps), float(h), self.am, self.af, self.gamma, self.beta, st.q, st.v, st.qdd, st.a,
-            st.lam, self.backup, self.model, fv, self.lu.factor, self.data, self.r, self.rhs,
+            st.lam, self.backup, asm.system, fv, self.lu.factor, self.data, self.r, self.rhs,
             self.dx, self.a_star, int(o.max_iterations), not o.modified,
             float(o.relative_tolerance), float(o.constraint_tolerance * asm.length_scale),
             float(o.roundoff_factor * 2.2e-16 * asm.length_scale), float(o.refresh_ratio),
-            float(o.refresh_iterations), float(o.refresh_cost), self.keep_acceleration, self.info)
-        self.cm.pull_state(self.model, asm)
+            float(o.refresh_iterations), float(o.refresh_cost), self.keep_acceleration, self.mode,
+            self.info)
         asm.stiffness_scale = float(self.info[cc.INFO_KSCALE])
         done = int(self.info[cc.INFO_DONE])
         if status == cc.STATUS_CONVERGED:
             return done
         if status == cc.STATUS_STOPPED:
-            j = [j for j in asm.model.interactions
-                 if type(j).__name__ == "SlidingJoint"][int(self.model.error[1])]
-            s = float(st.q[j._s_dof])
-            self.stopped = SimulationStopped(
-                f"joint '{j.name}': body '{j.body.name}' reached the end of beam "
-                f"'{j.beam.name}' at t = {t0 + done * h:.6g} s (s = {s:.6g}, beam length "
-                f"{j._total:.6g})")
+            self.stopped = asm.error_exception(int(self.info[cc.INFO_CODE]), st.q, t0 + done * h)
             return done
         self.invalidate()
         raise _StepFailure(done, self._failure_reason())
@@ -355,10 +331,9 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     out_dt = output_interval if output_interval is not None else dt
     if not out_dt > 0:
         raise ModelError(f"output_interval must be > 0 (got {output_interval})")
-    packed = _CompiledStepper.pack(asm) if options.compiled else None
+    compiled = options.compiled and not asm.compiled_reason()
     stepper: _PythonStepper | _CompiledStepper = (
-        _CompiledStepper(asm, options, state, packed) if packed is not None
-        else _PythonStepper(asm, options, state))
+        _CompiledStepper(asm, options, state) if compiled else _PythonStepper(asm, options, state))
     stats = IntegrationStats()
     h_nom = dt
     h = dt

@@ -276,23 +276,3 @@ def test_force_couple_equals_torque(seed):
     # remove the component along p; the rest must vanish
     dQ -= np.einsum("bi,bi->b", dQ, p)[:, None] * p
     assert np.allclose(dQ, 0.0, atol=1e-11)
-
-
-def test_compiled_inertial_residual_equals_numpy_reference():
-    """The numba kernel and the vectorised numpy formulas agree to rounding (1e-12 relative)."""
-    from flexmbs.elements.rigid_body import inertial_residual, inertial_residual_numpy
-
-    rng = np.random.default_rng(7)
-    nb = 4
-    mass = rng.uniform(0.5, 2.0, nb)
-    L = rng.standard_normal((nb, 3, 3))
-    inertia = L @ np.transpose(L, (0, 2, 1)) + np.eye(3)
-    p = rng.standard_normal((nb, 4))
-    p /= np.linalg.norm(p, axis=1, keepdims=True)
-    pd = rng.standard_normal((nb, 4))
-    qdd = rng.standard_normal((nb, 7))
-    outs = [tuple(np.zeros(s) for s in ((nb, 7), (nb, 7, 7), (nb, 7, 7))) for _ in range(2)]
-    inertial_residual(mass, inertia, p, pd, qdd, *outs[0])
-    inertial_residual_numpy(mass, inertia, p, pd, qdd, *outs[1])
-    for a, b in zip(outs[0], outs[1], strict=True):
-        assert np.allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())

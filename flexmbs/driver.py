@@ -1,0 +1,116 @@
+"""The one assembler kernel: sums the terms of every kind through their owners' kernels.
+
+    r_q   = M q'' + Q_int(q, q') + Phi_q^T lam - Q_ext(q, t)        (FORMULATION §0)
+    r_lam = Phi(q, t)
+
+and the iteration matrix ``[[cM M + cC C + cK K, Phi_q^T], [Phi_q, 0]]`` into the CSC ``data``
+of the assembler's fixed pattern. Every term is stated once, in the module that owns its
+physics (:mod:`flexmbs.terms`); this module only calls them in order. The Python Newton loop
+(through :meth:`flexmbs.assembly.Assembly.evaluate`) and the compiled one
+(:mod:`flexmbs.solvers._compiled`) both call these functions.
+
+``mode`` = ``[load factor, with inertia, with damping]`` (:mod:`flexmbs.terms`); ``fv`` holds
+the values of the model's time functions at the current time; ``error`` (int64, 3) receives
+``[code, index of the joint within its kind, detail]`` of a failure.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ._jit import njit
+from .constraints.joints import (
+    NormPart,
+    TermPart,
+    norms_jacobian,
+    norms_residual,
+    terms_jacobian,
+    terms_residual,
+)
+from .constraints.linear import LinearPart, linear_jacobian, linear_residual
+from .constraints.sliding import (
+    ERR_END_OF_BEAM,
+    SlidingPart,
+    sliding_jacobian,
+    sliding_post_step,
+    sliding_residual,
+)
+from .contact._detect import (
+    ERR_LEFT_BORE,
+    ClearancePart,
+    clearance_jacobian,
+    clearance_post_step_all,
+    clearance_residual,
+)
+from .elements.ancf_cable import beam_jacobian, beam_residual
+from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
+from .loads import LoadsPart, loads_residual
+
+__all__ = ["SystemPart", "residual", "jacobian", "post_step", "ERR_LEFT_BORE", "ERR_END_OF_BEAM",
+           "KIND_OF_ERROR"]
+
+#: term kind whose joint list ``error[1]`` indexes, per error code
+KIND_OF_ERROR = {ERR_LEFT_BORE: "clearance", ERR_END_OF_BEAM: "sliding"}
+
+
+class SystemPart(NamedTuple):
+    n: int                           # coordinates
+    m: int                           # multipliers
+    beams: tuple                     # BeamPart per element group (a homogeneous tuple)
+    bodies: BodiesPart
+    loads: LoadsPart
+    linear: LinearPart
+    norms: NormPart
+    terms: TermPart
+    sliding: SlidingPart
+    clearance: ClearancePart
+    error: np.ndarray                # (3,) [code, joint, detail] of the last error
+
+
+@njit
+def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
+    """``r = [r_q; r_lam]``; returns ``(scale, error code)``: the largest single force entering
+    ``r_q`` (the force scale of the convergence test) and 0 or an ``ERR_*`` code."""
+    n = sy.n
+    for i in range(n, r.size):
+        r[i] = 0.0
+    scale = loads_residual(sy.loads, fv, mode, r)
+    for bm in sy.beams:
+        scale = max(scale, beam_residual(bm, q, v, qdd, mode, r))
+    scale = max(scale, bodies_residual(sy.bodies, q, v, qdd, fv, mode, r))
+    linear_residual(sy.linear, n, q, lam, fv, mode, r)
+    norms_residual(sy.norms, n, q, lam, r)
+    terms_residual(sy.terms, n, q, lam, r)
+    scale = max(scale, sliding_residual(sy.sliding, n, q, v, lam, fv, r))
+    sc, code = clearance_residual(sy.clearance, q, v, r, sy.error)
+    return max(scale, sc), code
+
+
+@njit
+def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """Iteration matrix into ``data``; returns ``(largest diagonal beam stiffness, error code)``."""
+    for i in range(data.size):
+        data[i] = 0.0
+    kscale = 0.0
+    for bm in sy.beams:
+        kscale = max(kscale, beam_jacobian(bm, q, v, mode, cM, cC, cK, data))
+    bodies_jacobian(sy.bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
+    linear_jacobian(sy.linear, data)
+    norms_jacobian(sy.norms, q, lam, cK, data)
+    terms_jacobian(sy.terms, q, lam, cK, data)
+    sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data)
+    code = clearance_jacobian(sy.clearance, q, v, cC, cK, data, sy.error)
+    return kscale, code
+
+
+@njit
+def post_step(sy, q, v):  # noqa: ANN001, ANN201
+    """Interaction state after a converged step; must follow a :func:`residual` at this state
+    (whose contact detection it reuses). Returns 0 or an ``ERR_*`` code."""
+    code = sliding_post_step(sy.sliding, q, sy.error)
+    if code != 0:
+        return code
+    clearance_post_step_all(sy.clearance)
+    return 0

@@ -1,0 +1,98 @@
+"""The protocol between the assembler and the owners of the terms of the equations of motion.
+
+Every kind of term (a beam element group, the rigid bodies and their loads, the linear and
+prescribed constraint rows, the Euler-parameter normalisation, the joint term tables, the sliding
+joints, the clearance joints, the external loads) is owned by one module, which
+
+- reserves its couplings in the sparse pattern (``pattern(dofs)`` -> list of (rows, cols)),
+- packs itself into a named tuple of arrays (``pack(dofs, functions)``), reading the global
+  numbering through :class:`DofMap` (never the concrete assembler),
+- states its residual and Jacobian once, as numba kernels ``residual(part, ...)`` and
+  ``jacobian(part, ...)`` next to its physics,
+
+and :mod:`flexmbs.driver` sums the kernels of all kinds. The compiled Newton loop and the Python
+Newton loop both call that one driver, so no equation is written twice.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .loads import TimeFunction
+
+__all__ = ["DofMap", "FunctionTable", "LOAD_FACTOR", "WITH_INERTIA", "WITH_DAMPING", "MODE_SIZE",
+           "dynamic_mode", "static_mode"]
+
+#: entries of the ``mode`` vector every kernel receives (a float array, so that compiled callers
+#: do not specialise on literal flags)
+LOAD_FACTOR, WITH_INERTIA, WITH_DAMPING = 0, 1, 2
+MODE_SIZE = 3
+
+
+def dynamic_mode() -> np.ndarray:
+    """Dynamics: full loads, inertia and damping."""
+    return np.array([1.0, 1.0, 1.0])
+
+
+def static_mode(load_factor: float = 1.0, *, damping: bool = False) -> np.ndarray:
+    """Statics: loads and prescribed motion scaled by ``load_factor``, no inertia."""
+    return np.array([float(load_factor), 0.0, 1.0 if damping else 0.0])
+
+
+class DofMap(Protocol):
+    """Global numbering as the owners of terms see it (implemented by the assembler)."""
+
+    n_coords: int
+
+    def node_dofs(self, node: object) -> np.ndarray:
+        """The 6 (or the element's nodal count of) coordinates of a beam node."""
+
+    def body_dofs(self, body: object) -> np.ndarray:
+        """The 7 coordinates ``[r, p]`` of a rigid body."""
+
+    def element_dofs(self, beam: object) -> np.ndarray:
+        """(n_elem, element DOFs) coordinates of every element of a beam."""
+
+    def beam_dofs(self, beam: object) -> np.ndarray:
+        """All coordinates of a beam."""
+
+    def extra_dofs(self, owner: object) -> np.ndarray:
+        """Extra coordinates numbered for an interaction (e.g. a slide coordinate)."""
+
+    def multiplier_rows(self, constraint: object) -> np.ndarray:
+        """Multiplier index (into ``lam``) of every equation of a constraint, −1 if dropped."""
+
+    def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """CSC data positions of the dense block ``rows × cols`` (global, multipliers at
+        ``n_coords + row``), row-major (len(rows), len(cols)) flattened."""
+
+
+class FunctionTable:
+    """Time functions of a model numbered in first-use order; kernels read their values at the
+    current time from a vector ``fv`` (``fv[k] = functions[k](t)``)."""
+
+    def __init__(self) -> None:
+        self.items: list[TimeFunction] = []
+        self._index: dict[int, int] = {}
+
+    def __call__(self, fn: TimeFunction) -> int:
+        key = id(fn)
+        if key not in self._index:
+            self._index[key] = len(self.items)
+            self.items.append(fn)
+        return self._index[key]
+
+    def values(self, t: float) -> np.ndarray:
+        return np.array([fn(t) for fn in self.items], dtype=float)
+
+    def table(self, t0: float, h: float, n_steps: int) -> np.ndarray:
+        """``fv[k, i] = functions[i](t0 + (k + 1) h)``: the values at the end of every step."""
+        out = np.empty((n_steps, len(self.items)))
+        for k in range(n_steps):
+            t = t0 + (k + 1) * h
+            for i, fn in enumerate(self.items):
+                out[k, i] = fn(t)
+        return out
