@@ -35,7 +35,8 @@ def _best(fn, args, n: int = 300) -> float:  # noqa: ANN001
 
 def main(argv: list[str] | None = None) -> int:
     import flexmbs as fm
-    from flexmbs import compiled as cm
+    from flexmbs import driver as cm
+    from flexmbs.terms import dynamic_mode
     from flexmbs._jit import njit
     from flexmbs.assembly import Assembly
     from flexmbs.contact._detect import clearance_forces
@@ -52,9 +53,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     @njit
-    def loop_residual(m, q, v, qdd, lam, fv, r, n):  # noqa: ANN001, ANN202
+    def loop_residual(m, q, v, qdd, lam, fv, mode, r, n):  # noqa: ANN001, ANN202
         for _ in range(n):
-            cm.residual(m, q, v, qdd, lam, fv, r)
+            cm.residual(m, q, v, qdd, lam, fv, mode, r)
 
     @njit
     def loop_clearance(m, q, v, r, n):  # noqa: ANN001, ANN202
@@ -66,12 +67,12 @@ def main(argv: list[str] | None = None) -> int:
                              cl.xi_ws[0, :ns], cl.elem_out[0, :ns], cl.xi_out[0, :ns], cl.r_b[0],
                              cl.R[0], cl.law[0], cl.mu[0], cl.eps_v[0], cl.approach[0, :ns],
                              cl.active[0, :ns], cl.psi[0, :ns], cl.qe, cl.rows[0], False, r, cl.K,
-                             cl.K, cl.kelem)
+                             cl.C, cl.kelem)
 
     @njit
-    def loop_jacobian(m, q, v, qdd, lam, fv, data, n):  # noqa: ANN001, ANN202
+    def loop_jacobian(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN202
         for _ in range(n):
-            cm.jacobian(m, q, v, qdd, lam, fv, 1.0, 0.05, 1e-8, data)
+            cm.jacobian(m, q, v, qdd, lam, fv, mode, 1.0, 0.05, 1e-8, data)
 
     @njit
     def loop_factorize(f, data, n):  # noqa: ANN001, ANN202
@@ -93,19 +94,19 @@ def main(argv: list[str] | None = None) -> int:
         asm = Assembly(sc.model)
         res = fm.simulate(asm, t_end=0.05, dt=1e-4, output_interval=0.05, record_energy=False)
         st = res.final_state
-        m, fns, _ = cm.compile_model(asm)
-        cm.push_state(m, asm)
-        fv = cm.time_function_values(fns, st.t, 1e-4, 1)[0]
+        m = asm.system
+        mode = dynamic_mode()
+        fv = asm.functions.table(st.t, 1e-4, 1)[0]
         r = np.zeros(asm.n_total)
         x = np.zeros_like(r)
         data = np.zeros_like(asm.matrix.data)
-        cm.jacobian(m, st.q, st.v, st.qdd, st.lam, fv, 1.0, 0.05, 1e-8, data)
+        cm.jacobian(m, st.q, st.v, st.qdd, st.lam, fv, mode, 1.0, 0.05, 1e-8, data)
         lu = BorderedBandedLU(asm.matrix, border_indices(asm))
         lu.factorize(data)
-        u_res = _best(loop_residual, (m, st.q, st.v, st.qdd, st.lam, fv, r))
+        u_res = _best(loop_residual, (m, st.q, st.v, st.qdd, st.lam, fv, mode, r))
         u_joint = (_best(loop_clearance, (m, st.q, st.v, r)) if m.clearance.r_b.size
                    else float("nan"))
-        u_jac = _best(loop_jacobian, (m, st.q, st.v, st.qdd, st.lam, fv, data))
+        u_jac = _best(loop_jacobian, (m, st.q, st.v, st.qdd, st.lam, fv, mode, data))
         u_fac = _best(loop_factorize, (lu.factor, data))
         u_sol = _best(loop_solve, (lu.factor, r, x))
         run = fm.simulate(load_scenario(ROOT / "examples" / toml).model, t_end=args.t_end,

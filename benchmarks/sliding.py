@@ -102,7 +102,7 @@ def run_flexmbs(e_factor: float, h: float, t_end: float, variant: str) -> dict:
     res = fm.simulate(model, t_end=t_end, dt=h, integrator=integ, output_interval=1e-3,
                       record_energy=False)
     st = res.stats
-    return dict(t=res.t, s=res.q[:, res.assembly.extra_dofs[id(joint)][0]],
+    return dict(t=res.t, s=res.q[:, res.assembly.extra_dofs(joint)[0]],
                 z_low=res.node_displacement(rail.node(LOW_NODE))[:, 2],
                 wall=res.wall_time, steps=st.steps, newton=st.newton_iterations,
                 jac=st.factorizations, rejected=st.rejected_steps)
