@@ -36,7 +36,6 @@ def _best(fn, args, n: int = 300) -> float:  # noqa: ANN001
 def main(argv: list[str] | None = None) -> int:
     import flexmbs as fm
     from flexmbs import driver as cm
-    from flexmbs.terms import dynamic_mode
     from flexmbs._jit import njit
     from flexmbs.assembly import Assembly
     from flexmbs.contact._detect import clearance_forces
@@ -47,6 +46,7 @@ def main(argv: list[str] | None = None) -> int:
         bordered_factorize,
         bordered_solve,
     )
+    from flexmbs.terms import dynamic_mode
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t-end", type=float, default=0.5)
