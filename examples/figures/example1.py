@@ -1,7 +1,8 @@
 """Example 1 figure set (docs/examples.md): with vs without clearance, clearance sensitivity.
 
 Runs the models through examples/curved_beam_sleeve.py (unless the output folders exist; use
-``--rerun``), then draws into ``docs/figures/``:
+``--rerun``), then draws into ``docs/figures/`` with postprocess/ (which only reads the output
+folders):
 
 - ``ex1_slide.png``: slide coordinate s(t), with clearance vs the clearance-free joint;
 - ``ex1_rail.png``: vertical displacement of the rail's lowest point;
@@ -11,7 +12,7 @@ Runs the models through examples/curved_beam_sleeve.py (unless the output folder
   see docs/examples.md for why);
 - ``ex1_section.png`` and ``ex1_render.png``: section view and a rendered frame.
 
-    python postprocess/example1.py [--t-end 4.0] [--sensitivity-t-end 2.0] [--rerun]
+    python examples/figures/example1.py [--t-end 4.0] [--sensitivity-t-end 2.0] [--rerun]
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "examples"))
+ROOT = Path(__file__).resolve().parents[2]   # the checkout: its flexmbs, postprocess, examples
+sys.path[:0] = [str(ROOT), str(ROOT / "examples")]
 
 
 def _run(out: Path, t_end: float, rerun: bool, **kw) -> Path:  # noqa: ANN003
