@@ -47,13 +47,13 @@ def _tilt(run) -> np.ndarray:  # noqa: ANN001
     """Angle between the sleeve axis and the undeformed rail tangent at s (the arc
     phi = s - pi/4 with tangent (cos phi, 0, sin phi)); it includes the rail's own rotation
     under the moving sleeve, which is what the clearance-free curve shows."""
-    from flexmbs.model import rotation_from_quaternion
+    from flexmbs.elements.rigid_body import normalize, rotation_matrix
 
     p = run.probes
     out = []
     for i in range(len(p["t"])):
-        A = rotation_from_quaternion([p["sleeve_q_w"][i], p["sleeve_q_x"][i], p["sleeve_q_y"][i],
-                                      p["sleeve_q_z"][i]])
+        A = rotation_matrix(normalize(np.array([p["sleeve_q_w"][i], p["sleeve_q_x"][i],
+                                                p["sleeve_q_y"][i], p["sleeve_q_z"][i]])))
         phi = p["sleeve_s"][i] - math.pi / 4
         t = np.array([math.cos(phi), 0.0, math.sin(phi)])
         out.append(math.atan2(np.linalg.norm(np.cross(A[:, 0], t)), A[:, 0] @ t))
