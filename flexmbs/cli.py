@@ -260,38 +260,13 @@ class _Progress:
             self.bar = None
 
 
-def _run_static(sc: Any, asm: Any, out: Path, metadata: dict) -> tuple[str, dict]:
-    """``integrator = "static"``: the equilibrium at t_end, written as one output frame."""
-    from .io.output import OutputWriter, failure_reason
-    from .simulation import interaction_outputs, interaction_sections
-    from .solvers.generalized_alpha import State
-    from .solvers.static import solve_static
-
-    t = sc.simulation.t_end
-    t0 = time.perf_counter()
-    with OutputWriter(out, sc.name, asm, probes=sc.probes, metadata=metadata) as writer:
-        try:
-            st = solve_static(asm, sc.static_options(), t=t)
-        except ConvergenceError as exc:
-            writer.finish(f"failed: {failure_reason(exc)}", stats={"steps": 0},
-                          wall_time=time.perf_counter() - t0)
-            raise
-        zero = np.zeros_like(st.q)
-        state = State(t, st.q, zero, zero.copy(), zero.copy(), st.lam)
-        writer.write(state, contacts=interaction_outputs(asm, state),
-                     sections=interaction_sections(asm, state),
-                     checkpoint_extra={"scenario": sc.name, "n_coords": int(asm.n_coords),
-                                       "n_mult": int(asm.n_mult)})
-        stats = {"steps": 0, "newton_iterations": st.newton_iterations, "rejected_steps": 0,
-                 "load_increments": st.load_increments}
-        writer.finish("completed", stats=stats, wall_time=time.perf_counter() - t0)
-    return "completed", stats
-
-
 def cmd_run(args: argparse.Namespace) -> int:
-    from .assembly import Assembly
+    """``flexmbs run``: load the scenario, resolve the output folder, call
+    :func:`flexmbs.simulation.solve_static` (``integrator = "static"``) or
+    :func:`flexmbs.simulation.simulate`, which build the assembly and write the folder, and print
+    one line."""
     from .io.scenario import load_scenario
-    from .simulation import simulate
+    from .simulation import checkpoint_time, simulate, solve_static
 
     quiet = bool(args.quiet)
     status = "failed"
@@ -317,33 +292,27 @@ def cmd_run(args: argparse.Namespace) -> int:
             if not kernels_cached():
                 print("flexmbs: first run here: compiling the numba kernels (once, about 2-3 "
                       "minutes; cached for later runs)", file=sys.stderr, flush=True)
-        asm = Assembly(sc.model, redundant_constraints=sim.redundant_constraints)
         metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": _overrides(args),
                     "integrator_name": sim.integrator, "initial_static": sim.initial_static}
         if sim.integrator == "static":
             if args.resume is not None:
                 _error("--resume: a static scenario has nothing to resume")
                 return EXIT_BAD_INPUT
-            status, st = _run_static(sc, asm, out, metadata)
-            steps, newton, rejected = 0, st["newton_iterations"], 0
+            st = solve_static(sc.model, sc.static_options(), t=sim.t_end,
+                              redundant_constraints=sim.redundant_constraints, out=out,
+                              probes=sc.probes, name=sc.name, metadata=metadata)
+            status, steps, newton, rejected = "completed", 0, st.newton_iterations, 0
         else:
-            start = 0.0
-            if args.resume is not None:
-                from .io.checkpoint import load_checkpoint
-
-                ckpt = out / "checkpoint.npz"
-                if ckpt.is_file():
-                    try:
-                        start = load_checkpoint(ckpt)[0].t
-                    except (OSError, ValueError, KeyError):
-                        start = 0.0   # simulate() reports the unreadable checkpoint
+            # where the bar starts; simulate() reports a missing or unreadable checkpoint
+            start = (checkpoint_time(out) if args.resume is not None else None) or 0.0
             progress = _Progress(start, sim.t_end, name=sc.name,
                                  disable=quiet or not sys.stderr.isatty())
-            res = simulate(asm, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
+            res = simulate(sc.model, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
                            output_interval=sim.output_interval,
                            initial_static=sim.initial_static, static_options=sc.static_options(),
-                           record_energy=False, progress=progress, out=out, probes=sc.probes,
-                           name=sc.name, resume=args.resume is not None, metadata=metadata)
+                           redundant_constraints=sim.redundant_constraints, record_energy=False,
+                           progress=progress, out=out, probes=sc.probes, name=sc.name,
+                           resume=args.resume is not None, metadata=metadata)
             progress.close()
             status = res.status
             steps, newton = res.stats.steps, res.stats.newton_iterations

@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 
 from .elements.ancf_cable import CableOptions
+from .elements.rigid_body import quaternion_from_matrix, rotation_matrix
 from .errors import ModelError
 from .geometry.curves import Centerline
 from .loads import TimeFunction, as_time_function
@@ -36,41 +37,6 @@ def _unit(x: ArrayLike3, what: str) -> np.ndarray:
     return a / n
 
 
-def quaternion_from_rotation(R: np.ndarray) -> np.ndarray:
-    """Euler parameters [e0, e1, e2, e3] (e0 >= 0) of a rotation matrix (Shepperd's method)."""
-    R = np.asarray(R, float)
-    tr = np.trace(R)
-    cands = np.array([tr, R[0, 0], R[1, 1], R[2, 2]])
-    i = int(np.argmax(cands))
-    if i == 0:
-        e0 = 0.5 * np.sqrt(1 + tr)
-        p = [e0, (R[2, 1] - R[1, 2]) / (4 * e0), (R[0, 2] - R[2, 0]) / (4 * e0),
-             (R[1, 0] - R[0, 1]) / (4 * e0)]
-    elif i == 1:
-        e1 = 0.5 * np.sqrt(1 + 2 * R[0, 0] - tr)
-        p = [(R[2, 1] - R[1, 2]) / (4 * e1), e1, (R[0, 1] + R[1, 0]) / (4 * e1),
-             (R[0, 2] + R[2, 0]) / (4 * e1)]
-    elif i == 2:
-        e2 = 0.5 * np.sqrt(1 + 2 * R[1, 1] - tr)
-        p = [(R[0, 2] - R[2, 0]) / (4 * e2), (R[0, 1] + R[1, 0]) / (4 * e2), e2,
-             (R[1, 2] + R[2, 1]) / (4 * e2)]
-    else:
-        e3 = 0.5 * np.sqrt(1 + 2 * R[2, 2] - tr)
-        p = [(R[1, 0] - R[0, 1]) / (4 * e3), (R[0, 2] + R[2, 0]) / (4 * e3),
-             (R[1, 2] + R[2, 1]) / (4 * e3), e3]
-    p = np.asarray(p)
-    if p[0] < 0:
-        p = -p
-    return p / np.linalg.norm(p)
-
-
-def rotation_from_quaternion(p: ArrayLike3) -> np.ndarray:
-    e0, e1, e2, e3 = np.asarray(p, float)
-    e = np.array([e1, e2, e3])
-    et = np.array([[0, -e3, e2], [e3, 0, -e1], [-e2, e1, 0]])
-    return (2 * e0 * e0 - 1) * np.eye(3) + 2 * (np.outer(e, e) + e0 * et)
-
-
 @dataclass(frozen=True)
 class Pose:
     """Position and orientation (rotation matrix, columns = body axes in global components)."""
@@ -80,7 +46,11 @@ class Pose:
 
     @property
     def quaternion(self) -> np.ndarray:
-        return quaternion_from_rotation(self.rotation)
+        """Unit Euler parameters ``[e0, e1, e2, e3]`` with ``e0 >= 0`` (rigid_body's Shepperd
+        conversion, normalised here so that a slightly non-orthonormal rotation still gives
+        ``|p| = 1``)."""
+        p = quaternion_from_matrix(self.rotation)
+        return p / np.linalg.norm(p)
 
     def shifted(self, offset: ArrayLike3, *, local: bool = False) -> Pose:
         """Pose moved by ``offset`` (global components, or body components with ``local=True``)."""
@@ -94,7 +64,7 @@ class Pose:
         q = np.asarray(quaternion, float)
         if q.shape != (4,) or not np.linalg.norm(q) > 0:
             raise ModelError(f"quaternion must be 4 numbers [w, x, y, z], not zero (got {quaternion!r})")
-        return Pose(_vec3(position, "position"), rotation_from_quaternion(q / np.linalg.norm(q)))
+        return Pose(_vec3(position, "position"), rotation_matrix(q / np.linalg.norm(q)))
 
 
 class Ground:

@@ -97,11 +97,44 @@ def beam_positions(asm: Assembly, beam: Beam, q: np.ndarray, s: np.ndarray) -> n
 
 
 def solve_static(model: Model | Assembly, options: StaticOptions | None = None, *,
-                 t: float = 0.0, redundant_constraints: str = "error") -> StaticResult:
-    """Static equilibrium of ``model`` under its loads at time ``t``."""
+                 t: float = 0.0, redundant_constraints: str = "error",
+                 out: str | os.PathLike | None = None, probes: Sequence[Probe] = (),
+                 name: str | None = None, metadata: dict | None = None,
+                 write_vtu: bool = True) -> StaticResult:
+    """Static equilibrium of ``model`` under its loads at time ``t`` (load stepping with
+    ``options``).
+
+    With ``out`` the equilibrium is written as the output folder of DESIGN.md ("Output folder")
+    with one frame at ``t`` (zero velocity): ``<name>.pvd`` + ``vtu/``, ``probes.csv`` with
+    ``probes``, ``contacts.csv``, ``checkpoint.npz`` and ``summary.json`` (``name`` defaults to
+    the model name; ``metadata`` is stored in the summary). A solve that does not converge
+    leaves the folder with ``status: "failed: ..."`` and raises :class:`ConvergenceError`.
+    """
     asm = model if isinstance(model, Assembly) else Assembly(
         model, redundant_constraints=redundant_constraints)
-    return _solve_static(asm, options, t=t)
+    if out is None:
+        return _solve_static(asm, options, t=t)
+    run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
+    t0 = time.perf_counter()
+    with OutputWriter(out, run_name, asm, probes=probes, metadata=metadata,
+                      write_vtu=write_vtu) as writer:
+        try:
+            st = _solve_static(asm, options, t=t)
+        except ConvergenceError as exc:
+            writer.finish(f"failed: {failure_reason(exc)}", stats={"steps": 0},
+                          wall_time=time.perf_counter() - t0)
+            raise
+        zero = np.zeros_like(st.q)
+        state = State(t, st.q, zero, zero.copy(), zero.copy(), st.lam)
+        writer.write(state, contacts=interaction_outputs(asm, state),
+                     sections=interaction_sections(asm, state),
+                     checkpoint_extra={"scenario": run_name, "n_coords": int(asm.n_coords),
+                                       "n_mult": int(asm.n_mult)})
+        writer.finish("completed", stats={"steps": 0, "newton_iterations": st.newton_iterations,
+                                          "rejected_steps": 0,
+                                          "load_increments": st.load_increments},
+                      wall_time=time.perf_counter() - t0)
+    return st
 
 
 def modes(model: Model | Assembly, *, n_modes: int | None = None, static: bool = False,
@@ -284,6 +317,18 @@ def interaction_states(asm: Assembly) -> dict[str, Any]:
         if fn is not None:
             out[str(getattr(obj, "name", i))] = fn()
     return out
+
+
+def checkpoint_time(out: str | os.PathLike) -> float | None:
+    """Time of the state in ``out/checkpoint.npz``, where ``simulate(..., resume=True)`` would
+    start; ``None`` if there is no readable checkpoint (:func:`resume_point` says why)."""
+    ckpt = Path(out) / "checkpoint.npz"
+    if not ckpt.is_file():
+        return None
+    try:
+        return float(load_checkpoint(ckpt)[0].t)
+    except (OSError, ValueError, KeyError):
+        return None
 
 
 def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[State, dict]:

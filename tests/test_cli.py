@@ -209,3 +209,38 @@ def test_simulate_divergence_partial_result_and_folder(tmp_path):
     assert part.status.startswith("failed: ") and part.t[0] == 0.0
     assert summary(tmp_path / "f")["status"] == part.status
     assert len(read_pvd(tmp_path / "f" / "f.pvd")) == part.t.size
+
+
+
+def test_solve_static_out_writes_one_frame(tmp_path):
+    """The static run of ``flexmbs run`` through the API: one frame at t, probes, summary."""
+    from flexmbs.assembly import Assembly
+    from flexmbs.simulation import checkpoint_time
+
+    model, beam = small_cantilever()
+    st = fm.solve_static(model, fm.StaticOptions(load_steps=2), t=0.5, out=tmp_path / "st",
+                         probes=[BeamPointProbe("tip", beam, 1.0, "displacement")],
+                         metadata={"note": "api"})
+    assert [t for t, _ in read_pvd(tmp_path / "st" / "api.pvd")] == [0.5]
+    rows = np.loadtxt(tmp_path / "st" / "probes.csv", delimiter=",", skiprows=1, ndmin=2)
+    asm = Assembly(model)
+    d = asm.node_dofs(beam.last_node)[:3]
+    assert rows.shape == (1, 4) and rows[0, 0] == 0.5
+    np.testing.assert_allclose(rows[0, 1:], st.q[d] - asm.q_ref[d], rtol=1e-9, atol=1e-15)
+    s = summary(tmp_path / "st")
+    assert s["status"] == "completed" and s["scenario"] == "api" and s["steps"] == 0
+    assert s["newton_iterations"] == st.newton_iterations > 0
+    assert s["metadata"]["note"] == "api"
+    assert checkpoint_time(tmp_path / "st") == 0.5
+    assert checkpoint_time(tmp_path / "missing") is None
+
+
+def test_solve_static_out_failure_keeps_folder(tmp_path):
+    model, _ = small_cantilever()
+    opts = fm.StaticOptions(min_increment=0.5, newton=fm.NewtonOptions(
+        max_iterations=1, modified=False, line_search=False))
+    with pytest.raises(fm.ConvergenceError):
+        fm.solve_static(model, opts, out=tmp_path / "f", name="f")
+    s = summary(tmp_path / "f")
+    assert s["status"].startswith("failed: ") and s["scenario"] == "f"
+    assert read_pvd(tmp_path / "f" / "f.pvd") == []

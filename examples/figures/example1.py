@@ -1,7 +1,8 @@
 """Example 1 figure set (docs/examples.md): with vs without clearance, clearance sensitivity.
 
 Runs the models through examples/curved_beam_sleeve.py (unless the output folders exist; use
-``--rerun``), then draws into ``docs/figures/``:
+``--rerun``), then draws into ``docs/figures/`` with postprocess/ (which only reads the output
+folders):
 
 - ``ex1_slide.png``: slide coordinate s(t), with clearance vs the clearance-free joint;
 - ``ex1_rail.png``: vertical displacement of the rail's lowest point;
@@ -11,7 +12,7 @@ Runs the models through examples/curved_beam_sleeve.py (unless the output folder
   see docs/examples.md for why);
 - ``ex1_section.png`` and ``ex1_render.png``: section view and a rendered frame.
 
-    python postprocess/example1.py [--t-end 4.0] [--sensitivity-t-end 2.0] [--rerun]
+    python examples/figures/example1.py [--t-end 4.0] [--sensitivity-t-end 2.0] [--rerun]
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "examples"))
+ROOT = Path(__file__).resolve().parents[2]   # the checkout: its flexmbs, postprocess, examples
+sys.path[:0] = [str(ROOT), str(ROOT / "examples")]
 
 
 def _run(out: Path, t_end: float, rerun: bool, **kw) -> Path:  # noqa: ANN003
@@ -46,13 +47,13 @@ def _tilt(run) -> np.ndarray:  # noqa: ANN001
     """Angle between the sleeve axis and the undeformed rail tangent at s (the arc
     phi = s - pi/4 with tangent (cos phi, 0, sin phi)); it includes the rail's own rotation
     under the moving sleeve, which is what the clearance-free curve shows."""
-    from flexmbs.model import rotation_from_quaternion
+    from flexmbs.elements.rigid_body import normalize, rotation_matrix
 
     p = run.probes
     out = []
     for i in range(len(p["t"])):
-        A = rotation_from_quaternion([p["sleeve_q_w"][i], p["sleeve_q_x"][i], p["sleeve_q_y"][i],
-                                      p["sleeve_q_z"][i]])
+        A = rotation_matrix(normalize(np.array([p["sleeve_q_w"][i], p["sleeve_q_x"][i],
+                                                p["sleeve_q_y"][i], p["sleeve_q_z"][i]])))
         phi = p["sleeve_s"][i] - math.pi / 4
         t = np.array([math.cos(phi), 0.0, math.sin(phi)])
         out.append(math.atan2(np.linalg.norm(np.cross(A[:, 0], t)), A[:, 0] @ t))

@@ -8,15 +8,18 @@ of ``flexmbs run examples/solar_array_wing.toml`` and ``..._ideal.toml``:
 - ``ex2_render.png``: a view of wire, panels and grommet at the last output (Fig. 2(a));
 - ``ex2_contacts.png``: grommet contact forces and active points.
 
-    python postprocess/example2.py [--clearance out/solar_array_wing] [--ideal out/solar_array_wing_ideal]
+    python examples/figures/example2.py [--clearance out/solar_array_wing]
+        [--ideal out/solar_array_wing_ideal] [--sensitivity T_END]
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]   # the checkout: its flexmbs, postprocess, examples
+sys.path.insert(0, str(ROOT))
 
 
 VARIANTS = {
