@@ -32,10 +32,11 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import Any, TextIO
 
 import numpy as np
 
+from .._version import __version__
 from ..errors import FlexmbsError, ModelError
 from .checkpoint import save_checkpoint
 from .probes import Probe, probe_columns
@@ -144,7 +145,7 @@ class OutputWriter:
                                         resume_at=self.resume_at)
             self._probe_file, kept = self._open_csv("probes.csv", ["t", *self.probe_columns])
             self._contact_file, _ = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
-            self._section_file = None
+            self._section_file: TextIO | None = None   # opened at the first section row
             self.n_outputs = kept
             self._write_summary()
         except BaseException:
@@ -249,8 +250,6 @@ class OutputWriter:
     # ------------------------------------------------------------------ summary
     def _summary(self, *, stats: Any = None, wall_time: float | None = None,
                  energy_balance: dict | None = None) -> dict:
-        from .. import __version__
-
         if dataclasses.is_dataclass(stats) and not isinstance(stats, type):
             st = dataclasses.asdict(stats)
         else:
