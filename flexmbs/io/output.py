@@ -6,7 +6,7 @@
 
 Files (every one valid after every output, so a run that stops early leaves readable results):
 
-- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtu`` (:mod:`flexmbs.io.vtu`);
+- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtu`` (:mod:`flexmbs.io.vtu`, frames by :mod:`flexmbs.io.frames`);
 - ``probes.csv``: ``t,<probe columns>``, one row per output, flushed after each row;
 - ``contacts.csv``: ``t,joint,section,point,gap,normal_force,qx,qy,qz,px,py,pz,a,b``, one row
   per active contact (header written even if there is none; missing keys are empty fields);
@@ -39,8 +39,9 @@ import numpy as np
 from .._version import __version__
 from ..errors import FlexmbsError, ModelError
 from .checkpoint import save_checkpoint
+from .frames import BLOCK_NAMES, FrameBuilder
 from .probes import Probe, probe_columns
-from .vtu import BLOCK_NAMES, FrameBuilder, VTUSeries
+from .vtu import VTUSeries
 
 CONTACT_COLUMNS = ("t", "joint", "section", "point", "gap", "normal_force", "qx", "qy", "qz",
                    "px", "py", "pz", "a", "b")
