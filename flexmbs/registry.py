@@ -58,6 +58,12 @@ class Registry(Generic[T]):
 
         return add if entry is None else add(entry)
 
+    def unregister(self, name: str) -> T:
+        """Remove ``name`` and return its entry (a plug-in withdrawn, a test cleaning up)."""
+        entry = self.get(name)
+        del self._entries[name]
+        return entry
+
     def get(self, name: str) -> T:
         """The entry of ``name``; an unknown name is a :class:`ModelError` listing the known ones."""
         try:
