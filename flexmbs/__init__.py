@@ -40,7 +40,7 @@ def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (mes
     return _read_curve(path, **kwargs)
 
 
-__version__ = "0.1.0"
+from ._version import __version__  # noqa: E402 - after the API imports, as before
 
 __all__ = [
     "CircleHole", "Hole", "SlidingClearanceJoint", "SuperellipseHole", "Hertz", "HuntCrossley",

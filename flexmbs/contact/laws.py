@@ -4,8 +4,10 @@ Every law is a frozen keyword-only dataclass implementing :class:`ForceLaw`:
 ``force(delta, delta_dot, approach_velocity) -> (f, df_ddelta, df_ddelta_dot)`` with penetration
 ``δ = −g_N`` (> 0 in contact), its rate ``δ̇`` and the approach velocity ``δ̇⁽⁻⁾`` stored by the
 caller at contact onset. ``f = 0`` for ``δ ≤ 0`` and ``f`` is clamped at 0 when damping would
-pull (then both derivatives are 0). ``LAWS`` maps scenario names to classes; :func:`get_law`
-builds one by name with errors naming the unknown law or the missing/invalid parameter.
+pull (then both derivatives are 0). :data:`CONTACT_LAWS` (a :class:`~flexmbs.registry.Registry`)
+maps scenario names to classes; :func:`get_law` builds one by name with errors naming the unknown
+law or the missing/invalid parameter, and the scenario reader uses the same registry (a law's
+dataclass fields are its scenario keys).
 
 Every law is one special case of ``f = Kδⁿ(1 + χ δ̇/v₀) + c_d δ̇`` with ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``;
 :meth:`parameters` gives ``[K, n, χ, c_d, v_min]`` and :func:`law_force` (numba) evaluates it,
@@ -24,6 +26,7 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import ModelError
+from ..registry import Registry
 
 __all__ = [
     "ForceLaw",
@@ -32,6 +35,7 @@ __all__ = [
     "HuntCrossley",
     "LankaraniNikravesh",
     "RegularizedCoulomb",
+    "CONTACT_LAWS",
     "LAWS",
     "get_law",
     "law_force",
@@ -223,21 +227,20 @@ class RegularizedCoulomb:
         return F, dF_dv, g
 
 
-LAWS: dict[str, type] = {
-    "linear": LinearPenalty,
-    "hertz": Hertz,
-    "hunt_crossley": HuntCrossley,
-    "lankarani_nikravesh": LankaraniNikravesh,
-}
+#: scenario name -> normal force law class (``contact = { law = ... }``), alphabetical
+CONTACT_LAWS: Registry[type] = Registry("contact law")
+CONTACT_LAWS.register("hertz", Hertz)
+CONTACT_LAWS.register("hunt_crossley", HuntCrossley)
+CONTACT_LAWS.register("lankarani_nikravesh", LankaraniNikravesh)
+CONTACT_LAWS.register("linear", LinearPenalty)
+
+#: the former name of :data:`CONTACT_LAWS` (same object)
+LAWS = CONTACT_LAWS
 
 
 def get_law(name: str, **params: float) -> ForceLaw:
     """Normal force law by scenario name, e.g. ``get_law("linear", stiffness=1e6, damping=20)``."""
-    try:
-        cls = LAWS[name]
-    except KeyError:
-        known = ", ".join(sorted(LAWS))
-        raise ModelError(f"unknown contact law {name!r} (known: {known})") from None
+    cls = CONTACT_LAWS.get(name)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = sorted(set(params) - set(fields))
     if unknown:

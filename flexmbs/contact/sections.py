@@ -8,8 +8,11 @@ opposite sign (continuity rule, FORMULATION II §3).
 
 Pluggable (DESIGN.md "Pluggable parts"): a :class:`HoleSection` provides ``boundary(psi)`` and the
 generic detector of §6 (sample the common-normal residual F(ψ), bracket, safeguarded Newton). The
-circle overrides it with the closed-form quartic of §3. ``SECTION_TYPES`` maps scenario names
-to classes; :func:`get_section` builds one by name.
+circle overrides it with the closed-form quartic of §3. :data:`HOLE_SECTIONS` (a
+:class:`~flexmbs.registry.Registry`) maps the scenario names (``hole = { shape = ... }``) to
+classes; :func:`get_section` builds one by name, and the scenario reader uses the same registry.
+A new shape is a :class:`HoleSection` subclass registered with ``@HOLE_SECTIONS.register(name)``;
+its dataclass fields are its parameters, in Python and as scenario keys.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import numpy as np
 
 from .._jit import njit
 from ..errors import ModelError
+from ..registry import Registry
 
 __all__ = [
     "Ellipse2D",
@@ -29,6 +33,7 @@ __all__ = [
     "HoleSection",
     "CircleSection",
     "SuperellipseSection",
+    "HOLE_SECTIONS",
     "SECTION_TYPES",
     "get_section",
     "two_point_possible",
@@ -167,9 +172,9 @@ class HoleSection(ABC):
         s = 0.5 * (lo + hi)
         tol = 1e-13 * max(1.0, self.bounding_radius())
         for _ in range(60):
-            f, df, _ = self._residual(ellipse, s)
-            f = float(f)
-            df = float(df)
+            F, dF, _ = self._residual(ellipse, s)
+            f = float(F)
+            df = float(dF)
             if abs(f) <= tol:
                 return s
             if (f < 0.0) == (flo < 0.0):
@@ -384,6 +389,11 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     return phis[:nf], kinds[:nf]
 
 
+#: scenario name -> hole section class (``hole = { shape = "circle", radius = ... }``)
+HOLE_SECTIONS: Registry[type[HoleSection]] = Registry("hole section")
+
+
+@HOLE_SECTIONS.register("circle")
 @dataclass(frozen=True)
 class CircleSection(HoleSection):
     """Circular bore of radius R (FORMULATION II §3): closed-form quartic detector."""
@@ -429,30 +439,34 @@ class CircleSection(HoleSection):
         return out
 
 
+@HOLE_SECTIONS.register("superellipse")
 @dataclass(frozen=True)
 class SuperellipseSection(HoleSection):
-    """Superellipse bore ``|y/A|ⁿ + |z/B|ⁿ = 1``, n ≥ 2 (FORMULATION II §6), radially parametrised
-    ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``; generic common-normal detector."""
+    """Superellipse bore ``|y/a|ⁿ + |z/b|ⁿ = 1``, semi-axes ``a`` (body y) and ``b`` (body z),
+    ``n = exponent ≥ 2`` (FORMULATION II §6), radially parametrised ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``;
+    generic common-normal detector. Parameter names as in the scenario: ``a``, ``b``,
+    ``exponent``."""
 
-    A: float
-    B: float
-    n: float = 2.0
+    a: float
+    b: float
+    exponent: float = 2.0
     samples: int = 128
 
     def __post_init__(self) -> None:
-        for name in ("A", "B"):
+        for name in ("a", "b"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and v > 0.0):
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0.0):
                 raise ModelError(f"SuperellipseSection: {name} must be > 0 (got {v!r})")
-        if not (isinstance(self.n, (int, float)) and self.n >= 2.0):
-            raise ModelError(f"SuperellipseSection: exponent n must be >= 2 (got {self.n!r})")
+        n = self.exponent
+        if not (isinstance(n, (int, float)) and not isinstance(n, bool) and n >= 2.0):
+            raise ModelError(f"SuperellipseSection: exponent must be >= 2 (got {n!r})")
         if int(self.samples) < 64:
             raise ModelError(f"SuperellipseSection: samples must be >= 64 (got {self.samples!r})")
 
     def boundary(self, psi: np.ndarray | float
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         psi = np.asarray(psi, dtype=float)
-        A, B, n = float(self.A), float(self.B), float(self.n)
+        A, B, n = float(self.a), float(self.b), float(self.exponent)
         c, s = np.cos(psi), np.sin(psi)
         ac, as_ = np.abs(c / A), np.abs(s / B)
         g = ac**n + as_**n
@@ -480,24 +494,19 @@ class SuperellipseSection(HoleSection):
         return float(np.max(np.hypot(Y[:, 0], Y[:, 1]))) * (1.0 + 1e-6)
 
     def inscribed_radius(self) -> float:
-        return float(min(self.A, self.B))  # ρ(ψ) ≥ min(A, B) for n ≥ 2
+        return float(min(self.a, self.b))  # ρ(ψ) ≥ min(a, b) for n ≥ 2
 
 
-SECTION_TYPES: dict[str, type[HoleSection]] = {
-    "circle": CircleSection,
-    "superellipse": SuperellipseSection,
-}
+#: the former name of :data:`HOLE_SECTIONS` (same object)
+SECTION_TYPES = HOLE_SECTIONS
 
 
 def get_section(name: str, **params: float) -> HoleSection:
-    """Hole section by scenario name (``"circle"``: radius; ``"superellipse"``: A, B, n)."""
+    """Hole section by scenario name, e.g. ``get_section("superellipse", a=2e-3, b=3e-3,
+    exponent=4)``; an unknown name lists the known ones (:data:`HOLE_SECTIONS`)."""
+    cls = HOLE_SECTIONS.get(name)
     try:
-        cls = SECTION_TYPES[name]
-    except KeyError:
-        known = ", ".join(sorted(SECTION_TYPES))
-        raise ModelError(f"unknown hole section {name!r} (known: {known})") from None
-    try:
-        return cls(**params)  # type: ignore[call-arg]
+        return cls(**params)
     except TypeError as exc:
         raise ModelError(f"hole section {name!r}: {exc}") from None
 

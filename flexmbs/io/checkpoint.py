@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from .._version import __version__
 from ..solvers.generalized_alpha import State
 
 FORMAT = "flexmbs-checkpoint-1"
@@ -35,8 +36,6 @@ def _json_default(o: Any) -> Any:
 
 def save_checkpoint(path: str | os.PathLike, state: State, *, extra: dict | None = None) -> Path:
     """Write ``state`` (and ``extra``) to ``path`` atomically (temp file + rename)."""
-    from .. import __version__
-
     path = Path(path)
     arrays: dict[str, np.ndarray] = {"t": np.array(float(state.t))}
     for f in _STATE_FIELDS:

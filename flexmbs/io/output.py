@@ -6,7 +6,7 @@
 
 Files (every one valid after every output, so a run that stops early leaves readable results):
 
-- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtu`` (:mod:`flexmbs.io.vtu`);
+- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtu`` (:mod:`flexmbs.io.vtu`, frames by :mod:`flexmbs.io.frames`);
 - ``probes.csv``: ``t,<probe columns>``, one row per output, flushed after each row;
 - ``contacts.csv``: ``t,joint,section,point,gap,normal_force,qx,qy,qz,px,py,pz,a,b``, one row
   per active contact (header written even if there is none; missing keys are empty fields);
@@ -32,14 +32,16 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import Any, TextIO
 
 import numpy as np
 
+from .._version import __version__
 from ..errors import FlexmbsError, ModelError
 from .checkpoint import save_checkpoint
+from .frames import BLOCK_NAMES, FrameBuilder
 from .probes import Probe, probe_columns
-from .vtu import BLOCK_NAMES, FrameBuilder, VTUSeries
+from .vtu import VTUSeries
 
 CONTACT_COLUMNS = ("t", "joint", "section", "point", "gap", "normal_force", "qx", "qy", "qz",
                    "px", "py", "pz", "a", "b")
@@ -144,7 +146,7 @@ class OutputWriter:
                                         resume_at=self.resume_at)
             self._probe_file, kept = self._open_csv("probes.csv", ["t", *self.probe_columns])
             self._contact_file, _ = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
-            self._section_file = None
+            self._section_file: TextIO | None = None   # opened at the first section row
             self.n_outputs = kept
             self._write_summary()
         except BaseException:
@@ -249,8 +251,6 @@ class OutputWriter:
     # ------------------------------------------------------------------ summary
     def _summary(self, *, stats: Any = None, wall_time: float | None = None,
                  energy_balance: dict | None = None) -> dict:
-        from .. import __version__
-
         if dataclasses.is_dataclass(stats) and not isinstance(stats, type):
             st = dataclasses.asdict(stats)
         else:

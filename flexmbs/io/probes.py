@@ -1,21 +1,21 @@
 """Probes: named scalar/vector quantities written to ``probes.csv`` at every output time.
 
 A probe declares its CSV columns and evaluates them from the assembly and a solver state.
-Vector probes write ``<name>_x, <name>_y, <name>_z`` (DESIGN.md, "Output folder"). The registry
-:data:`PROBE_TYPES` maps the names used in scenario files (``[[probes]] type = ...``) to classes;
-more types register themselves with :func:`register_probe`.
+Vector probes write ``<name>_x, <name>_y, <name>_z`` (DESIGN.md, "Output folder"). The names
+used in scenario files (``[[probes]] type = ...``) are the registry
+:data:`flexmbs.io.builders.probes.PROBES` of scenario builders; a new probe type is a class here
+and a builder registered there.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from ..elements import ancf_cable as cable
-from ..errors import ModelError, ScenarioError
+from ..errors import ModelError
 from ..model import Beam, RigidBody
 
 _XYZ = ("x", "y", "z")
@@ -167,15 +167,6 @@ class EnergyProbe(Probe):
         return np.array([asm.energies(state.q, state.v)[self.quantity]])
 
 
-#: scenario ``type`` -> probe class
-PROBE_TYPES: dict[str, type[Probe]] = {
-    "beam_point": BeamPointProbe,
-    "body_position": BodyPositionProbe,
-    "body_orientation": BodyOrientationProbe,
-    "energy": EnergyProbe,
-}
-
-
 class SlideCoordinateProbe(Probe):
     """Arc length ``s`` (from the beam's first node) of a sliding joint's contact point."""
 
@@ -194,10 +185,6 @@ class SlideCoordinateProbe(Probe):
     def check(self, asm: Any) -> None:
         if self.joint not in asm.model.interactions:
             raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
-
-
-PROBE_TYPES["slide_coordinate"] = SlideCoordinateProbe
-PROBE_TYPES["body_point"] = BodyPointProbe
 
 
 class JointReactionProbe(Probe):
@@ -220,9 +207,6 @@ class JointReactionProbe(Probe):
             raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
 
 
-PROBE_TYPES["joint_reaction"] = JointReactionProbe
-
-
 class ContactForceProbe(Probe):
     """Total contact force on the hole body of a clearance joint (global components)."""
 
@@ -241,30 +225,6 @@ class ContactForceProbe(Probe):
     def check(self, asm: Any) -> None:
         if self.joint not in asm.model.interactions:
             raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
-
-
-PROBE_TYPES["contact_force"] = ContactForceProbe
-
-
-def register_probe(name: str) -> Callable[[type[Probe]], type[Probe]]:
-    """Class decorator adding a probe type to :data:`PROBE_TYPES` under ``name``."""
-
-    def deco(cls: type[Probe]) -> type[Probe]:
-        if name in PROBE_TYPES and PROBE_TYPES[name] is not cls:
-            raise ValueError(f"probe type '{name}' is already registered ({PROBE_TYPES[name]})")
-        PROBE_TYPES[name] = cls
-        return cls
-
-    return deco
-
-
-def get_probe_type(name: str) -> type[Probe]:
-    """The probe class registered as ``name``; unknown names list the known ones."""
-    try:
-        return PROBE_TYPES[name]
-    except (KeyError, TypeError):
-        raise ScenarioError(f"unknown probe type {name!r} (known: {', '.join(sorted(PROBE_TYPES))})"
-                            ) from None
 
 
 def probe_columns(probes: list[Probe] | tuple[Probe, ...]) -> list[str]:

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from flexmbs.contact.sections import (
-    SECTION_TYPES,
+    HOLE_SECTIONS,
     CircleSection,
     Ellipse2D,
     SuperellipseSection,
@@ -119,7 +119,7 @@ def test_superellipse_candidates_match_brute_force(b: float, ratio: float, th: f
     jamming for them) are excluded: there the stationary points crowd and the bracketing
     tolerance of the detector was seen to leave d' ~ 4e-3."""
     assume(ratio * b < 0.95 * min(A, B))
-    sec = SuperellipseSection(A, B, n)
+    sec = SuperellipseSection(a=A, b=B, exponent=n)
     E = Ellipse2D(np.array([rc * math.cos(ac), rc * math.sin(ac)]),
                   np.array([math.cos(th), math.sin(th)]), ratio * b, b)
     cands = sec.candidates(E, margin=MARGIN)
@@ -151,7 +151,7 @@ def test_superellipse_n2_equals_circle(rng: np.random.Generator) -> None:
         b = rng.uniform(0.3, 0.9)
         E = Ellipse2D(rng.uniform(-0.3, 0.3, 2), rng.normal(size=2), b * rng.uniform(1, 2), b)
         c1 = sorted(CircleSection(1.0).candidates(E, 0.2), key=lambda c: c.psi)
-        c2 = sorted(SuperellipseSection(1.0, 1.0, 2.0).candidates(E, 0.2), key=lambda c: c.psi)
+        c2 = sorted(SuperellipseSection(a=1.0, b=1.0, exponent=2.0).candidates(E, 0.2), key=lambda c: c.psi)
         assert len(c1) == len(c2)
         for x, y in zip(c1, c2, strict=True):
             np.testing.assert_allclose(x.Q, y.Q, atol=1e-9)
@@ -162,7 +162,7 @@ def test_superellipse_n2_equals_circle(rng: np.random.Generator) -> None:
 
 def test_superellipse_boundary_is_consistent() -> None:
     """N ⟂ Y_ψ, speed = |Y_ψ| and κ = |T_ψ|/|Y_ψ| by finite differences; Y on the curve."""
-    sec = SuperellipseSection(1.2, 0.8, 4.0)
+    sec = SuperellipseSection(a=1.2, b=0.8, exponent=4.0)
     psi = np.linspace(0.1, 6.2, 37)
     Y, N, T, speed, kappa = sec.boundary(psi)
     np.testing.assert_allclose(np.abs(Y[:, 0] / 1.2) ** 4 + np.abs(Y[:, 1] / 0.8) ** 4, 1.0, atol=1e-12)
@@ -237,17 +237,17 @@ def test_tilted_beam_centred_gives_axis_points() -> None:
 
 
 def test_registry_and_errors() -> None:
-    assert set(SECTION_TYPES) == {"circle", "superellipse"}
+    assert set(HOLE_SECTIONS) == {"circle", "superellipse"}
     assert get_section("circle", radius=2.0) == CircleSection(2.0)
-    assert get_section("superellipse", A=1.0, B=2.0, n=4.0).inscribed_radius() == 1.0
+    assert get_section("superellipse", a=1.0, b=2.0, exponent=4.0).inscribed_radius() == 1.0
     with pytest.raises(ModelError, match=r"unknown hole section 'hexagon' \(known: circle, superellipse\)"):
         get_section("hexagon")
     with pytest.raises(ModelError, match="radius"):
         get_section("circle", radius=-1.0)
     with pytest.raises(ModelError, match="circle"):
         get_section("circle", diameter=1.0)
-    with pytest.raises(ModelError, match="exponent n"):
-        SuperellipseSection(1.0, 1.0, 1.5)
+    with pytest.raises(ModelError, match="exponent must be >= 2"):
+        SuperellipseSection(a=1.0, b=1.0, exponent=1.5)
     with pytest.raises(ModelError, match="a >= b"):
         Ellipse2D(np.zeros(2), np.array([1.0, 0.0]), 0.5, 1.0)
 

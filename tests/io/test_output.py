@@ -17,16 +17,15 @@ import pytest
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.errors import ConvergenceError, ModelError, ScenarioError
+from flexmbs.errors import ConvergenceError, ModelError
+from flexmbs.io.builders import PROBES
 from flexmbs.io.checkpoint import load_checkpoint
 from flexmbs.io.output import CONTACT_COLUMNS, OutputWriter
 from flexmbs.io.probes import (
-    PROBE_TYPES,
     BeamPointProbe,
     BodyOrientationProbe,
     BodyPositionProbe,
     EnergyProbe,
-    get_probe_type,
 )
 from flexmbs.simulation import beam_positions
 from flexmbs.solvers.generalized_alpha import consistent_initial_state
@@ -259,10 +258,10 @@ def test_beam_point_probe_range_is_checked():
 
 
 def test_probe_registry():
-    assert {"beam_point", "body_position", "body_orientation", "energy"} <= set(PROBE_TYPES)
-    assert get_probe_type("energy") is EnergyProbe
-    with pytest.raises(ScenarioError, match="beam_point.*body_orientation.*body_position.*energy"):
-        get_probe_type("strain_gauge")
+    assert {"beam_point", "body_position", "body_orientation", "energy"} <= set(PROBES)
+    with pytest.raises(ModelError, match=r"unknown probe type 'strain_gauge' \(known: beam_point, "
+                                         "body_position, body_orientation, body_point, energy"):
+        PROBES.get("strain_gauge")
 
 
 def test_probe_names_must_be_unique_and_belong_to_the_model(tmp_path):

@@ -11,13 +11,10 @@ import pytest
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.io.scenario import (
-    JOINT_TYPES,
-    apply_override,
-    build_scenario,
-    load_scenario,
-    read_scenario_file,
-)
+from flexmbs.io.builders import JOINTS
+from flexmbs.io.overrides import apply_override
+from flexmbs.io.scenario import build_scenario, load_scenario
+from flexmbs.io.tables import read_toml
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
@@ -151,7 +148,7 @@ def test_apply_override_values_are_toml():
     ("beams=3", None),   # allowed by apply_override, rejected by the loader
 ])
 def test_override_errors(assignment, fragment):
-    raw = read_scenario_file(EXAMPLES / "cantilever.toml")
+    raw = read_toml(EXAMPLES / "cantilever.toml")
     if fragment is None:
         apply_override(raw, assignment)
         with pytest.raises(fm.ScenarioError, match="beams: expected an array of tables"):
@@ -421,7 +418,7 @@ def test_clearance_example_builds_the_joint_and_probes():
     assert len(joint.stations) == 9 and joint.beam_radius == pytest.approx(2e-3)
     assert sc.model.beams[0].length == pytest.approx(np.pi / 2, rel=1e-6)
     assert [p.name for p in sc.probes] == ["sleeve_s", "lowest_point", "contact_force", "energy"]
-    assert {"sliding", "sliding_clearance"} <= set(JOINT_TYPES)
+    assert {"sliding", "sliding_clearance"} <= set(JOINTS)
     with pytest.raises(fm.ScenarioError, match=r"probes\[sleeve_s\]\.joint: no sliding joint named"):
         load_scenario(EXAMPLES / "curved_beam_sleeve.toml", ["probes.sleeve_s.joint=other"])
 

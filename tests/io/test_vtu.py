@@ -15,18 +15,8 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.elements.rigid_body import angular_velocity_global, rotation_matrix
 from flexmbs.errors import ModelError
-from flexmbs.io.vtu import (
-    BLOCK_BEAM,
-    BLOCK_BODY,
-    BLOCK_CONTACT,
-    VTK_LINE,
-    VTK_TRIANGLE,
-    VTUMesh,
-    VTUSeries,
-    build_frame,
-    read_pvd,
-    write_vtu,
-)
+from flexmbs.io.frames import BLOCK_BEAM, BLOCK_BODY, BLOCK_CONTACT, build_frame
+from flexmbs.io.vtu import VTK_LINE, VTK_TRIANGLE, VTUMesh, VTUSeries, read_pvd, write_vtu
 from flexmbs.simulation import beam_positions
 from flexmbs.solvers.generalized_alpha import State
 

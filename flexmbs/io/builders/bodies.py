@@ -1,0 +1,100 @@
+"""``[[rigid_bodies]]``: mass, inertia, initial pose and velocity, output shape."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...errors import ScenarioError
+from ...model import Pose, RigidBody
+from ..tables import Table, at, display_path, is_number, show_value
+from .context import BuildContext
+
+__all__ = ["SHAPES", "build_rigid_body"]
+
+#: ``shape = { type = ... }`` of a body (drawn in the VTU output)
+SHAPES = ("cylinder", "box", "mesh")
+
+
+def build_rigid_body(t: Table, ctx: BuildContext) -> RigidBody:
+    """A ``[[rigid_bodies]]`` entry."""
+    t.allow(("name", "mass", "inertia", "pose", "velocity", "angular_velocity", "shape"))
+    mass = t.number("mass", gt=0)
+    inertia = _inertia(t)
+    pt = t.table("pose", None)
+    pose = Pose(np.zeros(3)) if pt is None else _pose(ctx, pt)
+    shape = _shape(ctx, t.table("shape")) if t.has("shape") else None
+    return ctx.model.add_rigid_body(mass=mass, inertia=inertia, pose=pose, name=t.raw["name"],
+                                    velocity=t.vector("velocity", np.zeros(3)),
+                                    angular_velocity=t.vector("angular_velocity", np.zeros(3)),
+                                    shape=shape)
+
+
+def _inertia(t: Table) -> np.ndarray:
+    expected = "3 principal moments > 0 or a symmetric positive definite 3x3 matrix [kg m^2]"
+    v = t.get("inertia", expected=expected)
+    J: np.ndarray | None = None
+    if isinstance(v, list) and len(v) == 3 and all(is_number(x) for x in v):
+        J = np.diag(np.array(v, dtype=float))
+    elif (isinstance(v, list) and len(v) == 3
+          and all(isinstance(r, list) and len(r) == 3 and all(is_number(x) for x in r) for r in v)):
+        J = np.array(v, dtype=float)
+    if J is None or not np.all(np.isfinite(J)) or not np.allclose(J, J.T, rtol=1e-10,
+                                                                  atol=1e-14 * np.abs(J).max()):
+        raise t.fail("inertia", expected, v)
+    ev = np.linalg.eigvalsh(J)
+    if ev.min() <= 0:
+        raise t.fail("inertia", expected, v)
+    if ev[2] > (ev[0] + ev[1]) * (1 + 1e-6):
+        raise ScenarioError(f"{t.key('inertia')}: principal moments {show_value(ev.tolist())} "
+                            "violate the triangle inequality (each <= the sum of the other two); "
+                            "no rigid body has them")
+    return J
+
+
+def _pose(ctx: BuildContext, p: Table) -> Pose:
+    p.allow(("position", "quaternion", "on_beam", "s", "offset", "up"))
+    if p.has("on_beam"):
+        bad = p.present(("position", "quaternion"))
+        if bad:
+            raise ScenarioError(f"{p.path}: give either {{ position, quaternion }} or "
+                                f"{{ on_beam, s, offset }}, not both (got on_beam and {bad[0]})")
+        beam = ctx.beam(p, "on_beam")
+        s = ctx.arc_length(p, beam)
+        up = p.vector("up", None)
+        with at(p.path):
+            frame = beam.frame_at(s, up=up)
+        return frame.shifted(p.vector("offset", np.zeros(3)))
+    bad = p.present(("s", "offset", "up"))
+    if bad:
+        raise ScenarioError(f"{p.key(bad[0])}: only with on_beam = \"<beam name>\"")
+    position = p.vector("position")
+    q = p.vector("quaternion", np.array([1.0, 0, 0, 0]), n=4,
+                 what="a unit quaternion [w, x, y, z] (4 numbers)")
+    if abs(np.linalg.norm(q) - 1.0) > 1e-3:
+        raise p.fail("quaternion", f"a unit quaternion [w, x, y, z] (norm {np.linalg.norm(q):.6g})",
+                     q.tolist())
+    return Pose.from_quaternion(position, q)
+
+
+def _shape(ctx: BuildContext, s: Table) -> dict[str, Any]:
+    kind = s.choice("type", SHAPES, what="shape type")
+    if kind == "cylinder":
+        s.allow(("type", "radius", "length", "inner_radius"))
+        r = s.number("radius", gt=0)
+        out: dict[str, Any] = {"type": kind, "radius": r, "length": s.number("length", gt=0)}
+        if s.has("inner_radius"):
+            out["inner_radius"] = s.number("inner_radius", ge=0, lt=r)
+        return out
+    if kind == "box":
+        s.allow(("type", "size"))
+        size = s.vector("size", what="3 sizes [lx, ly, lz] > 0")
+        if np.any(size <= 0):
+            raise s.fail("size", "3 sizes [lx, ly, lz] > 0", size.tolist())
+        return {"type": kind, "size": size.tolist()}
+    s.allow(("type", "file", "scale"))
+    file = ctx.resolve(s.string("file"))
+    if not file.is_file():
+        raise ScenarioError(f"{s.key('file')}: shape file not found: {display_path(file)}")
+    return {"type": kind, "file": str(file), "scale": s.number("scale", 1.0, gt=0)}

@@ -1,0 +1,87 @@
+"""``[[probes]]`` builders, registry :data:`PROBES` (the probe classes are in
+:mod:`flexmbs.io.probes`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...errors import ScenarioError
+from ...registry import Registry
+from .. import probes
+from ..tables import Table
+from .context import BuildContext, Builder, build_entry
+
+__all__ = ["PROBES", "build_probe"]
+
+#: ``[[probes]] type = ...`` -> builder(table, ctx) -> Probe
+PROBES: Registry[Builder] = Registry("probe type")
+
+
+def build_probe(t: Table, ctx: BuildContext) -> probes.Probe:
+    """A ``[[probes]]`` entry; its name must be usable as a CSV column."""
+    name = t.raw["name"]
+    if any(c in name for c in ",\"\n\r") or name.strip() != name:
+        raise t.fail("name", "a probe name usable as a CSV column (no commas, quotes or "
+                     "surrounding spaces)", name)
+    probe: probes.Probe = build_entry(PROBES, t, ctx)
+    return probe
+
+
+@PROBES.register("beam_point")
+def _beam_point(t: Table, ctx: BuildContext) -> probes.Probe:
+    t.allow(("name", "type", "beam", "s", "quantity"))
+    beam = ctx.beam(t)
+    s = ctx.arc_length(t, beam)
+    quantity = t.choice("quantity", probes.BeamPointProbe.QUANTITIES, "position", what="quantity")
+    return probes.BeamPointProbe(t.raw["name"], beam, s, quantity)
+
+
+@PROBES.register("body_position")
+def _body_position(t: Table, ctx: BuildContext) -> probes.Probe:
+    t.allow(("name", "type", "body"))
+    return probes.BodyPositionProbe(t.raw["name"], ctx.body(t))
+
+
+@PROBES.register("body_orientation")
+def _body_orientation(t: Table, ctx: BuildContext) -> probes.Probe:
+    t.allow(("name", "type", "body"))
+    return probes.BodyOrientationProbe(t.raw["name"], ctx.body(t))
+
+
+@PROBES.register("body_point")
+def _body_point(t: Table, ctx: BuildContext) -> probes.Probe:
+    t.allow(("name", "type", "body", "point", "quantity"))
+    quantity = t.choice("quantity", ("position", "displacement"), "position", what="quantity")
+    return probes.BodyPointProbe(t.raw["name"], ctx.body(t), t.vector("point"), quantity)
+
+
+@PROBES.register("energy")
+def _energy(t: Table, ctx: BuildContext) -> probes.Probe:
+    t.allow(("name", "type", "quantity"))
+    quantity = t.choice("quantity", probes.EnergyProbe.QUANTITIES, "total", what="quantity")
+    return probes.EnergyProbe(t.raw["name"], quantity)
+
+
+def _joint_probe(cls: type[Any], needs: str, kind: str) -> Builder:
+    """Builder of a probe on a joint that offers the method ``needs`` (``joint = "name"``)."""
+
+    def build(t: Table, ctx: BuildContext) -> probes.Probe:
+        t.allow(("name", "type", "joint"))
+        name = t.string("joint")
+        joint = ctx.joints.get(name)
+        if joint is None or not hasattr(joint, needs):
+            known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, needs))
+            raise ScenarioError(f"{t.key('joint')}: no {kind} joint named '{name}' "
+                                f"({kind} joints: {known or 'none'})")
+        probe: probes.Probe = cls(t.raw["name"], joint)
+        return probe
+
+    return build
+
+
+PROBES.register("slide_coordinate",
+                _joint_probe(probes.SlideCoordinateProbe, "slide_coordinate", "sliding"))
+PROBES.register("contact_force",
+                _joint_probe(probes.ContactForceProbe, "contact_force", "clearance"))
+PROBES.register("joint_reaction",
+                _joint_probe(probes.JointReactionProbe, "reaction_force", "sliding"))

@@ -1,0 +1,91 @@
+"""The ``[simulation]`` table -> :class:`SimulationSettings` (how to run a scenario)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ...solvers.newton import NewtonOptions
+from ...solvers.static import StaticOptions
+from ..tables import MISSING, Table
+
+__all__ = ["INTEGRATORS", "PREDICTORS", "SimulationSettings", "read_simulation"]
+
+INTEGRATORS = ("generalized_alpha", "hht", "static")
+PREDICTORS = ("constant_acceleration", "zero_acceleration")
+
+_NEWTON_KEYS = {"max_iterations": "int", "relative_tolerance": "pos", "constraint_tolerance": "pos",
+                "modified": "bool", "line_search": "bool", "refresh_ratio": "ratio",
+                "refresh_iterations": "pos", "refresh_cost": "pos"}
+
+
+@dataclass(frozen=True, kw_only=True)
+class SimulationSettings:
+    """The ``[simulation]`` table (units SI). See docs/scenario.md for every key."""
+
+    t_end: float
+    dt: float
+    integrator: str = "generalized_alpha"
+    rho_inf: float = 0.8
+    gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    output_interval: float | None = None       #: None: every step
+    initial_static: bool = False               #: start from the static equilibrium at t = 0
+    adaptive: bool = True                      #: halve the step on Newton failure
+    min_step: float | None = None              #: None: dt / 1024
+    redundant_constraints: str = "error"       #: "error" | "drop"
+    load_steps: int = 1                        #: initial load increments of the static solver
+    static_stabilizer: float = 0.0             #: mass-proportional stabiliser c_s [1/s^2]
+    predictor: str = "constant_acceleration"   #: Newton start of each step
+    compiled: bool = True                      #: compiled integrator when the model allows it
+    newton: dict[str, Any] = field(default_factory=dict)  #: NewtonOptions overrides
+
+    def newton_options(self, *, static: bool = False) -> NewtonOptions:
+        """NewtonOptions with the ``[simulation.newton]`` keys applied (static: full Newton)."""
+        base = StaticOptions().newton if static else NewtonOptions()
+        kw = {k: getattr(base, k) for k in base.__dataclass_fields__}
+        kw.update(self.newton)
+        return NewtonOptions(**kw)
+
+
+def read_simulation(t: Table) -> SimulationSettings:
+    """Validate the ``[simulation]`` table."""
+    t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval",
+             "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
+             "static_stabilizer", "predictor", "compiled",
+             "newton"))
+    integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
+    static = integrator == "static"
+    t_end = t.number("t_end", 1.0 if static else MISSING, gt=0)
+    dt = t.number("dt", t_end if static else MISSING, gt=0)
+    if dt > t_end:
+        raise t.fail("dt", f"a time step <= t_end = {t_end:g}", dt)
+    lo = 0.5 if integrator == "hht" else 0.0
+    rho_inf = t.number("rho_inf", 0.8, ge=lo, le=1.0)
+    gravity = t.vector("gravity", np.zeros(3))
+    out = t.number("output_interval", None, gt=0)
+    if out is not None and out < dt * (1 - 1e-12):
+        raise t.fail("output_interval", f"a number >= dt = {dt:g} (one output per step at most)", out)
+    min_step = t.number("min_step", None, gt=0)
+    if min_step is not None and min_step > dt:
+        raise t.fail("min_step", f"a number <= dt = {dt:g}", min_step)
+    newton: dict[str, Any] = {}
+    nt = t.table("newton", None)
+    if nt is not None:
+        nt.allow(_NEWTON_KEYS)
+        for k, kind in _NEWTON_KEYS.items():
+            if not nt.has(k):
+                continue
+            newton[k] = (nt.integer(k, ge=1) if kind == "int" else nt.boolean(k) if kind == "bool"
+                         else nt.number(k, gt=0, lt=1) if kind == "ratio" else nt.number(k, gt=0))
+    gx, gy, gz = (float(x) for x in gravity)
+    return SimulationSettings(
+        t_end=t_end, dt=dt, integrator=integrator, rho_inf=rho_inf, gravity=(gx, gy, gz),
+        output_interval=out, initial_static=t.boolean("initial_static", False),
+        adaptive=t.boolean("adaptive", True), min_step=min_step,
+        redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
+        load_steps=t.integer("load_steps", 1, ge=1),
+        static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0),
+        predictor=t.choice("predictor", PREDICTORS, "constant_acceleration", what="predictor"),
+        compiled=t.boolean("compiled", True), newton=newton)
