@@ -19,7 +19,7 @@ try:  # pragma: no cover - exercised implicitly
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
-    _njit = None
+    _njit = None  # type: ignore[assignment]
 
 
 def njit(*args: Any, **kwargs: Any) -> Any:

@@ -243,9 +243,9 @@ class Assembly:
                     n1 -= np.dot(n1, t) * t
                     n1 /= np.linalg.norm(n1)
                     n2 = np.cross(t, n1)
-                    for j, n in enumerate((n1, n2)):
-                        nz = np.abs(n) > 1e-14
-                        lin_rows.append((d[3:6][nz], n[nz]))
+                    for j, normal in enumerate((n1, n2)):
+                        nz = np.abs(normal) > 1e-14
+                        lin_rows.append((d[3:6][nz], normal[nz]))
                         lin_rhs.append(0.0)
                         lin_fun.append(None)
                         lin_labels.append(f"clamp '{spec.name}' ({node.name}) slope normal {j + 1}")
@@ -273,33 +273,29 @@ class Assembly:
             nonlinear.append(EulerParameterNormalization(f"{body.name}.normalization",
                                                          self.body_dofs(body)))
         for obj in self.model.interactions:
-            for c in obj.constraints():
-                phi, _ = c.evaluate(q0[c.coordinates()], 0.0)
+            for con in obj.constraints():
+                phi, _ = con.evaluate(q0[con.coordinates()], 0.0)
                 if np.abs(phi).max(initial=0.0) > 1e-6 * max(self._length_scale(), 1e-3):
                     raise ModelError(
                         f"joint '{obj.name}' is violated by {np.abs(phi).max():.3g} in the initial "
                         "configuration: place the body on the beam (e.g. pose = beam.frame_at(s), "
                         "scenario pose = {on_beam, s}) with its hole axis along the tangent")
-                nonlinear.append(c)
+                nonlinear.append(con)
 
         # ---- redundancy check on the full Jacobian at the initial configuration
         n = self.n_coords
         m_lin = len(lin_rows)
-        blocks = []
         labels = list(lin_labels)
-        owners: list[tuple[int, int]] = [(-1, i) for i in range(m_lin)]
-        J = np.zeros((m_lin + sum(c.n_equations for c in nonlinear), n))
+        J = np.zeros((m_lin + sum(con.n_equations for con in nonlinear), n))
         for i, (cols, vals) in enumerate(lin_rows):
             J[i, cols] = vals
         r = m_lin
-        for ci, c in enumerate(nonlinear):
-            idx = c.coordinates()
-            phi, jac = c.evaluate(q0[idx], 0.0)
-            J[r:r + c.n_equations][:, idx] = jac
-            labels.extend(f"{type(c).__name__} '{c.name}' equation {lab}" for lab in c.equation_labels)
-            owners.extend((ci, j) for j in range(c.n_equations))
-            r += c.n_equations
-            blocks.append(phi)
+        for con in nonlinear:
+            idx = con.coordinates()
+            _, jac = con.evaluate(q0[idx], 0.0)
+            J[r:r + con.n_equations][:, idx] = jac
+            labels.extend(f"{type(con).__name__} '{con.name}' equation {lab}" for lab in con.equation_labels)
+            r += con.n_equations
         keep_rows = np.arange(J.shape[0])
         if J.shape[0] > 0:
             norms = np.linalg.norm(J, axis=1)
@@ -325,7 +321,7 @@ class Assembly:
                               stacklevel=3)
                 keep_rows = np.sort(perm[:rank])
         self.dropped_equations = [labels[i] for i in sorted(set(range(J.shape[0])) - set(keep_rows))]
-        keep_set = set(int(i) for i in keep_rows)
+        keep_set = {int(i) for i in keep_rows}
 
         # ---- linear rows kept
         lin_keep = [i for i in range(m_lin) if i in keep_set]
@@ -339,7 +335,8 @@ class Assembly:
         self.lin_matrix = sp.csr_matrix((vals_i, (rows_i, cols_i)), shape=(self.m_lin, n))
         self.lin_matrix_T = self.lin_matrix.T.tocsr()
         self.lin_rhs0 = np.array([lin_rhs[i] for i in lin_keep], float)
-        self.lin_functions = [(new, lin_fun[i]) for new, i in enumerate(lin_keep) if lin_fun[i] is not None]
+        self.lin_functions: list[tuple[int, TimeFunction]] = [
+            (new, fn) for new, i in enumerate(lin_keep) if (fn := lin_fun[i]) is not None]
         self._lin_coo = (np.array(rows_i, np.int64), np.array(cols_i, np.int64), np.array(vals_i, float))
         multiplier_labels = [lin_labels[i] for i in lin_keep]
 
@@ -347,15 +344,15 @@ class Assembly:
         self.nonlinear: list[_NonlinearRows] = []
         row = self.m_lin
         base = m_lin
-        for c in nonlinear:
-            keep = np.array([j for j in range(c.n_equations) if base + j in keep_set], np.int64)
-            base += c.n_equations
+        for con in nonlinear:
+            keep = np.array([j for j in range(con.n_equations) if base + j in keep_set], np.int64)
+            base += con.n_equations
             if keep.size == 0:
                 continue
             rows = np.arange(row, row + keep.size)
             row += keep.size
-            self.nonlinear.append(_NonlinearRows(c, np.asarray(c.coordinates(), np.int64), keep, rows))
-            multiplier_labels.extend(f"{type(c).__name__} '{c.name}' equation {c.equation_labels[j]}"
+            self.nonlinear.append(_NonlinearRows(con, np.asarray(con.coordinates(), np.int64), keep, rows))
+            multiplier_labels.extend(f"{type(con).__name__} '{con.name}' equation {con.equation_labels[j]}"
                                      for j in keep)
         self.n_mult = row
         self.multiplier_labels = multiplier_labels
@@ -377,7 +374,8 @@ class Assembly:
             self.gravity_vector[d[:3]] += body.mass * g
         f_const += self.gravity_vector
         timed: list[tuple[np.ndarray, np.ndarray, TimeFunction]] = []
-        body_loads: list[tuple[RigidBody, np.ndarray, np.ndarray, np.ndarray | None, TimeFunction]] = []
+        body_loads: list[tuple[RigidBody, np.ndarray | None, np.ndarray, np.ndarray | None,
+                               TimeFunction]] = []
         for load in self.model.loads:
             idx: np.ndarray
             vals: np.ndarray
@@ -513,7 +511,7 @@ class Assembly:
         """Interactions evaluated by their Python path now (no compiled form); the clearance
         joints among them are switched off in the packed system."""
         enabled = self.system.clearance.enabled
-        out = [obj for obj in self._python_terms]
+        out = list(self._python_terms)
         for i, obj in enumerate(self.joint_lists["clearance"]):
             enabled[i] = obj.compiled_form()
             if not enabled[i]:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -18,6 +18,9 @@ from .errors import ModelError
 from .geometry.curves import Centerline
 from .loads import TimeFunction, as_time_function
 from .sections import BeamStiffness, CircularSection, Material
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .constraints.interaction import Interaction
 
 ArrayLike3 = Sequence[float] | np.ndarray
 
@@ -244,7 +247,7 @@ class Model:
         self.bodies: list[RigidBody] = []
         self.constraints: list[ConstraintSpec] = []
         self.loads: list[LoadSpec] = []
-        self.interactions: list[object] = []
+        self.interactions: list[Interaction] = []
         self._names: dict[str, set[str]] = {}
 
     # ------------------------------------------------------------------ naming

@@ -22,6 +22,7 @@ import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from .loads import TimeFunction
+    from .model import Beam, Node, RigidBody
 
 __all__ = ["DofMap", "FunctionTable", "LOAD_FACTOR", "WITH_INERTIA", "WITH_DAMPING", "MODE_SIZE",
            "dynamic_mode", "static_mode"]
@@ -47,16 +48,16 @@ class DofMap(Protocol):
 
     n_coords: int
 
-    def node_dofs(self, node: object) -> np.ndarray:
+    def node_dofs(self, node: Node) -> np.ndarray:
         """The 6 (or the element's nodal count of) coordinates of a beam node."""
 
-    def body_dofs(self, body: object) -> np.ndarray:
+    def body_dofs(self, body: RigidBody) -> np.ndarray:
         """The 7 coordinates ``[r, p]`` of a rigid body."""
 
-    def element_dofs(self, beam: object) -> np.ndarray:
+    def element_dofs(self, beam: Beam) -> np.ndarray:
         """(n_elem, element DOFs) coordinates of every element of a beam."""
 
-    def beam_dofs(self, beam: object) -> np.ndarray:
+    def beam_dofs(self, beam: Beam) -> np.ndarray:
         """All coordinates of a beam."""
 
     def extra_dofs(self, owner: object) -> np.ndarray:

@@ -184,7 +184,7 @@ def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarra
         if kind == CONST:
             for k in range(3):
                 val[s, k] = table.vec_c[v, k]
-        elif kind == NODE_POS or kind == NODE_SLOPE:
+        elif kind == NODE_POS or kind == NODE_SLOPE:  # noqa: SIM109 - compiled: no tuple search
             c0 = o if kind == NODE_POS else o + 3
             col[s] = c0
             ncol[s] = 3

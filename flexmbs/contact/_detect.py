@@ -305,7 +305,7 @@ class ClearancePart(NamedTuple):
     pos: np.ndarray                  # (nj, max_ne, 361): (body, element) blocks
     qe: np.ndarray                   # work (max_ne, 12)
     rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
-    count: np.ndarray                # (nj,) their number
+    n_candidates: np.ndarray         # (nj,) their number
     elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
     xi_out: np.ndarray
     K: np.ndarray                    # work (4 max_ns, 19, 19)
@@ -328,7 +328,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, error):  # noqa: ANN
         cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
         cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
         r, K, C, elem)
-    cl.count[j] = m
+    cl.n_candidates[j] = m
     if m < 0:
         error[0] = ERR_LEFT_BORE
         error[1] = j
@@ -380,5 +380,5 @@ def clearance_post_step_all(cl):  # noqa: ANN001, ANN201
         for k in range(ns):
             cl.elem_ws[j, k] = cl.elem_out[j, k]
             cl.xi_ws[j, k] = cl.xi_out[j, k]
-        clearance_update(cl.rows[j], cl.count[j], cl.approach[j, :ns], cl.active[j, :ns],
+        clearance_update(cl.rows[j], cl.n_candidates[j], cl.approach[j, :ns], cl.active[j, :ns],
                          cl.psi[j, :ns])

@@ -269,7 +269,7 @@ class SlidingClearanceJoint(Interaction):
         qe = np.ascontiguousarray(q[self._elem_dofs])
         e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
         m = detect_circle(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
-                          e_out, x_out, self.beam_radius, float(self.hole.section.radius),
+                          e_out, x_out, self.beam_radius, float(self.hole.section.bounding_radius()),
                           self._rows)
         if m < 0:
             self._raise_left_bore(m)

@@ -582,7 +582,8 @@ def pack_bodies(bodies: list, loads: list, dofs: DofMap, functions: FunctionTabl
         c(table), np.array([b.mass for b in bodies], float),
         c(np.array([b.inertia for b in bodies], float).reshape(nb, 3, 3)), c(pos),
         np.array([index[id(b)] for b, *_ in loads], dtype=np.int64),
-        c(point_tensor(np.array([pt for _, pt, *_ in loads], float).reshape(nl, 3))),
+        c(point_tensor(np.array([np.zeros(3) if pt is None else pt for _, pt, *_ in loads], float)
+                          .reshape(nl, 3))),
         c(np.array([f for _, _, f, _, _ in loads], float).reshape(nl, 3)),
         c(np.array([np.zeros(3) if m is None else m for _, _, _, m, _ in loads], float)
           .reshape(nl, 3)),

@@ -51,7 +51,7 @@ def _brute_maxima(E: Ellipse2D) -> list[tuple[float, float, float]]:
     """Local maxima (φ, depth, D'') of |X(φ)| − R: dense sampling + brentq on D'."""
     phi = np.linspace(0.0, 2.0 * np.pi, N_BRUTE, endpoint=False)
     D = np.linalg.norm(E.point(phi), axis=-1)
-    idx = np.nonzero((D > np.roll(D, 1)) & (D >= np.roll(D, -1)))[0]
+    idx = np.nonzero((np.roll(D, 1) < D) & (np.roll(D, -1) <= D))[0]
     h = 2.0 * np.pi / N_BRUTE
     out = []
     for i in idx:

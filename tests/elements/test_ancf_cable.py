@@ -322,7 +322,7 @@ def test_uniform_stretch_of_straight_bar(options: cable.CableOptions) -> None:
     np.testing.assert_allclose(K, 0.0, atol=1e-14)
     # energy = ½ EA (e − ε0)² × total length (ds0 = dx for a straight unit-slope reference)
     U = cable.strain_energy(q, props, rest, options).sum()
-    assert U == pytest.approx(0.5 * EA * (e - eps0) ** 2 * 1.5, rel=1e-12)
+    assert pytest.approx(0.5 * EA * (e - eps0) ** 2 * 1.5, rel=1e-12) == U
 
 
 def test_straight_reference_exudyn_equals_exact() -> None:

@@ -218,12 +218,12 @@ def test_failure_leaves_readable_series(tmp_path, exc, status):
     model, beam, body = cantilever_and_pendulum(3)
     asm = Assembly(model)
     st = _initial(asm)
-    with pytest.raises(type(exc)):
-        with OutputWriter(tmp_path, "demo", asm, probes=make_probes(beam, body)) as writer:
-            for k in range(3):
-                st.t = 0.01 * k
-                writer.write(st)
-            raise exc
+    with (pytest.raises(type(exc)),
+          OutputWriter(tmp_path, "demo", asm, probes=make_probes(beam, body)) as writer):
+        for k in range(3):
+            st.t = 0.01 * k
+            writer.write(st)
+        raise exc
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["status"] == status
     assert s["final_time"] == 0.02 and s["outputs"] == 3
