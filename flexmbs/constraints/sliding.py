@@ -225,8 +225,9 @@ class SlidingJoint(Interaction):
     ``hole_point``: hole centre in body coordinates; ``axis``: hole axis in body coordinates
     (default body x). ``variant="cylindrical"`` keeps the axis along the beam tangent (3 + 2
     equations); ``"ring"`` only the position (3), for a short ring or grommet. ``s0``: initial
-    arc length (default: projection of the hole centre onto the beam). ``friction`` (Coulomb
-    coefficient, regularised with ``friction_velocity``) and ``axial_force`` (N on the body
+    arc length (default: projection of the hole centre onto the beam). ``friction`` (a
+    :class:`~flexmbs.contact.laws.RegularizedCoulomb`, or its Coulomb coefficient regularised
+    with ``friction_velocity``, as for the clearance joint) and ``axial_force`` (N on the body
     along the tangent, number or time function) are optional.
     """
 
@@ -235,10 +236,14 @@ class SlidingJoint(Interaction):
     def __init__(self, beam: Beam, body: RigidBody, *, name: str | None = None,
                  hole_point=(0.0, 0.0, 0.0), axis=(1.0, 0.0, 0.0),
                  variant: Literal["cylindrical", "ring"] = "cylindrical", s0: float | None = None,
-                 friction: float = 0.0, friction_velocity: float = 1e-3,
+                 friction: Any = 0.0, friction_velocity: float = 1e-3,
                  axial_force: TimeFunction | float | None = None) -> None:
         if variant not in ("cylindrical", "ring"):
             raise ModelError(f"SlidingJoint: variant must be 'cylindrical' or 'ring' (got {variant!r})")
+        if friction is None:
+            friction = 0.0
+        elif hasattr(friction, "mu"):    # a RegularizedCoulomb, as the clearance joint takes it
+            friction, friction_velocity = friction.mu, friction.eps_v
         if friction < 0 or not friction_velocity > 0:
             raise ModelError("SlidingJoint: friction must be >= 0 and friction_velocity > 0")
         self.beam = beam

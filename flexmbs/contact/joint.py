@@ -31,7 +31,7 @@ from ._detect import (
     tracked_approach,
 )
 from .geometry import beam_point, closest_point, section_crossing, section_ellipse
-from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb
+from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb, as_friction
 from .pair import contact_point
 from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
 
@@ -62,14 +62,20 @@ class Hole:
         return np.linspace(-0.5 * self.length, 0.5 * self.length, int(self.sections))
 
 
-def CircleHole(radius: float, length: float, sections: int = 9) -> Hole:  # noqa: N802
+class CircleHole(Hole):
     """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``)."""
-    return Hole(CircleSection(radius), length, sections)
+
+    def __init__(self, radius: float, length: float, sections: int = 9) -> None:
+        super().__init__(CircleSection(radius), length, sections)
 
 
-def SuperellipseHole(A: float, B: float, n: float, length: float, sections: int = 9) -> Hole:  # noqa: N802
-    """Superellipse bore |y/A|^n + |z/B|^n = 1 (FORMULATION Part II §6)."""
-    return Hole(SuperellipseSection(A, B, n), length, sections)
+class SuperellipseHole(Hole):
+    """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (FORMULATION Part II §6); the
+    keys are those of the scenario files (``a``, ``b``, ``exponent``)."""
+
+    def __init__(self, a: float, b: float, exponent: float, length: float,
+                 sections: int = 9) -> None:
+        super().__init__(SuperellipseSection(a=a, b=b, exponent=exponent), length, sections)
 
 
 #: contact points tracked per section (a circle has at most 4; a superellipse's extra ones
@@ -95,14 +101,16 @@ class SlidingClearanceJoint(Interaction):
     term_kind = "clearance"
 
     def __init__(self, beam: Beam, body: RigidBody, *, hole: Hole,
-                 contact: ForceLaw | None = None, friction: RegularizedCoulomb | None = None,
+                 contact: ForceLaw | None = None,
+                 friction: RegularizedCoulomb | float | None = None,
+                 friction_velocity: float = 1e-3,
                  hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
                  consistent: bool = False, name: str | None = None) -> None:
         self.beam = beam
         self.body = body
         self.hole = hole
         self.contact = contact or LinearPenalty(stiffness=1e6)
-        self.friction = friction
+        self.friction = as_friction(friction, friction_velocity)
         self.hole_point = np.asarray(hole_point, float).reshape(3)
         self.consistent = bool(consistent)
         self.name = name or f"clearance_{body.name}"

@@ -252,3 +252,15 @@ def get_law(name: str, **params: float) -> ForceLaw:
     if missing:
         raise ModelError(f"contact law {name!r}: missing required parameter(s) {', '.join(missing)}")
     return cls(**params)
+
+
+def as_friction(friction: RegularizedCoulomb | float | None,
+                friction_velocity: float = 1e-3) -> RegularizedCoulomb | None:
+    """Friction of a joint given as a :class:`RegularizedCoulomb` or as a coefficient (with its
+    regularisation velocity); ``None`` or 0: frictionless. Both joints take friction this way."""
+    if friction is None or isinstance(friction, RegularizedCoulomb):
+        return friction
+    mu = float(friction)
+    if mu == 0.0:
+        return None
+    return RegularizedCoulomb(mu=mu, eps_v=float(friction_velocity))
