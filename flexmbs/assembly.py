@@ -1,7 +1,7 @@
 """Global assembly: DOF map, residual, sparse iteration matrix (pattern built once), energies.
 
-Unknowns: coordinates ``q`` (beams: per node [r, r'], 6 each; rigid bodies: [r, p], 7 each) and
-Lagrange multipliers ``lam`` (one per constraint equation). The dynamic residual follows the
+Unknowns: coordinates ``q`` (beams: per node the coordinates of its element layout, for the
+cable [r, r']; rigid bodies: [r, p], 7 each) and Lagrange multipliers ``lam`` (one per constraint equation). The dynamic residual follows the
 convention of FORMULATION §0::
 
     r_q   = M(q) q'' + Q_int(q, q') + Phi_q^T lam - Q_ext(q, t)
@@ -105,12 +105,12 @@ class Assembly:
         off = 0
         self.beam_offset: dict[int, int] = {}
         labels: list[tuple[str, str]] = []
-        comp = ("x", "y", "z", "x'", "y'", "z'")
         for beam in m.beams:
             self.beam_offset[id(beam)] = off
+            comp = beam.layout.node_coordinates
             for i in range(beam.n_nodes):
                 labels.extend((f"beam '{beam.name}' node {i}", c) for c in comp)
-            off += 6 * beam.n_nodes
+            off += len(comp) * beam.n_nodes
         self.body_offset: dict[int, int] = {}
         for body in m.bodies:
             self.body_offset[id(body)] = off
@@ -128,8 +128,9 @@ class Assembly:
         v0 = np.zeros(off)
         for beam in m.beams:
             o = self.beam_offset[id(beam)]
-            nodal = np.hstack([beam.centerline.points, beam.centerline.tangents])
-            q0[o:o + 6 * beam.n_nodes] = nodal.ravel()
+            nodal = cable.reference_nodal_coordinates(beam.centerline.points,
+                                                      beam.centerline.tangents)
+            q0[o:o + nodal.size] = nodal.ravel()
         for body in m.bodies:
             o = self.body_offset[id(body)]
             p = body.pose.quaternion
@@ -145,8 +146,9 @@ class Assembly:
         self.v_init = v0
 
     def node_dofs(self, node: Node) -> np.ndarray:
-        o = self.beam_offset[id(node.beam)] + 6 * node.index
-        return np.arange(o, o + 6)
+        k = node.beam.layout.node_size
+        o = self.beam_offset[id(node.beam)] + k * node.index
+        return np.arange(o, o + k)
 
     def body_dofs(self, body: RigidBody) -> np.ndarray:
         o = self.body_offset[id(body)]
@@ -154,12 +156,14 @@ class Assembly:
 
     def beam_dofs(self, beam: Beam) -> np.ndarray:
         o = self.beam_offset[id(beam)]
-        return np.arange(o, o + 6 * beam.n_nodes)
+        return np.arange(o, o + beam.layout.node_size * beam.n_nodes)
 
     def element_dofs(self, beam: Beam) -> np.ndarray:
         o = self.beam_offset[id(beam)]
         conn = beam.connectivity
-        return (o + 6 * conn[:, :, None] + np.arange(6)[None, None, :]).reshape(-1, 12)
+        lay = beam.layout
+        k = lay.node_size
+        return (o + k * conn[:, :, None] + np.arange(k)[None, None, :]).reshape(-1, lay.element_size)
 
     def extra_dofs(self, owner: object) -> np.ndarray:
         return self._extra_dofs[id(owner)]
@@ -234,7 +238,8 @@ class Assembly:
                     lin_fun.append(None)
                     lin_labels.append(f"{k} '{spec.name}' ({node.name}) position {'xyz'[c]}")
                 if k == "clamp":
-                    t = q0[d[3:6]] / np.linalg.norm(q0[d[3:6]])
+                    slope = d[list(node.beam.layout.slope)]
+                    t = q0[slope] / np.linalg.norm(q0[slope])
                     # two unit normals to the reference tangent: axis-aligned when possible so that
                     # the rows stay coordinate constraints for beams along global axes
                     order = np.argsort(np.abs(t))
@@ -245,7 +250,7 @@ class Assembly:
                     n2 = np.cross(t, n1)
                     for j, normal in enumerate((n1, n2)):
                         nz = np.abs(normal) > 1e-14
-                        lin_rows.append((d[3:6][nz], normal[nz]))
+                        lin_rows.append((slope[nz], normal[nz]))
                         lin_rhs.append(0.0)
                         lin_fun.append(None)
                         lin_labels.append(f"clamp '{spec.name}' ({node.name}) slope normal {j + 1}")
@@ -398,13 +403,14 @@ class Assembly:
                     beam, s = load.target  # type: ignore[misc]
                 if s is None:
                     d = self.node_dofs(node)
-                    idx, vals = d[:3], load.force.copy()
+                    lay = node.beam.layout
+                    idx, vals = d[list(lay.position)], load.force.copy()
                     if load.moment is not None:
                         # moment on a cable node: only the part normal to the tangent does work,
                         # Q_slope = (T x t)/|r'| (FORMULATION §1.2)
-                        t = self.q_ref[d[3:6]]
+                        t = self.q_ref[d[list(lay.slope)]]
                         nt = np.linalg.norm(t)
-                        idx = np.concatenate([idx, d[3:6]])
+                        idx = np.concatenate([idx, d[list(lay.slope)]])
                         vals = np.concatenate([vals, np.cross(load.moment, t / nt) / nt])
                 else:
                     e, xi = beam.locate(float(s))
@@ -467,13 +473,14 @@ class Assembly:
         self.functions = fns
         self.groups: list[BeamGroup] = []
         for opts, beams, gdofs, props in self._group_specs:
-            pos = np.array([self.positions(d, d) for d in gdofs], np.int64).reshape(-1, 144)
+            pos = np.array([self.positions(d, d).reshape(-1) for d in gdofs], np.int64)
             self.groups.append(BeamGroup(opts, beams,
                                          cable.pack_beams(gdofs, props, opts, self.q_ref, pos)))
         parts = [g.part for g in self.groups]
         if not parts:   # a homogeneous, non-empty tuple for the compiled driver
-            parts = [cable.pack_beams(np.zeros((0, 12), np.int64), cable.empty_properties(),
-                                      cable.CableOptions(), self.q_ref, np.zeros((0, 144)))]
+            parts = [cable.pack_beams(np.zeros((0, cable.LAYOUT.element_size), np.int64),
+                                      cable.empty_properties(), cable.CableOptions(), self.q_ref,
+                                      np.zeros((0, cable.LAYOUT.element_size ** 2)))]
         norms = [nl.constraint for nl in self.nonlinear
                  if isinstance(nl.constraint, EulerParameterNormalization)]
         terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]

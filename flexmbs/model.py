@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from .elements.ancf_cable import CableOptions
+from .elements.layout import ElementLayout, get_layout
 from .elements.rigid_body import quaternion_from_matrix, rotation_matrix
 from .errors import ModelError
 from .geometry.curves import Centerline
@@ -101,7 +102,9 @@ class Node:
 
 
 class Beam:
-    """An ANCF cable beam (12 DOF per element) on a stress-free reference ``centerline``."""
+    """A beam of elements of type ``element`` (a registered
+    :class:`~flexmbs.elements.layout.ElementLayout`, default the 12-DOF ANCF cable) on a
+    stress-free reference ``centerline``."""
 
     def __init__(self, name: str, centerline: Centerline, stiffness: BeamStiffness, *,
                  options: CableOptions, damping: float, reference_axial_strain: float) -> None:
@@ -111,6 +114,12 @@ class Beam:
         self.options = options
         self.damping = float(damping)
         self.reference_axial_strain = float(reference_axial_strain)
+        self.element = "ancf_cable"
+
+    @property
+    def layout(self) -> ElementLayout:
+        """The declared layout of its elements (nodal coordinates, sizes)."""
+        return get_layout(self.element)
 
     @property
     def n_elem(self) -> int:

@@ -23,6 +23,7 @@ import numpy as np
 
 from .._jit import FLAG, njit
 from ..terms import WITH_DAMPING, WITH_INERTIA
+from .layout import ELEMENT_TYPES, ElementLayout
 
 __all__ = [
     "CableOptions",
@@ -39,6 +40,18 @@ __all__ = [
     "strain_energy",
     "axial_strain_and_curvature",
 ]
+
+#: Element A's declared layout: per node [r, r′], 2 nodes, 12 element coordinates (§1.1)
+LAYOUT = ELEMENT_TYPES.register("ancf_cable", ElementLayout(
+    name="ancf_cable", node_coordinates=("x", "y", "z", "x'", "y'", "z'"), position=(0, 1, 2),
+    slope=(3, 4, 5), nodes_per_element=2,
+    output_fields=("displacement", "velocity", "axial_strain", "curvature")))
+
+
+def reference_nodal_coordinates(points: np.ndarray, tangents: np.ndarray) -> np.ndarray:
+    """Nodal coordinates (n_nodes, 6) of the stress-free reference: ``[r, r′]`` per node."""
+    return np.hstack([points, tangents])
+
 
 _BENDINGS = ("vector", "scalar")
 _AXIAL_RULES = ("lobatto3", "gauss5")

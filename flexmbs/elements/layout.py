@@ -1,0 +1,54 @@
+"""Declared layouts of beam elements: what an element module tells the rest of the package.
+
+An element module declares its nodal coordinates (names, which of them are the centreline
+position ``r`` and slope ``r′``), nodes per element and output fields in an
+:class:`ElementLayout`, and registers it in :data:`ELEMENT_TYPES` under the name scenario files
+use (``element = "ancf_cable"``). DOF numbering, constraints on nodes, output and probes read
+the layout; kernels read sizes from array shapes. No element size is written outside its module.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..registry import Registry
+
+__all__ = ["ElementLayout", "ELEMENT_TYPES", "get_layout"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ElementLayout:
+    name: str
+    node_coordinates: tuple[str, ...]   #: names of the coordinates of one node, in order
+    position: tuple[int, int, int]      #: nodal indices of the centreline point r
+    slope: tuple[int, int, int]         #: nodal indices of the centreline slope r′
+    nodes_per_element: int = 2
+    output_fields: tuple[str, ...] = ()
+
+    @property
+    def node_size(self) -> int:
+        return len(self.node_coordinates)
+
+    @property
+    def element_size(self) -> int:
+        return self.node_size * self.nodes_per_element
+
+    @property
+    def centerline(self) -> np.ndarray:
+        """Element-coordinate indices of the Hermite centreline ``[r0, r0′, r1, r1′]`` (what the
+        sliding and clearance joints read), in that order."""
+        out = []
+        for k in range(self.nodes_per_element):
+            out += [k * self.node_size + i for i in (*self.position, *self.slope)]
+        return np.array(out, dtype=np.int64)
+
+
+#: element types by scenario name
+ELEMENT_TYPES: Registry[ElementLayout] = Registry("element")
+
+
+def get_layout(name: str) -> ElementLayout:
+    """The layout of a registered element (an unknown name lists the known ones)."""
+    return ELEMENT_TYPES.get(name)
