@@ -1,8 +1,8 @@
 """Global assembly: DOF map, residual, sparse iteration matrix (pattern built once), energies.
 
 Unknowns: coordinates ``q`` (beams: per node the coordinates of its element layout, for the
-cable [r, r']; rigid bodies: [r, p], 7 each) and Lagrange multipliers ``lam`` (one per constraint equation). The dynamic residual follows the
-convention of FORMULATION §0::
+cable [r, r']; rigid bodies: [r, p], 7 each) and Lagrange multipliers ``lam`` (one per
+constraint equation). The dynamic residual follows the convention of FORMULATION §0::
 
     r_q   = M(q) q'' + Q_int(q, q') + Phi_q^T lam - Q_ext(q, t)
     r_lam = Phi(q, t)
