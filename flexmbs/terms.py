@@ -16,13 +16,9 @@ Newton loop both call that one driver, so no equation is written twice.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Protocol
+from typing import Any, Protocol
 
 import numpy as np
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .loads import TimeFunction
-    from .model import Beam, Node, RigidBody
 
 __all__ = ["DofMap", "FunctionTable", "LOAD_FACTOR", "WITH_INERTIA", "WITH_DAMPING", "MODE_SIZE",
            "dynamic_mode", "static_mode"]
@@ -43,21 +39,26 @@ def static_mode(load_factor: float = 1.0, *, damping: bool = False) -> np.ndarra
     return np.array([float(load_factor), 0.0, 1.0 if damping else 0.0])
 
 
+class TimeFunctionLike(Protocol):
+    def __call__(self, t: float) -> float: ...
+
+
 class DofMap(Protocol):
-    """Global numbering as the owners of terms see it (implemented by the assembler)."""
+    """Global numbering as the owners of terms see it (implemented by the assembler; the
+    arguments are the model's nodes, bodies and beams, which this layer does not import)."""
 
     n_coords: int
 
-    def node_dofs(self, node: Node) -> np.ndarray:
+    def node_dofs(self, node: Any) -> np.ndarray:
         """The 6 (or the element's nodal count of) coordinates of a beam node."""
 
-    def body_dofs(self, body: RigidBody) -> np.ndarray:
+    def body_dofs(self, body: Any) -> np.ndarray:
         """The 7 coordinates ``[r, p]`` of a rigid body."""
 
-    def element_dofs(self, beam: Beam) -> np.ndarray:
+    def element_dofs(self, beam: Any) -> np.ndarray:
         """(n_elem, element DOFs) coordinates of every element of a beam."""
 
-    def beam_dofs(self, beam: Beam) -> np.ndarray:
+    def beam_dofs(self, beam: Any) -> np.ndarray:
         """All coordinates of a beam."""
 
     def extra_dofs(self, owner: object) -> np.ndarray:
@@ -76,10 +77,10 @@ class FunctionTable:
     current time from a vector ``fv`` (``fv[k] = functions[k](t)``)."""
 
     def __init__(self) -> None:
-        self.items: list[TimeFunction] = []
+        self.items: list[TimeFunctionLike] = []
         self._index: dict[int, int] = {}
 
-    def __call__(self, fn: TimeFunction) -> int:
+    def __call__(self, fn: TimeFunctionLike) -> int:
         key = id(fn)
         if key not in self._index:
             self._index[key] = len(self.items)

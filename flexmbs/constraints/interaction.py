@@ -21,8 +21,14 @@ from ..errors import FlexmbsError, ModelError
 from .base import Constraint
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..model import Model
     from ..terms import DofMap
+
+
+class ModelParts(Protocol):
+    """What an interaction checks itself against when added to a model."""
+
+    beams: list[Any]
+    bodies: list[Any]
 
 
 class MatrixSink(Protocol):
@@ -39,7 +45,7 @@ class Interaction:
     #: the assembler term kind that evaluates it ("sliding", "clearance")
     term_kind: ClassVar[str] = ""
 
-    def validate(self, model: Model) -> None:
+    def validate(self, model: ModelParts) -> None:
         """Check the definition against the model (called by ``model.add_joint``)."""
 
     def extra_labels(self) -> list[str]:

@@ -28,10 +28,10 @@ from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
 from .base import Constraint
-from .interaction import Interaction
+from .interaction import Interaction, ModelParts
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..model import Beam, Model, RigidBody
+    from ..model import Beam, RigidBody
     from ..terms import DofMap, FunctionTable
 
 
@@ -272,7 +272,7 @@ class SlidingJoint(Interaction):
         self._constraint = _SlidingConstraint(self)   # also by the compiled integrator)
 
     # ------------------------------------------------------------------ set-up
-    def validate(self, model: Model) -> None:
+    def validate(self, model: ModelParts) -> None:
         if self.beam not in model.beams:
             raise ModelError(f"joint '{self.name}': the beam is not part of the model")
         if self.body not in model.bodies:

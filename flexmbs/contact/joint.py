@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..constraints.interaction import Interaction, MatrixSink
+from ..constraints.interaction import Interaction, MatrixSink, ModelParts
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, ModelError
 from ._detect import (
@@ -36,7 +36,7 @@ from .pair import contact_point
 from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..model import Beam, Model, RigidBody
+    from ..model import Beam, RigidBody
     from ..terms import DofMap
 
 
@@ -141,7 +141,7 @@ class SlidingClearanceJoint(Interaction):
         self._xi_out = np.zeros(ns)
 
     # ------------------------------------------------------------------ set-up
-    def validate(self, model: Model) -> None:
+    def validate(self, model: ModelParts) -> None:
         if self.beam not in model.beams:
             raise ModelError(f"joint '{self.name}': the beam is not part of the model")
         if self.body not in model.bodies:
