@@ -60,13 +60,12 @@ class Result:
     def beam_point(self, beam: Beam, s: float, quantity: str = "position") -> np.ndarray:
         """Position, displacement or velocity history of the material point at arc length ``s``."""
         e, xi = beam.locate(s)
-        dofs = self.assembly.element_dofs(beam)[e]
-        L = beam.centerline.lengths[e]
-        S, _, _ = cable.shape_functions(np.array([xi]), np.array([L]))
-        Sx = np.asarray(S).reshape(-1)[:4]
+        S, dofs = cable.centerline_interpolation(self.assembly.element_dofs(beam),
+                                                 beam.centerline.lengths, np.array([e]),
+                                                 np.array([xi]))
+
         def interp(X: np.ndarray) -> np.ndarray:
-            Xe = X[..., dofs].reshape(X.shape[:-1] + (4, 3))
-            return np.einsum("k,...kc->...c", Sx, Xe)
+            return cable.interpolate(S, dofs, X)[..., 0, :]
         if quantity == "position":
             return interp(self.q)
         if quantity == "displacement":
@@ -87,13 +86,8 @@ def beam_positions(asm: Assembly, beam: Beam, q: np.ndarray, s: np.ndarray) -> n
     lengths ``s`` (measured from the first node)."""
     s = np.atleast_1d(np.asarray(s, float))
     loc = [beam.locate(float(x)) for x in s]
-    e = np.array([a for a, _ in loc])
-    xi = np.array([b for _, b in loc])
-    L = np.asarray(beam.centerline.lengths)[e]
-    S, _, _ = cable.shape_functions(xi, L)
-    S = np.asarray(S).reshape(len(s), 4)
-    qe = q[asm.element_dofs(beam)[e]].reshape(len(s), 4, 3)
-    return np.einsum("pk,pkc->pc", S, qe)
+    return cable.centerline_points(q, asm.element_dofs(beam), beam.centerline.lengths,
+                                   np.array([a for a, _ in loc]), np.array([b for _, b in loc]))
 
 
 def solve_static(model: Model | Assembly, options: StaticOptions | None = None, *,

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements import ancf_cable as cable
-from ..elements.ancf_cable import shape_xi
+from ..elements.ancf_cable import hermite_basis, shape_xi
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
@@ -101,7 +101,10 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
     """``H = Σ_i λ_i ∂²Φ_i/∂q²`` (20, 20) of :func:`sliding_values` (exact, symmetric)."""
     p = ql[3:7]
     S, dS, ddS = _shape_x((ql[19] - start) / L, L)
-    d3 = np.array([12.0 / L**3, 6.0 / L**2, -12.0 / L**3, 6.0 / L**2])
+    _, _, _, t3 = hermite_basis((ql[19] - start) / L, L)
+    d3 = np.empty(4)             # d³S/dx³
+    for m in range(4):
+        d3[m] = t3[m] / (L * L * L)
     r1 = np.zeros(3)
     r2 = np.zeros(3)
     r3 = np.zeros(3)

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..elements.ancf_cable import element_point as _elem_point
 from ..elements.ancf_cable import shape_xi
 
 __all__ = [
@@ -39,37 +40,6 @@ __all__ = [
 @njit(inline="always")
 def _clip(x, lo, hi):  # noqa: ANN001, ANN202
     return lo if x < lo else (hi if x > hi else x)
-
-
-@njit
-def _elem_point(q, L, xi):  # noqa: ANN001, ANN202
-    """r, r_ξ, r_ξξ of one element row ``q (12,)`` at ξ (any real ξ: the cubic is extrapolated)."""
-    x2 = xi * xi
-    x3 = x2 * xi
-    s0 = 1.0 - 3.0 * x2 + 2.0 * x3
-    s1 = L * (xi - 2.0 * x2 + x3)
-    s2 = 3.0 * x2 - 2.0 * x3
-    s3 = L * (x3 - x2)
-    d0 = 6.0 * x2 - 6.0 * xi
-    d1 = L * (1.0 - 4.0 * xi + 3.0 * x2)
-    d2 = 6.0 * xi - 6.0 * x2
-    d3 = L * (3.0 * x2 - 2.0 * xi)
-    e0 = 12.0 * xi - 6.0
-    e1 = L * (6.0 * xi - 4.0)
-    e2 = 6.0 - 12.0 * xi
-    e3 = L * (6.0 * xi - 2.0)
-    r = np.empty(3)
-    rx = np.empty(3)
-    rxx = np.empty(3)
-    for c in range(3):
-        a0 = q[c]
-        a1 = q[3 + c]
-        a2 = q[6 + c]
-        a3 = q[9 + c]
-        r[c] = s0 * a0 + s1 * a1 + s2 * a2 + s3 * a3
-        rx[c] = d0 * a0 + d1 * a1 + d2 * a2 + d3 * a3
-        rxx[c] = e0 * a0 + e1 * a1 + e2 * a2 + e3 * a3
-    return r, rx, rxx
 
 
 @njit

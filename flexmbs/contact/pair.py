@@ -22,7 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import shape_xi
+from ..elements.ancf_cable import element_point, shape_xi
 from ..elements.rigid_body import point_tensor_of
 from .laws import ForceLaw, RegularizedCoulomb, coulomb_force, law_force
 
@@ -47,15 +47,6 @@ class ContactResult(NamedTuple):
 
 
 @njit
-def _interp(w, q):  # noqa: ANN001, ANN202
-    out = np.zeros(3)
-    for m in range(4):
-        for c in range(3):
-            out[c] += w[m] * q[3 * m + c]
-    return out
-
-
-@njit
 def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa: ANN001, ANN202
     """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
     rx, rxx, ell)``; see :func:`contact_geometry`."""
@@ -73,10 +64,7 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     # closest-point projection on this element (extrapolating the cubic)
     xi = xi0
     for _ in range(30):
-        S, dS, ddS = shape_xi(xi, length)
-        r = _interp(S, q_elem)
-        rx = _interp(dS, q_elem)
-        rxx = _interp(ddS, q_elem)
+        r, rx, rxx = element_point(q_elem, length, xi)
         d = r - Q
         h = d[0] * rx[0] + d[1] * rx[1] + d[2] * rx[2]
         a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
@@ -88,10 +76,8 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
         xi = max(-1.0, min(2.0, xi + step))
         if abs(step) < 1e-15:
             break
-    S, dS, ddS = shape_xi(xi, length)
-    P = _interp(S, q_elem)
-    rx = _interp(dS, q_elem)
-    rxx = _interp(ddS, q_elem)
+    S, dS, _ = shape_xi(xi, length)
+    P, rx, rxx = element_point(q_elem, length, xi)
     u = Q - P
     ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
     n = u / ell

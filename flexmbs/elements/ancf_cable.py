@@ -31,6 +31,11 @@ __all__ = [
     "CableRest",
     "shape_functions",
     "shape_xi",
+    "hermite_basis",
+    "element_point",
+    "centerline_points",
+    "centerline_interpolation",
+    "interpolate",
     "rest_state",
     "mass_matrix",
     "gravity_force",
@@ -129,48 +134,103 @@ class CableRest(NamedTuple):
 
 # ---------------------------------------------------------------------------------------------
 # shape functions and quadrature
+@njit(inline="always")
+def hermite_basis(xi, L):  # noqa: ANN001, ANN201
+    """Cubic Hermite shape functions S1..S4 (FORMULATION I §1.1) and their first, second and third
+    ξ-derivatives, as four 4-tuples (no allocation): the one statement of the element's basis."""
+    x2 = xi * xi
+    x3 = x2 * xi
+    S = (1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3, L * (x3 - x2))
+    dS = (6.0 * x2 - 6.0 * xi, L * (1.0 - 4.0 * xi + 3.0 * x2), 6.0 * xi - 6.0 * x2,
+          L * (3.0 * x2 - 2.0 * xi))
+    ddS = (12.0 * xi - 6.0, L * (6.0 * xi - 4.0), 6.0 - 12.0 * xi, L * (6.0 * xi - 2.0))
+    d3S = (12.0, 6.0 * L, -12.0, 6.0 * L)
+    return S, dS, ddS, d3S
+
+
+@njit
+def _basis_table(xi, L, S, dS, ddS):  # noqa: ANN001, ANN202
+    for i in range(xi.size):
+        s, d, dd, _ = hermite_basis(xi[i], L[i])
+        for n in range(4):
+            S[i, n] = s[n]
+            dS[i, n] = d[n] / L[i]
+            ddS[i, n] = dd[n] / (L[i] * L[i])
+
+
 def shape_functions(xi: np.ndarray, length: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Hermite shape functions S1..S4 and their x-derivatives (FORMULATION I §1.1).
 
     ``xi`` and ``length`` broadcast against each other (e.g. ``(n,)`` with ``(n,)`` for one
     point per element, or ``xi[None, :]`` with ``L[:, None]`` for a table); each returned array
-    has shape ``broadcast(xi, length).shape + (4,)``: ``S``, ``dS = dS/dx``, ``ddS = d²S/dx²``.
+    has shape ``broadcast(xi, length).shape + (4,)``: ``S``, ``dS = dS/dx``, ``ddS = d²S/dx²``
+    (from :func:`hermite_basis`).
     """
     xi, L = np.broadcast_arrays(np.asarray(xi, dtype=float), np.asarray(length, dtype=float))
-    x2 = xi * xi
-    x3 = x2 * xi
-    S = np.stack([1.0 - 3.0 * x2 + 2.0 * x3, L * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3,
-                  L * (x3 - x2)], axis=-1)
-    dS = np.stack([(6.0 * x2 - 6.0 * xi) / L, 1.0 - 4.0 * xi + 3.0 * x2, (6.0 * xi - 6.0 * x2) / L,
-                   3.0 * x2 - 2.0 * xi], axis=-1)
-    ddS = np.stack([(12.0 * xi - 6.0) / L**2, (6.0 * xi - 4.0) / L, (6.0 - 12.0 * xi) / L**2,
-                    (6.0 * xi - 2.0) / L], axis=-1)
-    return S, dS, ddS
+    shape = xi.shape
+    x = np.ascontiguousarray(xi.reshape(-1))
+    lf = np.ascontiguousarray(L.reshape(-1))
+    S, dS, ddS = (np.empty((x.size, 4)) for _ in range(3))
+    _basis_table(x, lf, S, dS, ddS)
+    return S.reshape(shape + (4,)), dS.reshape(shape + (4,)), ddS.reshape(shape + (4,))
 
 
 @njit
 def shape_xi(xi, length):  # noqa: ANN001, ANN201
-    """Hermite shape functions S1..S4 and their ξ-derivatives (FORMULATION II §0), 3 arrays (4,)."""
-    L = length
-    x2 = xi * xi
-    x3 = x2 * xi
+    """S1..S4 and their ξ-derivatives (FORMULATION II §0) as arrays (4,) (:func:`hermite_basis`)."""
+    s, d, dd, _ = hermite_basis(xi, length)
     S = np.empty(4)
     dS = np.empty(4)
     ddS = np.empty(4)
-    S[0] = 1.0 - 3.0 * x2 + 2.0 * x3
-    S[1] = L * (xi - 2.0 * x2 + x3)
-    S[2] = 3.0 * x2 - 2.0 * x3
-    S[3] = L * (x3 - x2)
-    dS[0] = 6.0 * x2 - 6.0 * xi
-    dS[1] = L * (1.0 - 4.0 * xi + 3.0 * x2)
-    dS[2] = 6.0 * xi - 6.0 * x2
-    dS[3] = L * (3.0 * x2 - 2.0 * xi)
-    ddS[0] = 12.0 * xi - 6.0
-    ddS[1] = L * (6.0 * xi - 4.0)
-    ddS[2] = 6.0 - 12.0 * xi
-    ddS[3] = L * (6.0 * xi - 2.0)
+    for n in range(4):
+        S[n] = s[n]
+        dS[n] = d[n]
+        ddS[n] = dd[n]
     return S, dS, ddS
+
+
+@njit
+def element_point(q, L, xi):  # noqa: ANN001, ANN201
+    """Centreline point of one element: ``r, r_ξ, r_ξξ`` (3,) at ξ from its coordinates
+    ``q = [r0, r0′, r1, r1′]`` (any real ξ: the cubic is extrapolated), r = S(ξ) q."""
+    s, d, dd, _ = hermite_basis(xi, L)
+    r = np.empty(3)
+    rx = np.empty(3)
+    rxx = np.empty(3)
+    for c in range(3):
+        a0 = q[c]
+        a1 = q[3 + c]
+        a2 = q[6 + c]
+        a3 = q[9 + c]
+        r[c] = s[0] * a0 + s[1] * a1 + s[2] * a2 + s[3] * a3
+        rx[c] = d[0] * a0 + d[1] * a1 + d[2] * a2 + d[3] * a3
+        rxx[c] = dd[0] * a0 + dd[1] * a1 + dd[2] * a2 + dd[3] * a3
+    return r, rx, rxx
+
+
+def centerline_interpolation(element_dofs: np.ndarray, lengths: np.ndarray, elem: np.ndarray,
+                             xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weights ``S (n, 4)`` and coordinates ``dofs (n, 12)`` of the centreline points at
+    (element, ξ) pairs: :func:`interpolate` gives r = S(ξ) q_e (FORMULATION I §1.1) from any
+    global vector (positions from q, velocities from q̇)."""
+    elem = np.asarray(elem, dtype=np.int64).reshape(-1)
+    S, _, _ = shape_functions(np.asarray(xi, dtype=float).reshape(-1), np.asarray(lengths)[elem])
+    return S, np.asarray(element_dofs)[elem]
+
+
+def interpolate(S: np.ndarray, dofs: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """``Σ_k S[p, k] X[..., dofs[p, 3k:3k+3]]`` -> (..., n, 3): centreline points of the global
+    vector(s) ``X`` (..., n_coords) at the points of :func:`centerline_interpolation`."""
+    X = np.asarray(X, dtype=float)
+    Xe = X[..., dofs].reshape(X.shape[:-1] + (dofs.shape[0], 4, 3))
+    return np.einsum("pk,...pkc->...pc", S, Xe)
+
+
+def centerline_points(q: np.ndarray, element_dofs: np.ndarray, lengths: np.ndarray,
+                      elem: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """Positions (n, 3) of the centreline at (element, ξ) pairs in configuration ``q``."""
+    return interpolate(*centerline_interpolation(element_dofs, lengths, elem, xi), q)
 
 
 def _gauss01(n: int) -> tuple[np.ndarray, np.ndarray]:

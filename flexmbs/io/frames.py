@@ -87,9 +87,8 @@ class FrameBuilder:
                 k = np.append(k, spe)
             ns = e.size
             L = np.asarray(beam.centerline.lengths, float)
-            S, _, _ = cable.shape_functions(xi_tab[k], L[e])
-            dofs = asm.element_dofs(beam)[e]
-            ref = np.einsum("pk,pkc->pc", S, asm.q_ref[dofs].reshape(ns, 4, 3))
+            S, dofs = cable.centerline_interpolation(asm.element_dofs(beam), L, e, xi_tab[k])
+            ref = cable.interpolate(S, dofs, asm.q_ref)
             cum = np.concatenate([[0.0], np.cumsum(L)])
             seg = np.column_stack([np.arange(ns - 1), np.arange(1, ns)])
             if beam.closed:
@@ -126,9 +125,8 @@ class FrameBuilder:
         return type(rest)(**sliced), grp.options
 
     def beam_mesh(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray) -> VTUMesh:
-        ns = b.S.shape[0]
-        x = np.einsum("pk,pkc->pc", b.S, q[b.dofs].reshape(ns, 4, 3))
-        vel = np.einsum("pk,pkc->pc", b.S, v[b.dofs].reshape(ns, 4, 3))
+        x = cable.interpolate(b.S, b.dofs, q)
+        vel = cable.interpolate(b.S, b.dofs, v)
         (rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
         eps, K = cable.axial_strain_and_curvature(q[elem_dofs], rest, options, b.xi)
         eps = eps.reshape(-1)[b.flat]

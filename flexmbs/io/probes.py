@@ -61,10 +61,7 @@ class BeamPointProbe(Probe):
             raise ModelError(f"probe '{name}': s = {s} is outside beam '{beam.name}'; valid range "
                              f"is 0 <= s <= {beam.length:.12g} (reference arc length)")
         self.beam, self.s, self.quantity = beam, s, quantity
-        e, xi = beam.locate(min(s, beam.length))
-        S, _, _ = cable.shape_functions(np.array([xi]), np.array([beam.centerline.lengths[e]]))
-        self._element = e
-        self._S = np.asarray(S).reshape(4)
+        self._element, self._xi = beam.locate(min(s, beam.length))
 
     def columns(self) -> list[str]:
         return [f"{self.name}_{c}" for c in _XYZ]
@@ -74,8 +71,8 @@ class BeamPointProbe(Probe):
             raise ModelError(f"probe '{self.name}': beam '{self.beam.name}' is not part of the model")
 
     def _interp(self, asm: Any, x: np.ndarray) -> np.ndarray:
-        dofs = asm.element_dofs(self.beam)[self._element]
-        return self._S @ np.asarray(x)[dofs].reshape(4, 3)
+        return cable.centerline_points(x, asm.element_dofs(self.beam), self.beam.centerline.lengths,
+                                       np.array([self._element]), np.array([self._xi]))[0]
 
     def evaluate(self, asm: Any, state: Any) -> np.ndarray:
         if self.quantity == "velocity":

@@ -36,3 +36,45 @@ def test_numbering_follows_the_layout():
     q = asm.q_ref[asm.node_dofs(node)]
     np.testing.assert_allclose(q[list(lay.position)], node.position)
     np.testing.assert_allclose(q[list(lay.slope)], node.tangent)
+
+
+def test_one_hermite_basis_derivatives_by_finite_differences():
+    """shape_functions, shape_xi and the third derivative all come from hermite_basis; check
+    its ξ-derivatives against central differences and the partition of unity."""
+    from flexmbs.elements.ancf_cable import hermite_basis, shape_functions
+
+    L, h = 0.37, 1e-6
+    for xi in (-0.3, 0.0, 0.41, 1.0, 1.7):
+        S, d, dd, d3 = (np.array(a) for a in hermite_basis(xi, L))
+        Sp, dp, ddp, _ = (np.array(a) for a in hermite_basis(xi + h, L))
+        Sm, dm, ddm, _ = (np.array(a) for a in hermite_basis(xi - h, L))
+        np.testing.assert_allclose(d, (Sp - Sm) / (2 * h), atol=1e-8)
+        np.testing.assert_allclose(dd, (dp - dm) / (2 * h), atol=1e-7)
+        np.testing.assert_allclose(d3, (ddp - ddm) / (2 * h), atol=1e-6)
+        assert abs(S[0] + S[2] - 1.0) < 1e-14
+        Sx, dSx, ddSx = shape_functions(np.array([xi]), np.array([L]))
+        np.testing.assert_allclose(Sx[0], S, rtol=1e-15)
+        np.testing.assert_allclose(dSx[0], d / L, rtol=1e-14)
+        np.testing.assert_allclose(ddSx[0], dd / L**2, rtol=1e-14)
+
+
+def test_centerline_points_of_a_line_and_an_arc():
+    from flexmbs.elements.ancf_cable import centerline_points
+
+    model = fm.Model()
+    line = model.add_beam(fm.line((0, 0, 0), (2, 0, 0), elements=4),
+                          section=fm.CircularSection(1e-3), material=fm.Material(E=1e9, rho=1e3))
+    arc = model.add_beam(fm.arc(center=(0, 0, 0), radius=1.0, start=(1, 0, 0), angle=np.pi / 2,
+                                elements=16),
+                         section=fm.CircularSection(1e-3), material=fm.Material(E=1e9, rho=1e3))
+    model.clamp(line.first_node)
+    model.clamp(arc.first_node)
+    asm = Assembly(model)
+    e = np.array([0, 1, 3])
+    xi = np.array([0.25, 0.5, 1.0])
+    P = centerline_points(asm.q_ref, asm.element_dofs(line), line.centerline.lengths, e, xi)
+    np.testing.assert_allclose(P[:, 0], 0.5 * (e + xi), atol=1e-15)
+    e = np.arange(16)
+    P = centerline_points(asm.q_ref, asm.element_dofs(arc), arc.centerline.lengths, e,
+                          np.full(16, 0.5))
+    assert np.abs(np.linalg.norm(P, axis=1) - 1.0).max() < 1e-6   # cubic Hermite on an arc
