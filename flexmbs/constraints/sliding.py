@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements import ancf_cable as cable
-from ..elements.ancf_cable import hermite_basis, shape_xi
+from ..elements.ancf_cable import CENTERLINE_SIZE, hermite_basis, shape_xi
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
@@ -33,6 +33,11 @@ from .interaction import Interaction, ModelParts
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
     from ..terms import DofMap, FunctionTable
+
+
+#: local coordinates of the joint ``[r_H (3), p (4), e_k (centreline), s]`` and the index of s
+S_INDEX = 7 + CENTERLINE_SIZE
+N_SLIDE = S_INDEX + 1
 
 
 @njit
@@ -46,13 +51,13 @@ def _shape_x(xi, L):  # noqa: ANN001, ANN202
 def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
     """Φ and Φ_q of the sliding joint on one element (Sugiyama et al. 2003, FORMULATION II §7).
 
-    ``ql = [r_H, p, e_k (12), s]`` (20); ``T`` (3, 3, 4, 4) = point tensors of the hole point
-    u_C and the body axes y, z (``(A w)_k = pᵀT_k(w)p``); ``n_eq`` = 3 (ring) or 5
-    (cylindrical). Writes ``phi`` (n_eq,) and ``jac`` (n_eq, 20)."""
+    ``ql = [r_H, p, e_k (CENTERLINE_SIZE), s]`` (N_SLIDE); ``T`` (3, 3, 4, 4) = point tensors of
+    the hole point u_C and the body axes y, z (``(A w)_k = pᵀT_k(w)p``); ``n_eq`` = 3 (ring) or 5
+    (cylindrical). Writes ``phi`` (n_eq,) and ``jac`` (n_eq, N_SLIDE)."""
     p = ql[3:7]
-    S, dS, ddS = _shape_x((ql[19] - start) / L, L)
+    S, dS, ddS = _shape_x((ql[S_INDEX] - start) / L, L)
     for i in range(n_eq):
-        for j in range(20):
+        for j in range(N_SLIDE):
             jac[i, j] = 0.0
     Tp = np.empty((3, 3, 4))        # T_k(w) p for w = u, y, z
     Aw = np.empty((3, 3))
@@ -82,7 +87,7 @@ def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
             jac[c, 3 + a] = 2.0 * Tp[0, c, a]
         for m in range(4):
             jac[c, 7 + 3 * m + c] = -S[m]
-        jac[c, 19] = -r1[c]
+        jac[c, S_INDEX] = -r1[c]
     if n_eq == 5:
         for i in range(2):
             w = 1 + i
@@ -93,15 +98,15 @@ def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
             for m in range(4):
                 for c in range(3):
                     jac[3 + i, 7 + 3 * m + c] = dS[m] * Aw[w, c]
-            jac[3 + i, 19] = Aw[w, 0] * r2[0] + Aw[w, 1] * r2[1] + Aw[w, 2] * r2[2]
+            jac[3 + i, S_INDEX] = Aw[w, 0] * r2[0] + Aw[w, 1] * r2[1] + Aw[w, 2] * r2[2]
 
 
 @njit
 def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
-    """``H = Σ_i λ_i ∂²Φ_i/∂q²`` (20, 20) of :func:`sliding_values` (exact, symmetric)."""
+    """``H = Σ_i λ_i ∂²Φ_i/∂q²`` (N_SLIDE, N_SLIDE) of :func:`sliding_values` (exact, symmetric)."""
     p = ql[3:7]
-    S, dS, ddS = _shape_x((ql[19] - start) / L, L)
-    _, _, _, t3 = hermite_basis((ql[19] - start) / L, L)
+    S, dS, ddS = _shape_x((ql[S_INDEX] - start) / L, L)
+    _, _, _, t3 = hermite_basis((ql[S_INDEX] - start) / L, L)
     d3 = np.empty(4)             # d³S/dx³
     for m in range(4):
         d3[m] = t3[m] / (L * L * L)
@@ -114,8 +119,8 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
             r1[c] += dS[m] * e
             r2[c] += ddS[m] * e
             r3[c] += d3[m] * e
-    for i in range(20):
-        for j in range(20):
+    for i in range(N_SLIDE):
+        for j in range(N_SLIDE):
             H[i, j] = 0.0
     for a in range(4):
         for b in range(4):
@@ -125,8 +130,8 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
             H[3 + a, 3 + b] = 2.0 * acc
     for m in range(4):
         for c in range(3):
-            H[7 + 3 * m + c, 19] = -dS[m] * lam[c]
-    H[19, 19] = -(lam[0] * r2[0] + lam[1] * r2[1] + lam[2] * r2[2])
+            H[7 + 3 * m + c, S_INDEX] = -dS[m] * lam[c]
+    H[S_INDEX, S_INDEX] = -(lam[0] * r2[0] + lam[1] * r2[1] + lam[2] * r2[2])
     if n_eq == 5:
         for i in range(2):
             mu = lam[3 + i]
@@ -149,16 +154,16 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
                 for m in range(4):
                     for c in range(3):
                         H[3 + a, 7 + 3 * m + c] += mu * Bw[c, a] * dS[m]
-                H[3 + a, 19] += mu * (Bw[0, a] * r2[0] + Bw[1, a] * r2[1] + Bw[2, a] * r2[2])
+                H[3 + a, S_INDEX] += mu * (Bw[0, a] * r2[0] + Bw[1, a] * r2[1] + Bw[2, a] * r2[2])
             for m in range(4):
                 for c in range(3):
-                    H[7 + 3 * m + c, 19] += mu * ddS[m] * aw[c]
-            H[19, 19] += mu * (aw[0] * r3[0] + aw[1] * r3[1] + aw[2] * r3[2])
+                    H[7 + 3 * m + c, S_INDEX] += mu * ddS[m] * aw[c]
+            H[S_INDEX, S_INDEX] += mu * (aw[0] * r3[0] + aw[1] * r3[1] + aw[2] * r3[2])
     for a in range(4):          # symmetric off-diagonal blocks
-        for j in range(7, 20):
+        for j in range(7, N_SLIDE):
             H[j, 3 + a] = H[3 + a, j]
-    for j in range(7, 19):
-        H[19, j] = H[j, 19]
+    for j in range(7, S_INDEX):
+        H[S_INDEX, j] = H[j, S_INDEX]
 
 
 @njit
@@ -207,7 +212,7 @@ class _SlidingConstraint(Constraint):
         k = j.element
         m = self.n_equations
         phi = np.empty(m)
-        jac = np.empty((m, 20))
+        jac = np.empty((m, N_SLIDE))
         sliding_values(np.ascontiguousarray(q_local, dtype=float), float(j._lengths[k]),
                        float(j._starts[k]), j._T_all, m, phi, jac)
         return phi, jac
@@ -215,7 +220,7 @@ class _SlidingConstraint(Constraint):
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
         j = self.joint
         k = j.element
-        H = np.empty((20, 20))
+        H = np.empty((N_SLIDE, N_SLIDE))
         sliding_hessian(np.ascontiguousarray(q_local, dtype=float), float(j._lengths[k]),
                         float(j._starts[k]), j._T_all, self.n_equations,
                         np.ascontiguousarray(lam, dtype=float), H)
@@ -288,7 +293,8 @@ class SlidingJoint(Interaction):
 
     def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
         self._body_dofs = dofs.body_dofs(self.body)
-        self._elem_dofs = dofs.element_dofs(self.beam)
+        # the Hermite centreline coordinates of every element (the element's declared layout)
+        self._elem_dofs = dofs.element_dofs(self.beam)[:, self.beam.layout.centerline]
         self._s_dof = int(extra_dofs[0])
         self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._starts = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
@@ -388,7 +394,7 @@ ERR_END_OF_BEAM = 2
 
 class SlidingPart(NamedTuple):
     body: np.ndarray                 # (nj, 7)
-    elem_dofs: np.ndarray            # (nj, max_ne, 12)
+    elem_dofs: np.ndarray            # (nj, max_ne, CENTERLINE_SIZE)
     lengths: np.ndarray              # (nj, max_ne)
     starts: np.ndarray               # (nj, max_ne)
     n_elem: np.ndarray               # (nj,)
@@ -401,13 +407,13 @@ class SlidingPart(NamedTuple):
     eps_v: np.ndarray
     fn: np.ndarray                   # (nj,) axial-force time function, −1 none
     element: np.ndarray              # (nj,) state: current element
-    pos_jac: np.ndarray              # (nj, max_ne, 5, 20) per element; −1 for dropped rows
+    pos_jac: np.ndarray              # (nj, max_ne, 5, N_SLIDE) per element; −1 for dropped rows
     pos_jacT: np.ndarray
-    pos_hess: np.ndarray             # (nj, max_ne, 400)
-    pos_s_elem: np.ndarray           # (nj, max_ne, 12): friction / axial force row of s
+    pos_hess: np.ndarray             # (nj, max_ne, N_SLIDE * N_SLIDE)
+    pos_s_elem: np.ndarray           # (nj, max_ne, CENTERLINE_SIZE): friction / axial force row of s
     pos_ss: np.ndarray               # (nj,)
     pos_s_lam: np.ndarray            # (nj, 3)
-    ql: np.ndarray                   # work (20,)
+    ql: np.ndarray                   # work (N_SLIDE,)
     phi: np.ndarray
     jac: np.ndarray
     H: np.ndarray
@@ -438,10 +444,10 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
     n = dofs.n_coords
     rows = np.full((nj, 5), -1, np.int64)
     max_el = max((len(j._lengths) for j in joints), default=0)
-    pj = np.full((nj, max_el, 5, 20), -1, np.int64)
-    pt = np.full((nj, max_el, 5, 20), -1, np.int64)
-    ph = np.zeros((nj, max_el, 400), np.int64)
-    pse = np.zeros((nj, max_el, 12), np.int64)
+    pj = np.full((nj, max_el, 5, N_SLIDE), -1, np.int64)
+    pt = np.full((nj, max_el, 5, N_SLIDE), -1, np.int64)
+    ph = np.zeros((nj, max_el, N_SLIDE * N_SLIDE), np.int64)
+    pse = np.zeros((nj, max_el, CENTERLINE_SIZE), np.int64)
     pss = np.zeros(nj, np.int64)
     psl = np.zeros((nj, 3), np.int64)
     for i, j in enumerate(joints):
@@ -453,8 +459,8 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
             cc = np.concatenate([j._body_dofs, j._elem_dofs[k], sd])
             if kept.size:
                 rr = n + r[kept]
-                pj[i, k, kept] = dofs.positions(rr, cc).reshape(kept.size, 20)
-                pt[i, k, kept] = dofs.positions(cc, rr).reshape(20, kept.size).T
+                pj[i, k, kept] = dofs.positions(rr, cc).reshape(kept.size, N_SLIDE)
+                pt[i, k, kept] = dofs.positions(cc, rr).reshape(N_SLIDE, kept.size).T
             ph[i, k] = dofs.positions(cc, cc)
             pse[i, k] = dofs.positions(sd, j._elem_dofs[k])
         pss[i] = dofs.positions(sd, sd)[0]
@@ -463,7 +469,7 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
     i64, c = np.int64, np.ascontiguousarray
     part = SlidingPart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
-        _pad([j._elem_dofs for j in joints], (12,), 0, np.int64),
+        _pad([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
         _pad([j._lengths for j in joints], (), 1.0, float),
         _pad([j._starts for j in joints], (), 0.0, float),
         np.array([len(j._lengths) for j in joints], i64),
@@ -474,7 +480,7 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
         np.array([j.friction_velocity for j in joints], float),
         np.array([-1 if j.axial_force is None else functions(j.axial_force) for j in joints], i64),
         np.array([j.element for j in joints], i64), pj, pt, ph, pse, pss, psl,
-        np.zeros(20), np.zeros(5), np.zeros((5, 20)), np.zeros((20, 20)), np.zeros(5))
+        np.zeros(N_SLIDE), np.zeros(5), np.zeros((5, N_SLIDE)), np.zeros((N_SLIDE, N_SLIDE)), np.zeros(5))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j._element = part.element[i:i + 1]
     return part
@@ -488,10 +494,10 @@ def _joint_values(sl, j, q):  # noqa: ANN001, ANN202
     ed = sl.elem_dofs[j, k]
     for a in range(7):
         sl.ql[a] = q[sl.body[j, a]]
-    for a in range(12):
+    for a in range(CENTERLINE_SIZE):
         sl.ql[7 + a] = q[ed[a]]
     sd = sl.s_dof[j]
-    sl.ql[19] = q[sd]
+    sl.ql[S_INDEX] = q[sd]
     ne_j = sl.n_eq[j]
     sliding_values(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.phi, sl.jac)
     return k, ed, sd, ne_j
@@ -505,7 +511,7 @@ def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
         if sl.rows[j, a] >= 0:
             lp[a] = lam[sl.rows[j, a]]
     f_ax = fv[sl.fn[j]] if sl.fn[j] >= 0 else 0.0
-    return sliding_axial_force(sl.ql[7:19], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp,
+    return sliding_axial_force(sl.ql[7:S_INDEX], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp,
                                sl.mu[j], sl.eps_v[j], f_ax)
 
 
@@ -523,9 +529,9 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
             lr = lam[row]
             for a in range(7):
                 r[sl.body[j, a]] += sl.jac[i, a] * lr
-            for a in range(12):
+            for a in range(CENTERLINE_SIZE):
                 r[ed[a]] += sl.jac[i, 7 + a] * lr
-            r[sd] += sl.jac[i, 19] * lr
+            r[sd] += sl.jac[i, S_INDEX] * lr
         if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
             Qs, _, _, _, _, _, _ = _joint_force(sl, j, k, sd, q, v, lam, fv)
             r[sd] -= Qs
@@ -546,13 +552,13 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
             sl.lam[i] = lam[row] if row >= 0 else 0.0
             if row < 0:
                 continue
-            for a in range(20):
+            for a in range(N_SLIDE):
                 data[sl.pos_jac[j, k, i, a]] += sl.jac[i, a]
                 data[sl.pos_jacT[j, k, i, a]] += sl.jac[i, a]
         sliding_hessian(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.lam[:ne_j], sl.H)
-        for a in range(20):
-            for c in range(20):
-                data[sl.pos_hess[j, k, 20 * a + c]] += cK * sl.H[a, c]
+        for a in range(N_SLIDE):
+            for c in range(N_SLIDE):
+                data[sl.pos_hess[j, k, N_SLIDE * a + c]] += cK * sl.H[a, c]
         if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
             Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = _joint_force(sl, j, k, sd, q, v, lam, fv)
             Ft = Qs / nr

@@ -16,9 +16,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import FLAG, njit
+from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation
 from .geometry import beam_point, closest_point_kernel, section_crossing_kernel, section_ellipse
-from .pair import contact_force
+from .pair import N_LOCAL, contact_force
 from .sections import circle_stationary_points
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
@@ -204,7 +205,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
     each candidate row gets its ``gap`` and ``gap_rate``. With ``want_tangent`` the signed
-    Gauss–Newton blocks (19×19, local [r_H, p, e_k]) go to ``K_out``/``C_out`` and the element
+    Gauss–Newton blocks (N_LOCAL×N_LOCAL, local [r_H, p, e_k]) go to ``K_out``/``C_out`` and the element
     to ``elem_k``. Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left
     the bore at section k."""
     qb, A, centre = _frame(q, body_dofs, hole_point)
@@ -213,17 +214,17 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
         vb[i] = v[body_dofs[i]]
     ne = elem_dofs.shape[0]
     for e in range(ne):
-        for k in range(12):
+        for k in range(CENTERLINE_SIZE):
             qe[e, k] = q[elem_dofs[e, k]]
     m = detect_circle(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out,
                       r_b, R, rows)
     if m < 0:
         return m, 0, 0.0
-    Qc = np.empty(19)
-    K = np.empty((19, 19))
-    C = np.empty((19, 19))
+    Qc = np.empty(N_LOCAL)
+    K = np.empty((N_LOCAL, N_LOCAL))
+    C = np.empty((N_LOCAL, N_LOCAL))
     geo = np.empty(12)
-    ve = np.empty(12)
+    ve = np.empty(CENTERLINE_SIZE)
     u_Q = np.empty(3)
     count = 0
     scale = 0.0
@@ -234,7 +235,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
         for c in range(3):
             u_Q[c] = (A[0, c] * (row[5] - qb[0]) + A[1, c] * (row[6] - qb[1])
                       + A[2, c] * (row[7] - qb[2]))
-        for c in range(12):
+        for c in range(CENTERLINE_SIZE):
             ve[c] = v[elem_dofs[eP, c]]
         v_app = tracked_approach(approach, active, psi_track, k, row[11])
         g, gdot, _, _ = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law, mu,
@@ -245,14 +246,14 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
             continue
         for c in range(7):
             r_q[body_dofs[c]] -= sign * Qc[c]
-        for c in range(12):
+        for c in range(CENTERLINE_SIZE):
             r_q[elem_dofs[eP, c]] -= sign * Qc[7 + c]
-        for c in range(19):
+        for c in range(N_LOCAL):
             if abs(Qc[c]) > scale:
                 scale = abs(Qc[c])
         if want_tangent:
-            for a in range(19):
-                for b in range(19):
+            for a in range(N_LOCAL):
+                for b in range(N_LOCAL):
                     K_out[count, a, b] = sign * K[a, b]
                     C_out[count, a, b] = sign * C[a, b]
             elem_k[count] = eP
@@ -269,8 +270,8 @@ def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, station
     bore). ``scratch`` receives the (discarded) residual."""
     m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
                                xi_ws, elem_ws, xi_ws, r_b, R, law, mu, eps_v, approach, active,
-                               psi_track, qe, rows, FLAG[0], scratch, np.empty((0, 19, 19)),
-                               np.empty((0, 19, 19)), np.empty(0, np.int64))
+                               psi_track, qe, rows, FLAG[0], scratch, np.empty((0, N_LOCAL, N_LOCAL)),
+                               np.empty((0, N_LOCAL, N_LOCAL)), np.empty(0, np.int64))
     if m < 0:
         return m
     clearance_update(rows, m, approach, active, psi_track)
@@ -285,7 +286,7 @@ ERR_LEFT_BORE = 1
 
 class ClearancePart(NamedTuple):
     body: np.ndarray                 # (nj, 7)
-    elem_dofs: np.ndarray            # (nj, max_ne, 12)
+    elem_dofs: np.ndarray            # (nj, max_ne, CENTERLINE_SIZE)
     n_elem: np.ndarray
     lengths: np.ndarray              # (nj, max_ne)
     hole_point: np.ndarray           # (nj, 3)
@@ -302,16 +303,16 @@ class ClearancePart(NamedTuple):
     approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
     active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
     psi: np.ndarray                  # (nj, max_ns, P)
-    pos: np.ndarray                  # (nj, max_ne, 361): (body, element) blocks
-    qe: np.ndarray                   # work (max_ne, 12)
+    pos: np.ndarray                  # (nj, max_ne, N_LOCAL * N_LOCAL): (body, element) blocks
+    qe: np.ndarray                   # work (max_ne, CENTERLINE_SIZE)
     rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
     n_candidates: np.ndarray         # (nj,) their number
     elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
     xi_out: np.ndarray
-    K: np.ndarray                    # work (4 max_ns, 19, 19)
+    K: np.ndarray                    # work (4 max_ns, N_LOCAL, N_LOCAL)
     C: np.ndarray
     kelem: np.ndarray                # work (4 max_ns,)
-    no_K: np.ndarray                 # (0, 19, 19): no tangent in the residual
+    no_K: np.ndarray                 # (0, N_LOCAL, N_LOCAL): no tangent in the residual
     no_elem: np.ndarray              # (0,)
     scratch: np.ndarray              # (n + m,) residual written while assembling the matrix
 
@@ -363,9 +364,9 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201
             return ERR_LEFT_BORE
         for i in range(cnt):
             pos = cl.pos[j, cl.kelem[i]]
-            for a in range(19):
-                for c in range(19):
-                    data[pos[19 * a + c]] += cK * cl.K[i, a, c] + cC * cl.C[i, a, c]
+            for a in range(N_LOCAL):
+                for c in range(N_LOCAL):
+                    data[pos[N_LOCAL * a + c]] += cK * cl.K[i, a, c] + cC * cl.C[i, a, c]
     return 0
 
 

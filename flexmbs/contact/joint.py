@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..constraints.interaction import Interaction, MatrixSink, ModelParts
+from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, ModelError
 from ._detect import (
@@ -32,7 +33,7 @@ from ._detect import (
 )
 from .geometry import beam_point, closest_point, section_crossing, section_ellipse
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb, as_friction
-from .pair import contact_point
+from .pair import N_LOCAL, contact_point
 from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -149,7 +150,8 @@ class SlidingClearanceJoint(Interaction):
 
     def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
         self._body_dofs = dofs.body_dofs(self.body)
-        self._elem_dofs = dofs.element_dofs(self.beam)
+        # the Hermite centreline coordinates of every element (the element's declared layout)
+        self._elem_dofs = dofs.element_dofs(self.beam)[:, self.beam.layout.centerline]
         # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
         self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._beam_dofs = dofs.beam_dofs(self.beam)
@@ -452,7 +454,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
     max_ne = max((len(j._lengths) for j in joints), default=0)
     max_ns = max((len(j.stations) for j in joints), default=0)
     fr = [j._friction_parameters() for j in joints]
-    pos = np.zeros((nj, max_ne, 361), np.int64)
+    pos = np.zeros((nj, max_ne, N_LOCAL * N_LOCAL), np.int64)
     for i, j in enumerate(joints):
         for k in range(len(j._lengths)):
             idx = np.concatenate([j._body_dofs, j._elem_dofs[k]])
@@ -460,7 +462,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
     i64, c = np.int64, np.ascontiguousarray
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
-        _pad([j._elem_dofs for j in joints], (12,), 0, np.int64),
+        _pad([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
         np.array([len(j._lengths) for j in joints], i64),
         _pad([j._lengths for j in joints], (), 1.0, float),
         c(np.array([j.hole_point for j in joints], float).reshape(nj, 3)),
@@ -476,9 +478,9 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         _pad([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
         _pad([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
         _pad([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
-        pos, np.zeros((max_ne, 12)), np.zeros((nj, 4 * max_ns, N_COLS)), np.zeros(nj, i64),
-        np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)), np.zeros((4 * max_ns, 19, 19)),
-        np.zeros((4 * max_ns, 19, 19)), np.zeros(4 * max_ns, i64), np.zeros((0, 19, 19)),
+        pos, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, 4 * max_ns, N_COLS)), np.zeros(nj, i64),
+        np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)), np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)),
+        np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)), np.zeros(4 * max_ns, i64), np.zeros((0, N_LOCAL, N_LOCAL)),
         np.zeros(0, i64), np.zeros(n_total))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         ns = len(j.stations)

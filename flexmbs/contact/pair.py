@@ -22,9 +22,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import element_point, shape_xi
+from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_tensor_of
 from .laws import ForceLaw, RegularizedCoulomb, coulomb_force, law_force
+
+#: local coordinates of a contact ``[r_H, p, e_k]``: the hole body's 7 and the element's centreline
+N_LOCAL = 7 + CENTERLINE_SIZE
 
 __all__ = ["ContactResult", "contact_point", "contact_geometry", "contact_force"]
 
@@ -39,9 +42,9 @@ class ContactResult(NamedTuple):
     f_n: float                 #: normal force magnitude (≥ 0)
     force_on_hole: np.ndarray  #: (3,) F_H = f_n n + F_t (the beam gets −F_H at P)
     Q_body: np.ndarray         #: (7,) external generalized force on [r_H, p]
-    Q_elem: np.ndarray         #: (12,) external generalized force on e_k
-    K: np.ndarray              #: (19, 19) −∂Q/∂q_c
-    C: np.ndarray              #: (19, 19) −∂Q/∂q̇_c
+    Q_elem: np.ndarray         #: (CENTERLINE_SIZE,) external generalized force on e_k
+    K: np.ndarray              #: (N_LOCAL, N_LOCAL) −∂Q/∂q_c
+    C: np.ndarray              #: (N_LOCAL, N_LOCAL) −∂Q/∂q̇_c
     xi: float                  #: re-projected ξ_P (may lie outside [0, 1])
     gap_rate: float            #: ġ_N = n·(v_Q − v_P)
 
@@ -82,16 +85,16 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
     n = u / ell
     g = ell - r_b
-    W = np.zeros((3, 19))
+    W = np.zeros((3, N_LOCAL))
     for c in range(3):
         W[c, c] = 1.0
         for i in range(4):
             W[c, 3 + i] = Bp[c, i]
         for m in range(4):
             W[c, 7 + 3 * m + c] = -S[m]
-    B = np.zeros(19)
+    B = np.zeros(N_LOCAL)
     vrel = np.zeros(3)
-    for j in range(19):
+    for j in range(N_LOCAL):
         B[j] = n[0] * W[0, j] + n[1] * W[1, j] + n[2] * W[2, j]
     for c in range(3):
         acc = v_body[c]
@@ -106,10 +109,10 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
 
 @njit
 def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
-    """The consistent ``∂²g_N/∂q_c²`` (19, 19) of §5 (ξ_P variation, Euler-parameter part)."""
-    H = np.zeros((19, 19))
-    for i in range(19):
-        for j in range(19):
+    """The consistent ``∂²g_N/∂q_c²`` (N_LOCAL, N_LOCAL) of §5 (ξ_P variation, Euler-parameter part)."""
+    H = np.zeros((N_LOCAL, N_LOCAL))
+    for i in range(N_LOCAL):
+        for j in range(N_LOCAL):
             acc = 0.0
             for c in range(3):
                 acc += W[c, i] * W[c, j]
@@ -124,14 +127,14 @@ def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
             H[3 + i, 3 + j] += 2.0 * acc
     a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
     den = a11 - ell * (n[0] * rxx[0] + n[1] * rxx[1] + n[2] * rxx[2])
-    w = np.zeros(19)
-    for j in range(19):
+    w = np.zeros(N_LOCAL)
+    for j in range(N_LOCAL):
         w[j] = rx[0] * W[0, j] + rx[1] * W[1, j] + rx[2] * W[2, j]
     for m in range(4):
         for c in range(3):
             w[7 + 3 * m + c] += ell * dS[m] * n[c]
-    for i in range(19):
-        for j in range(19):
+    for i in range(N_LOCAL):
+        for j in range(N_LOCAL):
             H[i, j] -= w[i] * w[j] / (ell * den)
     return H
 
@@ -140,13 +143,13 @@ def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
 def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):  # noqa: ANN001, ANN201
     """Gap kinematics of one contact (FORMULATION II §4–§5), numba kernel.
 
-    Returns ``(xi, g, gdot, n, P, Q, B (19,), W (3,19), H (19,19))`` with ``W = ∂(x_Q − x_P)/∂q_c``
-    at fixed ξ, ``B = nᵀW = ∂g_N/∂q_c``, and (if ``want_hessian``) the consistent
+    Returns ``(xi, g, gdot, n, P, Q, B (N_LOCAL,), W (3, N_LOCAL), H (N_LOCAL, N_LOCAL))`` with
+    ``W = ∂(x_Q − x_P)/∂q_c`` at fixed ξ, ``B = nᵀW = ∂g_N/∂q_c``, and (if ``want_hessian``) the consistent
     ``H = ∂²g_N/∂q_c²`` of §5 including the ξ_P variation and the Euler-parameter Hessian.
     """
     xi, g, gdot, n, P, Q, B, W, T, dS, rx, rxx, ell = _kinematics(
         q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b)
-    H = _gap_hessian(n, W, T, dS, rx, rxx, ell) if want_hessian else np.zeros((19, 19))
+    H = _gap_hessian(n, W, T, dS, rx, rxx, ell) if want_hessian else np.zeros((N_LOCAL, N_LOCAL))
     return xi, g, gdot, n, P, Q, B, W, H
 
 
@@ -156,9 +159,9 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
     """Penalty force of one contact point and its Gauss–Newton tangent (FORMULATION II §4–§5).
 
     ``law`` = :meth:`ForceLaw.parameters`; friction is regularised Coulomb when ``mu > 0``.
-    Writes ``Qc`` (19,) = ``Wᵀ F_H`` (external generalized force on [r_H, p, e_k]), with
+    Writes ``Qc`` (N_LOCAL,) = ``Wᵀ F_H`` (external generalized force on [r_H, p, e_k]), with
     ``want_tangent`` ``K = k_t BᵀB (+ k_t Wᵀ(∂F_t/∂f_N)Bᵀ)`` and ``C = c_t BᵀB (+ friction)``
-    (19, 19), and ``geo`` (12,) = [n, P, Q, F_H]. Returns ``(g_N, ġ_N, f_N, ξ_P)``.
+    (N_LOCAL, N_LOCAL), and ``geo`` (12,) = [n, P, Q, F_H]. Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
                                                             length, xi0, r_b)
@@ -173,7 +176,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
             acc = 0.0
             for j in range(7):
                 acc += W[c, j] * v_body[j]
-            for j in range(12):
+            for j in range(CENTERLINE_SIZE):
                 acc += W[c, 7 + j] * v_elem[j]
             vrel[c] = acc
         vn = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
@@ -184,7 +187,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
         coulomb_force(mu, eps_v, vt, f, Ft, dF_dv, dF_dfn)
         for c in range(3):
             F_H[c] += Ft[c]
-    for j in range(19):
+    for j in range(N_LOCAL):
         Qc[j] = W[0, j] * F_H[0] + W[1, j] * F_H[1] + W[2, j] * F_H[2]
     for c in range(3):
         geo[c] = n[c]
@@ -192,8 +195,8 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
         geo[6 + c] = Q[c]
         geo[9 + c] = F_H[c]
     if want_tangent:
-        for i in range(19):
-            for j in range(19):
+        for i in range(N_LOCAL):
+            for j in range(N_LOCAL):
                 bb = B[i] * B[j]
                 K[i, j] = kt * bb
                 C[i, j] = ct * bb
@@ -204,14 +207,14 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
                 dn = dF_dv[a, 0] * n[0] + dF_dv[a, 1] * n[1] + dF_dv[a, 2] * n[2]
                 for b in range(3):
                     M[a, b] = dF_dv[a, b] - dn * n[b]
-            MW = np.zeros((3, 19))
-            WtdF = np.zeros(19)
-            for j in range(19):
+            MW = np.zeros((3, N_LOCAL))
+            WtdF = np.zeros(N_LOCAL)
+            for j in range(N_LOCAL):
                 for a in range(3):
                     MW[a, j] = M[a, 0] * W[0, j] + M[a, 1] * W[1, j] + M[a, 2] * W[2, j]
                 WtdF[j] = W[0, j] * dF_dfn[0] + W[1, j] * dF_dfn[1] + W[2, j] * dF_dfn[2]
-            for i in range(19):
-                for j in range(19):
+            for i in range(N_LOCAL):
+                for j in range(N_LOCAL):
                     C[i, j] += ct * WtdF[i] * B[j] - (W[0, i] * MW[0, j] + W[1, i] * MW[1, j]
                                                       + W[2, i] * MW[2, j])
                     K[i, j] += kt * WtdF[i] * B[j]
@@ -244,7 +247,7 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction/normal-force coupling
     ``k_t Wᵀ(∂F_t/∂f_N)Bᵀ``); ``consistent=True`` adds the exact geometric and damping terms of
     the normal force, ``−f_N ∂²g_N + c_t B (∂²g_N q̇)ᵀ`` (analytic, §5), and replaces the friction
-    stiffness by central finite differences of ``Wᵀ F_t`` over the 19 coordinates.
+    stiffness by central finite differences of ``Wᵀ F_t`` over the N_LOCAL coordinates.
     ``C = c_t BᵀB`` + the exact friction velocity derivative.
     """
     q_body = np.ascontiguousarray(q_body, dtype=float)
@@ -253,7 +256,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     q_elem = np.ascontiguousarray(q_elem, dtype=float)
     v_elem = np.ascontiguousarray(v_elem, dtype=float)
     mu, eps_v = (float(friction.mu), float(friction.eps_v)) if friction is not None else (0.0, 1.0)
-    Qc, K, C, geo = np.empty(19), np.empty((19, 19)), np.empty((19, 19)), np.empty(12)
+    Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
+    geo = np.empty(12)
     g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
                                      float(r_b), law.parameters(), mu, eps_v,
                                      float(approach_velocity), True, Qc, K, C, geo)
@@ -271,7 +275,7 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
             K -= kt * np.outer(W.T @ dF_dfn, B)          # drop the Gauss-Newton friction part
             q_c = np.concatenate([q_body, q_elem])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
-            for j in range(19):
+            for j in range(N_LOCAL):
                 qp = q_c.copy()
                 qm = q_c.copy()
                 qp[j] += hstep

@@ -53,6 +53,11 @@ LAYOUT = ELEMENT_TYPES.register("ancf_cable", ElementLayout(
     output_fields=("displacement", "velocity", "axial_strain", "curvature")))
 
 
+#: coordinates of an element's Hermite centreline ``[r0, r0′, r1, r1′]``: what the sliding and
+#: clearance joints read of a beam element (``LAYOUT.centerline`` selects them)
+CENTERLINE_SIZE = 12
+
+
 def reference_nodal_coordinates(points: np.ndarray, tangents: np.ndarray) -> np.ndarray:
     """Nodal coordinates (n_nodes, 6) of the stress-free reference: ``[r, r′]`` per node."""
     return np.hstack([points, tangents])
