@@ -18,7 +18,7 @@ import numpy as np
 from .._jit import FLAG, njit
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation
-from .geometry import beam_point, closest_point_kernel, section_crossing_kernel, section_ellipse
+from .geometry import closest_point_kernel, section_state
 from .pair import N_LOCAL, contact_force
 from .sections import circle_stationary_points
 
@@ -47,33 +47,16 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi
     for k in range(stations.size):
         for c in range(3):
             origin[c] = centre[c] + stations[k] * n[c]
-        e, xi, found = section_crossing_kernel(qe, lengths, origin, n, elem_ws[k], xi_ws[k],
-                                               1e-12, np.int64(30), 2.0 * R + r_b)
+        found, e, xi, cy, cz, a, b, eax, eay = section_state(
+            qe, lengths, origin, n, ey, ez, elem_ws[k], xi_ws[k], r_b, 2.0 * R + r_b)
         if not found:
             return -1 - k   # no crossing near the section: the beam left the hole
         elem_out[k] = e
         xi_out[k] = xi
-        r, rx, _ = beam_point(qe, lengths, e, xi)
-        a, b, ea3, _, _ = section_ellipse(rx, n, ey, ez, r_b)
-        cy = 0.0
-        cz = 0.0
-        for c in range(3):
-            cy += (r[c] - origin[c]) * ey[c]
-            cz += (r[c] - origin[c]) * ez[c]
         if math.hypot(cy, cz) > R:
             return -1 - k   # the beam axis left the bore: the penetration is no longer defined
         if math.hypot(cy, cz) + a < R:
             continue   # broad phase: ellipse strictly inside the bore
-        eax = ea3[0] * ey[0] + ea3[1] * ey[1] + ea3[2] * ey[2]
-        eay = ea3[0] * ez[0] + ea3[1] * ez[1] + ea3[2] * ez[2]
-        nrm = math.hypot(eax, eay)
-        if nrm > 0.0:
-            eax /= nrm
-            eay /= nrm
-        else:
-            eax, eay = 1.0, 0.0
-        if a < b:
-            a = b
         phis, kinds = circle_stationary_points(cy, cz, eax, eay, a, b, R)
         for j in range(phis.size):
             ca = math.cos(phis[j])

@@ -281,3 +281,36 @@ def to_section(x, origin, e_y, e_z):  # noqa: ANN001, ANN201
 def from_section(y, origin, e_y, e_z):  # noqa: ANN001, ANN201
     """3D point ``O + y₀ e_y + y₁ e_z`` of 2D section coordinates."""
     return origin + y[0] * e_y + y[1] * e_z
+
+
+@njit
+def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_distance):  # noqa: ANN001, ANN201
+    """The beam in one hole section (FORMULATION II §2): the crossing of its axis with the section
+    plane ``(origin, normal)`` (warm-started at ``(elem0, xi0)``, within ``max_distance`` of
+    the origin) and the ellipse of its cross-section there, in section coordinates (e_y, e_z).
+
+    Returns ``(found, e, xi, cy, cz, a, b, eax, eay)``: element and ξ of the crossing, ellipse
+    centre, semi-axes ``a ≥ b`` and unit major axis. The one statement of the section loop used
+    by detection, the initial check and the section output."""
+    e, xi, found = section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, 1e-12,
+                                           np.int64(30), max_distance)
+    if not found:
+        return False, e, xi, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0
+    r, rx, _ = beam_point(q_e, lengths, e, xi)
+    a, b, ea3, _, _ = section_ellipse(rx, normal, e_y, e_z, r_b)
+    cy = 0.0
+    cz = 0.0
+    for c in range(3):
+        cy += (r[c] - origin[c]) * e_y[c]
+        cz += (r[c] - origin[c]) * e_z[c]
+    eax = _dot(ea3, e_y)
+    eay = _dot(ea3, e_z)
+    nrm = math.hypot(eax, eay)
+    if nrm > 0.0:
+        eax /= nrm
+        eay /= nrm
+    else:
+        eax, eay = 1.0, 0.0
+    if a < b:
+        a = b
+    return True, e, xi, cy, cz, a, b, eax, eay

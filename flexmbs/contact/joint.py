@@ -31,7 +31,7 @@ from ._detect import (
     detect_circle,
     tracked_approach,
 )
-from .geometry import beam_point, closest_point, section_crossing, section_ellipse
+from .geometry import closest_point, section_state
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb, as_friction
 from .pair import N_LOCAL, contact_point
 from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
@@ -175,14 +175,13 @@ class SlidingClearanceJoint(Interaction):
         R_in = self.hole.section.inscribed_radius()
         for k, zeta in enumerate(self.stations):
             origin = centre + zeta * n
-            e, xi, found = section_crossing(qe, self._lengths, origin, n, 0, 0.5)
-            r, r_xi, _ = beam_point(qe, self._lengths, e, xi)
-            if not found or np.linalg.norm(r - origin) > R_out:
+            found, e, xi, cy, cz, a, _b, _, _ = section_state(
+                qe, self._lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
+            if not found or math.hypot(cy, cz) > R_out:
                 raise ModelError(
                     f"joint '{self.name}': beam '{self.beam.name}' does not pass through the hole "
                     f"of body '{self.body.name}' at section {k} (axial station {zeta:.6g}); place "
                     "the body on the beam (pose = beam.frame_at(s), scenario pose = {on_beam, s})")
-            a, b, *_ = section_ellipse(r_xi, n, ey, ez, self.beam_radius)
             if a > R_in * (1 + 1e-12):
                 raise ModelError(
                     f"joint '{self.name}': the beam is tilted too much to fit the hole at section "
@@ -239,22 +238,16 @@ class SlidingClearanceJoint(Interaction):
         out = []
         for k, zeta in enumerate(self.stations):
             origin = centre + zeta * n
-            e, xi, found = section_crossing(qe, self._lengths, origin, n, int(self._elem[k]),
-                                            float(self._xi[k]), max_distance=2 * R_out + r_b)
+            found, e, xi, cy, cz, a, b, eax, eay = section_state(
+                qe, self._lengths, origin, n, ey, ez, int(self._elem[k]), float(self._xi[k]), r_b,
+                2 * R_out + r_b)
             if not found:
                 continue
             if update:
                 self._elem[k], self._xi[k] = e, xi
-            r, r_xi, _ = beam_point(qe, self._lengths, e, xi)
-            a, b, ea3, _, _ = section_ellipse(r_xi, n, ey, ez, r_b)
-            d = r - origin
-            cy, cz = float(d @ ey), float(d @ ez)
             if math.hypot(cy, cz) + a < R_in:
                 continue  # broad phase: the ellipse is strictly inside the bore
-            ea2 = np.array([ea3 @ ey, ea3 @ ez])
-            if not np.linalg.norm(ea2) > 0:
-                ea2 = np.array([1.0, 0.0])
-            ell = Ellipse2D(np.array([cy, cz]), ea2, max(a, b), b)
+            ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
             for j, cand in enumerate(section.candidates(ell)):
                 if cand.depth <= 0.0:
                     continue
@@ -377,17 +370,15 @@ class SlidingClearanceJoint(Interaction):
         rows = []
         for k, zeta in enumerate(self.stations):
             origin = centre + zeta * n
-            e, xi, found = section_crossing(qe, self._lengths, origin, n, int(self._elem[k]),
-                                            float(self._xi[k]), max_distance=2 * R + self.beam_radius)
+            found, e, xi, cy, cz, a, b, eax, eay = section_state(
+                qe, self._lengths, origin, n, ey, ez, int(self._elem[k]), float(self._xi[k]),
+                self.beam_radius, 2 * R + self.beam_radius)
             if not found:
                 continue
-            r, r_xi, _ = beam_point(qe, self._lengths, e, xi)
-            a, b, ea3, _, _ = section_ellipse(r_xi, n, ey, ez, self.beam_radius)
-            d = r - origin
             rows.append({"joint": self.name, "section": k, "ox": origin[0], "oy": origin[1],
                          "oz": origin[2], "eyx": ey[0], "eyy": ey[1], "eyz": ey[2],
-                         "ezx": ez[0], "ezy": ez[1], "ezz": ez[2], "cy": d @ ey, "cz": d @ ez,
-                         "ey_a": ea3 @ ey, "ez_a": ea3 @ ez, "a": a, "b": b, "R": R,
+                         "ezx": ez[0], "ezy": ez[1], "ezz": ez[2], "cy": cy, "cz": cz,
+                         "ey_a": eax, "ez_a": eay, "a": a, "b": b, "R": R,
                          "contacts": counts.get(k, 0)})
         return rows
 
