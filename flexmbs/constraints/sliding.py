@@ -24,6 +24,7 @@ import numpy as np
 from .._jit import njit
 from ..elements import ancf_cable as cable
 from ..elements.ancf_cable import CENTERLINE_SIZE, hermite_basis, shape_xi
+from ..elements.centerline import closest_point
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
@@ -320,32 +321,17 @@ class SlidingJoint(Interaction):
         return int(np.clip(np.searchsorted(self._starts, s, side="right") - 1, 0, len(self._lengths) - 1))
 
     def _project(self, q: np.ndarray, x: np.ndarray) -> float:
-        """Arc length of the point of the beam nearest to x (sampling + Newton)."""
+        """Arc length of the point of the beam nearest to x: the best of 9 samples per element
+        starts the closest-point projection (:func:`flexmbs.elements.centerline.closest_point`)."""
         n = len(self._lengths)
         xi = np.linspace(0.0, 1.0, 9)
-        best = (np.inf, 0.0)
-        for k in range(n):
-            S, _, _ = cable.shape_functions(xi, np.full(xi.shape, self._lengths[k]))
-            pts = np.asarray(S) @ q[self._elem_dofs[k]].reshape(4, 3)
-            d = np.linalg.norm(pts - x, axis=1)
-            i = int(np.argmin(d))
-            if d[i] < best[0]:
-                best = (d[i], self._starts[k] + xi[i] * self._lengths[k])
-        s = best[1]
-        for _ in range(20):
-            k = self._locate(s)
-            L = self._lengths[k]
-            xi_k = np.array((s - self._starts[k]) / L)
-            S, dS, ddS = (np.asarray(a).reshape(4) for a in cable.shape_functions(xi_k, np.array(L)))
-            e = q[self._elem_dofs[k]].reshape(4, 3)
-            r, r1, r2 = S @ e, dS @ e, ddS @ e
-            h = (r - x) @ r1
-            dh = r1 @ r1 + (r - x) @ r2
-            step = -h / dh if dh > 0 else 0.0
-            s = float(np.clip(s + step, 0.0, self._total))
-            if abs(step) < 1e-14 * max(self._total, 1.0):
-                break
-        return s
+        e_all = np.repeat(np.arange(n), xi.size)
+        pts = cable.centerline_points(q, self._elem_dofs, self._lengths, e_all, np.tile(xi, n))
+        i = int(np.argmin(np.linalg.norm(pts - x, axis=1)))
+        qe = np.ascontiguousarray(q[self._elem_dofs])
+        e, xi_p, *_ = closest_point(qe, self._lengths, np.asarray(x, float), int(e_all[i]),
+                                    float(xi[i % xi.size]))
+        return float(np.clip(self._starts[e] + xi_p * self._lengths[e], 0.0, self._total))
 
     def constraints(self) -> list[Constraint]:
         return [self._constraint]
