@@ -20,7 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-__all__ = ["DofMap", "FunctionTable", "LOAD_FACTOR", "WITH_INERTIA", "WITH_DAMPING", "MODE_SIZE",
+__all__ = ["DofMap", "FunctionTable", "pad_stack", "LOAD_FACTOR", "WITH_INERTIA", "WITH_DAMPING", "MODE_SIZE",
            "dynamic_mode", "static_mode"]
 
 #: entries of the ``mode`` vector every kernel receives (a float array, so that compiled callers
@@ -98,3 +98,14 @@ class FunctionTable:
             for i, fn in enumerate(self.items):
                 out[k, i] = fn(t)
         return out
+
+
+def pad_stack(arrays: list[np.ndarray], tail: tuple[int, ...], fill: float,
+              dtype: type) -> np.ndarray:
+    """Stack per-object arrays ``(n_i, *tail)`` into ``(len, max n_i, *tail)`` padded with
+    ``fill``: how a term kind packs several joints of different sizes into one part."""
+    n = max((a.shape[0] for a in arrays), default=0)
+    out = np.full((len(arrays), n) + tail, fill, dtype=dtype)
+    for i, a in enumerate(arrays):
+        out[i, :a.shape[0]] = np.asarray(a).reshape((a.shape[0],) + tail)
+    return out

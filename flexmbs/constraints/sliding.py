@@ -28,6 +28,7 @@ from ..elements.centerline import closest_point
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
+from ..terms import pad_stack
 from .base import Constraint
 from .interaction import Interaction, ModelParts
 
@@ -406,15 +407,6 @@ class SlidingPart(NamedTuple):
     lam: np.ndarray
 
 
-def _pad(arrays: list[np.ndarray], tail: tuple[int, ...], fill: float, dtype: type) -> np.ndarray:
-    """Stack arrays ``(n_i, *tail)`` into ``(len, max n_i, *tail)``, padded with ``fill``."""
-    n = max((a.shape[0] for a in arrays), default=0)
-    out = np.full((len(arrays), n) + tail, fill, dtype=dtype)
-    for i, a in enumerate(arrays):
-        out[i, :a.shape[0]] = np.asarray(a).reshape((a.shape[0],) + tail)
-    return out
-
-
 def sliding_pattern(joint: SlidingJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
     """Body and s couple with every beam coordinate (the current element moves along the beam),
     both ways; the joint's multipliers with all of them."""
@@ -455,9 +447,9 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
     i64, c = np.int64, np.ascontiguousarray
     part = SlidingPart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
-        _pad([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
-        _pad([j._lengths for j in joints], (), 1.0, float),
-        _pad([j._starts for j in joints], (), 0.0, float),
+        pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
+        pad_stack([j._lengths for j in joints], (), 1.0, float),
+        pad_stack([j._starts for j in joints], (), 0.0, float),
         np.array([len(j._lengths) for j in joints], i64),
         np.array([j._total for j in joints], float), np.array([j._s_dof for j in joints], i64),
         c(np.array([j._T_all for j in joints], float).reshape(nj, 3, 3, 4, 4)),

@@ -23,6 +23,7 @@ from ..constraints.interaction import Interaction, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, ModelError
+from ..terms import pad_stack
 from ._detect import (
     ERR_LEFT_BORE,
     N_COLS,
@@ -431,14 +432,6 @@ def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[
     return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
 
 
-def _pad(arrays: list[np.ndarray], tail: tuple[int, ...], fill: float, dtype: type) -> np.ndarray:
-    n = max((a.shape[0] for a in arrays), default=0)
-    out = np.full((len(arrays), n) + tail, fill, dtype=dtype)
-    for i, a in enumerate(arrays):
-        out[i, :a.shape[0]] = np.asarray(a).reshape((a.shape[0],) + tail)
-    return out
-
-
 def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int) -> ClearancePart:
     """All clearance joints; their state arrays become views of the packed ones."""
     nj = len(joints)
@@ -453,22 +446,22 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
     i64, c = np.int64, np.ascontiguousarray
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
-        _pad([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
+        pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
         np.array([len(j._lengths) for j in joints], i64),
-        _pad([j._lengths for j in joints], (), 1.0, float),
+        pad_stack([j._lengths for j in joints], (), 1.0, float),
         c(np.array([j.hole_point for j in joints], float).reshape(nj, 3)),
-        _pad([j.stations for j in joints], (), 0.0, float),
+        pad_stack([j.stations for j in joints], (), 0.0, float),
         np.array([len(j.stations) for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
         np.array([j.hole.section.bounding_radius() for j in joints], float),
         c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),
         np.array([m for m, _ in fr], float), np.array([e for _, e in fr], float),
         np.array([j.compiled_form() for j in joints], dtype=np.bool_),
-        _pad([j._elem for j in joints], (), 0, np.int64),
-        _pad([j._xi for j in joints], (), 0.5, float),
-        _pad([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
-        _pad([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
-        _pad([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
+        pad_stack([j._elem for j in joints], (), 0, np.int64),
+        pad_stack([j._xi for j in joints], (), 0.5, float),
+        pad_stack([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
+        pad_stack([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
+        pad_stack([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
         pos, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, 4 * max_ns, N_COLS)), np.zeros(nj, i64),
         np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)), np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)),
         np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)), np.zeros(4 * max_ns, i64), np.zeros((0, N_LOCAL, N_LOCAL)),
