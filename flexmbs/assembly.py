@@ -36,6 +36,7 @@ from .constraints.sliding import pack_sliding, sliding_pattern
 from .contact.joint import clearance_pattern, pack_clearance
 from .elements import ancf_cable as cable
 from .elements import rigid_body as rb
+from .elements.layout import ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
 from .loads import TimeFunction, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
@@ -44,8 +45,9 @@ from .terms import FunctionTable, dynamic_mode, static_mode
 
 @dataclass
 class BeamGroup:
-    """Beams sharing one CableOptions: one packed part, one kernel call."""
+    """Beams sharing an element type and its options: one packed part, one kernel call."""
 
+    element_type: ElementType
     options: cable.CableOptions
     beams: list[Beam]
     part: cable.BeamPart
@@ -128,8 +130,8 @@ class Assembly:
         v0 = np.zeros(off)
         for beam in m.beams:
             o = self.beam_offset[id(beam)]
-            nodal = cable.reference_nodal_coordinates(beam.centerline.points,
-                                                      beam.centerline.tangents)
+            nodal = beam.element_type.reference_nodal_coordinates(beam.centerline.points,
+                                                                  beam.centerline.tangents)
             q0[o:o + nodal.size] = nodal.ravel()
         for body in m.bodies:
             o = self.body_offset[id(body)]
@@ -176,36 +178,23 @@ class Assembly:
         return self.multiplier_labels[j] if j < len(self.multiplier_labels) else f"equation {i}"
 
     # ================================================================== beams
-    def _beam_groups(self) -> list[tuple[cable.CableOptions, list[Beam], np.ndarray,
-                                         cable.CableProperties]]:
-        """(options, beams, element dofs, section resultants per element) per CableOptions."""
-        groups: dict[cable.CableOptions, list[Beam]] = {}
+    def _beam_groups(self) -> list[tuple[ElementType, Any, list[Beam], np.ndarray, Any]]:
+        """(element type, options, beams, element dofs, section properties per element) per
+        group of beams sharing an element type and its options: one kernel call each."""
+        groups: dict[tuple[str, Any], list[Beam]] = {}
         for beam in self.model.beams:
-            groups.setdefault(beam.options, []).append(beam)
+            groups.setdefault((beam.element, beam.options), []).append(beam)
         out = []
         self.beam_slices: dict[int, tuple[int, slice]] = {}
-        for gi, (opts, beams) in enumerate(groups.items()):
-            dofs, L, EA, EI, rA, dA, dB, e0 = [], [], [], [], [], [], [], []
+        for gi, ((_, opts), beams) in enumerate(groups.items()):
+            etype = beams[0].element_type
             start = 0
             for beam in beams:
-                dofs.append(self.element_dofs(beam))
-                ne = beam.n_elem
-                st = beam.stiffness
-                L.append(np.asarray(beam.centerline.lengths, float))
-                EA.append(np.full(ne, st.axial_stiffness))
-                EI.append(np.full(ne, st.bending_stiffness))
-                rA.append(np.full(ne, st.mass_per_length))
-                dA.append(np.full(ne, beam.damping * st.axial_stiffness))
-                dB.append(np.full(ne, beam.damping * st.bending_stiffness))
-                e0.append(np.full(ne, beam.reference_axial_strain))
-                self.beam_slices[id(beam)] = (gi, slice(start, start + ne))
-                start += ne
-            props = cable.CableProperties(
-                length=np.concatenate(L), axial_stiffness=np.concatenate(EA),
-                bending_stiffness=np.concatenate(EI), mass_per_length=np.concatenate(rA),
-                axial_damping=np.concatenate(dA), bending_damping=np.concatenate(dB),
-                reference_axial_strain=np.concatenate(e0))
-            out.append((opts, beams, np.ascontiguousarray(np.vstack(dofs), dtype=np.int64), props))
+                self.beam_slices[id(beam)] = (gi, slice(start, start + beam.n_elem))
+                start += beam.n_elem
+            dofs = np.vstack([self.element_dofs(beam) for beam in beams])
+            out.append((etype, opts, beams, np.ascontiguousarray(dofs, dtype=np.int64),
+                        etype.section_properties(beams)))
         return out
 
     # ================================================================== constraints
@@ -372,8 +361,8 @@ class Assembly:
         g = self.model.gravity
         f_const = np.zeros(n)
         self.gravity_vector = np.zeros(n)
-        for _, _, gdofs, gprops in self._group_specs:
-            np.add.at(self.gravity_vector, gdofs, cable.gravity_force(gprops, g))
+        for etype, _, _, gdofs, gprops in self._group_specs:
+            np.add.at(self.gravity_vector, gdofs, etype.gravity_force(gprops, g))
         for body in self.model.bodies:
             d = self.body_dofs(body)
             self.gravity_vector[d[:3]] += body.mass * g
@@ -387,9 +376,9 @@ class Assembly:
             if load.kind == "distributed":
                 beam: Beam = load.target  # type: ignore[assignment]
                 gi, sl = self.beam_slices[id(beam)]
-                _, _, gdofs, gprops = self._group_specs[gi]
-                props = cable.CableProperties(*[np.asarray(a)[sl] for a in gprops])
-                Q = cable.distributed_force(props, load.force)
+                etype, _, _, gdofs, gprops = self._group_specs[gi]
+                props = type(gprops)(*[np.asarray(a)[sl] for a in gprops])
+                Q = etype.distributed_force(props, load.force)
                 idx, vals = gdofs[sl].ravel(), Q.ravel()
             elif isinstance(load.target, RigidBody):
                 body_loads.append((load.target, load.point, load.force, load.moment,
@@ -416,7 +405,7 @@ class Assembly:
                     e, xi = beam.locate(float(s))
                     dofs = self.element_dofs(beam)[e]
                     L = np.array([beam.centerline.lengths[e]])
-                    Q = cable.point_force_vector(np.array([xi]), L, load.force[None, :])[0]
+                    Q = beam.element_type.point_force(np.array([xi]), L, load.force[None, :])[0]
                     if load.moment is not None:
                         raise ModelError(f"load '{load.name}': moments are supported at nodes only")
                     idx, vals = dofs, Q
@@ -438,8 +427,8 @@ class Assembly:
         N = self.n_total
         n = self.n_coords
         blocks: list[tuple[np.ndarray, np.ndarray]] = []
-        for _, _, gdofs, _ in self._group_specs:
-            blocks += cable.beam_pattern(gdofs)
+        for *_, gdofs, _ in self._group_specs:
+            blocks += [(d, d) for d in gdofs]        # the block of every element
         blocks += rb.bodies_pattern(self.model.bodies, self)
         blocks += linear_pattern(self.lin_matrix, n)
         for nl in self.nonlinear:
@@ -472,10 +461,10 @@ class Assembly:
         fns = FunctionTable()
         self.functions = fns
         self.groups: list[BeamGroup] = []
-        for opts, beams, gdofs, props in self._group_specs:
+        for etype, opts, beams, gdofs, props in self._group_specs:
             pos = np.array([self.positions(d, d).reshape(-1) for d in gdofs], np.int64)
-            self.groups.append(BeamGroup(opts, beams,
-                                         cable.pack_beams(gdofs, props, opts, self.q_ref, pos)))
+            self.groups.append(BeamGroup(etype, opts, beams,
+                                         etype.pack(gdofs, props, opts, self.q_ref, pos)))
         parts = [g.part for g in self.groups]
         if not parts:   # a homogeneous, non-empty tuple for the compiled driver
             parts = [cable.pack_beams(np.zeros((0, cable.LAYOUT.element_size), np.int64),
@@ -683,7 +672,8 @@ class Assembly:
         for grp in self.groups:
             ve = v[grp.dofs]
             kin += 0.5 * float(np.einsum("ei,eij,ej->", ve, grp.mass, ve))
-            strain += float(np.sum(cable.strain_energy(q[grp.dofs], grp.props, grp.rest, grp.options)))
+            strain += float(np.sum(grp.element_type.strain_energy(q[grp.dofs], grp.props, grp.rest,
+                                                                  grp.options)))
         bp = self.system.bodies
         if bp.dofs.size:
             kin += float(np.sum(rb.kinetic_energy(bp.mass, bp.inertia, q[bp.dofs[:, 3:]], v[bp.dofs])))

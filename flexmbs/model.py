@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from .elements.ancf_cable import CableOptions
-from .elements.layout import ElementLayout, get_layout
+from .elements.layout import ElementLayout, ElementType, get_element_type
 from .elements.rigid_body import quaternion_from_matrix, rotation_matrix
 from .errors import ModelError
 from .geometry.curves import Centerline
@@ -117,9 +117,14 @@ class Beam:
         self.element = "ancf_cable"
 
     @property
+    def element_type(self) -> ElementType:
+        """Its registered element type (layout and functions)."""
+        return get_element_type(self.element)
+
+    @property
     def layout(self) -> ElementLayout:
         """The declared layout of its elements (nodal coordinates, sizes)."""
-        return get_layout(self.element)
+        return self.element_type.layout
 
     @property
     def n_elem(self) -> int:

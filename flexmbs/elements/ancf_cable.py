@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import FLAG, njit
 from ..terms import WITH_DAMPING, WITH_INERTIA
-from .layout import ELEMENT_TYPES, ElementLayout
+from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
 __all__ = [
     "CableOptions",
@@ -47,10 +47,10 @@ __all__ = [
 ]
 
 #: Element A's declared layout: per node [r, r′], 2 nodes, 12 element coordinates (§1.1)
-LAYOUT = ELEMENT_TYPES.register("ancf_cable", ElementLayout(
+LAYOUT = ElementLayout(
     name="ancf_cable", node_coordinates=("x", "y", "z", "x'", "y'", "z'"), position=(0, 1, 2),
     slope=(3, 4, 5), nodes_per_element=2,
-    output_fields=("displacement", "velocity", "axial_strain", "curvature")))
+    output_fields=("displacement", "velocity", "axial_strain", "curvature"))
 
 
 #: coordinates of an element's Hermite centreline ``[r0, r0′, r1, r1′]``: what the sliding and
@@ -744,11 +744,6 @@ class BeamPart(NamedTuple):
     empty: np.ndarray                # (0, 12, 12): no tangent in the residual
 
 
-def beam_pattern(element_dofs: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The 12×12 block of every element."""
-    return [(d, d) for d in element_dofs]
-
-
 def pack_beams(element_dofs: np.ndarray, props: CableProperties, options: CableOptions,
                q_ref: np.ndarray, positions: np.ndarray) -> BeamPart:
     """``element_dofs`` (n_elem, 12), the section resultants per element, the reference
@@ -824,3 +819,30 @@ def beam_jacobian(bm, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
                 data[bm.pos[e, 12 * i + j]] += (cK * bm.stiff[e, i, j] + cC * bm.damp[e, i, j]
                                                 + cM * bm.mass[e, i, j])
     return kscale
+
+
+def section_properties(beams: list) -> CableProperties:
+    """Section resultants per element of ``beams`` (in order): EA, EI, ρA from each beam's
+    stiffness, stiffness-proportional damping, reference axial strain."""
+    cols: dict[str, list[np.ndarray]] = {f: [] for f in CableProperties._fields}
+    for beam in beams:
+        ne = beam.n_elem
+        st = beam.stiffness
+        values = {"length": np.asarray(beam.centerline.lengths, float),
+                  "axial_stiffness": st.axial_stiffness, "bending_stiffness": st.bending_stiffness,
+                  "mass_per_length": st.mass_per_length,
+                  "axial_damping": beam.damping * st.axial_stiffness,
+                  "bending_damping": beam.damping * st.bending_stiffness,
+                  "reference_axial_strain": beam.reference_axial_strain}
+        for f in CableProperties._fields:
+            cols[f].append(np.broadcast_to(np.asarray(values[f], float), (ne,)).copy())
+    return CableProperties(*(np.concatenate(cols[f]) if cols[f] else np.zeros(0)
+                             for f in CableProperties._fields))
+
+
+#: the cable as the assembler sees it (flexmbs.elements.layout.ElementType)
+ELEMENT_TYPES.register("ancf_cable", ElementType(
+    layout=LAYOUT, section_properties=section_properties,
+    reference_nodal_coordinates=reference_nodal_coordinates, gravity_force=gravity_force,
+    distributed_force=distributed_force, point_force=point_force_vector, pack=pack_beams,
+    strain_energy=strain_energy))

@@ -9,13 +9,15 @@ the layout; kernels read sizes from array shapes. No element size is written out
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..registry import Registry
 
-__all__ = ["ElementLayout", "ELEMENT_TYPES", "get_layout"]
+__all__ = ["ElementLayout", "ElementType", "ELEMENT_TYPES", "get_layout", "get_element_type"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -45,10 +47,37 @@ class ElementLayout:
         return np.array(out, dtype=np.int64)
 
 
+@dataclass(frozen=True, kw_only=True)
+class ElementType:
+    """An element module as the assembler sees it: its layout and its functions (all batched
+    over the elements of a group of beams sharing the element type and options)."""
+
+    layout: ElementLayout
+    #: beams -> section properties per element (concatenated in beam order)
+    section_properties: Callable[[list[Any]], Any]
+    #: (points, tangents) of a reference centreline -> nodal coordinates (n_nodes, node size)
+    reference_nodal_coordinates: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    #: (properties, g) -> generalized gravity forces (n_elem, element size)
+    gravity_force: Callable[[Any, np.ndarray], np.ndarray]
+    #: (properties, force per length) -> generalized forces (n_elem, element size)
+    distributed_force: Callable[[Any, np.ndarray], np.ndarray]
+    #: (xi, lengths, forces) -> generalized forces of point forces (n, element size)
+    point_force: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    #: (element dofs, properties, options, q_ref, matrix positions) -> the packed part
+    pack: Callable[..., Any]
+    #: (q_e, properties, rest data, options) -> strain energy per element
+    strain_energy: Callable[..., np.ndarray]
+
+
 #: element types by scenario name
-ELEMENT_TYPES: Registry[ElementLayout] = Registry("element")
+ELEMENT_TYPES: Registry[ElementType] = Registry("element")
+
+
+def get_element_type(name: str) -> ElementType:
+    """A registered element type (an unknown name lists the known ones)."""
+    return ELEMENT_TYPES.get(name)
 
 
 def get_layout(name: str) -> ElementLayout:
     """The layout of a registered element (an unknown name lists the known ones)."""
-    return ELEMENT_TYPES.get(name)
+    return ELEMENT_TYPES.get(name).layout

@@ -78,3 +78,34 @@ def test_centerline_points_of_a_line_and_an_arc():
     P = centerline_points(asm.q_ref, asm.element_dofs(arc), arc.centerline.lengths, e,
                           np.full(16, 0.5))
     assert np.abs(np.linalg.norm(P, axis=1) - 1.0).max() < 1e-6   # cubic Hermite on an arc
+
+
+def test_the_assembler_reaches_the_element_through_its_registered_type():
+    """A registered element type is what the assembler calls: a copy of the cable registered
+    under another name numbers, loads and evaluates the same model identically."""
+    from dataclasses import replace
+
+    from flexmbs.elements.layout import get_element_type
+
+    cable_type = get_element_type("ancf_cable")
+    ELEMENT_TYPES.register("cable_copy", replace(
+        cable_type, layout=replace(cable_type.layout, name="cable_copy")))
+    try:
+        results = []
+        for name in ("ancf_cable", "cable_copy"):
+            model = fm.Model(gravity=(0, 0, -9.81))
+            beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=4),
+                                  section=fm.CircularSection(1e-3),
+                                  material=fm.Material(E=1e9, rho=1e3))
+            beam.element = name
+            model.clamp(beam.first_node)
+            model.add_point_load((beam, 0.3), (0, 0, -0.1))
+            asm = Assembly(model)
+            assert asm.groups[0].element_type.layout.name == name
+            n, m = asm.n_coords, asm.n_mult
+            rq, rl = np.zeros(n), np.zeros(m)
+            asm.evaluate(asm.q_ref + 1e-4, np.zeros(n), None, np.zeros(m), 0.0, rq, rl)
+            results.append(rq)
+        np.testing.assert_array_equal(results[0], results[1])
+    finally:
+        ELEMENT_TYPES.unregister("cable_copy")
