@@ -30,8 +30,29 @@ def njit(*args: Any, **kwargs: Any) -> Any:
         return lambda f: f
     kwargs.setdefault("cache", True)
     if len(args) == 1 and callable(args[0]):
-        return _njit(**kwargs)(args[0])
-    return _njit(*args, **kwargs)
+        return _tolerate_stale_cache(_njit(**kwargs)(args[0]))
+    decorate = _njit(*args, **kwargs)
+    return lambda f: _tolerate_stale_cache(decorate(f))
+
+
+def _tolerate_stale_cache(dispatcher: Any) -> Any:
+    """An on-disk cache index written by an older flexmbs can name types of modules that no
+    longer exist (numba unpickles it before it checks the source stamp, and then fails with
+    ModuleNotFoundError): such an index is treated as empty, so the kernel is compiled again
+    and the cache rewritten."""
+    cache_file: Any = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    load = getattr(cache_file, "_load_index", None)
+    if load is None:   # no cache, or numba internals changed: nothing to guard
+        return dispatcher
+
+    def load_index() -> Any:
+        try:
+            return load()
+        except (ImportError, AttributeError, EOFError):
+            return {}
+
+    cache_file._load_index = load_index
+    return dispatcher
 
 
 #: Runtime booleans for compiled callers. A literal ``True``/``False`` (or int) argument of a call
