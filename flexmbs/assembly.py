@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 
 from . import driver
@@ -38,8 +37,10 @@ from .elements import ancf_cable as cable
 from .elements import rigid_body as rb
 from .elements.layout import ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
+from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_RESIDUAL, kernel
 from .loads import TimeFunction, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
+from .solvers._compiled import idle_run
 from .terms import FunctionTable, dynamic_mode, static_mode
 
 
@@ -97,6 +98,7 @@ class Assembly:
         self._pack()
         self.length_scale = self._length_scale()
         self.stiffness_scale = 0.0
+        self._idle_run = idle_run()
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -298,6 +300,8 @@ class Assembly:
                 raise ModelError("constraint equations with an all-zero Jacobian at the initial "
                                  f"configuration: {[labels[i] for i in np.flatnonzero(zero)]}")
             Jn = J / norms[:, None]
+            import scipy.linalg  # here: its import costs 0.2 s of every start-up
+
             _, R, perm = scipy.linalg.qr(Jn.T, mode="economic", pivoting=True)
             diag = np.abs(np.diag(R))
             rank = int(np.sum(diag > rank_tol * max(diag[0], 1e-300)))
@@ -553,15 +557,15 @@ class Assembly:
         q = np.ascontiguousarray(q, dtype=float)
         v = np.ascontiguousarray(v, dtype=float)
         lam = np.ascontiguousarray(lam, dtype=float)
-        scale, code = driver.residual(self.system, q, v, acc, lam, fv, mode, self._r)
+        scale, code = self._kernel(OP_RESIDUAL, q, v, acc, lam, fv, mode, self._r)
         if code:
             raise self.error_exception(code, q, t)
         r_q[:] = self._r[:n]
         r_lam[:] = self._r[n:]
         if matrix is not None:
             cM, cC, cK = matrix
-            kscale, code = driver.jacobian(self.system, q, v, acc, lam, fv, mode, float(cM),
-                                           float(cC), float(cK), self._data)
+            kscale, code = self._kernel(OP_JACOBIAN, q, v, acc, lam, fv, mode, self._data,
+                                        (cM, cC, cK))
             if code:
                 raise self.error_exception(code, q, t)
             if kscale > 0:
@@ -570,16 +574,26 @@ class Assembly:
             scale = max(scale, obj.evaluate(self, q, v, lam, t, r_q, matrix))
         return scale
 
+    def _kernel(self, op: int, q: np.ndarray, v: np.ndarray, qdd: np.ndarray, lam: np.ndarray,
+                fv: np.ndarray, mode: np.ndarray, out: np.ndarray,
+                coef: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> tuple[float, int]:
+        """One evaluation through :func:`flexmbs.kernel.kernel` (``out``: the residual for
+        ``OP_RESIDUAL``, the CSC data of the iteration matrix for ``OP_JACOBIAN``)."""
+        r, data = (self._r, out) if op == OP_JACOBIAN else (out, self._data)
+        value, code = kernel(op, self.system, q, v, qdd, lam, fv.reshape(1, -1), mode,
+                             np.array(coef, dtype=float), r, data, self._idle_run)
+        return float(value), int(code)
+
     def post_step(self, q: np.ndarray, v: np.ndarray, t: float) -> None:
         """Interaction state after a converged step (may raise :class:`SimulationStopped`)."""
         python = self.python_interactions()
         q = np.ascontiguousarray(q, dtype=float)
         v = np.ascontiguousarray(v, dtype=float)
         lam = np.zeros(self.n_mult)
-        _, code = driver.residual(self.system, q, v, np.zeros_like(q), lam,
-                                  self.functions.values(t), dynamic_mode(), self._r)
+        fv, mode = self.functions.values(t), dynamic_mode()
+        _, code = self._kernel(OP_RESIDUAL, q, v, np.zeros_like(q), lam, fv, mode, self._r)
         if not code:
-            code = driver.post_step(self.system, q, v)
+            _, code = self._kernel(OP_POST_STEP, q, v, q, lam, fv, mode, self._r)
         if code:
             raise self.error_exception(code, q, t)
         for obj in python:
@@ -615,8 +629,8 @@ class Assembly:
         q = np.ascontiguousarray(q, dtype=float)
         zeros = np.zeros(n)
         self.python_interactions()
-        driver.jacobian(self.system, q, zeros, zeros, np.zeros(self.n_mult),
-                        self.functions.values(t), dynamic_mode(), cM, 0.0, 0.0, data)
+        self._kernel(OP_JACOBIAN, q, zeros, zeros, np.zeros(self.n_mult),
+                     self.functions.values(t), dynamic_mode(), data, (cM, 0.0, 0.0))
         return sp.csc_matrix((data, self.matrix.indices, self.matrix.indptr), shape=self.matrix.shape)
 
     def constraint_jacobian(self, q: np.ndarray, t: float = 0.0) -> sp.csr_matrix:
@@ -631,8 +645,8 @@ class Assembly:
         zeros = np.zeros(n)
         self.python_interactions()
         r = np.zeros(self.n_total)
-        driver.residual(self.system, q, zeros, zeros, np.zeros(self.n_mult),
-                        self.functions.values(t), dynamic_mode(), r)
+        self._kernel(OP_RESIDUAL, q, zeros, zeros, np.zeros(self.n_mult),
+                     self.functions.values(t), dynamic_mode(), r)
         return r[n:].copy()
 
     def constraint_time_terms(self, q: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:

@@ -287,7 +287,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         else:
             out = Path(args.out) if args.out is not None else Path("out") / sc.name
         if not quiet:
-            from .solvers._compiled import kernels_cached
+            from .kernel import kernels_cached
 
             if not kernels_cached():
                 print("flexmbs: first run here: compiling the numba kernels (once, about 2-3 "

@@ -7,7 +7,9 @@ and the iteration matrix ``[[cM M + cC C + cK K, Phi_q^T], [Phi_q, 0]]`` into th
 of the assembler's fixed pattern. Every term is stated once, in the module that owns its
 physics (:mod:`flexmbs.terms`); this module only calls them in order. The Python Newton loop
 (through :meth:`flexmbs.assembly.Assembly.evaluate`) and the compiled one
-(:mod:`flexmbs.solvers._compiled`) both call these functions.
+(:mod:`flexmbs.solvers._compiled`) both call these functions, inlined into the one compiled
+entry :func:`flexmbs.kernel.kernel` (called from Python directly, e.g. by a test, each is
+compiled on its own).
 
 ``mode`` = ``[load factor, with inertia, with damping]`` (:mod:`flexmbs.terms`); ``fv`` holds
 the values of the model's time functions at the current time; ``error`` (int64, 3) receives
@@ -69,7 +71,7 @@ class SystemPart(NamedTuple):
     error: np.ndarray                # (3,) [code, joint, detail] of the last error
 
 
-@njit
+@njit(inline="always")
 def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     """``r = [r_q; r_lam]``; returns ``(scale, error code)``: the largest single force entering
     ``r_q`` (the force scale of the convergence test) and 0 or an ``ERR_*`` code."""
@@ -88,7 +90,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     return max(scale, sc), code
 
 
-@njit
+@njit(inline="always")
 def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """Iteration matrix into ``data``; returns ``(largest diagonal beam stiffness, error code)``."""
     for i in range(data.size):
@@ -105,7 +107,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     return kscale, code
 
 
-@njit
+@njit(inline="always")
 def post_step(sy, q, v):  # noqa: ANN001, ANN201
     """Interaction state after a converged step; must follow a :func:`residual` at this state
     (whose contact detection it reuses). Returns 0 or an ``ERR_*`` code."""

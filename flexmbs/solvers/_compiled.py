@@ -13,11 +13,13 @@ arithmetic and the convergence test are those of :mod:`flexmbs.solvers.newton` a
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .._jit import njit
 from ..driver import ERR_END_OF_BEAM, jacobian, post_step, residual
-from ._bordered import bordered_factorize, bordered_solve
+from ._bordered import BorderedFactor, bordered_factorize, bordered_solve
 from .newton import renew_jacobian
 
 STATUS_CONVERGED = 0   # all steps done
@@ -34,13 +36,48 @@ ERR_SINGULAR = 100
 INFO_SIZE = 16
 
 
-def kernels_cached() -> bool:
-    """Whether numba's on-disk cache holds a compiled :func:`alpha_run` (else the first run
-    compiles the kernels, a one-time cost of a few minutes)."""
-    try:
-        return bool(alpha_run._cache._cache_file._load_index())
-    except Exception:   # no numba, caching disabled, or numba internals changed  # noqa: BLE001
-        return True
+class AlphaRun(NamedTuple):
+    """Settings and work arrays of one :func:`alpha_run` call (its caller's whole state)."""
+
+    n_steps: int
+    h: float
+    am: float                   # generalized-alpha parameters (Arnold-Brüls convention)
+    af: float
+    gamma: float
+    beta: float
+    a: np.ndarray               # (n,) acceleration-like variable
+    backup: np.ndarray          # (5, n + m) step start, restored on failure
+    factor: BorderedFactor
+    rhs: np.ndarray             # (n + m,)
+    dx: np.ndarray              # (n + m,)
+    a_star: np.ndarray          # (n,)
+    max_it: int
+    full_newton: bool
+    rtol: float
+    ctol: float
+    floor_factor: float         # rounding floor of the force tolerance per unit stiffness
+    refresh_ratio: float
+    refresh_iterations: float
+    refresh_cost: float
+    keep_acceleration: bool
+    info: np.ndarray            # (INFO_SIZE,) float
+
+
+def idle_run() -> AlphaRun:
+    """An :class:`AlphaRun` of no steps, with the types of a real one: what callers that only
+    evaluate pass to :func:`flexmbs.kernel.kernel` (one signature, one compiled library)."""
+    z = np.zeros(0)
+    zi = np.zeros(0, np.int64)
+    factor = BorderedFactor(
+        n=0, n_band=0, n_border=0, kl=0, ku=0, perm=zi, border=zi, fill_pos=zi, fill_row=zi,
+        fill_col=zi, fill_ptr=zi, ab=np.zeros((2, 2), order="F"),   # 2x2: typed F-contiguous
+        piv=zi, xt=np.zeros((0, 0)), a_ba=np.zeros((0, 0)), s=np.zeros((0, 0)), piv_s=zi,
+        work_a=z, work_b=z)
+    return AlphaRun(n_steps=0, h=0.0, am=0.0, af=0.0, gamma=0.0, beta=0.0, a=z,
+                    backup=np.zeros((5, 0)), factor=factor, rhs=z, dx=z, a_star=z, max_it=0,
+                    full_newton=False, rtol=0.0, ctol=0.0, floor_factor=0.0, refresh_ratio=0.0,
+                    refresh_iterations=0.0, refresh_cost=0.0, keep_acceleration=False,
+                    info=np.zeros(INFO_SIZE))
 
 
 @njit
@@ -65,11 +102,10 @@ def _restore(backup, q, v, qdd, a, lam):  # noqa: ANN001, ANN202
         lam[i] = backup[4, i]
 
 
-@njit
-def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model, fv, factor,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-              data, r, rhs, dx, a_star, max_it, full_newton, rtol, ctol, floor_factor,
-              refresh_ratio, refresh_iterations, refresh_cost, keep_acceleration, mode, info):
-    """Up to ``n_steps`` gen-alpha steps of size ``h``: predictor, modified-Newton iterations
+@njit(inline="always")
+def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, ANN201, C901, PLR0912, PLR0915
+    """Up to ``run.n_steps`` gen-alpha steps of size ``run.h`` (settings and work arrays in
+    ``run``, an :class:`AlphaRun`): predictor, modified-Newton iterations
     (Jacobian refreshed in place when needed), corrector, post-step update; ``fv[k]`` holds
     the time-function values at the end of step k of this call. ``info`` (float, INFO_SIZE)
     carries between calls whether a factorisation is held (INFO_HAVE; set 0 when h changes),
@@ -78,7 +114,13 @@ def alpha_run(n_steps, h, am, af, gamma, beta, q, v, qdd, a, lam, backup, model,
     equation, steps completed, error code (``flexmbs.driver.ERR_*`` or ERR_SINGULAR).
     Refresh rules: within a step, when modified Newton contracts too slowly (:func:`_slow`);
     between steps, the renewal rule (:func:`flexmbs.solvers.newton.renew_jacobian`).
-    Returns a ``STATUS_*``."""
+    Returns a ``STATUS_*``.
+
+    Inlined into :func:`flexmbs.kernel.kernel`, the one compiled entry (a call with more than
+    30 arguments could not be inlined: Python passes them as ``*args``, hence ``run``)."""
+    (n_steps, h, am, af, gamma, beta, a, backup, factor, rhs, dx, a_star, max_it, full_newton,
+     rtol, ctol, floor_factor, refresh_ratio, refresh_iterations, refresh_cost,
+     keep_acceleration, info) = run
     n = q.size
     m = lam.size
     bp = (1 - am) / (h * h * beta * (1 - af))

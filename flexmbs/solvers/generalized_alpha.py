@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 from ..assembly import Assembly
 from ..errors import ConvergenceError, ModelError
+from ..kernel import OP_STEPS, kernel
 from .newton import Newton, NewtonOptions
 
 
@@ -158,6 +158,8 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
     asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
     rhs = np.concatenate([-r_q, asm.constraint_time_terms(q0, v0, t0)])
     try:
+        import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
+
         lu = spla.splu(asm.matrix.tocsc())
         x = lu.solve(rhs)
     except RuntimeError as exc:
@@ -232,7 +234,8 @@ class _StepFailure(Exception):
 
 class _CompiledStepper:
     """Fast path: whole runs of steps (up to the next output) execute in numba
-    (:func:`flexmbs.solvers._compiled.alpha_run`: the driver's residual, Jacobian refresh,
+    (:func:`flexmbs.solvers._compiled.alpha_run` through :func:`flexmbs.kernel.kernel`: the
+    driver's residual, Jacobian refresh,
     bordered banded LU, post-step update, all compiled); Python is re-entered only at output
     times and on failure. Applies when every term has a compiled form
     (:meth:`Assembly.compiled_reason` is empty)."""
@@ -245,10 +248,11 @@ class _CompiledStepper:
         self.cc = cc
         self.asm = asm
         self.o = options.newton
-        self.am, self.af, self.gamma, self.beta = options.parameters()
+        self.am, self.af, self.gamma, self.beta = (float(x) for x in options.parameters())
         self.keep_acceleration = options.predictor == "constant_acceleration"
         self.state = state
         self.mode = dynamic_mode()
+        self._coef = np.zeros(3)
         n, m = asm.n_coords, asm.n_mult
         self.r = np.zeros(n + m)
         self.rhs = np.zeros(n + m)
@@ -282,14 +286,19 @@ class _CompiledStepper:
     def advance(self, h: float, n_steps: int, t0: float) -> int:
         asm, st, o, cc = self.asm, self.state, self.o, self.cc
         fv = asm.functions.table(t0, h, n_steps)
-        status = cc.alpha_run(
-            int(n_steps), float(h), self.am, self.af, self.gamma, self.beta, st.q, st.v, st.qdd, st.a,
-            st.lam, self.backup, asm.system, fv, self.lu.factor, self.data, self.r, self.rhs,
-            self.dx, self.a_star, int(o.max_iterations), not o.modified,
-            float(o.relative_tolerance), float(o.constraint_tolerance * asm.length_scale),
-            float(o.roundoff_factor * 2.2e-16 * asm.length_scale), float(o.refresh_ratio),
-            float(o.refresh_iterations), float(o.refresh_cost), self.keep_acceleration, self.mode,
-            self.info)
+        run = cc.AlphaRun(
+            n_steps=int(n_steps), h=float(h), am=self.am, af=self.af, gamma=self.gamma,
+            beta=self.beta, a=st.a, backup=self.backup, factor=self.lu.factor, rhs=self.rhs,
+            dx=self.dx, a_star=self.a_star, max_it=int(o.max_iterations),
+            full_newton=not o.modified, rtol=float(o.relative_tolerance),
+            ctol=float(o.constraint_tolerance * asm.length_scale),
+            floor_factor=float(o.roundoff_factor * 2.2e-16 * asm.length_scale),
+            refresh_ratio=float(o.refresh_ratio), refresh_iterations=float(o.refresh_iterations),
+            refresh_cost=float(o.refresh_cost), keep_acceleration=self.keep_acceleration,
+            info=self.info)
+        value, _ = kernel(OP_STEPS, asm.system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
+                          self._coef, self.r, self.data, run)
+        status = int(value)
         asm.stiffness_scale = float(self.info[cc.INFO_KSCALE])
         done = int(self.info[cc.INFO_DONE])
         if status == cc.STATUS_CONVERGED:

@@ -10,14 +10,16 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .._jit import njit
 from ..errors import ConvergenceError
+
+if TYPE_CHECKING:
+    import scipy.sparse.linalg as spla
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -128,6 +130,8 @@ class Newton:
 
     def _factorize(self, A: sp.csc_matrix) -> None:
         with warnings.catch_warnings():
+            import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
+
             warnings.simplefilter("error", spla.MatrixRankWarning)
             try:
                 self.lu = spla.splu(A, permc_spec="COLAMD", options={"SymmetricMode": False})

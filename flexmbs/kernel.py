@@ -1,0 +1,55 @@
+"""The one compiled entry point: every compiled evaluation of a system goes through :func:`kernel`.
+
+numba compiles each function called from Python into one machine-code library holding its
+whole call tree, linked in and optimised again. With the residual, the iteration matrix, the
+post-step update (called from the Python Newton loop) and the generalized-α step loop as four
+such entries, the code of every term was compiled twice, into the Python path's libraries and
+into the step loop's. As one entry, with those four inlined at numba's IR level, it is compiled
+once and loaded once (docs/design-notes.md, "Compile time"). The kernels themselves stay where
+their physics is: :mod:`flexmbs.driver` sums the owners' terms, :mod:`flexmbs.solvers._compiled`
+holds the step loop.
+
+``op`` selects the work:
+
+- ``OP_RESIDUAL``: ``r = [r_q; r_lam]`` at ``fv[0]``; returns ``(force scale, error code)``;
+- ``OP_JACOBIAN``: the iteration matrix ``cM M + cC C + cK K`` (``coef = [cM, cC, cK]``) with
+  its constraint borders into ``data``; returns ``(stiffness scale, error code)``;
+- ``OP_POST_STEP``: interaction state after a converged step (after an ``OP_RESIDUAL`` at the
+  same state); returns ``(0, error code)``;
+- ``OP_STEPS``: up to ``run.n_steps`` generalized-α steps (``fv[k]`` = time-function values at
+  the end of step k); returns ``(status, 0)``.
+
+Callers that only evaluate pass :func:`~flexmbs.solvers._compiled.idle_run` as ``run`` and a
+one-row ``fv``, so that every call has the same argument types (one signature, one library).
+"""
+
+from __future__ import annotations
+
+from ._jit import njit
+from .driver import jacobian, post_step, residual
+from .solvers._compiled import alpha_run
+
+__all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "kernel", "kernels_cached"]
+
+OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP = range(4)
+
+
+@njit
+def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: ANN001, ANN201
+    """See the module docstring."""
+    if op == OP_RESIDUAL:
+        return residual(system, q, v, qdd, lam, fv[0], mode, r)
+    if op == OP_JACOBIAN:
+        return jacobian(system, q, v, qdd, lam, fv[0], mode, coef[0], coef[1], coef[2], data)
+    if op == OP_POST_STEP:
+        return 0.0, post_step(system, q, v)
+    return float(alpha_run(system, q, v, qdd, lam, fv, mode, r, data, run)), 0
+
+
+def kernels_cached() -> bool:
+    """Whether numba's on-disk cache holds a compiled :func:`kernel` (else the first run
+    compiles it, a one-time cost of about a minute)."""
+    try:
+        return bool(kernel._cache._cache_file._load_index())
+    except Exception:   # no numba, caching disabled, or numba internals changed  # noqa: BLE001
+        return True
