@@ -50,7 +50,7 @@ __all__ = [
 LAYOUT = ElementLayout(
     name="ancf_cable", node_coordinates=("x", "y", "z", "x'", "y'", "z'"), position=(0, 1, 2),
     slope=(3, 4, 5), nodes_per_element=2,
-    output_fields=("displacement", "velocity", "axial_strain", "curvature"))
+    output_fields=("axial_strain", "curvature"))
 
 
 #: coordinates of an element's Hermite centreline ``[r0, r0′, r1, r1′]``: what the sliding and
@@ -700,6 +700,14 @@ def strain_energy(q_e: np.ndarray, props: CableProperties, rest: CableRest,
     return U + 0.5 * EI * np.sum(rest.bending_weight * dk2, axis=1)
 
 
+def output_fields(q_e: np.ndarray, rest: CableRest, options: CableOptions,
+                  xi: np.ndarray) -> dict[str, np.ndarray]:
+    """The cable's output fields at ξ: ``axial_strain`` and ``curvature`` (vector) of
+    :func:`axial_strain_and_curvature`."""
+    eps, K = axial_strain_and_curvature(q_e, rest, options, xi)
+    return {"axial_strain": eps, "curvature": K}
+
+
 def axial_strain_and_curvature(q_e: np.ndarray, rest: CableRest, options: CableOptions,
                                xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Axial strain and curvature vector at ξ (FORMULATION I §1.3), for output.
@@ -845,4 +853,4 @@ ELEMENT_TYPES.register("ancf_cable", ElementType(
     layout=LAYOUT, section_properties=section_properties,
     reference_nodal_coordinates=reference_nodal_coordinates, gravity_force=gravity_force,
     distributed_force=distributed_force, point_force=point_force_vector, pack=pack_beams,
-    strain_energy=strain_energy))
+    strain_energy=strain_energy, output_fields=output_fields))

@@ -27,6 +27,8 @@ class ElementLayout:
     position: tuple[int, int, int]      #: nodal indices of the centreline point r
     slope: tuple[int, int, int]         #: nodal indices of the centreline slope r′
     nodes_per_element: int = 2
+    #: names of the element's own output fields (VTU point data beside the displacement and
+    #: velocity every beam has), the keys :attr:`ElementType.output_fields` returns
     output_fields: tuple[str, ...] = ()
 
     @property
@@ -67,6 +69,10 @@ class ElementType:
     pack: Callable[..., Any]
     #: (q_e, properties, rest data, options) -> strain energy per element
     strain_energy: Callable[..., np.ndarray]
+    #: (q_e, rest data, options, xi) -> output fields at the sample points ξ of every element,
+    #: by name: (n_elem, m) scalars or (n_elem, m, 3) vectors (VTU point data, e.g. the
+    #: cable's ``axial_strain`` and ``curvature``)
+    output_fields: Callable[..., dict[str, np.ndarray]]
 
 
 #: element types by scenario name

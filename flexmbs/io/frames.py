@@ -30,7 +30,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -97,6 +97,7 @@ class FrameBuilder:
             self.beams.append(_BeamSampler(bi, dofs, S, ref, cum[e] + xi_tab[k] * L[e],
                                            e * (spe + 1) + k, seg.astype(np.int64), gi, sl, xi_tab))
         # per-frame constants: sliced reference data, element dofs, radius and cell arrays
+        self._field_names = [grp.element_type.layout.output_fields for grp in asm.groups]
         self._beam_const = []
         for b in self.beams:
             beam = model.beams[b.index]
@@ -115,30 +116,32 @@ class FrameBuilder:
             ref = q0[:3] + pts @ rb.rotation_matrix(q0[3:]).T
             self.bodies.append((bi, d, pts, tri, ref))
 
-    def _beam_rest(self, b: _BeamSampler) -> tuple[cable.CableRest, cable.CableOptions]:
+    def _beam_rest(self, b: _BeamSampler) -> tuple[Any, Any, Any]:
+        """(the element type's output function, the beam's slice of its group's rest data,
+        the group's options)."""
         grp = self.asm.groups[b.group]
-        rest: cable.CableRest = grp.rest  # type: ignore[assignment]
-        n_grp = rest.length.shape[0]
+        rest: Any = grp.rest
+        n_grp = int(np.asarray(grp.dofs).shape[0])
         sliced = {f: (v[b.slc] if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == n_grp
                       and f not in ("axial_xi", "bending_xi") else v)
                   for f, v in rest._asdict().items()}
-        return type(rest)(**sliced), grp.options
+        return grp.element_type.output_fields, type(rest)(**sliced), grp.options
 
     def beam_mesh(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         x = cable.interpolate(b.S, b.dofs, q)
         vel = cable.interpolate(b.S, b.dofs, v)
-        (rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
-        eps, K = cable.axial_strain_and_curvature(q[elem_dofs], rest, options, b.xi)
-        eps = eps.reshape(-1)[b.flat]
-        K = K.reshape(-1, 3)[b.flat]
-        return VTUMesh(
-            x, [(VTK_LINE, b.segments)],
-            point_data={"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc,
-                        "axial_strain": eps, "curvature": K,
-                        "curvature_magnitude": np.linalg.norm(K, axis=1),
-                        # section radius (for tubes: ParaView Tube "vary radius by scalar")
-                        "radius": radius},
-            cell_data=cells)
+        (fields_of, rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
+        point_data = {"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc}
+        fields = fields_of(q[elem_dofs], rest, options, b.xi)
+        for name in self._field_names[b.group]:
+            values = fields[name]
+            n_elem, m = values.shape[:2]
+            point_data[name] = values.reshape((n_elem * m, *values.shape[2:]))[b.flat]
+        if "curvature" in point_data:
+            point_data["curvature_magnitude"] = np.linalg.norm(point_data["curvature"], axis=1)
+        # section radius (for tubes: ParaView Tube "vary radius by scalar")
+        point_data["radius"] = radius
+        return VTUMesh(x, [(VTK_LINE, b.segments)], point_data=point_data, cell_data=cells)
 
     def body_mesh(self, i: int, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         bi, d, pts, tri, ref = self.bodies[i]

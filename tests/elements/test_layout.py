@@ -109,3 +109,46 @@ def test_the_assembler_reaches_the_element_through_its_registered_type():
         np.testing.assert_array_equal(results[0], results[1])
     finally:
         ELEMENT_TYPES.unregister("cable_copy")
+
+
+def test_vtu_frames_write_the_output_fields_the_element_type_declares():
+    """The frame builder asks the beam's element type for its fields: a registered type that
+    adds a field (here the element's mean ξ, known in advance) gets it written per sample."""
+    from dataclasses import replace
+
+    from flexmbs.elements.layout import get_element_type
+    from flexmbs.io.frames import build_frame
+    from flexmbs.solvers.generalized_alpha import State
+
+    cable_type = get_element_type("ancf_cable")
+
+    def fields(q_e: np.ndarray, rest: object, options: object, xi: np.ndarray) -> dict:
+        out = cable_type.output_fields(q_e, rest, options, xi)
+        out["sample_xi"] = np.broadcast_to(xi, (q_e.shape[0], xi.size)).copy()
+        return out
+
+    layout = replace(cable_type.layout, name="cable_fields",
+                     output_fields=(*cable_type.layout.output_fields, "sample_xi"))
+    ELEMENT_TYPES.register("cable_fields", replace(cable_type, layout=layout,
+                                                   output_fields=fields))
+    try:
+        model = fm.Model()
+        beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2),
+                              section=fm.CircularSection(1e-3), material=fm.Material(E=1e9, rho=1e3))
+        beam.element = "cable_fields"
+        model.clamp(beam.first_node)
+        asm = Assembly(model)
+        n, m = asm.n_coords, asm.n_mult
+        state = State(t=0.0, q=asm.q_ref.copy(), v=np.zeros(n), qdd=np.zeros(n), a=np.zeros(n),
+                      lam=np.zeros(m))
+        mesh = build_frame(asm, state, samples_per_element=4)
+        xi = mesh.point_data["sample_xi"]
+        arc = mesh.point_data["arc_length"]
+        # sample k of element e sits at arc length (e + ξ) L_e, L_e = 0.5 (the element ends
+        # are shared, so an end point may carry ξ = 0 of the next element or ξ = 1)
+        frac = (arc / 0.5) % 1.0
+        ok = np.isclose(xi, frac, atol=1e-12) | (np.isclose(xi, 1.0) & np.isclose(frac, 0.0))
+        assert ok.all()
+        np.testing.assert_allclose(mesh.point_data["axial_strain"], 0.0, atol=1e-12)
+    finally:
+        ELEMENT_TYPES.unregister("cable_fields")
