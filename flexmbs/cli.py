@@ -290,8 +290,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             from .kernel import kernels_cached
 
             if not kernels_cached():
-                print("flexmbs: first run here: compiling the numba kernels (once, about 2-3 "
-                      "minutes; cached for later runs)", file=sys.stderr, flush=True)
+                print("flexmbs: first run here: compiling the numba kernels (once, about a "
+                      "minute; cached for later runs)", file=sys.stderr, flush=True)
         metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": _overrides(args),
                     "integrator_name": sim.integrator, "initial_static": sim.initial_static}
         if sim.integrator == "static":
