@@ -311,6 +311,21 @@ def quartic_real_roots(c4, c3, c2, c1, c0, out):  # noqa: ANN001, ANN201
 
 
 @njit
+def circle_boundary(R, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+    """Wall point ``Y(ψ) = R(cos ψ, sin ψ)`` of a circular section and its first and second
+    ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,) (section coordinates; compiled boundary of
+    :class:`CircleSection`, what the exact contact tangent reads)."""
+    c = math.cos(psi)
+    s = math.sin(psi)
+    Y[0] = R * c
+    Y[1] = R * s
+    Yp[0] = -R * s
+    Yp[1] = R * c
+    Ypp[0] = -R * c
+    Ypp[1] = -R * s
+
+
+@njit
 def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (FORMULATION II §3).
 

@@ -1,0 +1,411 @@
+"""Exact linearisation of one detected clearance contact (issue "exact linearisation"; FORMULATION
+II §2–§5 differentiated, implicit-function theorem on the detection's own equations).
+
+The residual of a contact is that of :func:`flexmbs.contact._detect.clearance_forces`: in hole
+section k the beam axis crosses the section plane at ξ_I (element e_I), its section is the
+ellipse ``X(φ) = c + a cos φ e_a + b sin φ e_b`` (in-plane centre c, major axis e_a, a =
+r_b|r′|/|n·r′|, b = r_b); a stationary point φ of ``½|X|²`` (``F(φ) = X·X_φ = 0``) gives the
+wall angle ψ = atan2(X_z, X_y) and the hole point ``Q = o + R(cos ψ e_y + sin ψ e_z)``; Q is
+held as body coordinates ``u_Q = Aᵀ(Q − r_H)`` and the force acts between the body point
+``r_H + A u_Q`` and its closest centreline point P (ξ_P on element e_P):
+``g = |Q − P| − r_b``, ``F_H = f(−g, −ġ) n + F_t``, generalized force ``Q_c = Wᵀ F_H`` with
+``W = [I, 2T(u_Q)p, −S(ξ_P)]``.
+
+Every quantity is carried with its derivative (forward mode) with respect to the local
+coordinates ``[r_H, p (7), e_I (12), e_P (12)]``; the implicit unknowns ξ_I, φ and ξ_P get
+theirs from the implicit-function theorem on the crossing, stationarity and closest-point
+equations. ``A(p)`` is the homogeneous rotation (``A Aᵀ = |p|⁴ I``), differentiated as such, so
+the tangent is exact also off the Euler-parameter constraint (Newton iterates). The result is
+the exact ``K = −∂Q_c/∂q`` and ``C = −∂Q_c/∂q̇`` of the residual as implemented (the same
+function, evaluated in the same order), which the finite-difference tests confirm.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import njit
+from ..elements.ancf_cable import CENTERLINE_SIZE, shape_xi
+from ..elements.rigid_body import point_tensor_of, rotation
+from .laws import coulomb_force, law_force
+from .pair import N_LOCAL
+
+__all__ = ["N_EXT", "I_OFF", "P_OFF", "contact_tangent"]
+
+#: local coordinates of the exact tangent's columns: body (7), crossing element e_I, element e_P
+N_EXT = 7 + 2 * CENTERLINE_SIZE
+I_OFF = 7
+P_OFF = 7 + CENTERLINE_SIZE
+
+
+@njit
+def _body_basis():  # noqa: ANN202
+    """``T(e_j)`` (3, 3, 4, 4): the point tensors of the body's unit vectors (T is linear in u)."""
+    Te = np.zeros((3, 3, 4, 4))
+    u = np.zeros(3)
+    for j in range(3):
+        u[:] = 0.0
+        u[j] = 1.0
+        Te[j] = point_tensor_of(u)
+    return Te
+
+
+@njit
+def _t_times(Te, u, x):  # noqa: ANN001, ANN202
+    """``2 T(u) x`` (3, 4) = ∂(A(p)u)/∂p at p = x (with x = p) or the velocity term (x = ṗ)."""
+    out = np.zeros((3, 4))
+    for k in range(3):
+        for i in range(4):
+            acc = 0.0
+            for j in range(3):
+                if u[j] != 0.0:
+                    for m in range(4):
+                        acc += u[j] * Te[j, k, i, m] * x[m]
+            out[k, i] = 2.0 * acc
+    return out
+
+
+@njit
+def _d_dot(a, Da, b, Db, out):  # noqa: ANN001, ANN202
+    """``out = D(a·b) = Daᵀ b + aᵀ Db`` (vectors a, b (3,), derivatives (3, N_EXT))."""
+    for j in range(out.size):
+        out[j] = (Da[0, j] * b[0] + Da[1, j] * b[1] + Da[2, j] * b[2]
+                  + a[0] * Db[0, j] + a[1] * Db[1, j] + a[2] * Db[2, j])
+
+
+@njit
+def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law, mu,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+                    eps_v, approach_velocity, Qc, K, C):
+    """Force and exact tangent of one detected contact.
+
+    ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin; ``qI``
+    (12), ``LI``, ``xiI``: crossing element, its length and the crossing; ``qP``, ``vP``,
+    ``LP``, ``xiP``: the element of the closest point and ξ_P (converged); ``phi``: the
+    ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
+    section at the contact's ψ and its first and second ψ-derivatives (section coordinates, from
+    the hole shape's boundary kernel, e.g. :func:`flexmbs.contact.sections.circle_boundary`);
+    ``law``, ``mu``, ``eps_v``, ``approach_velocity`` as in
+    :func:`flexmbs.contact.pair.contact_force`. Writes ``Qc`` (N_LOCAL) on ``[r_H, p, e_P]``,
+    ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P] and ``C`` (N_LOCAL, N_LOCAL) =
+    −∂Q_c/∂[ṙ_H, ṗ, ė_P]. Returns ``(g, ġ, f_N)``.
+    """
+    NX = N_EXT
+    p = qb[3:7]
+    A = rotation(p)
+    Te = _body_basis()
+    # body basis n, e_y, e_z (columns of A) and their derivatives 2T(e_j)p
+    nvec = A[:, 0].copy()
+    ey = A[:, 1].copy()
+    ez = A[:, 2].copy()
+    Dn = np.zeros((3, NX))
+    Dey = np.zeros((3, NX))
+    Dez = np.zeros((3, NX))
+    unit = np.zeros(3)
+    for j in range(3):
+        unit[:] = 0.0
+        unit[j] = 1.0
+        Bj = _t_times(Te, unit, p)
+        for c in range(3):
+            for i in range(4):
+                if j == 0:
+                    Dn[c, 3 + i] = Bj[c, i]
+                elif j == 1:
+                    Dey[c, 3 + i] = Bj[c, i]
+                else:
+                    Dez[c, 3 + i] = Bj[c, i]
+    # section origin o = r_H + A u_o
+    o = np.empty(3)
+    Do = np.zeros((3, NX))
+    Bo = _t_times(Te, u_o, p)
+    for c in range(3):
+        o[c] = qb[c] + A[c, 0] * u_o[0] + A[c, 1] * u_o[1] + A[c, 2] * u_o[2]
+        Do[c, c] = 1.0
+        for i in range(4):
+            Do[c, 3 + i] = Bo[c, i]
+
+    # ---- crossing: h(ξ_I) = n·(r_I − o) = 0
+    SI, dSI, ddSI = shape_xi(xiI, LI)
+    rI = np.zeros(3)
+    rxI = np.zeros(3)
+    rxxI = np.zeros(3)
+    for m in range(4):
+        for c in range(3):
+            rI[c] += SI[m] * qI[3 * m + c]
+            rxI[c] += dSI[m] * qI[3 * m + c]
+            rxxI[c] += ddSI[m] * qI[3 * m + c]
+    d = rI - o
+    DrI = np.zeros((3, NX))     # partial (at fixed ξ_I) first
+    DrxI = np.zeros((3, NX))
+    for m in range(4):
+        for c in range(3):
+            DrI[c, I_OFF + 3 * m + c] = SI[m]
+            DrxI[c, I_OFF + 3 * m + c] = dSI[m]
+    Dd = DrI - Do
+    Dh = np.empty(NX)
+    _d_dot(nvec, Dn, d, Dd, Dh)
+    hx = nvec[0] * rxI[0] + nvec[1] * rxI[1] + nvec[2] * rxI[2]
+    DxiI = -Dh / hx
+    for c in range(3):
+        for j in range(NX):
+            DrI[c, j] += rxI[c] * DxiI[j]
+            DrxI[c, j] += rxxI[c] * DxiI[j]
+            Dd[c, j] = DrI[c, j] - Do[c, j]
+    # ---- ellipse in section coordinates: c = (d·e_y, d·e_z), e_a ∥ (r′·e_y, r′·e_z),
+    # a = r_b |r′| / |n·r′| (section_state / section_ellipse, literally)
+    cy = d[0] * ey[0] + d[1] * ey[1] + d[2] * ey[2]
+    cz = d[0] * ez[0] + d[1] * ez[1] + d[2] * ez[2]
+    Dcy = np.empty(NX)
+    Dcz = np.empty(NX)
+    _d_dot(d, Dd, ey, Dey, Dcy)
+    _d_dot(d, Dd, ez, Dez, Dcz)
+    ty = rxI[0] * ey[0] + rxI[1] * ey[1] + rxI[2] * ey[2]
+    tz = rxI[0] * ez[0] + rxI[1] * ez[1] + rxI[2] * ez[2]
+    Dty = np.empty(NX)
+    Dtz = np.empty(NX)
+    Dtn = np.empty(NX)
+    _d_dot(rxI, DrxI, ey, Dey, Dty)
+    _d_dot(rxI, DrxI, ez, Dez, Dtz)
+    _d_dot(rxI, DrxI, nvec, Dn, Dtn)
+    tn = hx
+    tp = math.hypot(ty, tz)
+    eax = 1.0
+    eay = 0.0
+    Deax = np.zeros(NX)
+    Deay = np.zeros(NX)
+    if tp > 0.0:
+        eax = ty / tp
+        eay = tz / tp
+        for j in range(NX):
+            Dtp = (ty * Dty[j] + tz * Dtz[j]) / tp
+            Deax[j] = (Dty[j] - eax * Dtp) / tp
+            Deay[j] = (Dtz[j] - eay * Dtp) / tp
+    lrx = math.sqrt(rxI[0] * rxI[0] + rxI[1] * rxI[1] + rxI[2] * rxI[2])
+    b = r_b
+    a = r_b * lrx / abs(tn)
+    Da = np.zeros(NX)
+    if a < b:
+        a = b           # clipped (section_state): a constant there
+    else:
+        sg = 1.0 if tn > 0.0 else -1.0
+        for j in range(NX):
+            Dlrx = (rxI[0] * DrxI[0, j] + rxI[1] * DrxI[1, j] + rxI[2] * DrxI[2, j]) / lrx
+            Da[j] = a * (Dlrx / lrx - sg * Dtn[j] / abs(tn))
+    # ---- common normal (FORMULATION II §3, §6): the ellipse point X(φ) and the wall point
+    # Y(ψ) (section coordinates) lie on one normal of the wall, and the ellipse's tangent is
+    # normal to it: E1 = (X − Y) × N = 0, E2 = X_φ·N = 0, N = (Y_ψ,z, −Y_ψ,y). For a circle
+    # this is X ∥ Y with X·X_φ = 0, i.e. ψ = atan2(X) at a stationary point of ½|X|².
+    # X = c + a cosφ e_a + b sinφ e_b, e_b = (−e_ay, e_ax)
+    cf = math.cos(phi)
+    sf = math.sin(phi)
+    X0 = cy + a * cf * eax - b * sf * eay
+    X1 = cz + a * cf * eay + b * sf * eax
+    Xp0 = -a * sf * eax - b * cf * eay
+    Xp1 = -a * sf * eay + b * cf * eax
+    Xpp0 = -a * cf * eax + b * sf * eay
+    Xpp1 = -a * cf * eay - b * sf * eax
+    N0 = Yp[1]
+    N1 = -Yp[0]
+    Nq0 = Ypp[1]
+    Nq1 = -Ypp[0]
+    J11 = Xp0 * N1 - Xp1 * N0
+    J12 = (Yp[0] * Yp[0] + Yp[1] * Yp[1]) + (X0 - Y[0]) * Nq1 - (X1 - Y[1]) * Nq0
+    J21 = Xpp0 * N0 + Xpp1 * N1
+    J22 = Xp0 * Nq0 + Xp1 * Nq1
+    det = J11 * J22 - J12 * J21
+    Qd = np.empty(3)
+    DQd = np.empty((3, NX))
+    for j in range(NX):
+        dX0 = Dcy[j] + Da[j] * cf * eax + a * cf * Deax[j] - b * sf * Deay[j]
+        dX1 = Dcz[j] + Da[j] * cf * eay + a * cf * Deay[j] + b * sf * Deax[j]
+        dXp0 = -Da[j] * sf * eax - a * sf * Deax[j] - b * cf * Deay[j]
+        dXp1 = -Da[j] * sf * eay - a * sf * Deay[j] + b * cf * Deax[j]
+        dE1 = dX0 * N1 - dX1 * N0
+        dE2 = dXp0 * N0 + dXp1 * N1
+        dpsi = -(J11 * dE2 - J21 * dE1) / det
+        for c in range(3):
+            DQd[c, j] = (Do[c, j] + Y[0] * Dey[c, j] + Y[1] * Dez[c, j]
+                         + (Yp[0] * ey[c] + Yp[1] * ez[c]) * dpsi)
+    for c in range(3):
+        Qd[c] = o[c] + Y[0] * ey[c] + Y[1] * ez[c]
+    # ---- body coordinates u_Q = Aᵀ(Q − r_H) and the body point Q = r_H + A u_Q it acts at
+    w = Qd - qb[0:3]
+    uQ = np.empty(3)
+    DuQ = np.zeros((3, NX))
+    for jj in range(3):
+        col = nvec if jj == 0 else (ey if jj == 1 else ez)
+        Dcol = Dn if jj == 0 else (Dey if jj == 1 else Dez)
+        uQ[jj] = col[0] * w[0] + col[1] * w[1] + col[2] * w[2]
+        for j in range(NX):
+            acc = 0.0
+            for c in range(3):
+                dw = DQd[c, j] - (1.0 if j == c else 0.0)
+                acc += Dcol[c, j] * w[c] + col[c] * dw
+            DuQ[jj, j] = acc
+    Bp = _t_times(Te, uQ, p)            # W_p = 2T(u_Q)p
+    Q = np.empty(3)
+    DQ = np.zeros((3, NX))
+    for c in range(3):
+        Q[c] = qb[c] + A[c, 0] * uQ[0] + A[c, 1] * uQ[1] + A[c, 2] * uQ[2]
+        DQ[c, c] = 1.0
+        for i in range(4):
+            DQ[c, 3 + i] += Bp[c, i]
+        for j in range(NX):
+            DQ[c, j] += A[c, 0] * DuQ[0, j] + A[c, 1] * DuQ[1, j] + A[c, 2] * DuQ[2, j]
+    # ---- closest point: G(ξ) = (r(ξ) − Q)·r′(ξ) = 0 on e_P
+    SP, dSP, ddSP = shape_xi(xiP, LP)
+    P = np.zeros(3)
+    rxP = np.zeros(3)
+    rxxP = np.zeros(3)
+    vPt = np.zeros(3)      # S(ξ_P) ė_P
+    vPx = np.zeros(3)      # S′(ξ_P) ė_P
+    for m in range(4):
+        for c in range(3):
+            P[c] += SP[m] * qP[3 * m + c]
+            rxP[c] += dSP[m] * qP[3 * m + c]
+            rxxP[c] += ddSP[m] * qP[3 * m + c]
+            vPt[c] += SP[m] * vP[3 * m + c]
+            vPx[c] += dSP[m] * vP[3 * m + c]
+    dPQ = P - Q
+    Gx = (rxP[0] * rxP[0] + rxP[1] * rxP[1] + rxP[2] * rxP[2]
+          + dPQ[0] * rxxP[0] + dPQ[1] * rxxP[1] + dPQ[2] * rxxP[2])
+    DxiP = np.empty(NX)
+    for j in range(NX):
+        acc = 0.0
+        for c in range(3):
+            acc -= DQ[c, j] * rxP[c]
+        DxiP[j] = acc
+    for m in range(4):
+        for c in range(3):
+            DxiP[P_OFF + 3 * m + c] += SP[m] * rxP[c] + dPQ[c] * dSP[m]
+    for j in range(NX):
+        DxiP[j] = -DxiP[j] / Gx
+    # ---- gap, normal
+    u = Q - P
+    ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    nc = u / ell
+    g = ell - r_b
+    Du = DQ.copy()
+    for j in range(NX):
+        for c in range(3):
+            Du[c, j] -= rxP[c] * DxiP[j]
+    for m in range(4):
+        for c in range(3):
+            Du[c, P_OFF + 3 * m + c] -= SP[m]
+    Dg = np.empty(NX)
+    Dnc = np.empty((3, NX))
+    for j in range(NX):
+        Dg[j] = nc[0] * Du[0, j] + nc[1] * Du[1, j] + nc[2] * Du[2, j]
+        for c in range(3):
+            Dnc[c, j] = (Du[c, j] - nc[c] * Dg[j]) / ell
+    # ---- relative velocity v_Q − v_P = W q̇_c and its q-derivative
+    Bv = _t_times(Te, uQ, vb[3:7])      # ∂(2T(u_Q)p ṗ)/∂p = 2T(u_Q)ṗ
+    vrel = np.empty(3)
+    for c in range(3):
+        acc = vb[c] - vPt[c]
+        for i in range(4):
+            acc += Bp[c, i] * vb[3 + i]
+        vrel[c] = acc
+    Dvrel = np.zeros((3, NX))
+    # through u_Q: 2 pᵀ T_k(e_jj) ṗ per unit vector
+    for jj in range(3):
+        unit[:] = 0.0
+        unit[jj] = 1.0
+        Bj = _t_times(Te, unit, p)
+        for c in range(3):
+            s = 0.0
+            for i in range(4):
+                s += Bj[c, i] * vb[3 + i]
+            for j in range(NX):
+                Dvrel[c, j] += s * DuQ[jj, j]
+    for c in range(3):
+        for i in range(4):
+            Dvrel[c, 3 + i] += Bv[c, i]
+        for j in range(NX):
+            Dvrel[c, j] -= vPx[c] * DxiP[j]
+    gdot = nc[0] * vrel[0] + nc[1] * vrel[1] + nc[2] * vrel[2]
+    Dgdot = np.empty(NX)
+    _d_dot(nc, Dnc, vrel, Dvrel, Dgdot)
+    # W (3, N_LOCAL) on [r_H, p, e_P] and ∂ġ/∂q̇ = nᵀW
+    W = np.zeros((3, N_LOCAL))
+    for c in range(3):
+        W[c, c] = 1.0
+        for i in range(4):
+            W[c, 3 + i] = Bp[c, i]
+        for m in range(4):
+            W[c, 7 + 3 * m + c] = -SP[m]
+    Bn = np.empty(N_LOCAL)
+    for j in range(N_LOCAL):
+        Bn[j] = nc[0] * W[0, j] + nc[1] * W[1, j] + nc[2] * W[2, j]
+    # ---- force F_H = f n + F_t
+    f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
+    Df = np.empty(NX)
+    for j in range(NX):
+        Df[j] = -kt * Dg[j] - ct * Dgdot[j]
+    F = np.empty(3)
+    DF = np.empty((3, NX))
+    dFv = np.zeros((3, N_LOCAL))     # ∂F_H/∂q̇_c
+    for c in range(3):
+        F[c] = f * nc[c]
+        for j in range(NX):
+            DF[c, j] = Df[j] * nc[c] + f * Dnc[c, j]
+        for j in range(N_LOCAL):
+            dFv[c, j] = -ct * Bn[j] * nc[c]
+    if mu > 0.0 and f > 0.0:
+        vn = gdot
+        vt = vrel - vn * nc
+        Dvt = np.empty((3, NX))
+        for c in range(3):
+            for j in range(NX):
+                Dvt[c, j] = Dvrel[c, j] - Dnc[c, j] * vn - nc[c] * Dgdot[j]
+        Ft = np.empty(3)
+        dF_dv = np.empty((3, 3))
+        dF_dfn = np.empty(3)
+        coulomb_force(mu, eps_v, vt, f, Ft, dF_dv, dF_dfn)
+        # ∂v_t/∂q̇_c = (I − n nᵀ) W
+        PW = np.empty((3, N_LOCAL))
+        for c in range(3):
+            for j in range(N_LOCAL):
+                PW[c, j] = W[c, j] - nc[c] * Bn[j]
+        for c in range(3):
+            F[c] += Ft[c]
+            for j in range(NX):
+                acc = dF_dfn[c] * Df[j]
+                for e in range(3):
+                    acc += dF_dv[c, e] * Dvt[e, j]
+                DF[c, j] += acc
+            for j in range(N_LOCAL):
+                acc = dF_dfn[c] * (-ct * Bn[j])
+                for e in range(3):
+                    acc += dF_dv[c, e] * PW[e, j]
+                dFv[c, j] += acc
+    # ---- generalized force Q_c = Wᵀ F_H and K = −∂Q_c/∂q, C = −∂Q_c/∂q̇
+    for j in range(N_LOCAL):
+        Qc[j] = W[0, j] * F[0] + W[1, j] * F[1] + W[2, j] * F[2]
+    for a_ in range(N_LOCAL):
+        for j in range(NX):
+            K[a_, j] = -(W[0, a_] * DF[0, j] + W[1, a_] * DF[1, j] + W[2, a_] * DF[2, j])
+        for j in range(N_LOCAL):
+            C[a_, j] = -(W[0, a_] * dFv[0, j] + W[1, a_] * dFv[1, j] + W[2, a_] * dFv[2, j])
+    # W_p = 2T(u_Q)p depends on p and on u_Q: (W_pᵀF)_i = 2 Σ_k F_k (T_k(u_Q) p)_i
+    for i in range(4):
+        for m in range(4):
+            acc = 0.0
+            for k in range(3):
+                for jj in range(3):
+                    acc += F[k] * uQ[jj] * Te[jj, k, i, m]
+            K[3 + i, 3 + m] -= 2.0 * acc
+        for jj in range(3):
+            acc = 0.0
+            for k in range(3):
+                for m in range(4):
+                    acc += F[k] * Te[jj, k, i, m] * p[m]
+            for j in range(NX):
+                K[3 + i, j] -= 2.0 * acc * DuQ[jj, j]
+    # W_e = −S(ξ_P) depends on ξ_P
+    for m in range(4):
+        for c in range(3):
+            for j in range(NX):
+                K[7 + 3 * m + c, j] += dSP[m] * F[c] * DxiP[j]
+    return g, gdot, f

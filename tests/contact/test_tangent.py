@@ -1,0 +1,141 @@
+"""The exact contact tangent (flexmbs.contact.tangent) against central differences of an
+independent reference: the contact residual re-derived here in numpy, with the section
+crossing, the stationary point of the section ellipse and the closest point solved by Newton at
+every perturbed configuration (so the implicit unknowns ξ_I, φ, ψ and ξ_P move with the
+coordinates)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from flexmbs.contact.pair import N_LOCAL
+from flexmbs.contact.sections import circle_boundary
+from flexmbs.contact.tangent import I_OFF, N_EXT, P_OFF, contact_tangent
+from flexmbs.elements.ancf_cable import CENTERLINE_SIZE, shape_xi
+from flexmbs.elements.rigid_body import rotation
+
+R_BORE = 2.5e-3
+R_BEAM = 2.0e-3
+L_ELEM = 0.1
+
+
+def _point(qe: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    S, dS, ddS = shape_xi(xi, L_ELEM)
+    E = qe.reshape(4, 3)
+    return S @ E, dS @ E, ddS @ E
+
+
+def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray, mu: float,
+               start: tuple[float, float, float], same: bool) -> tuple[np.ndarray, tuple]:
+    """Q_c of one contact at coordinates ``x = [body, e_I, e_P]`` (numpy, Newton solves)."""
+    qb, qI = x[:7], x[I_OFF:I_OFF + CENTERLINE_SIZE]
+    qP = qI if same else x[P_OFF:]
+    A = rotation(qb[3:7])
+    n, ey, ez = A[:, 0], A[:, 1], A[:, 2]
+    o = qb[:3] + A @ u_o
+    xi, phi, xp = start
+    for _ in range(50):
+        r, rx, _ = _point(qI, xi)
+        xi -= n @ (r - o) / (n @ rx)
+    r, rx, _ = _point(qI, xi)
+    cy, cz = (r - o) @ ey, (r - o) @ ez
+    ty, tz, tn = rx @ ey, rx @ ez, rx @ n
+    eax, eay = ty / math.hypot(ty, tz), tz / math.hypot(ty, tz)
+    a, b = max(R_BEAM * np.linalg.norm(rx) / abs(tn), R_BEAM), R_BEAM
+
+    def ellipse(phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        cf, sf = math.cos(phi), math.sin(phi)
+        return (np.array([cy + a * cf * eax - b * sf * eay, cz + a * cf * eay + b * sf * eax]),
+                np.array([-a * sf * eax - b * cf * eay, -a * sf * eay + b * cf * eax]),
+                np.array([-a * cf * eax + b * sf * eay, -a * cf * eay - b * sf * eax]))
+
+    for _ in range(60):
+        X, Xp, Xpp = ellipse(phi)
+        phi -= (X @ Xp) / (Xp @ Xp + X @ Xpp)
+    X, _, _ = ellipse(phi)
+    psi = math.atan2(X[1], X[0])
+    Qd = o + R_BORE * (math.cos(psi) * ey + math.sin(psi) * ez)
+    Q = qb[:3] + A @ (A.T @ (Qd - qb[:3]))
+    for _ in range(60):
+        r, rx, rxx = _point(qP, xp)
+        xp -= ((r - Q) @ rx) / (rx @ rx + (r - Q) @ rxx)
+    Y, Yp, Ypp = np.empty(2), np.empty(2), np.empty(2)
+    circle_boundary(R_BORE, psi, Y, Yp, Ypp)
+    Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
+    g, _, f = contact_tangent(qb, vel[:7], u_o, qI, L_ELEM, xi, qP, vel[7:], L_ELEM, xp, phi, Y, Yp,
+                              Ypp, R_BEAM, law, mu, 1e-3, 0.3, Qc, K, C)
+    return Qc, (K, C, xi, phi, xp, g, f)
+
+
+def _configuration(tilt: float, offset: float, same: bool, seed: int) -> tuple:
+    """A slightly curved element tilted by ``tilt`` in the x-z plane through a bore displaced by
+    ``offset`` along z, the body rotated a little and its Euler parameters 0.1 % off unit."""
+    rng = np.random.default_rng(seed)
+    t = np.array([math.cos(tilt), 0.0, math.sin(tilt)])
+
+    def element() -> np.ndarray:
+        return np.concatenate([-0.05 * t + rng.normal(scale=1e-4, size=3),
+                               t + rng.normal(scale=0.02, size=3),
+                               0.05 * t + rng.normal(scale=1e-4, size=3),
+                               t + rng.normal(scale=0.02, size=3)])
+
+    qI = element()
+    qP = qI.copy() if same else element()
+    p = np.array([1.0, *rng.normal(scale=0.05, size=3)])
+    p *= 1.001 / np.linalg.norm(p)
+    qb = np.concatenate([rng.normal(scale=3e-4, size=3) + [0.0, 0.0, offset], p])
+    vel = rng.normal(scale=0.1, size=7 + CENTERLINE_SIZE)
+    return np.concatenate([qb, qI, qP]), vel
+
+
+CASES = [  # tilt, bore offset, same element, friction, law [K, n, chi, c_d, v_min]
+    (0.05, 9e-4, True, 0.0, [1e6, 1.0, 0.0, 0.0, 1e-3]),
+    (0.3, 1e-3, True, 0.3, [1e6, 1.5, 0.0, 20.0, 1e-3]),
+    (0.6, 1.6e-3, False, 0.3, [1e6, 1.5, 0.0, 20.0, 1e-3]),
+    (1.1, 2.2e-3, True, 0.2, [1e9, 1.5, 0.8, 0.0, 1e-3]),     # a²/b > R: two-point regime
+    (1.0, 2.4e-3, False, 0.0, [1e6, 1.0, 0.0, 0.0, 1e-3]),
+]
+
+
+@pytest.mark.parametrize(("tilt", "offset", "same", "mu", "law"), CASES)
+def test_exact_tangent_equals_central_differences(tilt: float, offset: float, same: bool,
+                                                  mu: float, law: list) -> None:
+    x, vel = _configuration(tilt, offset, same, seed=3)
+    law_a = np.array(law, float)
+    u_o = np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0])
+    # the deepest stationary point (scan of starting angles)
+    found = []
+    for phi0 in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False):
+        _, info = _reference(x, vel, u_o, law_a, mu, (0.5, phi0, 0.5), same)
+        found.append(info)
+    info = min(found, key=lambda i: i[5])
+    assert info[5] < 0.0, "the configuration must be in contact"
+    K, C, xi, phi, xp = info[:5]
+    start = (xi, phi, xp)
+    Kfd = np.zeros_like(K)
+    for j in range(N_EXT):
+        if same and j >= P_OFF:
+            continue
+        h = 1e-7 * max(1.0, abs(x[j]))
+        xp_, xm_ = x.copy(), x.copy()
+        xp_[j] += h
+        xm_[j] -= h
+        Kfd[:, j] = -(_reference(xp_, vel, u_o, law_a, mu, start, same)[0]
+                      - _reference(xm_, vel, u_o, law_a, mu, start, same)[0]) / (2 * h)
+    if same:   # e_I and e_P are one element: their columns add
+        K = K.copy()
+        K[:, I_OFF:P_OFF] += K[:, P_OFF:]
+        K[:, P_OFF:] = 0.0
+    assert np.abs(K - Kfd).max() <= 1e-6 * np.abs(Kfd).max()
+    Cfd = np.zeros_like(C)
+    for j in range(N_LOCAL):
+        h = 1e-6
+        vp, vm = vel.copy(), vel.copy()
+        vp[j] += h
+        vm[j] -= h
+        Cfd[:, j] = -(_reference(x, vp, u_o, law_a, mu, start, same)[0]
+                      - _reference(x, vm, u_o, law_a, mu, start, same)[0]) / (2 * h)
+    assert np.abs(C - Cfd).max() <= 1e-6 * max(np.abs(Cfd).max(), 1e-12) + 1e-12
