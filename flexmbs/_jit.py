@@ -6,7 +6,9 @@ without it lets the pure-Python path serve as a slow, debuggable reference.
 
 from __future__ import annotations
 
+import hashlib
 import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -20,6 +22,58 @@ try:  # pragma: no cover - exercised implicitly
 except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
     _njit = None  # type: ignore[assignment]
+
+
+def package_stamp(root: str | os.PathLike[str]) -> str:
+    """Content hash of every module under ``root`` that holds compiled kernels (text contains
+    ``njit``): the on-disk cache stamp of every flexmbs kernel.
+
+    numba stamps a cached function with its own file only, but a kernel carries the machine
+    code of every kernel it calls (the one entry :func:`flexmbs.kernel.kernel` all of them):
+    after an edit of a callee's module (``git pull`` in a development checkout keeps the
+    caller's file untouched) numba would load the stale code. With this stamp an edit of any
+    kernel module recompiles them all."""
+    h = hashlib.sha1()
+    for path in sorted(Path(root).rglob("*.py")):
+        text = path.read_bytes()
+        if b"njit" in text:
+            h.update(str(path.relative_to(root)).encode() + b"\0" + text + b"\0")
+    return h.hexdigest()
+
+
+def _install_package_stamp() -> None:
+    """Put cache locators first that give this package's kernels :func:`package_stamp` as
+    their source stamp (numba's own locators otherwise, e.g. for users' functions)."""
+    try:
+        from numba.core import caching
+        impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+        names = ("UserProvidedCacheLocator", "_UserProvidedCacheLocator", "InTreeCacheLocator",
+                 "_InTreeCacheLocator")
+        bases = [b for b in dict.fromkeys(getattr(caching, n, None) for n in names) if b is not None]
+    except (ImportError, AttributeError):   # numba internals changed: keep numba's stamps
+        return
+    root = Path(__file__).resolve().parent
+    stamp = package_stamp(root)
+
+    def locator(base: Any) -> Any:
+        class PackageLocator(base):  # type: ignore[misc, valid-type]
+            def get_source_stamp(self) -> str:
+                return stamp
+
+            @classmethod
+            def from_function(cls, py_func: Any, py_file: str) -> Any:
+                if not Path(py_file).resolve().is_relative_to(root):
+                    return None
+                return super().from_function(py_func, py_file)
+
+        PackageLocator.__name__ = "Flexmbs" + base.__name__.lstrip("_")
+        return PackageLocator
+
+    impl._locator_classes = [locator(b) for b in bases] + list(impl._locator_classes)
+
+
+if _njit is not None:
+    _install_package_stamp()
 
 
 def njit(*args: Any, **kwargs: Any) -> Any:

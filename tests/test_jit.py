@@ -52,3 +52,30 @@ def test_stale_cache_index_recompiles(tmp_path: Path) -> None:
     second = run()                                  # the index now names a missing module
     assert second.returncode == 0, second.stderr[-500:]
     assert second.stdout.strip() == "3.0"
+
+
+def test_kernels_are_stamped_with_every_kernel_module(tmp_path):
+    """numba stamps a cached kernel with its own file; flexmbs' kernels carry the code of their
+    callees, so their stamp is the content of every kernel module: an edit of a callee's module
+    (here a copy of the package) changes it, an edit of a module without kernels does not."""
+    import shutil
+    from pathlib import Path
+
+    import flexmbs
+    from flexmbs._jit import HAVE_NUMBA, package_stamp
+
+    root = Path(flexmbs.__file__).parent
+    copy = tmp_path / "flexmbs"
+    shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    before = package_stamp(copy)
+    cli = copy / "cli.py"
+    cli.write_text(cli.read_text() + "\n# edited\n")
+    assert package_stamp(copy) == before
+    tangent = copy / "contact" / "tangent.py"
+    tangent.write_text(tangent.read_text() + "\n# edited\n")
+    assert package_stamp(copy) != before
+    if HAVE_NUMBA:
+        from flexmbs.kernel import kernel
+
+        locator = kernel._cache._impl._locator
+        assert locator.get_source_stamp() == package_stamp(root)

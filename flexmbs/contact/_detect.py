@@ -20,11 +20,12 @@ from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation
 from .geometry import closest_point_kernel, section_state
 from .pair import N_LOCAL, contact_force
-from .sections import circle_stationary_points
+from .sections import circle_boundary, circle_stationary_points
+from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
-        "gap_rate")
+        "gap_rate", "phi")
 N_COLS = len(COLS)
 #: two contact points of one section are the same contact from one step to the next if the
 #: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
@@ -86,6 +87,7 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi
             row[11] = math.atan2(y, x)
             row[12] = 0.0
             row[13] = 0.0
+            row[14] = phis[j]
             count += 1
     return count
 
@@ -181,16 +183,19 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
 
 
 @njit
-def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913
+def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      elem_out, xi_out, r_b, R, law, mu, eps_v, approach, active, psi_track, qe,
-                     rows, want_tangent, r_q, K_out, C_out, elem_k):
+                     rows, want_tangent, exact, r_q, K_out, C_out, elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
     each candidate row gets its ``gap`` and ``gap_rate``. With ``want_tangent`` the signed
-    Gauss–Newton blocks (N_LOCAL×N_LOCAL, local [r_H, p, e_k]) go to ``K_out``/``C_out`` and the element
-    to ``elem_k``. Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left
-    the bore at section k."""
+    tangent blocks go to ``K_out`` (N_LOCAL × N_EXT: rows [r_H, p, e_P], columns [r_H, p, e_I,
+    e_P] of :mod:`flexmbs.contact.tangent`) and ``C_out`` (N_LOCAL × N_LOCAL), the elements of
+    the contact point and of the section crossing to ``elem_k`` and ``elem_i``: the exact
+    linearisation (``exact``) or Gauss–Newton ``k BᵀB`` (frozen hole point, no e_I columns).
+    Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left the bore at
+    section k."""
     qb, A, centre = _frame(q, body_dofs, hole_point)
     vb = np.empty(7)
     for i in range(7):
@@ -206,6 +211,12 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     Qc = np.empty(N_LOCAL)
     K = np.empty((N_LOCAL, N_LOCAL))
     C = np.empty((N_LOCAL, N_LOCAL))
+    KX = np.empty((N_LOCAL, N_EXT))
+    Qx = np.empty(N_LOCAL)
+    Y = np.empty(2)
+    Yp = np.empty(2)
+    Ypp = np.empty(2)
+    u_o = np.empty(3)
     geo = np.empty(12)
     ve = np.empty(CENTERLINE_SIZE)
     u_Q = np.empty(3)
@@ -221,8 +232,9 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
         for c in range(CENTERLINE_SIZE):
             ve[c] = v[elem_dofs[eP, c]]
         v_app = tracked_approach(approach, active, psi_track, k, row[11])
-        g, gdot, _, _ = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law, mu,
-                                      eps_v, v_app, want_tangent, Qc, K, C, geo)
+        g, gdot, _, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law,
+                                        mu, eps_v, v_app, want_tangent and not exact, Qc, K, C,
+                                        geo)
         row[12] = g
         row[13] = gdot
         if g >= 0.0:
@@ -234,12 +246,32 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
         for c in range(N_LOCAL):
             if abs(Qc[c]) > scale:
                 scale = abs(Qc[c])
-        if want_tangent:
+        if want_tangent and exact:
+            eI = elem_out[k]
+            for c in range(3):
+                u_o[c] = hole_point[c] + (stations[k] if c == 0 else 0.0)
+            circle_boundary(R, row[11], Y, Yp, Ypp)
+            contact_tangent(qb, vb, u_o, qe[eI], lengths[eI], xi_out[k], qe[eP], ve, lengths[eP],
+                            xiP, row[14], Y, Yp, Ypp, r_b, law, mu, eps_v, v_app, Qx, KX, C)
             for a in range(N_LOCAL):
+                for b in range(N_EXT):
+                    K_out[count, a, b] = sign * KX[a, b]
                 for b in range(N_LOCAL):
-                    K_out[count, a, b] = sign * K[a, b]
                     C_out[count, a, b] = sign * C[a, b]
             elem_k[count] = eP
+            elem_i[count] = eI
+        elif want_tangent:
+            for a in range(N_LOCAL):
+                for b in range(N_EXT):
+                    K_out[count, a, b] = 0.0
+                for b in range(7):
+                    K_out[count, a, b] = sign * K[a, b]
+                for b in range(CENTERLINE_SIZE):
+                    K_out[count, a, P_OFF + b] = sign * K[a, 7 + b]
+                for b in range(N_LOCAL):
+                    C_out[count, a, b] = sign * C[a, b]
+            elem_k[count] = eP
+            elem_i[count] = eP
         count += 1
     return m, count, scale
 
@@ -253,8 +285,9 @@ def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, station
     bore). ``scratch`` receives the (discarded) residual."""
     m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
                                xi_ws, elem_ws, xi_ws, r_b, R, law, mu, eps_v, approach, active,
-                               psi_track, qe, rows, FLAG[0], scratch, np.empty((0, N_LOCAL, N_LOCAL)),
-                               np.empty((0, N_LOCAL, N_LOCAL)), np.empty(0, np.int64))
+                               psi_track, qe, rows, FLAG[0], FLAG[0], scratch,
+                               np.empty((0, N_LOCAL, N_EXT)), np.empty((0, N_LOCAL, N_LOCAL)),
+                               np.empty(0, np.int64), np.empty(0, np.int64))
     if m < 0:
         return m
     clearance_update(rows, m, approach, active, psi_track)
@@ -281,27 +314,31 @@ class ClearancePart(NamedTuple):
     mu: np.ndarray
     eps_v: np.ndarray
     enabled: np.ndarray              # (nj,) evaluated here (else by the joint's Python path)
+    exact: np.ndarray                # (nj,) exact tangent (else Gauss-Newton)
     elem_ws: np.ndarray              # (nj, max_ns) state: warm starts
     xi_ws: np.ndarray
     approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
     active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
     psi: np.ndarray                  # (nj, max_ns, P)
     pos: np.ndarray                  # (nj, max_ne, N_LOCAL * N_LOCAL): (body, element) blocks
+    cross: np.ndarray                # (nj, max_ne, 2, CENTERLINE_SIZE²): (element, element ∓ 1)
     qe: np.ndarray                   # work (max_ne, CENTERLINE_SIZE)
     rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
     n_candidates: np.ndarray         # (nj,) their number
     elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
     xi_out: np.ndarray
-    K: np.ndarray                    # work (4 max_ns, N_LOCAL, N_LOCAL)
-    C: np.ndarray
-    kelem: np.ndarray                # work (4 max_ns,)
-    no_K: np.ndarray                 # (0, N_LOCAL, N_LOCAL): no tangent in the residual
+    K: np.ndarray                    # work (4 max_ns, N_LOCAL, N_EXT)
+    C: np.ndarray                    # work (4 max_ns, N_LOCAL, N_LOCAL)
+    kelem: np.ndarray                # work (4 max_ns,): element of the contact point
+    kelem_i: np.ndarray              # work (4 max_ns,): element of the section crossing
+    no_K: np.ndarray                 # (0, N_LOCAL, N_EXT): no tangent in the residual
+    no_C: np.ndarray                 # (0, N_LOCAL, N_LOCAL)
     no_elem: np.ndarray              # (0,)
     scratch: np.ndarray              # (n + m,) residual written while assembling the matrix
 
 
 @njit(inline="always")
-def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, error):  # noqa: ANN001, ANN202
+def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # noqa: ANN001, ANN202
     """:func:`clearance_forces` of clearance joint j; records the candidates' count and, if the
     beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
     ne_j = cl.n_elem[j]
@@ -311,7 +348,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, error):  # noqa: ANN
         cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
         cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
-        r, K, C, elem)
+        cl.exact[j], r, K, C, elem, elem_i)
     cl.n_candidates[j] = m
     if m < 0:
         error[0] = ERR_LEFT_BORE
@@ -328,7 +365,8 @@ def clearance_residual(cl, q, v, r, error):  # noqa: ANN001, ANN201
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
             continue
-        m, _, sc = _joint_forces(cl, j, q, v, FLAG[0], r, cl.no_K, cl.no_K, cl.no_elem, error)
+        m, _, sc = _joint_forces(cl, j, q, v, FLAG[0], r, cl.no_K, cl.no_C, cl.no_elem,
+                                 cl.no_elem, error)
         if m < 0:
             return scale, ERR_LEFT_BORE
         if sc > scale:
@@ -337,19 +375,45 @@ def clearance_residual(cl, q, v, r, error):  # noqa: ANN001, ANN201
 
 
 @njit
-def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201
-    """Gauss–Newton contact tangent ``cK K + cC C`` of every (enabled) clearance joint."""
+def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, C901
+    """Contact tangent ``cK K + cC C`` of every (enabled) clearance joint (exact or
+    Gauss–Newton, per joint). The columns of the crossing element e_I go to the (body, e_I) block
+    for the body's rows and to the reserved (e_P, e_P ∓ 1) block for the element's rows; a
+    crossing two or more elements from the contact point (not met in practice: the section
+    plane and the contact lie within a beam radius or two) drops that coupling."""
+    ne = CENTERLINE_SIZE
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
             continue
-        m, cnt, _ = _joint_forces(cl, j, q, v, FLAG[1], cl.scratch, cl.K, cl.C, cl.kelem, error)
+        m, cnt, _ = _joint_forces(cl, j, q, v, FLAG[1], cl.scratch, cl.K, cl.C, cl.kelem,
+                                  cl.kelem_i, error)
         if m < 0:
             return ERR_LEFT_BORE
         for i in range(cnt):
-            pos = cl.pos[j, cl.kelem[i]]
+            eP = cl.kelem[i]
+            eI = cl.kelem_i[i]
+            pos = cl.pos[j, eP]
             for a in range(N_LOCAL):
-                for c in range(N_LOCAL):
+                for c in range(7):
                     data[pos[N_LOCAL * a + c]] += cK * cl.K[i, a, c] + cC * cl.C[i, a, c]
+                for c in range(ne):
+                    kk = cl.K[i, a, P_OFF + c]
+                    if eI == eP:
+                        kk += cl.K[i, a, I_OFF + c]
+                    data[pos[N_LOCAL * a + 7 + c]] += cK * kk + cC * cl.C[i, a, 7 + c]
+            if eI == eP:
+                continue
+            posI = cl.pos[j, eI]
+            for a in range(7):
+                for c in range(ne):
+                    data[posI[N_LOCAL * a + 7 + c]] += cK * cl.K[i, a, I_OFF + c]
+            side = 0 if eI == eP - 1 else (1 if eI == eP + 1 else -1)
+            if side < 0:
+                continue
+            cross = cl.cross[j, eP, side]
+            for a in range(ne):
+                for c in range(ne):
+                    data[cross[ne * a + c]] += cK * cl.K[i, 7 + a, I_OFF + c]
     return 0
 
 

@@ -36,6 +36,7 @@ from .geometry import closest_point, section_state
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb, as_friction
 from .pair import N_LOCAL, contact_point
 from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
+from .tangent import N_EXT
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
@@ -83,6 +84,8 @@ class SuperellipseHole(Hole):
 #: contact points tracked per section (a circle has at most 4; a superellipse's extra ones
 #: beyond this count are treated as first contacts at every step by the dissipative laws)
 MAX_POINTS = 8
+#: contact tangents of the clearance joint (see :class:`SlidingClearanceJoint`)
+TANGENTS = ("exact", "gauss_newton", "frozen_point")
 
 
 class SlidingClearanceJoint(Interaction):
@@ -91,13 +94,17 @@ class SlidingClearanceJoint(Interaction):
     ``hole``: :class:`Hole` (axis = body x through ``hole_point``, body coordinates);
     ``contact``: a normal force law (default linear penalty); ``friction``: optional
     :class:`RegularizedCoulomb`; ``beam_radius`` defaults to the beam's section radius.
-    The default tangent is Gauss-Newton, k B^T B (FORMULATION §5). ``consistent=True`` adds the
-    geometric terms that are exact for a hole point frozen as a material point of the hole; but
-    the detected hole point slides along the bore, so the true geometric stiffness of a beam
-    pressed into a concave bore is about +f_N/clearance, while the frozen-point term is about
-    -f_N/r_b: for a pretensioned wire pressed sideways into a grommet it makes the tangent
-    indefinite (a spurious negative eigenvalue in the linearised modes). Neither tangent changes
-    the converged solution; Newton converges linearly in the sliding direction.
+    ``tangent`` (the contact's part of Newton's matrix; none changes the converged solution):
+
+    - ``"exact"`` (default): the exact derivative of the contact forces, with the hole point
+      sliding along the bore as the detection moves it (:mod:`flexmbs.contact.tangent`):
+      quadratic Newton, the right linearised modes. Circular bores (compiled); other bores fall
+      back to ``"gauss_newton"`` until their section has a compiled boundary kernel;
+    - ``"gauss_newton"``: ``k BᵀB`` (FORMULATION §5), no stiffness along the bore wall;
+    - ``"frozen_point"``: adds the geometric terms that are exact for a hole point frozen as a
+      material point of the hole (Python path). The true geometric stiffness of a beam pressed
+      into a concave bore is about +f_N/clearance, the frozen-point term about −f_N/r_b: for a
+      pretensioned wire pressed into a grommet it makes the tangent indefinite.
     """
 
     term_kind = "clearance"
@@ -107,15 +114,18 @@ class SlidingClearanceJoint(Interaction):
                  friction: RegularizedCoulomb | float | None = None,
                  friction_velocity: float = 1e-3,
                  hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
-                 consistent: bool = False, name: str | None = None) -> None:
+                 tangent: str = "exact", name: str | None = None) -> None:
         self.beam = beam
         self.body = body
         self.hole = hole
         self.contact = contact or LinearPenalty(stiffness=1e6)
         self.friction = as_friction(friction, friction_velocity)
         self.hole_point = np.asarray(hole_point, float).reshape(3)
-        self.consistent = bool(consistent)
         self.name = name or f"clearance_{body.name}"
+        if tangent not in TANGENTS:
+            raise ModelError(f"joint '{self.name}': tangent must be one of {', '.join(TANGENTS)} "
+                             f"(got {tangent!r})")
+        self.tangent = tangent
         r_b = beam_radius if beam_radius is not None else beam.radius
         if r_b is None or not r_b > 0:
             raise ModelError(f"joint '{self.name}': the beam radius is unknown; give the beam a "
@@ -302,10 +312,15 @@ class SlidingClearanceJoint(Interaction):
 
     def compiled_form(self) -> bool:
         """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): circular
-        bore, detection not frozen, Gauss–Newton tangent; else the per-contact Python path of
+        bore, detection not frozen, exact or Gauss–Newton tangent; else the per-contact Python path of
         :meth:`evaluate` does."""
         return (isinstance(self.hole.section, CircleSection) and self._frozen is None
-                and not self.consistent)
+                and self.tangent != "frozen_point")
+
+    @property
+    def consistent(self) -> bool:
+        """The Python path's frozen-point geometric terms are on (``tangent="frozen_point"``)."""
+        return self.tangent == "frozen_point"
 
     def _friction_parameters(self) -> tuple[float, float]:
         f = self.friction
@@ -427,9 +442,15 @@ class SlidingClearanceJoint(Interaction):
 # ---------------------------------------------------------------------------------------------
 # the clearance-joint term of the assembler (flexmbs.terms)
 def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The hole body couples with every coordinate of the beam (contacts move along it)."""
+    """The hole body couples with every coordinate of the beam (contacts move along it), and
+    each element with its neighbours (the exact tangent: a contact point's element with the
+    element where the section plane crosses the axis)."""
     cols = np.concatenate([joint._body_dofs, joint._beam_dofs])
-    return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
+    blocks = [(joint._body_dofs, cols), (cols, joint._body_dofs)]
+    ed = joint._elem_dofs
+    for k in range(len(ed) - 1):
+        blocks += [(ed[k], ed[k + 1]), (ed[k + 1], ed[k])]
+    return blocks
 
 
 def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int) -> ClearancePart:
@@ -439,10 +460,16 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
     max_ns = max((len(j.stations) for j in joints), default=0)
     fr = [j._friction_parameters() for j in joints]
     pos = np.zeros((nj, max_ne, N_LOCAL * N_LOCAL), np.int64)
+    ne2 = CENTERLINE_SIZE * CENTERLINE_SIZE
+    cross = np.zeros((nj, max_ne, 2, ne2), np.int64)
     for i, j in enumerate(joints):
-        for k in range(len(j._lengths)):
+        n_el = len(j._lengths)
+        for k in range(n_el):
             idx = np.concatenate([j._body_dofs, j._elem_dofs[k]])
             pos[i, k] = dofs.positions(idx, idx)
+            for side, other in ((0, k - 1), (1, k + 1)):
+                if 0 <= other < n_el:
+                    cross[i, k, side] = dofs.positions(j._elem_dofs[k], j._elem_dofs[other])
     i64, c = np.int64, np.ascontiguousarray
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
@@ -457,15 +484,17 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),
         np.array([m for m, _ in fr], float), np.array([e for _, e in fr], float),
         np.array([j.compiled_form() for j in joints], dtype=np.bool_),
+        np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),
         pad_stack([j._elem for j in joints], (), 0, np.int64),
         pad_stack([j._xi for j in joints], (), 0.5, float),
         pad_stack([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
         pad_stack([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
         pad_stack([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
-        pos, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, 4 * max_ns, N_COLS)), np.zeros(nj, i64),
-        np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)), np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)),
-        np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)), np.zeros(4 * max_ns, i64), np.zeros((0, N_LOCAL, N_LOCAL)),
-        np.zeros(0, i64), np.zeros(n_total))
+        pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, 4 * max_ns, N_COLS)),
+        np.zeros(nj, i64), np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)),
+        np.zeros((4 * max_ns, N_LOCAL, N_EXT)), np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)),
+        np.zeros(4 * max_ns, i64), np.zeros(4 * max_ns, i64), np.zeros((0, N_LOCAL, N_EXT)),
+        np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         ns = len(j.stations)
         j._elem = part.elem_ws[i, :ns]

@@ -170,18 +170,18 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     _d_dot(rxI, DrxI, nvec, Dn, Dtn)
     tn = hx
     tp = math.hypot(ty, tz)
+    lrx = math.sqrt(rxI[0] * rxI[0] + rxI[1] * rxI[1] + rxI[2] * rxI[2])
     eax = 1.0
     eay = 0.0
     Deax = np.zeros(NX)
     Deay = np.zeros(NX)
-    if tp > 0.0:
+    if tp >= 1e-10 * lrx:    # else section_ellipse's circle: e_a = e_y, fixed
         eax = ty / tp
         eay = tz / tp
         for j in range(NX):
             Dtp = (ty * Dty[j] + tz * Dtz[j]) / tp
             Deax[j] = (Dty[j] - eax * Dtp) / tp
             Deay[j] = (Dtz[j] - eay * Dtp) / tp
-    lrx = math.sqrt(rxI[0] * rxI[0] + rxI[1] * rxI[1] + rxI[2] * rxI[2])
     b = r_b
     a = r_b * lrx / abs(tn)
     Da = np.zeros(NX)

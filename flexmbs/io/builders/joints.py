@@ -54,7 +54,7 @@ def _sliding(t: Table, ctx: BuildContext) -> Any:
 @JOINTS.register("sliding_clearance")
 def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     """``type = "sliding_clearance"``: SlidingClearanceJoint, FORMULATION Part II §1-§8."""
-    from ...contact.joint import Hole, SlidingClearanceJoint
+    from ...contact.joint import TANGENTS, Hole, SlidingClearanceJoint
 
     t.allow(("name", "type", "beam", "body", "hole", "contact", "beam_radius", "tangent"))
     beam = ctx.beam(t)
@@ -67,12 +67,12 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     mu = c.number("friction", 0.0, ge=0.0)
     friction = (RegularizedCoulomb(mu=mu, eps_v=c.number("friction_velocity", 1e-3, gt=0.0))
                 if mu > 0 else None)
-    tangent = t.choice("tangent", ("consistent", "gauss_newton"), "gauss_newton", what="tangent")
+    tangent = t.choice("tangent", TANGENTS, "exact", what="tangent")
     joint = SlidingClearanceJoint(
         beam, body, hole=hole, contact=contact_law, friction=friction,
         hole_point=h.vector("point", (0.0, 0.0, 0.0)),
         beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
-        consistent=tangent == "consistent", name=t.raw["name"])
+        tangent=tangent, name=t.raw["name"])
     return ctx.model.add_joint(joint)
 
 
