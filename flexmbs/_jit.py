@@ -46,7 +46,7 @@ def _install_package_stamp() -> None:
     their source stamp (numba's own locators otherwise, e.g. for users' functions)."""
     try:
         from numba.core import caching
-        impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+        impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")  # noqa: B009
         names = ("UserProvidedCacheLocator", "_UserProvidedCacheLocator", "InTreeCacheLocator",
                  "_InTreeCacheLocator")
         bases = [b for b in dict.fromkeys(getattr(caching, n, None) for n in names) if b is not None]
