@@ -609,6 +609,13 @@ class Assembly:
             raise ModelError("internal: matrix entry outside the reserved sparsity pattern")
         return pos
 
+    def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """As :meth:`positions`, with −1 for the entries outside the pattern."""
+        N = self.n_total
+        k = (np.asarray(cols, np.int64)[None, :] * N + np.asarray(rows, np.int64)[:, None]).ravel()
+        pos = np.minimum(np.searchsorted(self._ukeys, k), self._ukeys.size - 1)
+        return np.where(self._ukeys[pos] == k, pos, -1)
+
     def add_to_matrix(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
         """Add a dense block to the iteration matrix being assembled (rows/cols global)."""
         np.add.at(self._data, self.positions(rows, cols), np.asarray(block, float).ravel())

@@ -71,6 +71,9 @@ class DofMap(Protocol):
         """CSC data positions of the dense block ``rows × cols`` (global, multipliers at
         ``n_coords + row``), row-major (len(rows), len(cols)) flattened."""
 
+    def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """As :meth:`positions`, with −1 for the entries outside the pattern (no error)."""
+
 
 class FunctionTable:
     """Time functions of a model numbered in first-use order; kernels read their values at the

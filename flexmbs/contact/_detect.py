@@ -321,7 +321,8 @@ class ClearancePart(NamedTuple):
     active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
     psi: np.ndarray                  # (nj, max_ns, P)
     pos: np.ndarray                  # (nj, max_ne, N_LOCAL * N_LOCAL): (body, element) blocks
-    cross: np.ndarray                # (nj, max_ne, 2, CENTERLINE_SIZE²): (element, element ∓ 1)
+    cross: np.ndarray                # (nj, max_ne, 2, CENTERLINE_SIZE²): (element, element ∓ 1),
+                                     # −1 outside the pattern
     qe: np.ndarray                   # work (max_ne, CENTERLINE_SIZE)
     rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
     n_candidates: np.ndarray         # (nj,) their number
@@ -378,9 +379,10 @@ def clearance_residual(cl, q, v, r, error):  # noqa: ANN001, ANN201
 def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, C901
     """Contact tangent ``cK K + cC C`` of every (enabled) clearance joint (exact or
     Gauss–Newton, per joint). The columns of the crossing element e_I go to the (body, e_I) block
-    for the body's rows and to the reserved (e_P, e_P ∓ 1) block for the element's rows; a
-    crossing two or more elements from the contact point (not met in practice: the section
-    plane and the contact lie within a beam radius or two) drops that coupling."""
+    for the body's rows and, for the element's rows, to the entries of a neighbouring e_I that
+    the pattern holds (the shared node; the others, of order ξ² where the contact and the
+    crossing straddle a node, and a crossing two or more elements away, are dropped: the
+    tangent is exact whenever the section plane crosses the contact point's element)."""
     ne = CENTERLINE_SIZE
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
@@ -413,7 +415,9 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
             cross = cl.cross[j, eP, side]
             for a in range(ne):
                 for c in range(ne):
-                    data[cross[ne * a + c]] += cK * cl.K[i, 7 + a, I_OFF + c]
+                    at = cross[ne * a + c]
+                    if at >= 0:     # the shared node's entries (see clearance_pattern)
+                        data[at] += cK * cl.K[i, 7 + a, I_OFF + c]
     return 0
 
 

@@ -442,15 +442,13 @@ class SlidingClearanceJoint(Interaction):
 # ---------------------------------------------------------------------------------------------
 # the clearance-joint term of the assembler (flexmbs.terms)
 def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The hole body couples with every coordinate of the beam (contacts move along it), and
-    each element with its neighbours (the exact tangent: a contact point's element with the
-    element where the section plane crosses the axis)."""
+    """The hole body couples with every coordinate of the beam (contacts move along it). The
+    exact tangent's coupling of a contact point's element with a neighbouring crossing element
+    uses the entries the beam already has (their shared node): reserving the rest would widen
+    the band of every beam by a node (measured: Example 1 20 % slower) for entries of order
+    ξ² near the shared node."""
     cols = np.concatenate([joint._body_dofs, joint._beam_dofs])
-    blocks = [(joint._body_dofs, cols), (cols, joint._body_dofs)]
-    ed = joint._elem_dofs
-    for k in range(len(ed) - 1):
-        blocks += [(ed[k], ed[k + 1]), (ed[k + 1], ed[k])]
-    return blocks
+    return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
 
 
 def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int) -> ClearancePart:
@@ -469,7 +467,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
             pos[i, k] = dofs.positions(idx, idx)
             for side, other in ((0, k - 1), (1, k + 1)):
                 if 0 <= other < n_el:
-                    cross[i, k, side] = dofs.positions(j._elem_dofs[k], j._elem_dofs[other])
+                    cross[i, k, side] = dofs.positions_present(j._elem_dofs[k],
+                                                               j._elem_dofs[other])
     i64, c = np.int64, np.ascontiguousarray
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
