@@ -88,6 +88,27 @@ def two_groups() -> fm.Model:
     return model
 
 
+def steep_wire_in_a_ring() -> fm.Model:
+    """A wire crossing a thin ring (one hole section) at 54° to its axis, 0.8 mm off the
+    centre across the plane of the tilt: the section ellipse (a = 3.4 mm, b = 2 mm, a²/b > R =
+    3.5 mm) touches the bore at two points (FORMULATION II §3), damped contact with friction."""
+    import math
+
+    model = fm.Model(gravity=(0, 0, 0))
+    d = np.array([math.cos(0.942), 0.0, math.sin(0.942)])
+    off = np.array([0.0, -8e-4, 0.0])
+    beam = model.add_beam(fm.line(tuple(off - 0.1 * d), tuple(off + 0.1 * d), elements=4),
+                          section=fm.CircularSection(2e-3), material=fm.Material(E=2.1e11, rho=7800))
+    model.clamp(beam.first_node)
+    ring = model.add_rigid_body(mass=0.1, inertia=(1e-5, 1e-5, 1e-5), position=(0, 0, 0),
+                                name="ring")
+    model.add_joint(fm.SlidingClearanceJoint(
+        beam, ring, hole=fm.CircleHole(3.5e-3, 1e-3, 1), name="ring",
+        contact=fm.LinearPenalty(stiffness=1e6, damping=5.0),
+        friction=fm.RegularizedCoulomb(mu=0.2, eps_v=1e-3)))
+    return model
+
+
 def _exact_tangent_models():
     """Every term kind whose tangent is exact: all but the sliding joint's friction
     (FORMULATION II §7); the clearance contacts with their default, exact tangent (damped,
@@ -96,6 +117,7 @@ def _exact_tangent_models():
     yield "example1_ideal", ex1.build(ideal=True)[0]
     yield "example2_ideal", ex2.build(ideal=True)[0]
     yield "two_groups", two_groups()
+    yield "two_contacts_one_section", steep_wire_in_a_ring()
     model = kitchen_sink(sleeve_offset=-4.6e-4)    # bore resting on the beam
     sliding = next(j for j in model.interactions if isinstance(j, fm.SlidingJoint))
     sliding.friction = 0.0
@@ -124,7 +146,10 @@ def test_matrix_is_the_derivative_of_the_residual(name, model):
     A = asm.matrix.toarray()
     for joint in model.interactions:   # the clearance contacts are active (else nothing tested)
         if isinstance(joint, fm.SlidingClearanceJoint):
-            assert joint.output(asm, q, v, lam, t), f"{name}: no active contact"
+            rows = joint.output(asm, q, v, lam, t)
+            assert rows, f"{name}: no active contact"
+            if name == "two_contacts_one_section":
+                assert [r["section"] for r in rows] == [0, 0]
     h = 1e-7
     fd = np.zeros((n + m, n + m))
     for j in range(n):   # d r / d x with q' = cK dx, v' = cC dx, q'' = cM dx (the Newton update)

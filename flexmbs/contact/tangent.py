@@ -214,6 +214,10 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     J21 = Xpp0 * N0 + Xpp1 * N1
     J22 = Xp0 * Nq0 + Xp1 * Nq1
     det = J11 * J22 - J12 * J21
+    # at the bifurcation where one contact splits into two (a maximum turning into two maxima
+    # and a minimum, FORMULATION II §3) the stationary point moves infinitely fast: its
+    # ψ-derivative is dropped there (the section force, summed with signs ±1, stays continuous)
+    singular = abs(det) <= 1e-12 * (J11 * J11 + J12 * J12 + J21 * J21 + J22 * J22)
     Qd = np.empty(3)
     DQd = np.empty((3, NX))
     for j in range(NX):
@@ -223,7 +227,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
         dXp1 = -Da[j] * sf * eay - a * sf * Deay[j] + b * cf * Deax[j]
         dE1 = dX0 * N1 - dX1 * N0
         dE2 = dXp0 * N0 + dXp1 * N1
-        dpsi = -(J11 * dE2 - J21 * dE1) / det
+        dpsi = 0.0 if singular else -(J11 * dE2 - J21 * dE1) / det
         for c in range(3):
             DQd[c, j] = (Do[c, j] + Y[0] * Dey[c, j] + Y[1] * Dez[c, j]
                          + (Yp[0] * ey[c] + Yp[1] * ez[c]) * dpsi)
