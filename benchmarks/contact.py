@@ -65,9 +65,10 @@ def main(argv: list[str] | None = None) -> int:
             clearance_forces(q, v, cl.body[0], cl.elem_dofs[0, :ne], cl.lengths[0, :ne],
                              cl.hole_point[0], cl.stations[0, :ns], cl.elem_ws[0, :ns],
                              cl.xi_ws[0, :ns], cl.elem_out[0, :ns], cl.xi_out[0, :ns], cl.r_b[0],
-                             cl.R[0], cl.law[0], cl.mu[0], cl.eps_v[0], cl.approach[0, :ns],
-                             cl.active[0, :ns], cl.psi[0, :ns], cl.qe, cl.rows[0], False, r, cl.K,
-                             cl.C, cl.kelem)
+                             cl.shape[0], cl.params[0], cl.R_out[0], cl.R_in[0], cl.law[0],
+                             cl.mu[0], cl.eps_v[0], cl.approach[0, :ns], cl.active[0, :ns],
+                             cl.psi[0, :ns], cl.qe, cl.rows[0], False, False, r, cl.K, cl.C,
+                             cl.kelem, cl.kelem_i)
 
     @njit
     def loop_jacobian(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN202

@@ -1,9 +1,10 @@
-"""Compiled narrow phase of the clearance joint for circular bores (all sections in one call).
+"""Compiled narrow phase of the clearance joint (all sections in one call; circular bores by the
+closed form, other compiled sections by the generic common-normal detector).
 
 Chains the numba kernels of :mod:`flexmbs.contact.geometry` and
 :func:`flexmbs.contact.sections.circle_stationary_points` (FORMULATION Part II §2-§4): section
 crossing (warm-started), ellipse, broad phase, stationary points of the penetration, hole point
-Q and its closest-point projection (:func:`detect_circle`); then the penalty forces of a whole joint
+Q and its closest-point projection (:func:`detect_section`); then the penalty forces of a whole joint
 (:func:`clearance_forces`) and its state update after a converged step
 (:func:`clearance_post_step`), called by the joint in Python and by the compiled integrator.
 """
@@ -20,7 +21,13 @@ from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation
 from .geometry import closest_point_kernel, section_state
 from .pair import N_LOCAL, contact_force
-from .sections import circle_boundary, circle_stationary_points
+from .sections import (
+    SHAPE_CIRCLE,
+    circle_stationary_points,
+    common_normal_points,
+    section_boundary,
+    section_contains,
+)
 from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
@@ -32,45 +39,76 @@ N_COLS = len(COLS)
 MATCH_ANGLE = 0.5
 
 
+#: stationary points of one section kept at most (a flat side and two corners can each touch)
+MAX_CANDIDATES = 8
+#: samples of the common-normal residual in the generic (non-circular) detector
+SHAPE_SAMPLES = 128
+
+
 @njit
-def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out, r_b, R, out):  # noqa: ANN001, ANN201
+def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out, r_b,  # noqa: ANN001, ANN201, C901
+                   shape, params, R_out, R_in, out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
-    ``A`` = hole body rotation (columns: hole axis, e_y, e_z). The section crossings start at
-    the warm starts ``(elem_ws, xi_ws)`` and are written to ``(elem_out, xi_out)`` (the same
-    arrays to update the warm starts)."""
+    ``A`` = hole body rotation (columns: hole axis, e_y, e_z); ``shape``, ``params``: the
+    compiled section (:func:`flexmbs.contact.sections.section_boundary`), ``R_out``/``R_in`` its
+    bounding and inscribed radii. Circles take the closed-form quartic (§3), other shapes the
+    generic common-normal detector (§6). The section crossings start at the warm starts
+    ``(elem_ws, xi_ws)`` and are written to ``(elem_out, xi_out)`` (the same arrays to update
+    the warm starts)."""
     n = A[:, 0].copy()
     ey = A[:, 1].copy()
     ez = A[:, 2].copy()
     origin = np.empty(3)
+    Y = np.empty(2)
+    Yp = np.empty(2)
+    Ypp = np.empty(2)
+    psis = np.empty(MAX_CANDIDATES)
+    phis = np.empty(MAX_CANDIDATES)
+    kinds = np.empty(MAX_CANDIDATES, np.int64)
+    depths = np.empty(MAX_CANDIDATES)
     count = 0
     for k in range(stations.size):
         for c in range(3):
             origin[c] = centre[c] + stations[k] * n[c]
         found, e, xi, cy, cz, a, b, eax, eay = section_state(
-            qe, lengths, origin, n, ey, ez, elem_ws[k], xi_ws[k], r_b, 2.0 * R + r_b)
+            qe, lengths, origin, n, ey, ez, elem_ws[k], xi_ws[k], r_b, 2.0 * R_out + r_b)
         if not found:
             return -1 - k   # no crossing near the section: the beam left the hole
         elem_out[k] = e
         xi_out[k] = xi
-        if math.hypot(cy, cz) > R:
+        if not section_contains(shape, params, cy, cz):
             return -1 - k   # the beam axis left the bore: the penetration is no longer defined
-        if math.hypot(cy, cz) + a < R:
+        if math.hypot(cy, cz) + a < R_in:
             continue   # broad phase: ellipse strictly inside the bore
-        phis, kinds = circle_stationary_points(cy, cz, eax, eay, a, b, R)
-        for j in range(phis.size):
-            ca = math.cos(phis[j])
-            sa = math.sin(phis[j])
-            x = cy + a * ca * eax - b * sa * eay
-            y = cz + a * ca * eay + b * sa * eax
-            rho = math.hypot(x, y)
-            depth = rho - R
-            if depth <= 0.0 or rho == 0.0 or count >= out.shape[0]:
+        if shape == SHAPE_CIRCLE:
+            R = params[0]
+            cphi, ckind = circle_stationary_points(cy, cz, eax, eay, a, b, R)
+            m = 0
+            for j in range(min(cphi.size, MAX_CANDIDATES)):
+                ca = math.cos(cphi[j])
+                sa = math.sin(cphi[j])
+                x = cy + a * ca * eax - b * sa * eay
+                y = cz + a * ca * eay + b * sa * eax
+                rho = math.hypot(x, y)
+                if rho == 0.0:
+                    continue
+                psis[m] = math.atan2(y, x)
+                phis[m] = cphi[j]
+                kinds[m] = ckind[j]
+                depths[m] = rho - R
+                m += 1
+        else:
+            m = common_normal_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
+                                     psis, phis, kinds, depths)
+        for j in range(m):
+            if depths[j] <= 0.0 or count >= out.shape[0]:
                 continue
+            section_boundary(shape, params, psis[j], Y, Yp, Ypp)
             Q = np.empty(3)
             for c in range(3):
-                Q[c] = origin[c] + R * (x / rho) * ey[c] + R * (y / rho) * ez[c]
+                Q[c] = origin[c] + Y[0] * ey[c] + Y[1] * ez[c]
             eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13, np.int64(30))
             row = out[count]
             row[0] = k
@@ -83,8 +121,8 @@ def detect_circle(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi
             row[7] = Q[2]
             row[8] = a
             row[9] = b
-            row[10] = depth
-            row[11] = math.atan2(y, x)
+            row[10] = depths[j]
+            row[11] = psis[j]
             row[12] = 0.0
             row[13] = 0.0
             row[14] = phis[j]
@@ -184,8 +222,9 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
 
 @njit
 def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
-                     elem_out, xi_out, r_b, R, law, mu, eps_v, approach, active, psi_track, qe,
-                     rows, want_tangent, exact, r_q, K_out, C_out, elem_k, elem_i):
+                     elem_out, xi_out, r_b, shape, params, R_out, R_in, law, mu, eps_v, approach,
+                     active, psi_track, qe, rows, want_tangent, exact, r_q, K_out, C_out, elem_k,
+                     elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
@@ -204,8 +243,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     for e in range(ne):
         for k in range(CENTERLINE_SIZE):
             qe[e, k] = q[elem_dofs[e, k]]
-    m = detect_circle(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out,
-                      r_b, R, rows)
+    m = detect_section(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out,
+                       r_b, shape, params, R_out, R_in, rows)
     if m < 0:
         return m, 0, 0.0
     Qc = np.empty(N_LOCAL)
@@ -250,7 +289,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
             eI = elem_out[k]
             for c in range(3):
                 u_o[c] = hole_point[c] + (stations[k] if c == 0 else 0.0)
-            circle_boundary(R, row[11], Y, Yp, Ypp)
+            section_boundary(shape, params, row[11], Y, Yp, Ypp)
             contact_tangent(qb, vb, u_o, qe[eI], lengths[eI], xi_out[k], qe[eP], ve, lengths[eP],
                             xiP, row[14], Y, Yp, Ypp, r_b, law, mu, eps_v, v_app, Qx, KX, C)
             for a in range(N_LOCAL):
@@ -278,14 +317,15 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
 
 @njit
 def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,  # noqa: ANN001, ANN201, PLR0913
-                        xi_ws, r_b, R, law, mu, eps_v, approach, active, psi_track, qe, rows,
-                        scratch):
+                        xi_ws, r_b, shape, params, R_out, R_in, law, mu, eps_v, approach, active,
+                        psi_track, qe, rows, scratch):
     """After a converged step: warm starts of the section crossings moved to the new state and
     the contacts tracked (:func:`clearance_update`). Returns 0, or ``−1 − k`` (axis left the
     bore). ``scratch`` receives the (discarded) residual."""
     m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
-                               xi_ws, elem_ws, xi_ws, r_b, R, law, mu, eps_v, approach, active,
-                               psi_track, qe, rows, FLAG[0], FLAG[0], scratch,
+                               xi_ws, elem_ws, xi_ws, r_b, shape, params, R_out, R_in, law, mu,
+                               eps_v, approach, active, psi_track, qe, rows, FLAG[0], FLAG[0],
+                               scratch,
                                np.empty((0, N_LOCAL, N_EXT)), np.empty((0, N_LOCAL, N_LOCAL)),
                                np.empty(0, np.int64), np.empty(0, np.int64))
     if m < 0:
@@ -309,7 +349,10 @@ class ClearancePart(NamedTuple):
     stations: np.ndarray             # (nj, max_ns)
     n_sec: np.ndarray
     r_b: np.ndarray
-    R: np.ndarray
+    shape: np.ndarray                # (nj,) compiled section kind (sections.SHAPE_*)
+    params: np.ndarray               # (nj, 3) its parameters
+    R_out: np.ndarray                # (nj,) bounding radius of the section
+    R_in: np.ndarray                 # (nj,) inscribed radius
     law: np.ndarray                  # (nj, 5)
     mu: np.ndarray
     eps_v: np.ndarray
@@ -324,14 +367,14 @@ class ClearancePart(NamedTuple):
     cross: np.ndarray                # (nj, max_ne, 2, CENTERLINE_SIZE²): (element, element ∓ 1),
                                      # −1 outside the pattern
     qe: np.ndarray                   # work (max_ne, CENTERLINE_SIZE)
-    rows: np.ndarray                 # (nj, 4 max_ns, N_COLS): candidates of the last residual
+    rows: np.ndarray                 # (nj, MAX_CANDIDATES max_ns, N_COLS): last candidates
     n_candidates: np.ndarray         # (nj,) their number
     elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
     xi_out: np.ndarray
-    K: np.ndarray                    # work (4 max_ns, N_LOCAL, N_EXT)
-    C: np.ndarray                    # work (4 max_ns, N_LOCAL, N_LOCAL)
-    kelem: np.ndarray                # work (4 max_ns,): element of the contact point
-    kelem_i: np.ndarray              # work (4 max_ns,): element of the section crossing
+    K: np.ndarray                    # work (MAX_CANDIDATES max_ns, N_LOCAL, N_EXT)
+    C: np.ndarray                    # work (MAX_CANDIDATES max_ns, N_LOCAL, N_LOCAL)
+    kelem: np.ndarray                # work (MAX_CANDIDATES max_ns,): contact point's element
+    kelem_i: np.ndarray              # work (MAX_CANDIDATES max_ns,): crossing's element
     no_K: np.ndarray                 # (0, N_LOCAL, N_EXT): no tangent in the residual
     no_C: np.ndarray                 # (0, N_LOCAL, N_LOCAL)
     no_elem: np.ndarray              # (0,)
@@ -347,7 +390,8 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     m, cnt, sc = clearance_forces(
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
         cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
-        cl.xi_out[j, :ns], cl.r_b[j], cl.R[j], cl.law[j], cl.mu[j], cl.eps_v[j],
+        cl.xi_out[j, :ns], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
+        cl.law[j], cl.mu[j], cl.eps_v[j],
         cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
         cl.exact[j], r, K, C, elem, elem_i)
     cl.n_candidates[j] = m

@@ -26,10 +26,11 @@ from ..errors import ConvergenceError, FlexmbsError, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ERR_LEFT_BORE,
+    MAX_CANDIDATES,
     N_COLS,
     ClearancePart,
     clearance_update,
-    detect_circle,
+    detect_section,
     tracked_approach,
 )
 from .geometry import closest_point, section_state
@@ -148,7 +149,7 @@ class SlidingClearanceJoint(Interaction):
         self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
-        self._rows = np.zeros((4 * ns, N_COLS))  # at most 4 stationary points per circle section
+        self._rows = np.zeros((MAX_CANDIDATES * ns, N_COLS))  # stationary points per section
         self._elem_out = np.zeros(ns, np.int64)  # crossings of the last evaluation
         self._xi_out = np.zeros(ns)
 
@@ -236,8 +237,8 @@ class SlidingClearanceJoint(Interaction):
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b, psi))
             return out
-        if isinstance(self.hole.section, CircleSection):
-            return self._contacts_circle(q, v, want_tangent, update)
+        if self.hole.section.compiled_shape() is not None:
+            return self._contacts_compiled(q, v, want_tangent, update)
         qb = q[self._body_dofs]
         vb = v[self._body_dofs]
         A, centre, n, ey, ez = self._frames(qb)
@@ -274,17 +275,23 @@ class SlidingClearanceJoint(Interaction):
                 out.append((k, j, cand.kind, eP, res, a, b, psi))
         return out
 
-    def _contacts_circle(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
-                         update: bool) -> list:
-        """Circular bore: the narrow phase of all sections runs compiled (contact/_detect.py)."""
+    def _contacts_compiled(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
+                           update: bool) -> list:
+        """A section with a compiled shape: the narrow phase of all sections runs compiled
+        (contact/_detect.py)."""
         qb = q[self._body_dofs]
         vb = v[self._body_dofs]
         A, centre, *_ = self._frames(qb)
         qe = np.ascontiguousarray(q[self._elem_dofs])
         e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
-        m = detect_circle(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
-                          e_out, x_out, self.beam_radius, float(self.hole.section.bounding_radius()),
-                          self._rows)
+        section = self.hole.section
+        compiled = section.compiled_shape()
+        assert compiled is not None
+        shape, params = compiled
+        m = detect_section(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
+                           e_out, x_out, self.beam_radius, shape, params,
+                           float(section.bounding_radius()), float(section.inscribed_radius()),
+                           self._rows)
         if m < 0:
             self._raise_left_bore(m)
         out = []
@@ -311,10 +318,10 @@ class SlidingClearanceJoint(Interaction):
                         for k, j, kind, eP, res, a, b, psi in self._contacts(q, v, False, False)]
 
     def compiled_form(self) -> bool:
-        """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): circular
-        bore, detection not frozen, exact or Gauss–Newton tangent; else the per-contact Python path of
-        :meth:`evaluate` does."""
-        return (isinstance(self.hole.section, CircleSection) and self._frozen is None
+        """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): a section
+        with a compiled shape, detection not frozen, exact or Gauss–Newton tangent; else the
+        per-contact Python path of :meth:`evaluate` does."""
+        return (self.hole.section.compiled_shape() is not None and self._frozen is None
                 and self.tangent != "frozen_point")
 
     @property
@@ -470,6 +477,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
                     cross[i, k, side] = dofs.positions_present(j._elem_dofs[k],
                                                                j._elem_dofs[other])
     i64, c = np.int64, np.ascontiguousarray
+    shapes = [j.hole.section.compiled_shape() or (0, np.zeros(3)) for j in joints]
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
         pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
@@ -479,7 +487,10 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         pad_stack([j.stations for j in joints], (), 0.0, float),
         np.array([len(j.stations) for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
+        np.array([shapes[i][0] for i in range(nj)], i64),
+        c(np.array([shapes[i][1] for i in range(nj)], float).reshape(nj, 3)),
         np.array([j.hole.section.bounding_radius() for j in joints], float),
+        np.array([j.hole.section.inscribed_radius() for j in joints], float),
         c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),
         np.array([m for m, _ in fr], float), np.array([e for _, e in fr], float),
         np.array([j.compiled_form() for j in joints], dtype=np.bool_),
@@ -489,10 +500,12 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         pad_stack([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
         pad_stack([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
         pad_stack([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
-        pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, 4 * max_ns, N_COLS)),
+        pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
         np.zeros(nj, i64), np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)),
-        np.zeros((4 * max_ns, N_LOCAL, N_EXT)), np.zeros((4 * max_ns, N_LOCAL, N_LOCAL)),
-        np.zeros(4 * max_ns, i64), np.zeros(4 * max_ns, i64), np.zeros((0, N_LOCAL, N_EXT)),
+        np.zeros((MAX_CANDIDATES * max_ns, N_LOCAL, N_EXT)),
+        np.zeros((MAX_CANDIDATES * max_ns, N_LOCAL, N_LOCAL)),
+        np.zeros(MAX_CANDIDATES * max_ns, i64), np.zeros(MAX_CANDIDATES * max_ns, i64),
+        np.zeros((0, N_LOCAL, N_EXT)),
         np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         ns = len(j.stations)

@@ -129,6 +129,11 @@ class HoleSection(ABC):
     def inscribed_radius(self) -> float:
         """Radius of the largest centred circle inside the section (broad phase)."""
 
+    def compiled_shape(self) -> tuple[int, np.ndarray] | None:
+        """``(kind, params)`` of the compiled boundary kernel (:func:`section_boundary`), or
+        None: the joint then runs this section's Python detector."""
+        return None
+
     def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
         """All stationary points of the penetration with ``depth > −margin`` (FORMULATION II §6).
 
@@ -326,6 +331,148 @@ def circle_boundary(R, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
 
 
 @njit
+def superellipse_boundary(A, B, n, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+    """Wall point of the superellipse ``|y/A|ⁿ + |z/B|ⁿ = 1`` in the radial parametrisation
+    ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``, ``ρ = g^(−1/n)``, ``g = |cos ψ/A|ⁿ + |sin ψ/B|ⁿ``, and its
+    first and second ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,) (compiled boundary of
+    :class:`SuperellipseSection`, FORMULATION II §6; n ≥ 2 keeps g twice differentiable)."""
+    c = math.cos(psi)
+    s = math.sin(psi)
+    u = c / A
+    w = s / B
+    au = abs(u)
+    aw = abs(w)
+    su = 1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0)
+    sw = 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
+    g = au**n + aw**n
+    t1 = au ** (n - 1.0) * su * (-s / A)
+    t2 = aw ** (n - 1.0) * sw * (c / B)
+    dg = n * (t1 + t2)
+    d2g = n * ((n - 1.0) * au ** (n - 2.0) * (s / A) ** 2 + au ** (n - 1.0) * su * (-c / A)
+               + (n - 1.0) * aw ** (n - 2.0) * (c / B) ** 2 + aw ** (n - 1.0) * sw * (-s / B))
+    rho = g ** (-1.0 / n)
+    drho = -rho * dg / (n * g)
+    d2rho = -(drho * dg + rho * d2g) / (n * g) + rho * dg * dg / (n * g * g)
+    Y[0] = rho * c
+    Y[1] = rho * s
+    Yp[0] = drho * c - rho * s
+    Yp[1] = drho * s + rho * c
+    Ypp[0] = d2rho * c - 2.0 * drho * s - rho * c
+    Ypp[1] = d2rho * s + 2.0 * drho * c - rho * s
+
+
+#: compiled shapes: the kind codes of :meth:`HoleSection.compiled_shape`
+SHAPE_CIRCLE = 0
+SHAPE_SUPERELLIPSE = 1
+
+
+@njit
+def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+    """``Y(ψ), Y′, Y″`` of a compiled hole section (``kind``, ``params`` of
+    :meth:`HoleSection.compiled_shape`): the only place that knows the shapes; the detector and
+    the contact tangent read the wall through it."""
+    if kind == SHAPE_CIRCLE:
+        circle_boundary(params[0], psi, Y, Yp, Ypp)
+    else:
+        superellipse_boundary(params[0], params[1], params[2], psi, Y, Yp, Ypp)
+
+
+@njit
+def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
+    """Whether the point (y, z) lies inside the compiled hole section (on the wall counts)."""
+    if kind == SHAPE_CIRCLE:
+        return y * y + z * z <= params[0] * params[0]
+    n = params[2]
+    return abs(y / params[0]) ** n + abs(z / params[1]) ** n <= 1.0
+
+
+@njit
+def _support(cy, cz, eax, eay, a, b, N0, N1):  # noqa: ANN001, ANN202
+    """Ellipse point with outward normal N: ``X = c + ΣN/√(NᵀΣN)``, and ``TᵀJ_E T`` for the
+    tangent T = (−N1, N0) (FORMULATION II §6)."""
+    na = N0 * eax + N1 * eay            # components of N along e_a, e_b
+    nb = -N0 * eay + N1 * eax
+    qq = a * a * na * na + b * b * nb * nb
+    sq = math.sqrt(qq)
+    xa = a * a * na / sq
+    xb = b * b * nb / sq
+    X0 = cy + xa * eax - xb * eay
+    X1 = cz + xa * eay + xb * eax
+    # T in (e_a, e_b): (−nb, na); TᵀΣT − (TᵀΣN)²/NᵀΣN over √(NᵀΣN)
+    tst = a * a * nb * nb + b * b * na * na
+    tsn = -a * a * na * nb + b * b * na * nb
+    rho = (tst - tsn * tsn / qq) / sq
+    return X0, X1, rho, xa / a, xb / b
+
+
+@njit
+def _common_normal_f(kind, params, cy, cz, eax, eay, a, b, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+    """``F(ψ) = T·(X(N(ψ)) − Y(ψ))``, ``F′``, ``d = N·(X − Y)`` and the ellipse angle of X."""
+    section_boundary(kind, params, psi, Y, Yp, Ypp)
+    speed = math.hypot(Yp[0], Yp[1])
+    T0 = Yp[0] / speed
+    T1 = Yp[1] / speed
+    N0 = T1
+    N1 = -T0
+    kappa = (Yp[0] * Ypp[1] - Yp[1] * Ypp[0]) / speed**3
+    X0, X1, rho, ca, sb = _support(cy, cz, eax, eay, a, b, N0, N1)
+    F = T0 * (X0 - Y[0]) + T1 * (X1 - Y[1])
+    d = N0 * (X0 - Y[0]) + N1 * (X1 - Y[1])
+    dF = speed * (kappa * (rho - d) - 1.0)
+    return F, dF, d, math.atan2(sb, ca)
+
+
+@njit
+def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, phi_out,  # noqa: ANN001, ANN201
+                         kind_out, depth_out):
+    """Every stationary point of the penetration of the ellipse through a compiled section
+    (generic detector of FORMULATION II §6, compiled): ``F(ψ)`` sampled at ``samples`` points,
+    sign changes bracketed, safeguarded Newton; writes ψ (wall parameter), φ (ellipse angle),
+    kind (+1 maximum of the penetration, −1 minimum) and depth ``N·(X − Y)``; returns their
+    number (at most ``psi_out.size``)."""
+    Y = np.empty(2)
+    Yp = np.empty(2)
+    Ypp = np.empty(2)
+    h = 2.0 * np.pi / samples
+    F0, _, _, _ = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, 0.0, Y, Yp, Ypp)
+    Fi = F0
+    count = 0
+    scale = max(a, params[0])
+    for i in range(samples):
+        lo = i * h
+        hi = lo + h
+        if i + 1 < samples:
+            Fj, _, _, _ = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, hi, Y, Yp, Ypp)
+        else:
+            Fj = F0
+        if Fi == 0.0 or Fi * Fj < 0.0:
+            flo = Fi
+            s = 0.5 * (lo + hi) if Fi != 0.0 else lo
+            for _ in range(60):
+                f, df, _, _ = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, s, Y, Yp, Ypp)
+                if abs(f) <= 1e-13 * scale or hi - lo < 1e-15:
+                    break
+                if (f < 0.0) == (flo < 0.0):
+                    lo = s
+                    flo = f
+                else:
+                    hi = s
+                s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
+                if not (lo < s_new < hi):
+                    s_new = 0.5 * (lo + hi)
+                s = s_new
+            f, df, d, phi = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, s, Y, Yp, Ypp)
+            if count < psi_out.size:
+                psi_out[count] = s % (2.0 * np.pi)
+                phi_out[count] = phi
+                kind_out[count] = 1 if df < 0.0 else -1
+                depth_out[count] = d
+                count += 1
+        Fi = Fj
+    return count
+
+
+@njit
 def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (FORMULATION II §3).
 
@@ -430,6 +577,9 @@ class CircleSection(HoleSection):
     def bounding_radius(self) -> float:
         return float(self.radius)
 
+    def compiled_shape(self) -> tuple[int, np.ndarray]:
+        return SHAPE_CIRCLE, np.array([float(self.radius), 0.0, 0.0])
+
     def inscribed_radius(self) -> float:
         return float(self.radius)
 
@@ -510,6 +660,9 @@ class SuperellipseSection(HoleSection):
 
     def inscribed_radius(self) -> float:
         return float(min(self.a, self.b))  # ρ(ψ) ≥ min(a, b) for n ≥ 2
+
+    def compiled_shape(self) -> tuple[int, np.ndarray]:
+        return SHAPE_SUPERELLIPSE, np.array([float(self.a), float(self.b), float(self.exponent)])
 
 
 #: the former name of :data:`HOLE_SECTIONS` (same object)

@@ -1,0 +1,129 @@
+"""The superellipse bore on the compiled path (issue "non-circular bores, compiled"): its
+boundary kernel against differences of itself, its detector against the Python generic one, a
+round superellipse against the circle, and the exact tangent through the shape interface
+against central differences of the residual."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import flexmbs as fm
+from flexmbs.assembly import Assembly
+from flexmbs.contact.sections import (
+    SHAPE_SUPERELLIPSE,
+    Ellipse2D,
+    SuperellipseSection,
+    common_normal_points,
+    superellipse_boundary,
+)
+
+
+@pytest.mark.parametrize("n", [2.0, 3.0, 4.0, 10.0])
+def test_boundary_kernel_derivatives_and_wall(n):
+    A, B = 3e-3, 2e-3
+    Y, Yp, Ypp = np.empty(2), np.empty(2), np.empty(2)
+    h = 1e-6
+    for psi in np.linspace(0.05, 2 * np.pi, 23):
+        superellipse_boundary(A, B, n, psi, Y, Yp, Ypp)
+        y0, yp, ypp = Y.copy(), Yp.copy(), Ypp.copy()
+        assert abs(abs(y0[0] / A) ** n + abs(y0[1] / B) ** n - 1.0) < 1e-12
+        superellipse_boundary(A, B, n, psi + h, Y, Yp, Ypp)
+        a1, b1 = Y.copy(), Yp.copy()
+        superellipse_boundary(A, B, n, psi - h, Y, Yp, Ypp)
+        assert np.allclose((a1 - Y) / (2 * h), yp, rtol=0, atol=1e-7 * A)
+        # (n = 3: Y‴ jumps at the vertices, so the difference quotient is off by O(h A) there)
+        assert np.allclose((b1 - Yp) / (2 * h), ypp, rtol=0, atol=1e-5 * A)
+
+
+def test_compiled_detector_finds_the_python_detectors_points():
+    sec = SuperellipseSection(a=3e-3, b=2e-3, exponent=4.0)
+    params = np.array([3e-3, 2e-3, 4.0])
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        c = rng.normal(scale=4e-4, size=2)
+        ang = rng.uniform(0, np.pi)
+        ell = Ellipse2D(c, np.array([math.cos(ang), math.sin(ang)]), 1.9e-3, 1.5e-3)
+        ref = np.array(sorted((cd.psi, cd.kind, cd.depth)
+                              for cd in sec.candidates(ell, margin=1.0)))
+        psi, phi, kind, depth = np.empty(16), np.empty(16), np.empty(16, np.int64), np.empty(16)
+        m = common_normal_points(SHAPE_SUPERELLIPSE, params, c[0], c[1], ell.e_a[0], ell.e_a[1],
+                                 ell.a, ell.b, 128, psi, phi, kind, depth)
+        got = np.array(sorted((psi[i], int(kind[i]), depth[i]) for i in range(m)))
+        assert got.shape == ref.shape
+        assert np.allclose(got[:, :2], ref[:, :2], rtol=0, atol=1e-9)
+        assert np.allclose(got[:, 2], ref[:, 2], rtol=0, atol=1e-12)
+        for i in range(m):   # φ is the ellipse angle of the support point
+            X = ell.point(phi[i])
+            assert np.linalg.norm(X - c) > 0
+
+
+def _sleeve_model(hole: fm.Hole, tangent: str = "exact") -> tuple[fm.Model, object]:
+    model = fm.Model(gravity=(0, 0, -9.81))
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0.2), elements=8), name="rail",
+                          section=fm.CircularSection(2e-3), material=fm.Material(E=2.1e11, rho=7800))
+    model.clamp(beam.first_node)
+    model.clamp(beam.last_node)
+    pose = beam.frame_at(0.5).shifted((0.0, 2e-4, -6e-4))
+    sleeve = model.add_rigid_body(mass=0.2, inertia=(2e-5, 4e-5, 4e-5), pose=pose, name="sleeve")
+    joint = model.add_joint(fm.SlidingClearanceJoint(
+        beam, sleeve, hole=hole, tangent=tangent,
+        contact=fm.LinearPenalty(stiffness=1e6, damping=10.0), friction=0.2))
+    return model, joint
+
+
+def _state(asm: Assembly, seed: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return (asm.q_ref + 1e-6 * rng.standard_normal(asm.n_coords),
+            0.02 * rng.standard_normal(asm.n_coords))
+
+
+def test_round_superellipse_is_the_circle():
+    """n = 2, a = b = R: the generic compiled detector gives the circle's residual and matrix
+    (closed-form quartic) to rounding."""
+    out = []
+    for hole in (fm.CircleHole(2.5e-3, 0.04, 9), fm.SuperellipseHole(2.5e-3, 2.5e-3, 2.0, 0.04, 9)):
+        model, joint = _sleeve_model(hole)
+        assert joint.compiled_form()
+        asm = Assembly(model)
+        q, v = _state(asm)
+        rq, rl = np.zeros(asm.n_coords), np.zeros(asm.n_mult)
+        asm.evaluate(q, v, np.zeros_like(q), np.zeros(asm.n_mult), 0.0, rq, rl,
+                     matrix=(1.0, 0.1, 0.01))
+        assert joint.output(asm, q, v, np.zeros(asm.n_mult), 0.0)
+        out.append((rq.copy(), asm.matrix.toarray()))
+    (r1, m1), (r2, m2) = out
+    assert np.abs(r1 - r2).max() <= 1e-9 * np.abs(r1).max()
+    assert np.abs(m1 - m2).max() <= 1e-9 * np.abs(m1).max()
+
+
+def test_superellipse_tangent_equals_central_differences():
+    """A rounded-rectangular bore (n = 4) on the compiled path: the assembled matrix with the
+    exact contact tangent (friction, damping) equals central differences of the residual."""
+    model, joint = _sleeve_model(fm.SuperellipseHole(2.6e-3, 2.3e-3, 4.0, 0.04, 5))
+    asm = Assembly(model)
+    n, m = asm.n_coords, asm.n_mult
+    q, v = _state(asm)
+    lam = np.zeros(m)
+    qdd = np.zeros(n)
+    assert joint.output(asm, q, v, lam, 0.0), "the bore must touch the beam"
+    cK, cC = 1.0, 0.3
+
+    def res(q_, v_):
+        rq, rl = np.zeros(n), np.zeros(m)
+        asm.evaluate(q_, v_, qdd, lam, 0.0, rq, rl)
+        return rq
+
+    asm.evaluate(q, v, qdd, lam, 0.0, np.zeros(n), np.zeros(m), matrix=(0.0, cC, cK))
+    A = asm.matrix.toarray()[:n, :n]
+    h = 1e-8
+    fd = np.zeros((n, n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = h
+        fd[:, j] = (res(q + cK * e, v + cC * e) - res(q - cK * e, v - cC * e)) / (2 * h)
+    body = asm.body_dofs(model.bodies[0])
+    rows = np.concatenate([body, np.arange(n)])   # the contact couples everything to the body
+    assert np.abs(A - fd)[np.ix_(rows, rows)].max() <= 2e-6 * np.abs(fd).max()
