@@ -50,6 +50,20 @@ class ContactResult(NamedTuple):
 
 
 @njit
+def contact_map(Bp, S):  # noqa: ANN001, ANN201
+    """``W = ∂(x_Q − x_P)/∂q_c = [I, 2T(u_Q)p, −S(ξ_P)]`` (3, N_LOCAL) at fixed u_Q and ξ_P
+    (FORMULATION II §4): ``Bp`` = 2T(u_Q)p (3, 4), ``S`` the shape functions at ξ_P (4,)."""
+    W = np.zeros((3, N_LOCAL))
+    for c in range(3):
+        W[c, c] = 1.0
+        for i in range(4):
+            W[c, 3 + i] = Bp[c, i]
+        for m in range(4):
+            W[c, 7 + 3 * m + c] = -S[m]
+    return W
+
+
+@njit
 def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa: ANN001, ANN202
     """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
     rx, rxx, ell)``; see :func:`contact_geometry`."""
@@ -85,13 +99,7 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
     n = u / ell
     g = ell - r_b
-    W = np.zeros((3, N_LOCAL))
-    for c in range(3):
-        W[c, c] = 1.0
-        for i in range(4):
-            W[c, 3 + i] = Bp[c, i]
-        for m in range(4):
-            W[c, 7 + 3 * m + c] = -S[m]
+    W = contact_map(Bp, S)
     B = np.zeros(N_LOCAL)
     vrel = np.zeros(3)
     for j in range(N_LOCAL):

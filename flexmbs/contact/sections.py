@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._jit import njit
+from ..elements.centerline import bracketed_newton_step
 from ..errors import ModelError
 from ..registry import Registry
 
@@ -452,15 +453,7 @@ def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out,
                 f, df, _, _ = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, s, Y, Yp, Ypp)
                 if abs(f) <= 1e-13 * scale or hi - lo < 1e-15:
                     break
-                if (f < 0.0) == (flo < 0.0):
-                    lo = s
-                    flo = f
-                else:
-                    hi = s
-                s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
-                if not (lo < s_new < hi):
-                    s_new = 0.5 * (lo + hi)
-                s = s_new
+                s, lo, hi, flo = bracketed_newton_step(s, f, df, lo, hi, flo)
             f, df, d, phi = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, s, Y, Yp, Ypp)
             if count < psi_out.size:
                 psi_out[count] = s % (2.0 * np.pi)

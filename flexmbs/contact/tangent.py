@@ -27,10 +27,10 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import CENTERLINE_SIZE, shape_xi
+from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_tensor_of, rotation
 from .laws import coulomb_force, law_force
-from .pair import N_LOCAL
+from .pair import N_LOCAL, contact_map
 
 __all__ = ["N_EXT", "I_OFF", "P_OFF", "contact_tangent"]
 
@@ -126,15 +126,8 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
             Do[c, 3 + i] = Bo[c, i]
 
     # ---- crossing: h(ξ_I) = n·(r_I − o) = 0
-    SI, dSI, ddSI = shape_xi(xiI, LI)
-    rI = np.zeros(3)
-    rxI = np.zeros(3)
-    rxxI = np.zeros(3)
-    for m in range(4):
-        for c in range(3):
-            rI[c] += SI[m] * qI[3 * m + c]
-            rxI[c] += dSI[m] * qI[3 * m + c]
-            rxxI[c] += ddSI[m] * qI[3 * m + c]
+    SI, dSI, _ = shape_xi(xiI, LI)
+    rI, rxI, rxxI = element_point(qI, LI, xiI)
     d = rI - o
     DrI = np.zeros((3, NX))     # partial (at fixed ξ_I) first
     DrxI = np.zeros((3, NX))
@@ -258,19 +251,9 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
         for j in range(NX):
             DQ[c, j] += A[c, 0] * DuQ[0, j] + A[c, 1] * DuQ[1, j] + A[c, 2] * DuQ[2, j]
     # ---- closest point: G(ξ) = (r(ξ) − Q)·r′(ξ) = 0 on e_P
-    SP, dSP, ddSP = shape_xi(xiP, LP)
-    P = np.zeros(3)
-    rxP = np.zeros(3)
-    rxxP = np.zeros(3)
-    vPt = np.zeros(3)      # S(ξ_P) ė_P
-    vPx = np.zeros(3)      # S′(ξ_P) ė_P
-    for m in range(4):
-        for c in range(3):
-            P[c] += SP[m] * qP[3 * m + c]
-            rxP[c] += dSP[m] * qP[3 * m + c]
-            rxxP[c] += ddSP[m] * qP[3 * m + c]
-            vPt[c] += SP[m] * vP[3 * m + c]
-            vPx[c] += dSP[m] * vP[3 * m + c]
+    SP, dSP, _ = shape_xi(xiP, LP)
+    P, rxP, rxxP = element_point(qP, LP, xiP)
+    vPt, vPx, _ = element_point(vP, LP, xiP)      # S(ξ_P) ė_P and S′(ξ_P) ė_P
     dPQ = P - Q
     Gx = (rxP[0] * rxP[0] + rxP[1] * rxP[1] + rxP[2] * rxP[2]
           + dPQ[0] * rxxP[0] + dPQ[1] * rxxP[1] + dPQ[2] * rxxP[2])
@@ -332,13 +315,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     Dgdot = np.empty(NX)
     _d_dot(nc, Dnc, vrel, Dvrel, Dgdot)
     # W (3, N_LOCAL) on [r_H, p, e_P] and ∂ġ/∂q̇ = nᵀW
-    W = np.zeros((3, N_LOCAL))
-    for c in range(3):
-        W[c, c] = 1.0
-        for i in range(4):
-            W[c, 3 + i] = Bp[c, i]
-        for m in range(4):
-            W[c, 7 + 3 * m + c] = -SP[m]
+    W = contact_map(Bp, SP)
     Bn = np.empty(N_LOCAL)
     for j in range(N_LOCAL):
         Bn[j] = nc[0] * W[0, j] + nc[1] * W[1, j] + nc[2] * W[2, j]

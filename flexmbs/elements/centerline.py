@@ -70,6 +70,22 @@ def _phi_at(q_e, lengths, origin, normal, s):  # noqa: ANN001, ANN202
 
 
 @njit
+def bracketed_newton_step(s, f, df, lo, hi, flo):  # noqa: ANN001, ANN201
+    """One Newton step on a bracketed root, bisection when it would leave the bracket: the
+    bracket ``[lo, hi]`` (``flo`` = f(lo)) shrinks to the side of s that keeps the sign change.
+    Returns ``(s_new, lo, hi, flo)`` (used by every bracketed root search of the package)."""
+    if (f < 0.0) == (flo < 0.0):
+        lo = s
+        flo = f
+    else:
+        hi = s
+    s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
+    if not (lo < s_new < hi):
+        s_new = 0.5 * (lo + hi)
+    return s_new, lo, hi, flo
+
+
+@njit
 def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter):  # noqa: ANN001, ANN202
     """Root of φ(s) in [lo, hi] with φ(lo)φ(hi) ≤ 0: Newton, bisection if it leaves the bracket."""
     s = 0.5 * (lo + hi)
@@ -77,14 +93,7 @@ def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter):
         f, df, _, _, _ = _phi_at(q_e, lengths, origin, normal, s)
         if abs(f) <= tol:
             return s, True
-        if (f < 0.0) == (flo < 0.0):
-            lo = s
-            flo = f
-        else:
-            hi = s
-        s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
-        if not (lo < s_new < hi):
-            s_new = 0.5 * (lo + hi)
+        s_new, lo, hi, flo = bracketed_newton_step(s, f, df, lo, hi, flo)
         if hi - lo <= 1e-15 * (1.0 + abs(hi)):
             return s_new, True
         s = s_new
