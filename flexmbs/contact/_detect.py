@@ -350,7 +350,7 @@ class ClearancePart(NamedTuple):
     n_sec: np.ndarray
     r_b: np.ndarray
     shape: np.ndarray                # (nj,) compiled section kind (sections.SHAPE_*)
-    params: np.ndarray               # (nj, 3) its parameters
+    params: np.ndarray               # (nj, 4) its parameters
     R_out: np.ndarray                # (nj,) bounding radius of the section
     R_in: np.ndarray                 # (nj,) inscribed radius
     law: np.ndarray                  # (nj, 5)

@@ -75,11 +75,13 @@ class CircleHole(Hole):
 
 class SuperellipseHole(Hole):
     """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (FORMULATION Part II §6); the
-    keys are those of the scenario files (``a``, ``b``, ``exponent``)."""
+    keys are those of the scenario files (``a``, ``b``, ``exponent``, ``angle``: the section
+    turned in the body by that many radians from body y towards body z)."""
 
     def __init__(self, a: float, b: float, exponent: float, length: float,
-                 sections: int = 9) -> None:
-        super().__init__(SuperellipseSection(a=a, b=b, exponent=exponent), length, sections)
+                 sections: int = 9, angle: float = 0.0) -> None:
+        super().__init__(SuperellipseSection(a=a, b=b, exponent=exponent, angle=angle), length,
+                         sections)
 
 
 #: contact points tracked per section (a circle has at most 4; a superellipse's extra ones
@@ -477,7 +479,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
                     cross[i, k, side] = dofs.positions_present(j._elem_dofs[k],
                                                                j._elem_dofs[other])
     i64, c = np.int64, np.ascontiguousarray
-    shapes = [j.hole.section.compiled_shape() or (0, np.zeros(3)) for j in joints]
+    shapes = [j.hole.section.compiled_shape() or (0, np.zeros(4)) for j in joints]
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
         pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
@@ -488,7 +490,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         np.array([len(j.stations) for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
         np.array([shapes[i][0] for i in range(nj)], i64),
-        c(np.array([shapes[i][1] for i in range(nj)], float).reshape(nj, 3)),
+        c(np.array([shapes[i][1] for i in range(nj)], float).reshape(nj, 4)),
         np.array([j.hole.section.bounding_radius() for j in joints], float),
         np.array([j.hole.section.inscribed_radius() for j in joints], float),
         c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),

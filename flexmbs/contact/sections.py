@@ -374,8 +374,16 @@ def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
     the contact tangent read the wall through it."""
     if kind == SHAPE_CIRCLE:
         circle_boundary(params[0], psi, Y, Yp, Ypp)
-    else:
-        superellipse_boundary(params[0], params[1], params[2], psi, Y, Yp, Ypp)
+        return
+    beta = params[3]      # orientation of the section's a axis from e_y towards e_z
+    superellipse_boundary(params[0], params[1], params[2], psi - beta, Y, Yp, Ypp)
+    if beta != 0.0:
+        cb = math.cos(beta)
+        sb = math.sin(beta)
+        for v in (Y, Yp, Ypp):
+            v0 = v[0]
+            v[0] = cb * v0 - sb * v[1]
+            v[1] = sb * v0 + cb * v[1]
 
 
 @njit
@@ -384,7 +392,11 @@ def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
     if kind == SHAPE_CIRCLE:
         return y * y + z * z <= params[0] * params[0]
     n = params[2]
-    return abs(y / params[0]) ** n + abs(z / params[1]) ** n <= 1.0
+    cb = math.cos(params[3])
+    sb = math.sin(params[3])
+    yl = cb * y + sb * z        # the point in the section's own axes
+    zl = -sb * y + cb * z
+    return abs(yl / params[0]) ** n + abs(zl / params[1]) ** n <= 1.0
 
 
 @njit
@@ -571,7 +583,7 @@ class CircleSection(HoleSection):
         return float(self.radius)
 
     def compiled_shape(self) -> tuple[int, np.ndarray]:
-        return SHAPE_CIRCLE, np.array([float(self.radius), 0.0, 0.0])
+        return SHAPE_CIRCLE, np.array([float(self.radius), 0.0, 0.0, 0.0])
 
     def inscribed_radius(self) -> float:
         return float(self.radius)
@@ -602,13 +614,15 @@ class CircleSection(HoleSection):
 class SuperellipseSection(HoleSection):
     """Superellipse bore ``|y/a|ⁿ + |z/b|ⁿ = 1``, semi-axes ``a`` (body y) and ``b`` (body z),
     ``n = exponent ≥ 2`` (FORMULATION II §6), radially parametrised ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``;
-    generic common-normal detector. Parameter names as in the scenario: ``a``, ``b``,
-    ``exponent``."""
+    generic common-normal detector. ``angle`` turns the section in the hole body (its a axis
+    from body y towards body z, radians). Parameter names as in the scenario: ``a``, ``b``,
+    ``exponent``, ``angle``."""
 
     a: float
     b: float
     exponent: float = 2.0
     samples: int = 128
+    angle: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("a", "b"):
@@ -620,10 +634,23 @@ class SuperellipseSection(HoleSection):
             raise ModelError(f"SuperellipseSection: exponent must be >= 2 (got {n!r})")
         if int(self.samples) < 64:
             raise ModelError(f"SuperellipseSection: samples must be >= 64 (got {self.samples!r})")
+        ang = self.angle
+        if not (isinstance(ang, (int, float)) and not isinstance(ang, bool) and math.isfinite(ang)):
+            raise ModelError(f"SuperellipseSection: angle must be a finite number (got {ang!r})")
 
     def boundary(self, psi: np.ndarray | float
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         psi = np.asarray(psi, dtype=float)
+        if self.angle == 0.0:
+            return self._boundary_local(psi)
+        Y, N, T, speed, kappa = self._boundary_local(psi - float(self.angle))
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        rot = np.array([[c, -s], [s, c]])
+        return Y @ rot.T, N @ rot.T, T @ rot.T, speed, kappa
+
+    def _boundary_local(self, psi: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`boundary` in the section's own axes (a along y)."""
         A, B, n = float(self.a), float(self.b), float(self.exponent)
         c, s = np.cos(psi), np.sin(psi)
         ac, as_ = np.abs(c / A), np.abs(s / B)
@@ -655,7 +682,8 @@ class SuperellipseSection(HoleSection):
         return float(min(self.a, self.b))  # ρ(ψ) ≥ min(a, b) for n ≥ 2
 
     def compiled_shape(self) -> tuple[int, np.ndarray]:
-        return SHAPE_SUPERELLIPSE, np.array([float(self.a), float(self.b), float(self.exponent)])
+        return SHAPE_SUPERELLIPSE, np.array([float(self.a), float(self.b), float(self.exponent),
+                                             float(self.angle)])
 
 
 #: the former name of :data:`HOLE_SECTIONS` (same object)

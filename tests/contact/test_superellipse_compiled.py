@@ -38,9 +38,11 @@ def test_boundary_kernel_derivatives_and_wall(n):
         assert np.allclose((b1 - Yp) / (2 * h), ypp, rtol=0, atol=1e-5 * A)
 
 
-def test_compiled_detector_finds_the_python_detectors_points():
-    sec = SuperellipseSection(a=3e-3, b=2e-3, exponent=4.0)
-    params = np.array([3e-3, 2e-3, 4.0])
+@pytest.mark.parametrize("angle", [0.0, 0.7])
+def test_compiled_detector_finds_the_python_detectors_points(angle):
+    """Same points, kinds and depths as the Python generic detector, the section turned or not."""
+    sec = SuperellipseSection(a=3e-3, b=2e-3, exponent=4.0, angle=angle)
+    params = np.array([3e-3, 2e-3, 4.0, angle])
     rng = np.random.default_rng(0)
     for _ in range(20):
         c = rng.normal(scale=4e-4, size=2)
@@ -99,10 +101,12 @@ def test_round_superellipse_is_the_circle():
     assert np.abs(m1 - m2).max() <= 1e-9 * np.abs(m1).max()
 
 
-def test_superellipse_tangent_equals_central_differences():
-    """A rounded-rectangular bore (n = 4) on the compiled path: the assembled matrix with the
-    exact contact tangent (friction, damping) equals central differences of the residual."""
-    model, joint = _sleeve_model(fm.SuperellipseHole(2.6e-3, 2.3e-3, 4.0, 0.04, 5))
+@pytest.mark.parametrize("angle", [0.0, 0.4])
+def test_superellipse_tangent_equals_central_differences(angle):
+    """A rounded-rectangular bore (n = 4, turned in the body or not) on the compiled path: the
+    assembled matrix with the exact contact tangent (friction, damping) equals central
+    differences of the residual."""
+    model, joint = _sleeve_model(fm.SuperellipseHole(2.6e-3, 2.3e-3, 4.0, 0.04, 5, angle=angle))
     asm = Assembly(model)
     n, m = asm.n_coords, asm.n_mult
     q, v = _state(asm)
@@ -127,3 +131,25 @@ def test_superellipse_tangent_equals_central_differences():
     body = asm.body_dofs(model.bodies[0])
     rows = np.concatenate([body, np.arange(n)])   # the contact couples everything to the body
     assert np.abs(A - fd)[np.ix_(rows, rows)].max() <= 2e-6 * np.abs(fd).max()
+
+
+def test_turned_section_detects_the_turned_points():
+    """Turning the section and the ellipse together by β turns the detected wall points by β
+    and leaves the kinds and depths alone (the orientation is a rigid rotation)."""
+    params0 = np.array([3e-3, 2e-3, 6.0, 0.0])
+    beta = 0.9
+    params1 = np.array([3e-3, 2e-3, 6.0, beta])
+    c = np.array([3e-4, -2e-4])
+    ea = np.array([math.cos(0.3), math.sin(0.3)])
+    rot = np.array([[math.cos(beta), -math.sin(beta)], [math.sin(beta), math.cos(beta)]])
+    out = []
+    for params, cc, e in ((params0, c, ea), (params1, rot @ c, rot @ ea)):
+        psi, phi, kind, depth = np.empty(16), np.empty(16), np.empty(16, np.int64), np.empty(16)
+        m = common_normal_points(SHAPE_SUPERELLIPSE, params, cc[0], cc[1], e[0], e[1], 2.2e-3,
+                                 1.6e-3, 128, psi, phi, kind, depth)
+        out.append(sorted(((psi[i] - params[3]) % (2 * np.pi), int(kind[i]), depth[i])
+                          for i in range(m)))
+    assert len(out[0]) == len(out[1]) > 0
+    for (p0, k0, d0), (p1, k1, d1) in zip(out[0], out[1], strict=True):
+        assert k0 == k1
+        assert abs(p0 - p1) < 1e-9 and abs(d0 - d1) < 1e-12
