@@ -50,6 +50,17 @@ class SectionState:
     forces: list[float] = field(default_factory=list)
     distances: list[float] = field(default_factory=list)   #: |Q - P| in 3D
     ab_source: str = "sections.csv"
+    hole: dict | None = None      #: the joint's non-circular section (summary.json), else a circle
+
+    def wall(self, psi: np.ndarray) -> np.ndarray:
+        """Wall points (len(psi), 2) of the bore: the registered section's own boundary (any
+        shape) or the circle of radius R."""
+        if self.hole is None:
+            return self.R * np.stack([np.cos(psi), np.sin(psi)], axis=-1)
+        from flexmbs.contact.sections import get_section
+
+        params = {k: v for k, v in self.hole.items() if k not in ("shape", "length", "sections")}
+        return get_section(self.hole["shape"], **params).boundary(psi)[0]
 
     @property
     def clearance(self) -> float:
@@ -98,6 +109,9 @@ def section_state(out_dir: str | Path, *, joint: str | None = None, section: int
     if not R > 0:
         raise ValueError(f"bore radius must be > 0 (got {R})")
     st = SectionState(joint, section, t, R, s["a"], s["b"], np.array([s["cy"], s["cz"]]), ea)
+    hole = (run.summary.get("hole_sections") or {}).get(joint)
+    if hole and hole.get("shape") != "circle" and radius is None:
+        st.hole = hole
     pts = [r for r in run.contacts if r["joint"] == joint and float(r["t"]) == t
            and int(r["section"]) == section]
 
@@ -147,8 +161,20 @@ def section_figure(out_dir: str | Path, *, joint: str | None = None, section: in
     phi = np.linspace(0.0, 2.0 * np.pi, 721)
     fig, ax = plt.subplots(figsize=(8.6, 5.6))
     Rd = b + f * (R - b)
-    ax.plot(mm * Rd * np.cos(phi), mm * Rd * np.sin(phi), "k-", lw=1.5,
-            label=f"bore, R = {1e3 * R:.4g} mm (drawn {1e3 * Rd:.3g} mm)")
+
+    def drawn(x: np.ndarray) -> np.ndarray:
+        """A wall point drawn at b + f(|x| − b) in its true direction (clearance ×f)."""
+        r = np.linalg.norm(x, axis=-1, keepdims=True)
+        return x / np.where(r > 0, r, 1.0) * (b + f * (r - b))
+
+    wall = drawn(st.wall(phi))
+    if st.hole is None:
+        bore = f"bore, R = {1e3 * R:.4g} mm (drawn {1e3 * Rd:.3g} mm)"
+    else:
+        shown = ", ".join(f"{k} = {v:.4g}" for k, v in st.hole.items()
+                          if k not in ("shape", "length", "sections", "samples"))
+        bore = f"bore: {st.hole['shape']} ({shown})"
+    ax.plot(mm * wall[:, 0], mm * wall[:, 1], "k-", lw=1.5, label=bore)
     ax.plot([0.0], [0.0], "k+", ms=10, label="hole centre O")
     cd = f * st.centre
     ell = cd[:, None] + a * np.cos(phi) * st.e_a[:, None] + b * np.sin(phi) * eb[:, None]
@@ -161,7 +187,7 @@ def section_figure(out_dir: str | Path, *, joint: str | None = None, section: in
     for i, (Q, P, g, F, ell3) in enumerate(zip(st.Q, st.P, st.gaps, st.forces, st.distances,
                                                strict=True)):
         u = Q / (np.linalg.norm(Q) or 1.0)
-        Qd, Pd = mm * Rd * u, mm * f * P
+        Qd, Pd = mm * drawn(Q), mm * f * P
         ax.plot(*Qd, "ro", ms=6, label="Q (hole point)" if i == 0 else None)
         ax.plot(*Pd, "gs", ms=5, label="P (closest point on the beam axis)" if i == 0 else None)
         ax.plot([Pd[0], Qd[0]], [Pd[1], Qd[1]], "r:", lw=0.9)
@@ -172,7 +198,7 @@ def section_figure(out_dir: str | Path, *, joint: str | None = None, section: in
     if not st.Q:
         ax.text(0.02, 0.98, "no contact in this section", transform=ax.transAxes, va="top",
                 fontsize=9)
-    lim = 1.2 * mm * max(Rd, float(np.abs(ell).max()))
+    lim = 1.2 * mm * max(float(np.abs(wall).max()), float(np.abs(ell).max()))
     ax.set_xlim(-lim, lim)
     ax.set_ylim(-lim, lim)
     ax.set_aspect("equal")

@@ -13,6 +13,7 @@ the approach velocities of the damped laws are updated after each converged step
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -318,6 +319,18 @@ class SlidingClearanceJoint(Interaction):
         A = rotation_matrix(qb[3:7])
         self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b, psi)
                         for k, j, kind, eP, res, a, b, psi in self._contacts(q, v, False, False)]
+
+    def hole_record(self) -> dict[str, Any]:
+        """The hole as data (``summary.json["hole_sections"]``, read by the section view):
+        ``shape`` (registered name) and the section's parameters, ``length``, ``sections``."""
+        from .sections import HOLE_SECTIONS
+
+        section = self.hole.section
+        shape = next((n for n in HOLE_SECTIONS.names() if HOLE_SECTIONS.get(n) is type(section)),
+                     type(section).__name__)
+        params: dict[str, Any] = dataclasses.asdict(section) if dataclasses.is_dataclass(section) else {}
+        return {"shape": shape, **params, "length": float(self.hole.length),
+                "sections": int(self.hole.sections)}
 
     def compiled_form(self) -> bool:
         """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): a section

@@ -282,6 +282,8 @@ class OutputWriter:
             "vtu_blocks": {"block_id": {str(k): v for k, v in BLOCK_NAMES.items()},
                            "beam_id": [b.name for b in model.beams],
                            "body_id": [b.name for b in model.bodies]},
+            "hole_sections": {j.name: j.hole_record() for j in model.interactions
+                              if hasattr(j, "hole_record")},
             "metadata": self.metadata,
         })
 

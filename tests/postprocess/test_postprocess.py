@@ -4,6 +4,7 @@ contain the expected series, the section view draws the ellipse of contacts.csv.
 from __future__ import annotations
 
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -224,3 +225,35 @@ def test_cli_render_and_plot(sleeve_run, tmp_path, capsys, monkeypatch):
     assert main(["render", str(sleeve_run)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'pip install -e ".[render]"' in err
+
+
+def test_section_view_draws_a_non_circular_bore(tmp_path):
+    """A turned rounded-square bore (superellipse n = 4, 0.3 rad): summary.json records the
+    section, the view draws the registered shape's own wall (its undrawn points satisfy the
+    turned superellipse equation) and puts Q on the drawn wall."""
+    from flexmbs.cli import main
+    from postprocess.section import section_figure
+
+    out = tmp_path / "rounded"
+    hole = ('joints.sleeve.hole={shape="superellipse", a=2.5e-3, b=2.5e-3, exponent=4.0, '
+            'angle=0.3, length=0.04, sections=9}')
+    assert main(["run", str(EXAMPLES / "curved_beam_sleeve.toml"), "--t-end", "0.003", "-q",
+                 "--out", str(out), "--set", hole]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["hole_sections"]["sleeve"]["shape"] == "superellipse"
+    fig, st = section_figure(out, joint="sleeve", section=0, exaggeration=1.0)
+    psi = np.linspace(0, 2 * np.pi, 50)
+    W = st.wall(psi)
+    c, s = math.cos(0.3), math.sin(0.3)
+    yl, zl = c * W[:, 0] + s * W[:, 1], -s * W[:, 0] + c * W[:, 1]
+    assert np.allclose((yl / 2.5e-3) ** 4 + (zl / 2.5e-3) ** 4, 1.0, atol=1e-12)
+    ax = fig.axes[0]
+    wall = next(ln for ln in ax.lines if ln.get_label().startswith("bore: superellipse"))
+    assert st.Q, "the resting sleeve touches the bore"
+    q = next(ln for ln in ax.lines if ln.get_label() == "Q (hole point)")
+    Qd = 1e-3 * np.array([q.get_xdata()[0], q.get_ydata()[0]])
+    drawn = 1e-3 * np.stack([wall.get_xdata(), wall.get_ydata()], axis=1)
+    assert np.min(np.linalg.norm(drawn - Qd, axis=1)) < 2e-5     # on the drawn wall (f = 1)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
