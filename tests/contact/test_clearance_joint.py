@@ -3,6 +3,8 @@ tangent vs finite differences, sliding on an incline, input validation."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -14,7 +16,7 @@ J_SLEEVE = (2.479e-5, 4.098e-5, 4.098e-5)
 
 
 def _beam_with_sleeve(*, direction=(1.0, 0.0, 0.0), offset=-5.01e-4, stiffness=1e6, damping=0.0,
-                      lock_axial=True, friction=None, s=0.5, tangent="exact"):
+                      lock_axial=True, friction=None, s=0.5, tangent="exact", hole=None):
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     model = fm.Model(gravity=(0, 0, -G))
     beam = model.add_beam(fm.line((0, 0, 0), tuple(d), elements=16), name="rail",
@@ -27,7 +29,8 @@ def _beam_with_sleeve(*, direction=(1.0, 0.0, 0.0), offset=-5.01e-4, stiffness=1
         model.joint(sleeve, fm.GROUND, point=pose.position, axis=tuple(d), translation=(1, 0, 0),
                     rotation=(1, 0, 0))
     joint = model.add_joint(fm.SlidingClearanceJoint(
-        beam, sleeve, hole=fm.CircleHole(2.5e-3, 0.04, 9), friction=friction, tangent=tangent,
+        beam, sleeve, hole=hole or fm.CircleHole(2.5e-3, 0.04, 9), friction=friction,
+        tangent=tangent,
         contact=fm.LinearPenalty(stiffness=stiffness, damping=damping)))
     return model, beam, sleeve, joint
 
@@ -185,3 +188,112 @@ def test_full_newton_converges_quadratically_with_the_exact_tangent():
         gn = _StaticStep(asm_gn, st.q.copy(), st.lam.copy(), 0.0)
         gn.load = 0.8
         Newton(NewtonOptions(relative_tolerance=1e-12), asm_gn.length_scale).solve(gn, full=True)
+
+
+def _contact_directions(asm, sleeve, joint, q):
+    """(angle of Q, angle of the contact normal) about the hole axis, in the sleeve's (y, z)."""
+    from flexmbs.elements.rigid_body import rotation_matrix
+
+    qb = q[asm.body_dofs(sleeve)]
+    A = rotation_matrix(qb[3:7])
+    out = []
+    for r in joint.output(asm, q, np.zeros_like(q), np.zeros(asm.n_mult), 0.0):
+        u = A.T @ (np.asarray(r["position"]) - qb[:3])
+        nrm = A.T @ np.asarray(r["normal"])
+        out.append((math.atan2(u[2], u[1]), math.atan2(nrm[2], nrm[1])))
+    return out
+
+
+ROUNDED_SQUARE = fm.SuperellipseHole(2.5e-3, 2.5e-3, 6.0, 0.04, 9)
+
+
+def test_rounded_square_sleeve_slides_on_its_flat_side_like_the_circular_one():
+    """The incline of the test above with a rounded-square bore (superellipse n = 6, compiled):
+    the beam bears on the bore's flat top, and the sleeve slides with g sin(alpha) like the
+    circular one (2e-3)."""
+    alpha = 0.2
+    d = (np.cos(alpha), 0.0, -np.sin(alpha))
+    model, beam, sleeve, joint = _beam_with_sleeve(direction=d, offset=-5.05e-4 / np.cos(alpha),
+                                                   lock_axial=False, damping=20.0, s=0.3,
+                                                   hole=ROUNDED_SQUARE)
+    assert joint.compiled_form()
+    for b in model.beams:
+        b.stiffness = fm.BeamStiffness(axial_stiffness=2.6e8, bending_stiffness=2.6e2,
+                                       mass_per_length=0.098, radius=2e-3)
+    res = fm.simulate(model, t_end=0.25, dt=2e-4, output_interval=5e-3, record_energy=False,
+                      integrator=fm.GeneralizedAlpha(rho_inf=0.8))
+    x = res.body_position(sleeve) @ np.asarray(d)
+    sel = res.t >= 0.05
+    acc = 2 * np.polyfit(res.t[sel], x[sel], 2)[0]
+    assert acc == pytest.approx(G * np.sin(alpha), rel=2e-3)
+    dirs = _contact_directions(res.assembly, sleeve, joint, res.q[-1])
+    assert dirs
+    for q_angle, n_angle in dirs:     # on the flat top, normal straight up
+        assert abs(q_angle - math.pi / 2) < 0.45 and abs(n_angle - math.pi / 2) < 1e-3
+
+
+def test_pushed_diagonally_the_contact_moves_to_the_rounded_corner():
+    """Statics: the hanging sleeve pushed sideways by m g as well: the beam must bear along the
+    resultant, 45 degrees from the vertical (y, z of the sleeve). A thin stiff rod (r = 0.5 mm)
+    in a rounded-square bore (n = 4, corner radius of curvature 0.99 mm > r) sits in the corner
+    with one contact whose wall normal points along the resultant, like the circular bore's;
+    the flat sides alone cannot carry the sideways force. (The sleeve starts with the rod near
+    that corner: along a flat there is no stiffness to load-step on.)"""
+    r_b = 5e-4
+    for hole, corner in ((fm.CircleHole(2.5e-3, 0.04, 9), 2.5e-3),
+                         (fm.SuperellipseHole(2.5e-3, 2.5e-3, 4.0, 0.04, 9),
+                          2.5e-3 * 0.5 ** (-1 / 4))):
+        reach = (corner - r_b + 1e-6) / math.sqrt(2.0)     # rod axis off the hole centre
+        model = fm.Model(gravity=(0, 0, -G))
+        beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=16), name="rail",
+                              section=fm.CircularSection(r_b),
+                              material=fm.Material(E=2.1e11, rho=7800))
+        beam.stiffness = fm.BeamStiffness(axial_stiffness=2.6e8, bending_stiffness=2.6e2,
+                                          mass_per_length=0.098, radius=r_b)
+        model.clamp(beam.first_node)
+        model.clamp(beam.last_node)
+        pose = beam.frame_at(0.5).shifted((0, -reach, -reach))
+        sleeve = model.add_rigid_body(mass=M_SLEEVE, inertia=J_SLEEVE, pose=pose, name="sleeve")
+        model.joint(sleeve, fm.GROUND, point=pose.position, axis=(1, 0, 0), translation=(1, 0, 0),
+                    rotation=(1, 0, 0))
+        joint = model.add_joint(fm.SlidingClearanceJoint(beam, sleeve, hole=hole,
+                                                         contact=fm.LinearPenalty(stiffness=1e6)))
+        model.add_point_load(sleeve, (0.0, -M_SLEEVE * G, 0.0))
+        asm = Assembly(model)
+        st = fm.solve_static(asm, fm.StaticOptions(load_steps=4))
+        dirs = _contact_directions(asm, sleeve, joint, st.q)
+        assert dirs
+        for q_angle, n_angle in dirs:
+            assert n_angle == pytest.approx(math.pi / 4, abs=2e-3)
+            assert q_angle == pytest.approx(math.pi / 4, abs=0.02)
+
+
+def test_contact_migrates_from_the_flat_side_to_the_rounded_corner():
+    """Dynamics: the thin rod of the test above rests on the flat top of the rounded square
+    (contact normal straight up, 90 degrees); a sideways push ramped to m g over 0.3 s moves
+    the contact round to the corner, where it settles with the normal along the resultant, 45
+    degrees (friction 0.3 damps the swing along the wall; measured 45.0 / 45.1 degrees at 1 s)."""
+    r_b = 5e-4
+    model = fm.Model(gravity=(0, 0, -G))
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=16), name="rail",
+                          section=fm.CircularSection(r_b), material=fm.Material(E=2.1e11, rho=7800))
+    beam.stiffness = fm.BeamStiffness(axial_stiffness=2.6e8, bending_stiffness=2.6e2,
+                                      mass_per_length=0.098, radius=r_b)
+    model.clamp(beam.first_node)
+    model.clamp(beam.last_node)
+    pose = beam.frame_at(0.5).shifted((0, 0, -(2.5e-3 - r_b + 1e-6)))
+    sleeve = model.add_rigid_body(mass=M_SLEEVE, inertia=J_SLEEVE, pose=pose, name="sleeve")
+    model.joint(sleeve, fm.GROUND, point=pose.position, axis=(1, 0, 0), translation=(1, 0, 0),
+                rotation=(1, 0, 0))
+    joint = model.add_joint(fm.SlidingClearanceJoint(
+        beam, sleeve, hole=fm.SuperellipseHole(2.5e-3, 2.5e-3, 4.0, 0.04, 9),
+        contact=fm.LinearPenalty(stiffness=1e6, damping=30.0), friction=0.3))
+    model.add_point_load(sleeve, (0.0, -M_SLEEVE * G, 0.0), function=fm.Ramp(end=0.3))
+    res = fm.simulate(model, t_end=1.0, dt=2e-4, output_interval=0.05, record_energy=False)
+    first = _contact_directions(res.assembly, sleeve, joint, res.q[0])
+    last = _contact_directions(res.assembly, sleeve, joint, res.q[-1])
+    assert first and all(n == pytest.approx(math.pi / 2, abs=1e-3) for _, n in first)
+    assert last
+    for q_angle, n_angle in last:
+        assert math.degrees(n_angle) == pytest.approx(45.0, abs=1.0)
+        assert math.degrees(q_angle) == pytest.approx(45.0, abs=1.0)
