@@ -103,7 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="figure format (repeatable; default png and svg)")
     plot.add_argument("--section", action="store_true",
                       help="also draw a hole section of each clearance joint (the paper's "
-                           "Fig. 2(b)); default: the middle section at the last output")
+                           "Fig. 2(b); default: the middle section at the last output) and "
+                           "where its contact points sit over time")
     plot.add_argument("--joint", metavar="NAME", help="section view: only this joint")
     plot.add_argument("--section-index", type=int, metavar="K", help="section view: section K")
     plot.add_argument("--time", type=float, metavar="T",
@@ -194,6 +195,7 @@ def cmd_postprocess(args: argparse.Namespace) -> int:
                     files.append(postprocess.section_view(
                         args.directory, joint=joint, section=args.section_index, time=args.time,
                         radius=args.radius, exaggeration=args.exaggeration))
+                    files.append(postprocess.contact_angles_view(args.directory, joint=joint))
     except (FileNotFoundError, ValueError) as exc:
         print(f"flexmbs: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

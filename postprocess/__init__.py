@@ -9,6 +9,7 @@ and matplotlib are imported lazily inside the functions.
 from .data import Run, read_run
 from .plots import plot
 from .render import render
-from .section import section_figure, section_view
+from .section import contact_angles, contact_angles_view, section_figure, section_view
 
-__all__ = ["Run", "plot", "read_run", "render", "section_figure", "section_view"]
+__all__ = ["Run", "contact_angles", "contact_angles_view", "plot", "read_run", "render",
+           "section_figure", "section_view"]

@@ -231,3 +231,67 @@ def section_view(out_dir: str | Path, *, joint: str | None = None, section: int 
     fig.savefig(out, dpi=130, bbox_inches="tight")
     plt.close(fig)
     return out
+
+
+def contact_angles(out_dir: str | Path, joint: str | None = None
+                   ) -> tuple[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Where the contacts of a clearance joint sit over time: ``(joint, t, section, angle,
+    normal_force)`` per contacts.csv row, the angle of the hole point Q about the hole axis in
+    the section's own axes (atan2(z, y), degrees), from contacts.csv and the section frames of
+    sections.csv at the same output time."""
+    run = read_run(out_dir)
+    if not run.sections:
+        raise FileNotFoundError(f"{out_dir}: no sections.csv (only clearance joints write it)")
+    joints = sorted({r["joint"] for r in run.sections})
+    joint = joint or joints[0]
+    frames = {(float(r["t"]), int(r["section"])): r for r in run.sections if r["joint"] == joint}
+    t, sec, ang, force = [], [], [], []
+    for r in run.contacts:
+        if r["joint"] != joint:
+            continue
+        key = (float(r["t"]), int(r["section"]))
+        fr = frames.get(key)
+        if fr is None:
+            continue
+        d = np.array([float(r["qx"]) - float(fr["ox"]), float(r["qy"]) - float(fr["oy"]),
+                      float(r["qz"]) - float(fr["oz"])])
+        y = d @ np.array([float(fr["eyx"]), float(fr["eyy"]), float(fr["eyz"])])
+        z = d @ np.array([float(fr["ezx"]), float(fr["ezy"]), float(fr["ezz"])])
+        t.append(key[0])
+        sec.append(key[1])
+        ang.append(np.degrees(np.arctan2(z, y)))
+        force.append(float(r["normal_force"] or 0.0))
+    return joint, np.array(t), np.array(sec, int), np.array(ang), np.array(force)
+
+
+def contact_angles_view(out_dir: str | Path, joint: str | None = None,
+                        path: str | Path | None = None) -> Path:
+    """Figure of :func:`contact_angles`: the angle of every contact point about the hole axis
+    over time, coloured by hole section, marker area by normal force; saved to ``path``
+    (default ``out_dir/figures/contact_angles_<joint>.png``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    joint, t, sec, ang, force = contact_angles(out_dir, joint)
+    fig, ax = plt.subplots(figsize=(8.6, 4.4))
+    if t.size:
+        size = 6.0 + 40.0 * np.abs(force) / max(float(np.abs(force).max()), 1e-300)
+        pts = ax.scatter(t, ang, c=sec, s=size, cmap="viridis", alpha=0.8)
+        fig.colorbar(pts, ax=ax, label="hole section")
+    else:
+        ax.text(0.02, 0.95, "no contact", transform=ax.transAxes, va="top")
+    ax.set_ylim(-180.0, 180.0)
+    ax.set_yticks(np.arange(-180, 181, 45))
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("contact angle atan2(z, y) in the section [deg]")
+    ax.set_title(f"joint '{joint}': where the contact points sit (marker area ~ normal force)",
+                 fontsize=10)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    out = Path(path) if path is not None else Path(out_dir) / "figures" / f"contact_angles_{joint}.png"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return out

@@ -257,3 +257,9 @@ def test_section_view_draws_a_non_circular_bore(tmp_path):
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+    # where the contacts sit: the angles of the section-0 contacts at that time are the view's
+    joint, t, sec, ang, force = postprocess.contact_angles(out, "sleeve")
+    sel = (t == st.t) & (sec == 0)
+    expect = sorted(math.degrees(math.atan2(Q[1], Q[0])) for Q in st.Q)
+    assert sorted(ang[sel]) == pytest.approx(expect, abs=1e-9)
+    assert postprocess.contact_angles_view(out, "sleeve").is_file()
