@@ -13,16 +13,17 @@ unexpected internal error keeps its traceback (exit 1) so that it can be reporte
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
 import numpy as np
 
-from .errors import ConvergenceError, FlexmbsError
+from .errors import ConvergenceError, FlexmbsError, Interrupted
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
@@ -68,6 +69,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--resume", metavar="OUT_DIR",
                      help="continue the stopped run in OUT_DIR from its checkpoint.npz to t_end, "
                           "appending to its files")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace the output of another scenario in the output folder")
 
     info = sub.add_parser("info", parents=[overrides], help="print the model of a scenario",
                           description="Print the model: coordinates, beams, bodies, constraints, "
@@ -262,11 +265,35 @@ class _Progress:
             self.bar = None
 
 
+def _terminate_like_ctrl_c() -> Callable[[], None]:
+    """SIGTERM and SIGHUP raise :class:`~flexmbs.errors.Interrupted` (a KeyboardInterrupt), so
+    a terminated run finishes like Ctrl-C: frame, checkpoint, ``summary.json``. Returns the
+    function that restores the previous handlers."""
+    import signal
+
+    def handler(signum: int, _frame: Any) -> None:
+        raise Interrupted(signal.Signals(signum).name)
+
+    previous = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            with contextlib.suppress(ValueError):   # not the main thread (e.g. a worker)
+                previous[sig] = signal.signal(sig, handler)
+
+    def restore() -> None:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+    return restore
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """``flexmbs run``: load the scenario, resolve the output folder, call
     :func:`flexmbs.simulation.solve_static` (``integrator = "static"``) or
     :func:`flexmbs.simulation.simulate`, which build the assembly and write the folder, and print
     one line."""
+    from .io.folder import claim
     from .io.scenario import load_scenario
     from .simulation import checkpoint_time, simulate, solve_static
 
@@ -275,6 +302,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     out: Path | None = None
     t_wall = time.perf_counter()
     progress: _Progress | None = None
+    held: list[Any] = []                 # the claimed output folder (its lock), released below
+    restore = _terminate_like_ctrl_c()
     try:
         sc = load_scenario(args.scenario, _overrides(args))
         sim = sc.simulation
@@ -287,6 +316,9 @@ def cmd_run(args: argparse.Namespace) -> int:
                 _error(f"cannot resume: {out} is not a folder")
                 return EXIT_BAD_INPUT
         else:
+            if args.out is not None and not args.out.strip():
+                _error("--out: empty path; give the output folder")
+                return EXIT_BAD_INPUT
             out = Path(args.out) if args.out is not None else Path("out") / sc.name
         if not quiet:
             from .kernel import kernels_cached
@@ -296,10 +328,14 @@ def cmd_run(args: argparse.Namespace) -> int:
                       "minute; cached for later runs)", file=sys.stderr, flush=True)
         metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": _overrides(args),
                     "integrator_name": sim.integrator, "initial_static": sim.initial_static}
+        if sim.integrator == "static" and args.resume is not None:
+            _error("--resume: a static scenario has nothing to resume")
+            return EXIT_BAD_INPUT
+        claimed = claim(out, scenario=sc.name, overwrite=bool(getattr(args, "overwrite", False)),
+                        resume=args.resume is not None)
+        claimed.__enter__()
+        held.append(claimed)
         if sim.integrator == "static":
-            if args.resume is not None:
-                _error("--resume: a static scenario has nothing to resume")
-                return EXIT_BAD_INPUT
             st = solve_static(sc.model, sc.static_options(), t=sim.t_end,
                               redundant_constraints=sim.redundant_constraints, out=out,
                               probes=sc.probes, name=sc.name, metadata=metadata)
@@ -335,6 +371,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
         _error(f"cannot write or read{where}: {exc.strerror or _one_line(exc)}")
         return EXIT_BAD_INPUT
+    finally:
+        for claimed in held:
+            claimed.__exit__(None, None, None)
+        restore()
     if not quiet:
         wall = time.perf_counter() - t_wall
         print(f"{sc.name}: {status} at t = {sim.t_end:.6g} s: {steps} steps, {newton} Newton "

@@ -27,6 +27,11 @@ class RedundantConstraintError(ModelError):
     """The constraint Jacobian is rank deficient; the message lists the dependent equations."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """A termination signal (SIGTERM, SIGHUP) handled like Ctrl-C: the run finishes its frame,
+    writes its checkpoint and ``summary.json`` (status ``interrupted: <signal>``)."""
+
+
 class SimulationStopped(FlexmbsError):
     """The simulation cannot continue (e.g. a sliding body reached the end of its beam); the
     steps before stand."""

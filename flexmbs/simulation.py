@@ -263,8 +263,9 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         last = State(ts[-1], qs[-1], vs[-1], np.zeros_like(qs[-1]), np.zeros_like(qs[-1]), ls[-1])
         exc.partial_result = result(last, stats, status)  # type: ignore[attr-defined]
         raise
-    except KeyboardInterrupt:
-        finish("interrupted", last_stats[0] if last_stats else IntegrationStats())
+    except KeyboardInterrupt as exc:
+        finish("interrupted" + (f": {exc}" if str(exc) else ""),
+               last_stats[0] if last_stats else IntegrationStats())
         raise
     except BaseException as exc:
         finish(f"failed: {failure_reason(exc)}", last_stats[0] if last_stats else IntegrationStats())

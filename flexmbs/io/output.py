@@ -316,6 +316,6 @@ class OutputWriter:
         if exc is None:
             self.finish("completed")
         elif isinstance(exc, KeyboardInterrupt):
-            self.finish("interrupted")
+            self.finish("interrupted" + (f": {exc}" if str(exc) else ""))
         else:
             self.finish(f"failed: {failure_reason(exc)}")

@@ -1,0 +1,112 @@
+"""Who may write an output folder (issue "nothing lost", items 3, 4, 6): one run at a time,
+no silent take-over of another scenario's results, ``--out ""`` refused, a terminated run
+finishes like Ctrl-C. Real runs through the CLI; the concurrency and signal cases in real
+subprocesses."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from flexmbs.cli import main
+from flexmbs.io.folder import LOCK_NAME
+
+ROOT = Path(__file__).resolve().parents[2]
+CANTILEVER = str(ROOT / "examples" / "cantilever.toml")
+PENDULUM = str(ROOT / "examples" / "flexible_pendulum.toml")
+
+
+def _run(scenario: str, out: Path, *extra: str) -> int:
+    return main(["run", scenario, "--t-end", "0.002", "--quiet", "--out", str(out), *extra])
+
+
+def test_rerun_of_the_same_scenario_replaces_its_own_files(tmp_path):
+    out = tmp_path / "o"
+    assert _run(CANTILEVER, out) == 0
+    stale = out / "vtu" / "stale_999.vtu"
+    stale.write_text("old")
+    assert _run(CANTILEVER, out) == 0
+    assert not stale.exists()                    # the earlier run's frames are gone
+    assert json.loads((out / "summary.json").read_text())["status"] == "completed"
+    assert not (out / LOCK_NAME).exists()        # the lock is released
+
+
+def test_another_scenarios_folder_is_refused_without_overwrite(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert _run(CANTILEVER, out) == 0
+    before = (out / "summary.json").read_text()
+    assert _run(PENDULUM, out) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "holds the output of scenario 'cantilever'" in err[0]
+    assert "--overwrite" in err[0]
+    assert (out / "summary.json").read_text() == before          # nothing written
+    assert _run(PENDULUM, out, "--overwrite") == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scenario"] == "flexible_pendulum"
+    assert not list((out / "vtu").glob("cantilever_*.vtu"))      # the old frames are cleared
+    assert not (out / "cantilever.pvd").exists()
+
+
+def test_foreign_folders_and_empty_out_are_refused(tmp_path, capsys, monkeypatch):
+    mine = tmp_path / "notes"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("keep me")
+    for extra in ((), ("--overwrite",)):
+        assert _run(CANTILEVER, mine, *extra) == 2
+        assert "holds no flexmbs output" in capsys.readouterr().err
+    assert (mine / "thesis.tex").read_text() == "keep me"
+    assert sorted(p.name for p in mine.iterdir()) == ["thesis.tex"]
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", CANTILEVER, "--t-end", "0.002", "--quiet", "--out", ""]) == 2
+    assert "--out: empty path" in capsys.readouterr().err
+
+
+def _spawn(out: Path, t_end: str) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.Popen([sys.executable, "-m", "flexmbs", "run", CANTILEVER, "--t-end", t_end,
+                             "--quiet", "--out", str(out)], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for(path: Path, seconds: float = 60.0) -> None:
+    end = time.time() + seconds
+    while not path.exists():
+        assert time.time() < end, f"{path} did not appear"
+        time.sleep(0.05)
+
+
+def test_a_second_run_into_a_busy_folder_is_refused(tmp_path):
+    out = tmp_path / "o"
+    first = _spawn(out, "200")
+    try:
+        _wait_for(out / "probes.csv")
+        second = _spawn(out, "0.002")
+        _, err = second.communicate(timeout=120)
+        assert second.returncode == 2
+        assert "another flexmbs run (process" in err and len(err.strip().splitlines()) == 1
+    finally:
+        first.send_signal(signal.SIGINT)
+        first.communicate(timeout=120)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_terminate_and_hangup_finish_like_ctrl_c(tmp_path, sig):
+    out = tmp_path / "o"
+    proc = _spawn(out, "200")
+    _wait_for(out / "probes.csv")
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    proc.communicate(timeout=120)
+    assert proc.returncode == 130
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == f"interrupted: {sig.name}"
+    assert (out / "checkpoint.npz").is_file()
+    assert summary["final_time"] > 0
+    assert not (out / LOCK_NAME).exists()
