@@ -182,11 +182,6 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         if not t_end > resume_t:
             raise ModelError(f"cannot resume: the checkpoint in {out} is at t = {resume_t:.6g} "
                              f"and t_end = {t_end:.6g}; give a later t_end")
-    else:
-        q0, v0 = asm.initial_state()
-        if initial_static:
-            q0 = _solve_static(asm, static_options).q
-        state0 = consistent_initial_state(asm, q0, v0, 0.0)
     ts: list[float] = []
     qs: list[np.ndarray] = []
     vs: list[np.ndarray] = []
@@ -202,6 +197,20 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
             meta["resumed_from"] = resume_t
         writer = OutputWriter(out, run_name, asm, probes=probes, metadata=meta,
                               write_vtu=write_vtu, resume_at=resume_t)
+    if not resume:
+        # after the folder exists: a failure here (an initial static solve that does not
+        # converge, a singular mass matrix) still leaves summary.json saying why
+        try:
+            q0, v0 = asm.initial_state()
+            if initial_static:
+                q0 = _solve_static(asm, static_options).q
+            state0 = consistent_initial_state(asm, q0, v0, 0.0)
+        except BaseException as exc:
+            if writer is not None:
+                writer.finish("interrupted" + (f": {exc}" if str(exc) else "")
+                              if isinstance(exc, KeyboardInterrupt)
+                              else f"failed: {failure_reason(exc)}")
+            raise
     ckpt_extra = {"scenario": run_name, "n_coords": int(asm.n_coords), "n_mult": int(asm.n_mult)}
 
     def record(s: State) -> None:

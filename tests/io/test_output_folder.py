@@ -110,3 +110,17 @@ def test_terminate_and_hangup_finish_like_ctrl_c(tmp_path, sig):
     assert (out / "checkpoint.npz").is_file()
     assert summary["final_time"] > 0
     assert not (out / LOCK_NAME).exists()
+
+
+def test_a_failure_before_the_first_output_leaves_the_summary(tmp_path, capsys):
+    """Item 8: density 0 (allowed) makes the initial accelerations singular; the run fails
+    before its first output but the folder holds summary.json saying why."""
+    out = tmp_path / "o"
+    code = main(["run", CANTILEVER, "--t-end", "0.002", "--quiet", "--out", str(out),
+                 "--set", "beams.rod.density=0.0"])
+    assert code == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "singular mass" in err[0]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"].startswith("failed: cannot compute consistent initial accelerations")
+    assert not (out / LOCK_NAME).exists()
