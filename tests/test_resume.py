@@ -107,3 +107,25 @@ def test_resume_refuses(tmp_path, capsys, what):
                 "no_folder": "is not a folder"}[what]
     assert expected in lines[0]
     assert {p: p.read_bytes() for p in folder.glob("*.csv")} == before   # left untouched
+
+
+def test_resume_keeps_frames_the_index_had_not_listed_yet(tmp_path):
+    """Item 1 of issue 18: the .pvd index lags the frames (rewritten at most once a second), so
+    a kill can leave frames on disk that the index does not list although the checkpoint is
+    later. --resume lists them again instead of deleting them as stale: every output time of
+    probes.csv has its frame, each once, and a frame cut short by the kill is rewritten."""
+    part = tmp_path / "part"
+    assert run(CANTILEVER, "--t-end", T1, "--out", str(part), *FULL_NEWTON) == EXIT_OK
+    pvd = part / "cantilever.pvd"
+    entries = read_pvd(pvd)
+    assert len(entries) == 4
+    text = pvd.read_text().splitlines()
+    pvd.write_text("\n".join(line for line in text if "_000002.vtu" not in line
+                             and "_000003.vtu" not in line) + "\n")   # the lagging index
+    assert len(read_pvd(pvd)) == 2
+    assert run(CANTILEVER, "--t-end", T2, "--resume", str(part), *FULL_NEWTON) == EXIT_OK
+    entries = read_pvd(pvd)
+    t = np.loadtxt(part / "probes.csv", delimiter=",", skiprows=1)[:, 0]
+    np.testing.assert_allclose([e[0] for e in entries], t, rtol=0, atol=1e-15)
+    assert [Path(f).name for _, f in entries] == [f"cantilever_{k:06d}.vtu" for k in range(7)]
+    assert all((part / f).is_file() for _, f in entries)

@@ -251,6 +251,7 @@ class VTUSeries:
         self.entries: list[tuple[float, str]] = []
         if resume_at is not None:
             self.entries = [(t, f) for t, f in read_pvd(self.pvd_path) if t <= resume_at]
+            self._recover_unlisted(resume_at)
         keep = {Path(f).name for _, f in self.entries}
         stale = re.compile(rf"{re.escape(self.name)}_\d{{6,}}\.vtu")
         for f in self.vtu_dir.iterdir():
@@ -261,6 +262,22 @@ class VTUSeries:
         self._pvd_written = time.perf_counter()
         self._pvd_stale = False
         self._write_pvd()
+
+    def _recover_unlisted(self, resume_at: float) -> None:
+        """Frames written after the last ``.pvd`` update (it is rewritten at most once per
+        ``pvd_interval``) but at or before the checkpoint are part of the resumed run: list
+        them again, in order, up to the first missing, unreadable (cut short by a kill) or
+        later frame."""
+        last = self.entries[-1][0] if self.entries else -np.inf
+        k = len(self.entries)
+        while True:
+            fname = f"{self.name}_{k:06d}.vtu"
+            t = frame_time(self.vtu_dir / fname)
+            if t is None or not last < t <= resume_at:
+                return
+            self.entries.append((t, f"{self.vtu_subdir}/{fname}"))
+            last = t
+            k += 1
 
     @property
     def step(self) -> int:
@@ -305,6 +322,29 @@ class VTUSeries:
 
 
 _PVD_DATASET = re.compile(r'<DataSet\b[^>]*\btimestep="([^"]*)"[^>]*\bfile="([^"]*)"')
+
+
+def frame_time(path: str | os.PathLike) -> float | None:
+    """The ``time`` field data of a frame written by :func:`write_vtu`, or None when the file is
+    missing, incomplete or has none."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return None
+    for arr in root.iter("DataArray"):
+        if arr.get("Name") != "time":
+            continue
+        text = (arr.text or "").strip()
+        try:
+            if arr.get("format") == "binary":
+                raw = base64.b64decode(text)[8:]
+                return float(np.frombuffer(raw, dtype="<f8")[0])
+            return float(text.split()[0])
+        except (ValueError, IndexError):
+            return None
+    return None
 
 
 def read_pvd(pvd_path: str | os.PathLike) -> list[tuple[float, str]]:
