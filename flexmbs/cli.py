@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import sys
 import time
@@ -288,6 +289,48 @@ def _terminate_like_ctrl_c() -> Callable[[], None]:
     return restore
 
 
+def _is_end_time(assignment: str) -> bool:
+    return assignment.replace(" ", "").startswith("simulation.t_end=")
+
+
+def _scenario_digest(path: str | os.PathLike[str]) -> str:
+    import hashlib
+
+    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
+
+
+def _resume_overrides(args: argparse.Namespace) -> list[str]:
+    """The overrides of a resumed run: the first run's (from ``summary.json``, without its end
+    time) unless the same are given again; a different model is refused with one line naming
+    the difference (issue "nothing lost", item 5). The scenario file and its content must be
+    those of the first run."""
+    from .errors import ScenarioError
+
+    given = _overrides(args)
+    try:
+        meta = json.loads((Path(args.resume) / "summary.json").read_text(encoding="utf-8"))
+        meta = meta.get("metadata") or {}
+    except (OSError, ValueError):
+        return given                     # resume_point reports what is missing
+    where = f"--resume {args.resume}"
+    first_file = meta.get("scenario_file")
+    if first_file and os.path.abspath(args.scenario) != first_file:
+        raise ScenarioError(f"{where}: that run was made from {first_file}, not "
+                            f"{os.path.abspath(args.scenario)}")
+    digest = meta.get("scenario_sha1")
+    if digest and Path(args.scenario).is_file() and _scenario_digest(args.scenario) != digest:
+        raise ScenarioError(f"{where}: {args.scenario} has changed since that run started; a "
+                            "resumed run must be the same model (only the end time may change)")
+    first = [o for o in meta.get("overrides") or [] if not _is_end_time(o)]
+    now = [o for o in given if not _is_end_time(o)]
+    if now and now != first:
+        extra = [o for o in now if o not in first] or [o for o in first if o not in now] or now
+        raise ScenarioError(f"{where}: that run used --set {' '.join(first) or '(none)'}; this "
+                            f"one differs ({extra[0]}); a resumed run must be the same model "
+                            "(only the end time may change)")
+    return first + [o for o in given if _is_end_time(o)]
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """``flexmbs run``: load the scenario, resolve the output folder, call
     :func:`flexmbs.simulation.solve_static` (``integrator = "static"``) or
@@ -305,7 +348,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     held: list[Any] = []                 # the claimed output folder (its lock), released below
     restore = _terminate_like_ctrl_c()
     try:
-        sc = load_scenario(args.scenario, _overrides(args))
+        overrides = _resume_overrides(args) if args.resume is not None else _overrides(args)
+        sc = load_scenario(args.scenario, overrides)
         sim = sc.simulation
         if args.resume is not None:
             if args.out is not None and Path(args.out).resolve() != Path(args.resume).resolve():
@@ -326,7 +370,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             if not kernels_cached():
                 print("flexmbs: first run here: compiling the numba kernels (once, about a "
                       "minute; cached for later runs)", file=sys.stderr, flush=True)
-        metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": _overrides(args),
+        metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": overrides,
+                    "scenario_sha1": _scenario_digest(sc.path),
                     "integrator_name": sim.integrator, "initial_static": sim.initial_static}
         if sim.integrator == "static" and args.resume is not None:
             _error("--resume: a static scenario has nothing to resume")

@@ -102,8 +102,8 @@ def test_resume_refuses(tmp_path, capsys, what):
     assert run(*args, "--resume", str(folder)) == EXIT_BAD_INPUT
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("flexmbs: error: ")
-    expected = {"missing": "no checkpoint", "other_scenario": "belongs to another run",
-                "other_size": "n_coords 102 (this run: 54)", "not_later": "give a later t_end",
+    expected = {"missing": "no checkpoint", "other_scenario": "that run was made from",
+                "other_size": "differs (beams.rod.elements=8)", "not_later": "give a later t_end",
                 "no_folder": "is not a folder"}[what]
     assert expected in lines[0]
     assert {p: p.read_bytes() for p in folder.glob("*.csv")} == before   # left untouched
@@ -129,3 +129,35 @@ def test_resume_keeps_frames_the_index_had_not_listed_yet(tmp_path):
     np.testing.assert_allclose([e[0] for e in entries], t, rtol=0, atol=1e-15)
     assert [Path(f).name for _, f in entries] == [f"cantilever_{k:06d}.vtu" for k in range(7)]
     assert all((part / f).is_file() for _, f in entries)
+
+
+@pytest.mark.parametrize("change", ["set", "dt", "edited"])
+def test_resume_refuses_a_different_model_and_keeps_the_first_runs_overrides(tmp_path, capsys,
+                                                                           change):
+    """Item 5 of issue 18: a resumed run is the first run's model. Without --set it re-applies
+    the first run's overrides (a resume that forgot them gives the same trajectory as the
+    uninterrupted run); a different override, time step or an edited scenario file is refused
+    in one line before anything is written."""
+    scen = tmp_path / "c.toml"
+    scen.write_text(Path(CANTILEVER).read_text())
+    stiff = ["--set", "beams.rod.youngs_modulus=3e11"]
+    full, part = tmp_path / "full", tmp_path / "part"
+    assert run(str(scen), "--t-end", T2, "--out", str(full), *stiff, *FULL_NEWTON) == EXIT_OK
+    assert run(str(scen), "--t-end", T1, "--out", str(part), *stiff, *FULL_NEWTON) == EXIT_OK
+    before = {p: p.read_bytes() for p in part.glob("*.csv")}
+    capsys.readouterr()
+    if change == "set":
+        bad = ["--set", "beams.rod.youngs_modulus=1e9"]
+    elif change == "dt":
+        bad = [*stiff, *FULL_NEWTON, "--dt", "5e-4"]
+    else:
+        scen.write_text(scen.read_text() + "\n# edited\n")
+        bad = []
+    assert run(str(scen), "--t-end", T2, "--resume", str(part), *bad) == EXIT_BAD_INPUT
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "a resumed run must be the same model" in lines[0]
+    assert {p: p.read_bytes() for p in part.glob("*.csv")} == before
+    if change == "edited":
+        return
+    assert run(str(scen), "--t-end", T2, "--resume", str(part)) == EXIT_OK   # overrides kept
+    assert (part / "probes.csv").read_bytes() == (full / "probes.csv").read_bytes()
