@@ -415,7 +415,10 @@ def cmd_run(args: argparse.Namespace) -> int:
             progress.close()
         where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
         _error(f"cannot write or read{where}: {exc.strerror or _one_line(exc)}")
-        return EXIT_BAD_INPUT
+        # a run that had started (its summary exists) failed, e.g. on a full disk; before
+        # that it is a bad path
+        started = out is not None and (out / "summary.json").is_file()
+        return EXIT_FAILED if started else EXIT_BAD_INPUT
     finally:
         for claimed in held:
             claimed.__exit__(None, None, None)

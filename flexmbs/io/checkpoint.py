@@ -11,6 +11,7 @@ Layout of the archive (``allow_pickle=False`` throughout):
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from pathlib import Path
@@ -50,9 +51,16 @@ def save_checkpoint(path: str | os.PathLike, state: State, *, extra: dict | None
     arrays["format"] = np.array(FORMAT)
     arrays["flexmbs_version"] = np.array(__version__)
     tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "wb") as fh:
-        np.savez(fh, **arrays)  # type: ignore[arg-type]
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)  # type: ignore[arg-type]
+        os.replace(tmp, path)
+    except OSError as exc:          # e.g. a full disk: no temporary left, the file named
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if exc.filename is None:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+        raise
     return path
 
 

@@ -23,13 +23,14 @@ Files (every one valid after every output, so a run that stops early leaves read
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
 import json
 import math
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any, TextIO
@@ -84,11 +85,26 @@ def _jsonable(o: Any) -> Any:
 
 def failure_reason(exc: BaseException) -> str:
     """One line describing ``exc`` for ``status: "failed: <reason>"``."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = f" {exc.filename}" if exc.filename else ""
+        return f"cannot write or read{where}: {exc.strerror}"
     msg = str(exc).strip().splitlines()
     text = msg[0] if msg else ""
     if not isinstance(exc, FlexmbsError) or not text:
         text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
     return text
+
+
+@contextlib.contextmanager
+def _naming(path: Path) -> Iterator[None]:
+    """Give an OSError without a file name (a write that fails, e.g. on a full disk) the path
+    being written, so the one-line error and the summary say which file."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+        raise
 
 
 class OutputWriter:
@@ -213,26 +229,31 @@ class OutputWriter:
         t = float(state.t)
         contacts = list(contacts or [])
         if self.series is not None and self.frames is not None:
-            self.series.write(t, self.frames(state, contacts=contacts))
+            frame = self.frames(state, contacts=contacts)
+            with _naming(self.series.vtu_dir / f"{self.series.name}_{self.series.step:06d}.vtu"):
+                self.series.write(t, frame)
         if probe_values is None:
             probe_values = np.concatenate(
                 [np.asarray(p.evaluate(self.asm, state), float).reshape(-1) for p in self.probes]
                 + [np.zeros(0)])
         row = [_fmt(t)] + [_fmt(float(x)) for x in probe_values]
-        csv.writer(self._probe_file).writerow(row)
-        self._probe_file.flush()
+        with _naming(self.directory / "probes.csv"):
+            csv.writer(self._probe_file).writerow(row)
+            self._probe_file.flush()
         if contacts:
-            w = csv.writer(self._contact_file)
-            for c in contacts:
-                w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in CONTACT_COLUMNS[1:]])
-            self._contact_file.flush()
+            with _naming(self.directory / "contacts.csv"):
+                w = csv.writer(self._contact_file)
+                for c in contacts:
+                    w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in CONTACT_COLUMNS[1:]])
+                self._contact_file.flush()
         if sections:
-            if self._section_file is None:
-                self._section_file, _ = self._open_csv("sections.csv", list(SECTION_COLUMNS))
-            w = csv.writer(self._section_file)
-            for c in sections:
-                w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in SECTION_COLUMNS[1:]])
-            self._section_file.flush()
+            with _naming(self.directory / "sections.csv"):
+                if self._section_file is None:
+                    self._section_file, _ = self._open_csv("sections.csv", list(SECTION_COLUMNS))
+                w = csv.writer(self._section_file)
+                for c in sections:
+                    w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in SECTION_COLUMNS[1:]])
+                self._section_file.flush()
         if self.checkpoints:
             extra = {"output_step": self.n_outputs, **(checkpoint_extra or {})}
             self._pending_checkpoint = (state.copy(), extra)
@@ -289,10 +310,11 @@ class OutputWriter:
 
     def _write_summary(self, **kwargs: Any) -> None:
         tmp = self.summary_path.with_name(f".{self.summary_path.name}.tmp")
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(self._summary(**kwargs), f, indent=2)
-            f.write("\n")
-        os.replace(tmp, self.summary_path)
+        with _naming(self.summary_path):
+            with open(tmp, "w", encoding="utf-8") as f:
+                json.dump(self._summary(**kwargs), f, indent=2)
+                f.write("\n")
+            os.replace(tmp, self.summary_path)
 
     def finish(self, status: str = "completed", *, stats: Any = None, wall_time: float | None = None,
                energy_balance: dict | None = None) -> None:
@@ -301,10 +323,30 @@ class OutputWriter:
         if self.finished:
             return
         self.status = " ".join(str(status).split())   # one line
-        self._write_checkpoint()
-        self._close_files()
         self.finished = True
-        self._write_summary(stats=stats, wall_time=wall_time, energy_balance=energy_balance)
+        try:
+            try:
+                self._write_checkpoint()
+            finally:
+                self._close_files()
+        except OSError as exc:    # e.g. the disk is full: the summary still says so if it can
+            self.status = f"failed: {failure_reason(exc)}"
+            self._remove_temporaries()
+            with contextlib.suppress(OSError):
+                self._write_summary(stats=stats, wall_time=wall_time,
+                                    energy_balance=energy_balance)
+            self._remove_temporaries()
+            raise
+        try:
+            self._write_summary(stats=stats, wall_time=wall_time, energy_balance=energy_balance)
+        except OSError:
+            self._remove_temporaries()
+            raise
+
+    def _remove_temporaries(self) -> None:
+        for p in self.directory.glob(".*.tmp"):
+            with contextlib.suppress(OSError):
+                p.unlink()
 
     def __enter__(self) -> OutputWriter:
         return self

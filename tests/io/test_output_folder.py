@@ -124,3 +124,34 @@ def test_a_failure_before_the_first_output_leaves_the_summary(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"].startswith("failed: cannot compute consistent initial accelerations")
     assert not (out / LOCK_NAME).exists()
+
+
+def test_a_full_disk_names_the_file_sets_the_status_and_leaves_no_temporaries(tmp_path, capsys,
+                                                                              monkeypatch):
+    """Item 7: writing a frame fails with ENOSPC (simulated: the write raises as a full disk
+    does, with no file name). The error line names the file, summary.json says failed with the
+    reason, no temporary file is left, the exit status is the failure code (3)."""
+    import errno
+
+    from flexmbs.io import vtu
+
+    real = vtu.write_vtu
+    calls = []
+
+    def full_disk(path, mesh, **kw):
+        calls.append(path)
+        if len(calls) > 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(path, mesh, **kw)
+
+    monkeypatch.setattr(vtu, "write_vtu", full_disk)
+    out = tmp_path / "o"
+    code = main(["run", CANTILEVER, "--t-end", "0.05", "--quiet", "--out", str(out)])
+    assert code == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cantilever_000002.vtu" in err[0] and "No space left" in err[0]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"].startswith("failed: cannot write or read")
+    assert "cantilever_000002.vtu" in summary["status"]
+    assert not list(out.glob(".*.tmp")) and not list(out.glob("*.tmp"))
+    assert not (out / LOCK_NAME).exists()
