@@ -42,7 +42,6 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs.io.scenario import load_scenario
     from flexmbs.solvers._bordered import (
         BorderedBandedLU,
-        border_indices,
         bordered_factorize,
         bordered_solve,
     )
@@ -102,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
         x = np.zeros_like(r)
         data = np.zeros_like(asm.matrix.data)
         cm.jacobian(m, st.q, st.v, st.qdd, st.lam, fv, mode, 1.0, 0.05, 1e-8, data)
-        lu = BorderedBandedLU(asm.matrix, border_indices(asm))
+        lu = BorderedBandedLU(asm.matrix, asm.border_indices())
         lu.factorize(data)
         u_res = _best(loop_residual, (m, st.q, st.v, st.qdd, st.lam, fv, mode, r))
         u_joint = (_best(loop_clearance, (m, st.q, st.v, r)) if m.clearance.r_b.size

@@ -609,6 +609,23 @@ class Assembly:
             raise ModelError("internal: matrix entry outside the reserved sparsity pattern")
         return pos
 
+    def border_indices(self) -> np.ndarray:
+        """Unknowns of the bordered banded LU's dense border (:mod:`flexmbs.solvers._bordered`):
+        rigid-body and interaction coordinates, nonlinear multipliers, and linear multipliers
+        touching a border coordinate (the beams' coordinates form the band)."""
+        n = self.n_coords
+        coords = np.concatenate([self.body_dof_table.ravel()]
+                                + [np.asarray(self.extra_dofs(obj), np.int64)
+                                   for obj in self.model.interactions])
+        in_border = np.zeros(n, bool)
+        in_border[coords] = True
+        parts = [coords] + [n + np.asarray(nl.rows, np.int64) for nl in self.nonlinear]
+        if self.m_lin:
+            L = sp.csr_matrix(self.lin_matrix)
+            pattern = sp.csr_matrix((np.ones(L.nnz), L.indices, L.indptr), shape=L.shape)
+            parts.append(n + np.flatnonzero(pattern @ in_border.astype(float) > 0))
+        return np.unique(np.concatenate(parts).astype(np.int64))
+
     def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """As :meth:`positions`, with −1 for the entries outside the pattern."""
         N = self.n_total

@@ -19,15 +19,12 @@ enters it; not for a beam held only through border unknowns in statics).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
 
 from .._jit import njit
-
-if TYPE_CHECKING:
-    from ..assembly import Assembly
 
 
 class BorderedFactor(NamedTuple):
@@ -313,20 +310,3 @@ def bordered_solve(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None
             x[border[j]] = z
     for k in range(na):
         x[perm[k]] = wa[k]
-
-
-def border_indices(asm: Assembly) -> np.ndarray:
-    """Border unknowns of an :class:`~flexmbs.assembly.Assembly`: rigid-body and interaction
-    coordinates, nonlinear multipliers, and linear multipliers touching a border coordinate."""
-    n = asm.n_coords
-    coords = np.concatenate([asm.body_dof_table.ravel()]
-                            + [np.asarray(asm.extra_dofs(obj), np.int64)
-                               for obj in asm.model.interactions])
-    in_border = np.zeros(n, bool)
-    in_border[coords] = True
-    parts = [coords] + [n + np.asarray(nl.rows, np.int64) for nl in asm.nonlinear]
-    if asm.m_lin:
-        L = sp.csr_matrix(asm.lin_matrix)
-        pattern = sp.csr_matrix((np.ones(L.nnz), L.indices, L.indptr), shape=L.shape)
-        parts.append(n + np.flatnonzero(pattern @ in_border.astype(float) > 0))
-    return np.unique(np.concatenate(parts).astype(np.int64))

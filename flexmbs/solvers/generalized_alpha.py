@@ -243,7 +243,7 @@ class _CompiledStepper:
     def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
         from ..terms import dynamic_mode
         from . import _compiled as cc
-        from ._bordered import BorderedBandedLU, border_indices
+        from ._bordered import BorderedBandedLU
 
         self.cc = cc
         self.asm = asm
@@ -262,7 +262,7 @@ class _CompiledStepper:
         self.info = np.zeros(cc.INFO_SIZE)
         self.info[cc.INFO_KSCALE] = asm.stiffness_scale
         self.data = np.zeros_like(asm.matrix.data)
-        self.lu = BorderedBandedLU(asm.matrix, border_indices(asm))
+        self.lu = BorderedBandedLU(asm.matrix, asm.border_indices())
         self.stopped: Exception | None = None
 
     def max_chunk(self) -> int:

@@ -106,9 +106,17 @@ def test_frictionless_sleeve_slides_down_an_incline_with_g_sin_alpha():
     slide acceleration is g sin(alpha) (frictionless, penalty normal forces do no axial work);
     fitted over 0.05-0.25 s, 2e-3 relative (the rod's own vibration under the moving load)."""
     alpha = 0.2
+    acc, *_ = _slide_on_incline(alpha)
+    assert acc == pytest.approx(G * np.sin(alpha), rel=2e-3)
+
+
+def _slide_on_incline(alpha: float, hole=None):  # noqa: ANN001, ANN202
+    """Stiff rod inclined by alpha, sleeve resting on it, 0.25 s: (slide acceleration fitted
+    over 0.05-0.25 s, result, sleeve, joint)."""
     d = (np.cos(alpha), 0.0, -np.sin(alpha))
     model, beam, sleeve, joint = _beam_with_sleeve(direction=d, offset=-5.05e-4 / np.cos(alpha),
-                                                   lock_axial=False, damping=20.0, s=0.3)
+                                                   lock_axial=False, damping=20.0, s=0.3,
+                                                   hole=hole)
     for b in model.beams:
         b.stiffness = fm.BeamStiffness(axial_stiffness=2.6e8, bending_stiffness=2.6e2,
                                        mass_per_length=0.098, radius=2e-3)
@@ -116,8 +124,7 @@ def test_frictionless_sleeve_slides_down_an_incline_with_g_sin_alpha():
                       integrator=fm.GeneralizedAlpha(rho_inf=0.8))
     x = res.body_position(sleeve) @ np.asarray(d)
     sel = res.t >= 0.05
-    acc = 2 * np.polyfit(res.t[sel], x[sel], 2)[0]
-    assert acc == pytest.approx(G * np.sin(alpha), rel=2e-3)
+    return 2 * np.polyfit(res.t[sel], x[sel], 2)[0], res, sleeve, joint
 
 
 def test_input_errors_are_clear():
@@ -212,19 +219,8 @@ def test_rounded_square_sleeve_slides_on_its_flat_side_like_the_circular_one():
     the beam bears on the bore's flat top, and the sleeve slides with g sin(alpha) like the
     circular one (2e-3)."""
     alpha = 0.2
-    d = (np.cos(alpha), 0.0, -np.sin(alpha))
-    model, beam, sleeve, joint = _beam_with_sleeve(direction=d, offset=-5.05e-4 / np.cos(alpha),
-                                                   lock_axial=False, damping=20.0, s=0.3,
-                                                   hole=ROUNDED_SQUARE)
+    acc, res, sleeve, joint = _slide_on_incline(alpha, hole=ROUNDED_SQUARE)
     assert joint.compiled_form()
-    for b in model.beams:
-        b.stiffness = fm.BeamStiffness(axial_stiffness=2.6e8, bending_stiffness=2.6e2,
-                                       mass_per_length=0.098, radius=2e-3)
-    res = fm.simulate(model, t_end=0.25, dt=2e-4, output_interval=5e-3, record_energy=False,
-                      integrator=fm.GeneralizedAlpha(rho_inf=0.8))
-    x = res.body_position(sleeve) @ np.asarray(d)
-    sel = res.t >= 0.05
-    acc = 2 * np.polyfit(res.t[sel], x[sel], 2)[0]
     assert acc == pytest.approx(G * np.sin(alpha), rel=2e-3)
     dirs = _contact_directions(res.assembly, sleeve, joint, res.q[-1])
     assert dirs

@@ -13,7 +13,7 @@ from scipy.linalg.lapack import dgbtrf
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.solvers._bordered import BorderedBandedLU, border_indices, bordered_solve
+from flexmbs.solvers._bordered import BorderedBandedLU, bordered_solve
 from tests.conftest import straight_beam
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -208,7 +208,7 @@ def test_border_indices_of_body_constraints():
     model.prescribe(body, [2])
     asm = Assembly(model)
     n = asm.n_coords
-    border = border_indices(asm)
+    border = asm.border_indices()
     lin_body = [n + r for r in range(asm.m_lin) if np.any(asm.lin_matrix[r].indices >= 30)]
     assert len(lin_body) == 1 and asm.m_lin == 6
     nonlin = np.concatenate([n + nl.rows for nl in asm.nonlinear])
@@ -232,7 +232,7 @@ def test_example1_matrix():
     asm.evaluate(asm.q_ref, np.zeros(n), np.zeros(n), np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                  matrix=(1.0, 0.05, 1e-8))
     A = asm.matrix
-    border = border_indices(asm)
+    border = asm.border_indices()
     nl = np.concatenate([n + r.rows for r in asm.nonlinear])
     assert np.array_equal(border, np.unique(np.r_[asm.body_dof_table.ravel(), nl]))
     lu = BorderedBandedLU(A, border)
