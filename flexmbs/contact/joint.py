@@ -37,7 +37,13 @@ from ._detect import (
 from .geometry import closest_point, section_state
 from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb, as_friction
 from .pair import N_LOCAL, contact_point
-from .sections import CircleSection, Ellipse2D, HoleSection, SuperellipseSection
+from .sections import (
+    CircleSection,
+    Ellipse2D,
+    HoleSection,
+    SuperellipseSection,
+    section_contains,
+)
 from .tangent import N_EXT
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -192,7 +198,10 @@ class SlidingClearanceJoint(Interaction):
             origin = centre + zeta * n
             found, e, xi, cy, cz, a, _b, _, _ = section_state(
                 qe, self._lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
-            if not found or math.hypot(cy, cz) > R_out:
+            compiled = self.hole.section.compiled_shape()
+            outside = (math.hypot(cy, cz) > R_out if compiled is None
+                       else not section_contains(compiled[0], compiled[1], cy, cz))
+            if not found or outside:
                 raise ModelError(
                     f"joint '{self.name}': beam '{self.beam.name}' does not pass through the hole "
                     f"of body '{self.body.name}' at section {k} (axial station {zeta:.6g}); place "

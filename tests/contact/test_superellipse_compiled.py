@@ -153,3 +153,17 @@ def test_turned_section_detects_the_turned_points():
     for (p0, k0, d0), (p1, k1, d1) in zip(out[0], out[1], strict=True):
         assert k0 == k1
         assert abs(p0 - p1) < 1e-9 and abs(d0 - d1) < 1e-12
+
+
+def test_a_beam_outside_a_non_circular_bore_is_refused_at_the_start():
+    """The start check asks the shape: an axis 2.8 mm above the centre of a 2.5 mm rounded
+    square (n = 8) lies inside its bounding circle (3.24 mm) but outside the bore."""
+    model = fm.Model()
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=4),
+                          section=fm.CircularSection(5e-4), material=fm.Material(E=2e11, rho=7800))
+    body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1),
+                                pose=beam.frame_at(0.5).shifted((0, 0, 2.8e-3)))
+    model.add_joint(fm.SlidingClearanceJoint(beam, body,
+                                             hole=fm.SuperellipseHole(2.5e-3, 2.5e-3, 8.0, 0.02, 3)))
+    with pytest.raises(fm.ModelError, match="does not pass through the hole"):
+        Assembly(model)
