@@ -20,7 +20,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, NoReturn, TextIO
 
 import numpy as np
 
@@ -43,16 +43,25 @@ def _error(message: str) -> None:
 
 
 # ================================================================================ parser
+class _OneLineParser(argparse.ArgumentParser):
+    """Usage errors in one line (``flexmbs run: error: ...; see flexmbs run -h``), exit 2,
+    instead of argparse's usage block."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}; see {self.prog} -h\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _OneLineParser(
         prog="flexmbs", description="Flexible multibody dynamics: ANCF beams, rigid bodies, "
         "sliding joints with clearance. See docs/cli.md.")
     parser.add_argument("--version", action="version", version=f"flexmbs {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
+                                parser_class=_OneLineParser)
 
-    overrides = argparse.ArgumentParser(add_help=False)
+    overrides = _OneLineParser(add_help=False)
     overrides.add_argument("--set", dest="overrides", action="append", default=[],
                            metavar="KEY=VALUE",
                            help="override a scenario value, e.g. simulation.dt=5e-4 or "

@@ -244,3 +244,13 @@ def test_solve_static_out_failure_keeps_folder(tmp_path):
     s = summary(tmp_path / "f")
     assert s["status"].startswith("failed: ") and s["scenario"] == "f"
     assert read_pvd(tmp_path / "f" / "f.pvd") == []
+
+
+@pytest.mark.parametrize("argv, what", [([], "COMMAND"), (["run"], "SCENARIO"),
+                                        (["run", "x.toml", "--bogus"], "--bogus"),
+                                        (["run", "x.toml", "--t-end", "soon"], "--t-end")])
+def test_usage_errors_take_one_line(argv, what, capsys):
+    """argparse's usage block is replaced by one line naming the problem, exit 2."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and what in err[0] and err[0].startswith("flexmbs")
