@@ -329,6 +329,64 @@ class SlidingClearanceJoint(Interaction):
         self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b, psi)
                         for k, j, kind, eP, res, a, b, psi in self._contacts(q, v, False, False)]
 
+    def rest_on_beam(self, direction: Any) -> float:
+        """Move the body along ``direction`` (projected on the plane normal to the hole axis;
+        e.g. gravity) until its bore rests on the beam in the reference configuration: the
+        deepest section point just touches (issue "nothing lost", item 9). The placement follows
+        the clearance, so a changed hole radius starts in contact, not inside the wall.
+        Returns the distance moved [m]."""
+        from ..model import Pose
+
+        body = self.body
+        A = body.pose.rotation
+        axis = A[:, 0]
+        d = np.asarray(direction, float).reshape(3)
+        d = d - axis * (axis @ d)
+        if not np.linalg.norm(d) > 0:
+            raise ModelError(f"joint '{self.name}': the rest direction is along the hole axis; "
+                             "give one across it")
+        d = d / np.linalg.norm(d)
+        cl = self.beam.centerline
+        P, T, L = np.asarray(cl.points), np.asarray(cl.tangents), np.asarray(cl.lengths)
+        qe = np.ascontiguousarray(np.concatenate([P[:-1], T[:-1], P[1:], T[1:]], axis=1))
+        section = self.hole.section
+        R_out = section.bounding_radius()
+
+        def deepest(shift: float) -> float:
+            centre = body.pose.position + shift * d + A @ self.hole_point
+            worst = -np.inf
+            for zeta in self.stations:
+                origin = centre + zeta * axis
+                found, _e, _xi, cy, cz, a, b, eax, eay = section_state(
+                    qe, L, origin, axis, A[:, 1], A[:, 2], 0, 0.5, self.beam_radius, np.inf)
+                if not found:
+                    return np.inf
+                ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
+                for cand in section.candidates(ell, margin=np.inf):
+                    worst = max(worst, cand.depth)
+            return worst
+
+        lo, hi = 0.0, 2.0 * R_out
+        if not deepest(lo) < 0.0:   # a curved beam may need the bore shifted against d first
+            free = [x for x in np.linspace(0.0, -R_out, 41)[1:] if deepest(x) < 0.0]
+            if not free:
+                raise ModelError(
+                    f"joint '{self.name}': the bore cuts the beam wherever it is placed across "
+                    "it (the beam bends more than the clearance within the hole, or the beam is "
+                    "too thick); a larger hole radius or a shorter hole fits")
+            lo = free[0]
+        if not deepest(hi) > 0.0:
+            raise ModelError(f"joint '{self.name}': moving the body along the rest direction "
+                             "never brings the bore onto the beam")
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if deepest(mid) < 0.0:
+                lo = mid
+            else:
+                hi = mid
+        body.pose = Pose(body.pose.position + hi * d, A)
+        return hi
+
     def hole_record(self) -> dict[str, Any]:
         """The hole as data (``summary.json["hole_sections"]``, read by the section view):
         ``shape`` (registered name) and the section's parameters, ``length``, ``sections``."""

@@ -25,10 +25,17 @@ def build_rigid_body(t: Table, ctx: BuildContext) -> RigidBody:
     pt = t.table("pose", None)
     pose = Pose(np.zeros(3)) if pt is None else _pose(ctx, pt)
     shape = _shape(ctx, t.table("shape")) if t.has("shape") else None
-    return ctx.model.add_rigid_body(mass=mass, inertia=inertia, pose=pose, name=t.raw["name"],
+    body = ctx.model.add_rigid_body(mass=mass, inertia=inertia, pose=pose, name=t.raw["name"],
                                     velocity=t.vector("velocity", np.zeros(3)),
                                     angular_velocity=t.vector("angular_velocity", np.zeros(3)),
                                     shape=shape)
+    if pt is not None and pt.has("rest"):
+        pt.choice("rest", ("bore",), what="rest placement")
+        direction = pt.vector("rest_direction", None)
+        ctx.resting[body.name] = (direction, pt.path)
+    elif pt is not None and pt.has("rest_direction"):
+        raise ScenarioError(f"{pt.key('rest_direction')}: only with rest = \"bore\"")
+    return body
 
 
 def _inertia(t: Table) -> np.ndarray:
@@ -54,7 +61,7 @@ def _inertia(t: Table) -> np.ndarray:
 
 
 def _pose(ctx: BuildContext, p: Table) -> Pose:
-    p.allow(("position", "quaternion", "on_beam", "s", "offset", "up"))
+    p.allow(("position", "quaternion", "on_beam", "s", "offset", "up", "rest", "rest_direction"))
     if p.has("on_beam"):
         bad = p.present(("position", "quaternion"))
         if bad:
@@ -66,7 +73,7 @@ def _pose(ctx: BuildContext, p: Table) -> Pose:
         with at(p.path):
             frame = beam.frame_at(s, up=up)
         return frame.shifted(p.vector("offset", np.zeros(3)))
-    bad = p.present(("s", "offset", "up"))
+    bad = p.present(("s", "offset", "up", "rest", "rest_direction"))
     if bad:
         raise ScenarioError(f"{p.key(bad[0])}: only with on_beam = \"<beam name>\"")
     position = p.vector("position")

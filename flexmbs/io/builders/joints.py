@@ -12,9 +12,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from ...contact.laws import CONTACT_LAWS, ForceLaw, RegularizedCoulomb, get_law
 from ...contact.sections import HOLE_SECTIONS, HoleSection, get_section
-from ...errors import ScenarioError
+from ...errors import ModelError, ScenarioError
 from ...registry import Registry
 from ..tables import Table, at
 from .context import BuildContext, Builder
@@ -73,6 +75,18 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
         hole_point=h.vector("point", (0.0, 0.0, 0.0)),
         beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
         tangent=tangent, name=t.raw["name"])
+    if body.name in ctx.resting:      # pose = { on_beam, s, rest = "bore" }
+        direction, where = ctx.resting.pop(body.name)
+        if direction is None:
+            direction = np.asarray(ctx.model.gravity, float)
+            if not np.linalg.norm(direction) > 0:
+                raise ScenarioError(f"{where}.rest: rest = \"bore\" lets the bore rest on the "
+                                    "beam along gravity, which is zero here; give "
+                                    "rest_direction = [x, y, z]")
+        try:
+            joint.rest_on_beam(direction)
+        except ModelError as exc:
+            raise ScenarioError(f"{where}.rest: {exc}") from None
     return ctx.model.add_joint(joint)
 
 
