@@ -135,8 +135,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warnings() -> None:
+    """flexmbs' own warnings as ``flexmbs: warning: ...`` (one line); others as before."""
+    import warnings
+
+    from .errors import FlexmbsWarning
+
+    show = warnings.showwarning
+    if getattr(show, "flexmbs", False):
+        return
+
+    def showwarning(message: Any, category: type[Warning], filename: str, lineno: int,
+                    file: Any = None, line: str | None = None) -> None:
+        if issubclass(category, FlexmbsWarning):
+            print(f"flexmbs: warning: {message}", file=sys.stderr)
+        else:
+            show(message, category, filename, lineno, file, line)
+
+    showwarning.flexmbs = True  # type: ignore[attr-defined]
+    warnings.showwarning = showwarning
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``flexmbs`` console script; returns the exit status."""
+    _one_line_warnings()
     parser = build_parser()
     try:
         args = parser.parse_args(None if argv is None else list(argv))

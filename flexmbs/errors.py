@@ -27,6 +27,11 @@ class RedundantConstraintError(ModelError):
     """The constraint Jacobian is rank deficient; the message lists the dependent equations."""
 
 
+class FlexmbsWarning(UserWarning):
+    """Something that runs but is probably not what was meant (printed as one line by the
+    CLI), e.g. a clearance joint starting with the beam pressed into the bore wall."""
+
+
 class Interrupted(KeyboardInterrupt):
     """A termination signal (SIGTERM, SIGHUP) handled like Ctrl-C: the run finishes its frame,
     writes its checkpoint and ``summary.json`` (status ``interrupted: <signal>``)."""

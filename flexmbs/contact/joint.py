@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -23,7 +24,7 @@ import numpy as np
 from ..constraints.interaction import Interaction, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
-from ..errors import ConvergenceError, FlexmbsError, ModelError
+from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ERR_LEFT_BORE,
@@ -194,9 +195,10 @@ class SlidingClearanceJoint(Interaction):
         qe = np.ascontiguousarray(q0[self._elem_dofs])
         R_out = self.hole.section.bounding_radius()
         R_in = self.hole.section.inscribed_radius()
+        deepest = 0.0
         for k, zeta in enumerate(self.stations):
             origin = centre + zeta * n
-            found, e, xi, cy, cz, a, _b, _, _ = section_state(
+            found, e, xi, cy, cz, a, _b, eax, eay = section_state(
                 qe, self._lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
             compiled = self.hole.section.compiled_shape()
             outside = (math.hypot(cy, cz) > R_out if compiled is None
@@ -212,6 +214,16 @@ class SlidingClearanceJoint(Interaction):
                     f"{k} (ellipse semi-axis {a:.6g} > bore {R_in:.6g}: jamming); align the hole "
                     "axis with the beam")
             self._elem[k], self._xi[k] = e, xi
+            ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, _b)
+            deepest = max(deepest, max((c.depth for c in self.hole.section.candidates(ell)),
+                                       default=0.0))
+        clearance = self.hole.section.inscribed_radius() - self.beam_radius
+        if deepest > 0.05 * clearance:
+            warnings.warn(FlexmbsWarning(
+                f"joint '{self.name}': the beam starts {deepest:.3g} m into the bore wall "
+                f"({deepest / clearance:.0%} of the clearance {clearance:.3g} m), so the contact "
+                "starts with a large force; place the body with pose = { on_beam, s, rest = "
+                "\"bore\" } or fix its offset"), stacklevel=2)
 
     # ------------------------------------------------------------------ detection + forces
     def _approach_for(self, k: int, psi: float) -> float:

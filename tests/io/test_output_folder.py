@@ -196,3 +196,21 @@ def test_rest_on_the_bore_refuses_what_cannot_fit_and_needs_a_direction(capsys):
     assert len(err) == 1 and "rest_direction" in err[0]
     assert main(["info", str(EXAMPLE1), "--set", "simulation.gravity=[0.0, 0.0, 0.0]",
                  "--set", "rigid_bodies.sleeve.pose.rest_direction=[0.0, 0.0, -1.0]"]) == 0
+
+
+def test_a_start_inside_the_bore_wall_is_warned_in_one_line(tmp_path, capsys):
+    """Item 9: the issue's case, Example 1 with the sleeve at a fixed offset chosen for 0.5 mm
+    of clearance and the hole made 2.3 mm: the rail starts 0.2 mm inside the wall; one warning
+    line names the joint, the depth and the fix."""
+    text = EXAMPLE1.read_text().replace(
+        'pose = { on_beam = "rail", s = 0.2617993877991494, rest = "bore" }',
+        'pose = { on_beam = "rail", s = 0.2617993877991494, offset = [-1.5e-4, 0.0, -2.598076e-4] }')
+    text = text.replace('mesh = "../meshes/', f'mesh = "{ROOT / "meshes"}/')
+    scen = tmp_path / "fixed_offset.toml"
+    scen.write_text(text)
+    assert main(["info", str(scen), "--set", "joints.sleeve.hole.radius=2.3e-3"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("flexmbs: warning: joint 'sleeve'")
+    assert "into the bore wall" in err[0] and 'rest = "bore"' in err[0]
+    assert main(["info", str(EXAMPLE1)]) == 0                      # placed at rest: no warning
+    assert "warning" not in capsys.readouterr().err
