@@ -179,9 +179,13 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
             raise ModelError("simulate(resume=True) needs out= (the folder of the stopped run)")
         state0, previous = resume_point(out, asm, run_name)
         resume_t = state0.t
+        solver_state = _solver_state(out)
         if not t_end > resume_t:
             raise ModelError(f"cannot resume: the checkpoint in {out} is at t = {resume_t:.6g} "
                              f"and t_end = {t_end:.6g}; give a later t_end")
+    if not resume:
+        solver_state = None
+    solver_now: dict[str, Any] = {}    # the integrator's own state at the current output
     ts: list[float] = []
     qs: list[np.ndarray] = []
     vs: list[np.ndarray] = []
@@ -231,7 +235,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
             writer.write(s, contacts=interaction_outputs(asm, s),
                          sections=interaction_sections(asm, s), probe_values=values,
                          energy=energy,
-                         checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm)})
+                         checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm),
+                                           **{f"solver_{k}": v for k, v in solver_now.items()}})
         if observer is not None:
             observer(s)
 
@@ -263,7 +268,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     try:
         final, stats = integrate(asm, opts, t_end=t_end, dt=dt, state=state0,
                                  output_interval=output_interval, observer=record,
-                                 progress=watch)
+                                 progress=watch, solver_state=solver_state,
+                                 snapshot=solver_now.update)
     except ConvergenceError as exc:
         # keep what was computed: the partial history travels with the exception
         stats = last_stats[0] if last_stats else IntegrationStats()
@@ -333,6 +339,16 @@ def checkpoint_time(out: str | os.PathLike) -> float | None:
         return float(load_checkpoint(ckpt)[0].t)
     except (OSError, ValueError, KeyError):
         return None
+
+
+def _solver_state(out: str | os.PathLike) -> dict[str, Any] | None:
+    """The integrator's own state saved with the checkpoint (``solver_*`` entries), if any."""
+    try:
+        _, extra = load_checkpoint(Path(out) / "checkpoint.npz")
+    except (OSError, ValueError, KeyError):
+        return None
+    found = {k[len("solver_"):]: v for k, v in extra.items() if k.startswith("solver_")}
+    return found or None
 
 
 def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[State, dict]:

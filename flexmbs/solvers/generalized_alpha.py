@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -178,6 +178,14 @@ Observer = Callable[[State], None]
 class _PythonStepper:
     """General path: Newton on :class:`_AlphaStep` (any model), one step per call."""
 
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Solver state a checkpoint carries (none here: SuperLU factors do not serialise; a
+        resumed Python-path run refactorises, agreeing to the Newton tolerance)."""
+        return {}
+
+    def restore(self, saved: dict[str, np.ndarray]) -> None:
+        """See :meth:`snapshot`."""
+
     def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
         self.am, self.af, self.gamma, self.beta = options.parameters()
         self.keep_acceleration = options.predictor == "constant_acceleration"
@@ -268,6 +276,32 @@ class _CompiledStepper:
     def max_chunk(self) -> int:
         return 1_000_000
 
+    #: entries of ``info`` that steer the next steps (counters excluded: the summary adds them)
+    _KEPT_INFO = ("INFO_HAVE", "INFO_KSCALE", "INFO_RENEW", "INFO_CYC_STEPS", "INFO_CYC_ITS")
+    _FACTOR_ARRAYS = ("ab", "piv", "xt", "a_ba", "s", "piv_s")
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """What the next steps depend on besides the state: whether a factorisation is held,
+        its age in the renewal rule, the stiffness scale, and the factors themselves, so that a
+        resumed run continues with the same factorisation (bit for bit, issue "nothing lost")."""
+        cc = self.cc
+        out = {"info": np.array([self.info[getattr(cc, k)] for k in self._KEPT_INFO])}
+        for k in self._FACTOR_ARRAYS:
+            out[k] = np.array(getattr(self.lu.factor, k), copy=True)
+        return out
+
+    def restore(self, saved: dict[str, np.ndarray]) -> None:
+        """Take over a :meth:`snapshot` (ignored unless every array fits this model)."""
+        if "info" not in saved or any(
+                k not in saved or np.shape(saved[k]) != getattr(self.lu.factor, k).shape
+                for k in self._FACTOR_ARRAYS):
+            return
+        for k in self._FACTOR_ARRAYS:
+            getattr(self.lu.factor, k)[...] = saved[k]
+        for value, k in zip(np.asarray(saved["info"], float), self._KEPT_INFO, strict=True):
+            self.info[getattr(self.cc, k)] = value
+        self.asm.stiffness_scale = float(self.info[self.cc.INFO_KSCALE])
+
     def invalidate(self) -> None:
         self.info[self.cc.INFO_HAVE] = 0.0
 
@@ -323,12 +357,17 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
               state: State | None = None, output_interval: float | None = None,
               observer: Observer | None = None,
               progress: Callable[[State, IntegrationStats], None] | None = None,
+              solver_state: dict[str, Any] | None = None,
+              snapshot: Callable[[dict[str, Any]], None] | None = None,
               ) -> tuple[State, IntegrationStats]:
     """Integrate from ``state`` (default: consistent initial state) to ``t_end``.
 
     ``observer(state)`` is called at t0 and at every multiple of ``output_interval`` (default:
-    every step). Raises :class:`ConvergenceError` if a step cannot be completed even at
-    ``min_step``; everything observed before stays valid.
+    every step); just before, ``snapshot(d)`` receives the solver's own state (step size,
+    cut-back count, the factorisation and its age), which ``solver_state=d`` restores, so that a
+    run resumed from an output continues exactly as the uninterrupted one. Raises
+    :class:`ConvergenceError` if a step cannot be completed even at ``min_step``; everything
+    observed before stays valid.
     """
     if not dt > 0:
         raise ModelError(f"time step dt must be > 0 (got {dt})")
@@ -350,9 +389,22 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     ok_since_cut = 0
     t_eps = 1e-9 * dt
     k_out = int(math.floor(state.t / out_dt + 1e-9)) + 1
-    if observer is not None:
-        observer(state)
-    h_matrix = None
+    h_matrix: float | None = None
+    if solver_state:
+        stepper.restore(solver_state)
+        h = float(solver_state.get("h", h))
+        ok_since_cut = int(solver_state.get("ok_since_cut", 0))
+        hm = float(solver_state.get("h_matrix", -1.0))
+        h_matrix = hm if hm > 0 else None
+
+    def observe() -> None:
+        if snapshot is not None:
+            snapshot({"h": h, "ok_since_cut": ok_since_cut,
+                      "h_matrix": -1.0 if h_matrix is None else h_matrix, **stepper.snapshot()})
+        if observer is not None:
+            observer(state)
+
+    observe()
     while state.t < t_end - t_eps:
         t_out = min(k_out * out_dt, t_end)
         remaining = t_out - state.t
@@ -396,8 +448,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         stepper.finish_chunk()
         if state.t == t_out:
             k_out += 1
-            if observer is not None:
-                observer(state)
+            observe()
         if progress is not None:
             stats.newton_iterations, stats.factorizations, stats.residual_evaluations = (
                 stepper.totals())
