@@ -31,6 +31,7 @@ from .simulation import Result, modes, simulate, solve_static
 from .solvers.generalized_alpha import GeneralizedAlpha
 from .solvers.newton import NewtonOptions
 from .solvers.static import StaticOptions
+from .sweeps import sweep
 
 
 def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (meshio import cost)
@@ -50,5 +51,5 @@ __all__ = [
     "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",
     "RedundantConstraintError", "Result", "RigidBody", "ScenarioError", "SimulationStopped",
     "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
-    "modes", "polyline", "read_curve", "simulate", "solve_static",
+    "modes", "polyline", "read_curve", "simulate", "solve_static", "sweep",
 ]

@@ -31,9 +31,6 @@ EXIT_BAD_INPUT = 2
 EXIT_FAILED = 3
 EXIT_INTERRUPTED = 130
 
-_NOT_AVAILABLE = "not available in this version (parameter sweeps on Dask arrive with a later release)"
-
-
 def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
 
@@ -127,11 +124,24 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--exaggeration", type=float, metavar="F",
                       help="section view: factor on offsets and clearance (default: clearance "
                            "drawn as half the bore radius)")
-    sweep = sub.add_parser("sweep", help="run scenario variants "
-                           f"({_NOT_AVAILABLE.split(' (')[0]})")
-    sweep.add_argument("scenario", metavar="SCENARIO")
-    sweep.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...")
-    sweep.add_argument("--scheduler", metavar="ADDRESS")
+    sweep = sub.add_parser(
+        "sweep", parents=[overrides], help="run variants of a scenario on Dask (parameter study)",
+        description="Run the Cartesian product of --grid lists (times the --zip lists taken side "
+                    "by side) of --set overrides on Dask, one output folder per case, and write "
+                    "the table sweep.csv (docs/sweeps.md). A rerun skips completed cases.")
+    sweep.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
+    sweep.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...",
+                       help="values of one --set key; several --grid give their product")
+    sweep.add_argument("--zip", action="append", default=[], metavar="KEY=V1,V2,...",
+                       help="values taken side by side with the other --zip lists (same length)")
+    sweep.add_argument("--out", metavar="DIR",
+                       help="sweep folder (default: out/<scenario name>_sweep)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="an existing Dask scheduler (tcp://host:8786 or a scheduler file); "
+                            "default: a LocalCluster on this machine")
+    sweep.add_argument("--workers", type=int, metavar="N",
+                       help="LocalCluster worker processes (default: one per core)")
+    sweep.add_argument("--quiet", "-q", action="store_true", help="no progress output")
     return parser
 
 
@@ -171,14 +181,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_info(args)
         if args.command in ("render", "plot"):
             return cmd_postprocess(args)
+        if args.command == "sweep":
+            return cmd_sweep(args)
     except BrokenPipeError:   # e.g. `flexmbs info ... | head`: the reader left, not an error
         import os
 
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
-    print(f"flexmbs {args.command}: {_NOT_AVAILABLE}", file=sys.stderr)
-    return EXIT_BAD_INPUT
+    raise AssertionError(f"unhandled command {args.command}")  # pragma: no cover
 
 
 def cmd_postprocess(args: argparse.Namespace) -> int:
@@ -324,18 +335,13 @@ def _is_end_time(assignment: str) -> bool:
     return assignment.replace(" ", "").startswith("simulation.t_end=")
 
 
-def _scenario_digest(path: str | os.PathLike[str]) -> str:
-    import hashlib
-
-    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
-
-
 def _resume_overrides(args: argparse.Namespace) -> list[str]:
     """The overrides of a resumed run: the first run's (from ``summary.json``, without its end
     time) unless the same are given again; a different model is refused with one line naming
     the difference (issue "nothing lost", item 5). The scenario file and its content must be
     those of the first run."""
     from .errors import ScenarioError
+    from .runs import scenario_digest
 
     given = _overrides(args)
     try:
@@ -349,7 +355,7 @@ def _resume_overrides(args: argparse.Namespace) -> list[str]:
         raise ScenarioError(f"{where}: that run was made from {first_file}, not "
                             f"{os.path.abspath(args.scenario)}")
     digest = meta.get("scenario_sha1")
-    if digest and Path(args.scenario).is_file() and _scenario_digest(args.scenario) != digest:
+    if digest and Path(args.scenario).is_file() and scenario_digest(args.scenario) != digest:
         raise ScenarioError(f"{where}: {args.scenario} has changed since that run started; a "
                             "resumed run must be the same model (only the end time may change)")
     first = [o for o in meta.get("overrides") or [] if not _is_end_time(o)]
@@ -363,20 +369,26 @@ def _resume_overrides(args: argparse.Namespace) -> list[str]:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """``flexmbs run``: load the scenario, resolve the output folder, call
-    :func:`flexmbs.simulation.solve_static` (``integrator = "static"``) or
-    :func:`flexmbs.simulation.simulate`, which build the assembly and write the folder, and print
+    """``flexmbs run``: load the scenario, resolve the output folder and call
+    :func:`flexmbs.runs.run_scenario`, which claims the folder and runs the scenario
+    (:func:`~flexmbs.simulation.solve_static` or :func:`~flexmbs.simulation.simulate`); print
     one line."""
-    from .io.folder import claim
     from .io.scenario import load_scenario
-    from .simulation import checkpoint_time, simulate, solve_static
+    from .runs import run_scenario
 
     quiet = bool(args.quiet)
-    status = "failed"
     out: Path | None = None
     t_wall = time.perf_counter()
-    progress: _Progress | None = None
-    held: list[Any] = []                 # the claimed output folder (its lock), released below
+    bars: list[_Progress] = []
+
+    def progress(start: float, t_end: float, name: str) -> _Progress:
+        bars.append(_Progress(start, t_end, name=name, disable=quiet or not sys.stderr.isatty()))
+        return bars[-1]
+
+    def close_bars() -> None:
+        for bar in bars:
+            bar.close()
+
     restore = _terminate_like_ctrl_c()
     try:
         overrides = _resume_overrides(args) if args.resume is not None else _overrides(args)
@@ -390,6 +402,9 @@ def cmd_run(args: argparse.Namespace) -> int:
             if not out.is_dir():
                 _error(f"cannot resume: {out} is not a folder")
                 return EXIT_BAD_INPUT
+            if sim.integrator == "static":
+                _error("--resume: a static scenario has nothing to resume")
+                return EXIT_BAD_INPUT
         else:
             if args.out is not None and not args.out.strip():
                 _error("--out: empty path; give the output folder")
@@ -401,49 +416,20 @@ def cmd_run(args: argparse.Namespace) -> int:
             if not kernels_cached():
                 print("flexmbs: first run here: compiling the numba kernels (once, about a "
                       "minute; cached for later runs)", file=sys.stderr, flush=True)
-        metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": overrides,
-                    "scenario_sha1": _scenario_digest(sc.path),
-                    "integrator_name": sim.integrator, "initial_static": sim.initial_static}
-        if sim.integrator == "static" and args.resume is not None:
-            _error("--resume: a static scenario has nothing to resume")
-            return EXIT_BAD_INPUT
-        claimed = claim(out, scenario=sc.name, overwrite=bool(getattr(args, "overwrite", False)),
-                        resume=args.resume is not None)
-        claimed.__enter__()
-        held.append(claimed)
-        if sim.integrator == "static":
-            st = solve_static(sc.model, sc.static_options(), t=sim.t_end,
-                              redundant_constraints=sim.redundant_constraints, out=out,
-                              probes=sc.probes, name=sc.name, metadata=metadata)
-            status, steps, newton, rejected = "completed", 0, st.newton_iterations, 0
-        else:
-            # where the bar starts; simulate() reports a missing or unreadable checkpoint
-            start = (checkpoint_time(out) if args.resume is not None else None) or 0.0
-            progress = _Progress(start, sim.t_end, name=sc.name,
-                                 disable=quiet or not sys.stderr.isatty())
-            res = simulate(sc.model, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
-                           output_interval=sim.output_interval,
-                           initial_static=sim.initial_static, static_options=sc.static_options(),
-                           redundant_constraints=sim.redundant_constraints, record_energy=False,
-                           progress=progress, out=out, probes=sc.probes, name=sc.name,
-                           resume=args.resume is not None, metadata=metadata)
-            progress.close()
-            status = res.status
-            steps, newton = res.stats.steps, res.stats.newton_iterations
-            rejected = res.stats.rejected_steps
+        outcome = run_scenario(sc, out, overrides=overrides, resume=args.resume is not None,
+                               overwrite=bool(getattr(args, "overwrite", False)),
+                               progress=progress)
+        close_bars()
     except KeyboardInterrupt:
-        if progress is not None:
-            progress.close()
+        close_bars()
         _error("interrupted" + (f" (output so far in {out})" if out is not None else ""))
         return EXIT_INTERRUPTED
     except FlexmbsError as exc:
-        if progress is not None:
-            progress.close()
+        close_bars()
         _error(_one_line(exc))
         return EXIT_FAILED if isinstance(exc, ConvergenceError) else EXIT_BAD_INPUT
     except OSError as exc:
-        if progress is not None:
-            progress.close()
+        close_bars()
         where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
         _error(f"cannot write or read{where}: {exc.strerror or _one_line(exc)}")
         # a run that had started (its summary exists) failed, e.g. on a full disk; before
@@ -451,14 +437,71 @@ def cmd_run(args: argparse.Namespace) -> int:
         started = out is not None and (out / "summary.json").is_file()
         return EXIT_FAILED if started else EXIT_BAD_INPUT
     finally:
-        for claimed in held:
-            claimed.__exit__(None, None, None)
         restore()
     if not quiet:
         wall = time.perf_counter() - t_wall
-        print(f"{sc.name}: {status} at t = {sim.t_end:.6g} s: {steps} steps, {newton} Newton "
-              f"iterations, {rejected} rejected, wall time {wall:.3g} s; output: {out}")
+        print(f"{sc.name}: {outcome.status} at t = {sim.t_end:.6g} s: {outcome.steps} steps, "
+              f"{outcome.newton_iterations} Newton iterations, {outcome.rejected_steps} rejected, "
+              f"wall time {wall:.3g} s; output: {out}")
     return EXIT_OK
+
+
+# ================================================================================ sweep
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """``flexmbs sweep``: :func:`flexmbs.sweeps.sweep` with a progress line per case; exit 0
+    when every case completed, 3 when some failed (the table lists them), 2 on bad input."""
+    import importlib.util
+
+    from .sweeps import Case, parse_values, sweep
+
+    if importlib.util.find_spec("distributed") is None:
+        _error('sweep needs dask.distributed; install it with pip install "dask[distributed]"')
+        return EXIT_BAD_INPUT
+    quiet = bool(args.quiet)
+    t0 = time.perf_counter()
+
+    def report(case: Case, row: dict[str, Any], done: int, total: int, reused: bool) -> None:
+        status = str(row.get("status"))
+        if quiet:
+            return
+        if status != "completed":
+            _error(f"case {case.name} {status}")
+        elif reused:
+            print(f"[{done}/{total}] {case.name}: completed by an earlier run (kept)",
+                  file=sys.stderr, flush=True)
+        else:
+            print(f"[{done}/{total}] {case.name}: completed in {row.get('wall_time', 0):.3g} s, "
+                  f"{row.get('steps')} steps", file=sys.stderr, flush=True)
+
+    restore = _terminate_like_ctrl_c()
+    try:
+        grid = dict(parse_values(g, "--grid") for g in args.grid)
+        zipped = dict(parse_values(z, "--zip") for z in args.zip)
+        if len(grid) != len(args.grid) or len(zipped) != len(args.zip):
+            _error("sweep: a key is given twice; give each --grid/--zip key once")
+            return EXIT_BAD_INPUT
+        rows = sweep(args.scenario, grid, zip=zipped, overrides=args.overrides, out=args.out,
+                     scheduler=args.scheduler, workers=args.workers, report=report)
+    except KeyboardInterrupt:
+        _error("sweep interrupted (finished cases are in the table; rerun to continue)")
+        return EXIT_INTERRUPTED
+    except FlexmbsError as exc:
+        _error(_one_line(exc))
+        return EXIT_BAD_INPUT
+    except OSError as exc:
+        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
+        _error(f"cannot write or read{where}: {exc.strerror or _one_line(exc)}")
+        return EXIT_BAD_INPUT
+    finally:
+        restore()
+    failed = [r for r in rows if r.get("status") != "completed"]
+    if not quiet:
+        from .sweeps import TABLE_FILE
+
+        table = Path(str(rows[0]["folder"])).parent / TABLE_FILE
+        print(f"sweep: {len(rows) - len(failed)} of {len(rows)} cases completed, {len(failed)} "
+              f"failed, wall time {time.perf_counter() - t0:.3g} s; table: {table}")
+    return EXIT_FAILED if failed else EXIT_OK
 
 
 # ================================================================================ info

@@ -10,6 +10,7 @@ from .data import Run, read_run
 from .plots import plot
 from .render import render
 from .section import contact_angles, contact_angles_view, section_figure, section_view
+from .sweep import plot_sweep, sweep_figures
 
 __all__ = ["Run", "contact_angles", "contact_angles_view", "plot", "read_run", "render",
-           "section_figure", "section_view"]
+           "section_figure", "section_view", "plot_sweep", "sweep_figures"]

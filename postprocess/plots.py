@@ -126,12 +126,19 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
 
 def plot(out_dir: str | Path, *, compare: str | Path | None = None,
          formats: Sequence[str] = ("png", "svg")) -> list[Path]:
-    """Write the figures of :func:`make_figures` into ``out_dir/figures``; returns the paths."""
+    """Write the figures of :func:`make_figures` into ``out_dir/figures``; returns the paths.
+    A sweep folder (``sweep.csv``) gets the sweep's figures (:mod:`postprocess.sweep`)."""
     import matplotlib.pyplot as plt
+
+    from .sweep import is_sweep, plot_sweep
 
     for f in formats:
         if f not in ("png", "svg", "pdf"):
             raise ValueError(f"unknown figure format '{f}' (known: png, svg, pdf)")
+    if is_sweep(out_dir):
+        if compare is not None:
+            raise ValueError(f"{out_dir} is a sweep folder: --compare applies to run folders")
+        return plot_sweep(out_dir, formats=formats)
     run = read_run(out_dir)
     other = read_run(compare) if compare is not None else None
     figs = make_figures(run, other)

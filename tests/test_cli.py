@@ -109,12 +109,12 @@ def test_bad_input_exit_2_one_line(tmp_path, capsys, args, expected):
 
 
 def test_missing_output_folder_and_sweep_give_one_line(capsys):
-    """render/plot of a folder that does not exist, and the not-yet-available sweep: exit 2 and
+    """render/plot of a folder that does not exist, and a sweep without parameters: exit 2 and
     one line on stderr."""
     for cmd, expected in ((["render", "out/x"], "flexmbs: error: output folder not found: out/x"),
                           (["plot", "out/x"], "flexmbs: error: output folder not found: out/x"),
-                          (["sweep", CANTILEVER], "flexmbs sweep: not available in this version "
-                           "(parameter sweeps on Dask arrive with a later release)")):
+                          (["sweep", CANTILEVER], "flexmbs: error: sweep: no parameters; give "
+                           "--grid KEY=V1,V2,... (or --zip)")):
         assert main(cmd) == EXIT_BAD_INPUT
         err = capsys.readouterr().err.strip()
         assert err == expected

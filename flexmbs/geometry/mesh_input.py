@@ -12,7 +12,7 @@ import contextlib
 import io
 import os
 import re
-import sys
+import warnings
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +24,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..errors import GeometryError
+from ..errors import FlexmbsWarning, GeometryError
 from .curves import Centerline, bessel_tangents, hermite_lengths, polyline
 
 if TYPE_CHECKING:
@@ -70,9 +70,11 @@ def _read(path: str | os.PathLike[str]) -> Mesh:
     except Exception as exc:  # meshio raises ReadError, ValueError, KeyError... by format
         reason = str(exc) or type(exc).__name__
         raise GeometryError(f"cannot read mesh file {p}: {reason}") from exc
-    for stream, text in ((sys.stdout, out.getvalue()), (sys.stderr, err.getvalue())):
-        if text:  # meshio warnings (e.g. unsupported cells) stay visible
-            stream.write(text)
+    # meshio's own messages (e.g. unsupported cells; a bare newline for some gmsh files) become
+    # one flexmbs warning naming the file, not loose lines in the terminal
+    lines = [ln.strip() for ln in (out.getvalue() + err.getvalue()).splitlines() if ln.strip()]
+    if lines:
+        warnings.warn(f"{p}: meshio says: {'; '.join(lines)}", FlexmbsWarning, stacklevel=3)
     return mesh
 
 

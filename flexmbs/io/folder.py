@@ -22,7 +22,7 @@ from pathlib import Path
 
 from ..errors import ScenarioError
 
-__all__ = ["LOCK_NAME", "claim", "output_files"]
+__all__ = ["LOCK_NAME", "claim", "lock_folder", "output_files"]
 
 LOCK_NAME = ".flexmbs.lock"
 
@@ -81,6 +81,17 @@ def _previous_scenario(folder: Path) -> str | None:
 
 
 @contextlib.contextmanager
+def lock_folder(folder: Path) -> Iterator[Path]:
+    """Hold ``folder``'s lock (one writer at a time) for the ``with`` block."""
+    lock = _lock(folder)
+    try:
+        yield folder
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            lock.unlink()
+
+
+@contextlib.contextmanager
 def claim(folder: str | os.PathLike[str], *, scenario: str, overwrite: bool = False,
           resume: bool = False) -> Iterator[Path]:
     """Lock ``folder`` for a run of ``scenario`` and make sure it may be written (module
@@ -109,8 +120,7 @@ def claim(folder: str | os.PathLike[str], *, scenario: str, overwrite: bool = Fa
                 f"--out {path}: holds files that are not flexmbs output ({foreign[0].name}, ...); "
                 "choose another folder")
     path.mkdir(parents=True, exist_ok=True)
-    lock = _lock(path)
-    try:
+    with lock_folder(path):
         if not resume:
             for p in output_files(path):
                 if p.is_dir():
@@ -118,6 +128,3 @@ def claim(folder: str | os.PathLike[str], *, scenario: str, overwrite: bool = Fa
                 else:
                     p.unlink()
         yield path
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            lock.unlink()

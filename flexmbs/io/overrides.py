@@ -11,7 +11,7 @@ from typing import Any
 from ..errors import ScenarioError
 from .tables import show_value, tomllib
 
-__all__ = ["ARRAY_KEYS", "apply_override"]
+__all__ = ["ARRAY_KEYS", "apply_override", "parse_value"]
 
 #: top-level keys holding arrays of tables (``[[beams]]``), addressed by entry name or index
 ARRAY_KEYS = ("beams", "rigid_bodies", "constraints", "joints", "loads", "probes")
@@ -33,7 +33,7 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
         parts = _split_key(key)
     except ValueError:
         raise ScenarioError(f"--set {assignment}: invalid key {key.strip()!r}") from None
-    value = _parse_value(text)
+    value = parse_value(text)
     node: Any = raw
     done: list[str] = []
     for part in parts[:-1]:
@@ -58,7 +58,8 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
     node[last] = value
 
 
-def _parse_value(text: str) -> Any:
+def parse_value(text: str) -> Any:
+    """The value of ``KEY=VALUE``: a TOML value, or a bare word as a string."""
     text = text.strip()
     try:
         return tomllib.loads(f"v = {text}")["v"]
