@@ -10,10 +10,8 @@ Short public API (see DESIGN.md, "Python API")::
     result = fm.simulate(model, t_end=1.0, dt=1e-3)
 """
 
-from .constraints.sliding import SlidingJoint
-from .contact.joint import CircleHole, Hole, SlidingClearanceJoint, SuperellipseHole
-from .contact.laws import Hertz, HuntCrossley, LankaraniNikravesh, LinearPenalty, RegularizedCoulomb
-from .elements.ancf_cable import CableOptions
+from typing import TYPE_CHECKING, Any
+
 from .errors import (
     ConvergenceError,
     FlexmbsError,
@@ -23,15 +21,81 @@ from .errors import (
     ScenarioError,
     SimulationStopped,
 )
-from .geometry.curves import Centerline, arc, line, polyline
-from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
-from .model import GROUND, Beam, Model, Node, Pose, RigidBody
-from .sections import BeamStiffness, CircularSection, Material
-from .simulation import Result, modes, simulate, solve_static
-from .solvers.generalized_alpha import GeneralizedAlpha
-from .solvers.newton import NewtonOptions
-from .solvers.static import StaticOptions
-from .sweeps import sweep
+
+# The public names are imported on first use (PEP 562): ``import flexmbs`` and the ``flexmbs``
+# command start in milliseconds (numpy, scipy and numba load when a model is built), and a
+# Ctrl-C during start-up meets the command's own handler, not an import traceback.
+if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LAZY
+    from .constraints.sliding import SlidingJoint
+    from .contact.joint import CircleHole, Hole, SlidingClearanceJoint, SuperellipseHole
+    from .contact.laws import Hertz, HuntCrossley, LankaraniNikravesh, LinearPenalty, RegularizedCoulomb
+    from .elements.ancf_cable import CableOptions
+    from .geometry.curves import Centerline, arc, line, polyline
+    from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
+    from .model import GROUND, Beam, Model, Node, Pose, RigidBody
+    from .sections import BeamStiffness, CircularSection, Material
+    from .simulation import Result, modes, simulate, solve_static
+    from .solvers.generalized_alpha import GeneralizedAlpha
+    from .solvers.newton import NewtonOptions
+    from .solvers.static import StaticOptions
+    from .sweeps import sweep
+
+_LAZY = {
+    "SlidingJoint": ".constraints.sliding",
+    "CircleHole": ".contact.joint",
+    "Hole": ".contact.joint",
+    "SlidingClearanceJoint": ".contact.joint",
+    "SuperellipseHole": ".contact.joint",
+    "Hertz": ".contact.laws",
+    "HuntCrossley": ".contact.laws",
+    "LankaraniNikravesh": ".contact.laws",
+    "LinearPenalty": ".contact.laws",
+    "RegularizedCoulomb": ".contact.laws",
+    "CableOptions": ".elements.ancf_cable",
+    "Centerline": ".geometry.curves",
+    "arc": ".geometry.curves",
+    "line": ".geometry.curves",
+    "polyline": ".geometry.curves",
+    "Constant": ".loads",
+    "Function": ".loads",
+    "HalfSine": ".loads",
+    "Ramp": ".loads",
+    "Sine": ".loads",
+    "Table": ".loads",
+    "TimeFunction": ".loads",
+    "GROUND": ".model",
+    "Beam": ".model",
+    "Model": ".model",
+    "Node": ".model",
+    "Pose": ".model",
+    "RigidBody": ".model",
+    "BeamStiffness": ".sections",
+    "CircularSection": ".sections",
+    "Material": ".sections",
+    "Result": ".simulation",
+    "modes": ".simulation",
+    "simulate": ".simulation",
+    "solve_static": ".simulation",
+    "GeneralizedAlpha": ".solvers.generalized_alpha",
+    "NewtonOptions": ".solvers.newton",
+    "StaticOptions": ".solvers.static",
+    "sweep": ".sweeps",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'flexmbs' has no attribute '{name}'")
+    import importlib
+
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 
 def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (meshio import cost)

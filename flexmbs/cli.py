@@ -22,8 +22,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn, TextIO
 
-import numpy as np
-
 from .errors import ConvergenceError, FlexmbsError, Interrupted
 
 EXIT_OK = 0
@@ -167,7 +165,16 @@ def _one_line_warnings() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``flexmbs`` console script; returns the exit status."""
+    """Entry point of the ``flexmbs`` console script; returns the exit status. Ctrl-C at any
+    moment (also while the libraries load) is one line and exit 130."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        _error("interrupted")
+        return EXIT_INTERRUPTED
+
+
+def _main(argv: Sequence[str] | None) -> int:
     _one_line_warnings()
     parser = build_parser()
     try:
@@ -278,6 +285,7 @@ class _Progress:
                                    "[{elapsed}<{remaining}{postfix}]")
 
     def __call__(self, state: Any, stats: Any) -> None:
+        _raise_pending()
         if self.bar is None:
             return
         self.stats = stats
@@ -309,26 +317,54 @@ class _Progress:
 
 
 def _terminate_like_ctrl_c() -> Callable[[], None]:
-    """SIGTERM and SIGHUP raise :class:`~flexmbs.errors.Interrupted` (a KeyboardInterrupt), so
-    a terminated run finishes like Ctrl-C: frame, checkpoint, ``summary.json``. Returns the
-    function that restores the previous handlers."""
+    """SIGINT, SIGTERM and SIGHUP raise :class:`~flexmbs.errors.Interrupted` (a
+    KeyboardInterrupt), so a terminated run finishes like Ctrl-C: frame, checkpoint,
+    ``summary.json``. A signal that lands while numba runs Python code from C (loading or
+    compiling a kernel) would be swallowed there ("Exception ignored on calling ctypes
+    callback"): it is remembered and raised again at the next progress report, and the
+    swallowed copy is not printed. Returns the function that restores the previous handlers."""
     import signal
 
-    def handler(signum: int, _frame: Any) -> None:
-        raise Interrupted(signal.Signals(signum).name)
+    pending: list[str] = []
 
-    previous = {}
-    for name in ("SIGTERM", "SIGHUP"):
+    def handler(signum: int, _frame: Any) -> None:
+        name = signal.Signals(signum).name
+        pending.append(name)
+        raise Interrupted("" if name == "SIGINT" else name)
+
+    previous: dict[Any, Any] = {}
+    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
         sig = getattr(signal, name, None)
         if sig is not None:
             with contextlib.suppress(ValueError):   # not the main thread (e.g. a worker)
                 previous[sig] = signal.signal(sig, handler)
+    hook = sys.unraisablehook
+
+    def unraisable(info: Any) -> None:
+        if not (pending and isinstance(info.exc_value, KeyboardInterrupt)):
+            hook(info)
+
+    sys.unraisablehook = unraisable
+    _PENDING[:] = [pending]
 
     def restore() -> None:
         for sig, old in previous.items():
             signal.signal(sig, old)
+        sys.unraisablehook = hook
 
     return restore
+
+
+#: the signals received by the running command (see _terminate_like_ctrl_c)
+_PENDING: list[list[str]] = []
+
+
+def _raise_pending() -> None:
+    """Raise a signal that numba swallowed (called from the progress report of every step)."""
+    if _PENDING and _PENDING[0]:
+        name = _PENDING[0][-1]
+        _PENDING[0].clear()
+        raise Interrupted("" if name == "SIGINT" else name)
 
 
 def _is_end_time(assignment: str) -> bool:
@@ -506,6 +542,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 # ================================================================================ info
 def _fmt(x: Any) -> str:
+    import numpy as np
+
     if isinstance(x, (float, np.floating)):
         return f"{float(x):.6g}"
     if isinstance(x, np.ndarray):
@@ -521,6 +559,8 @@ def _target(obj: Any) -> str:
 
 def print_info(sc: Any, asm: Any, file: TextIO) -> None:
     """The model of a loaded scenario, human readable."""
+    import numpy as np
+
     def p(*parts: Any) -> None:
         print(*parts, file=file)
 

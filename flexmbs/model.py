@@ -266,12 +266,15 @@ class Model:
 
     # ------------------------------------------------------------------ naming
     _KIND = {"beam": "beam", "body": "rigid body", "joint": "joint", "load": "load"}
+    #: kinds that share one namespace: a beam and a rigid body are both "parts" (output
+    #: blocks, probes and the section view name them without saying which kind)
+    _NAMESPACE = {"beam": "part", "rigid body": "part"}
 
     def _unique(self, name: str | None, prefix: str) -> str:
         """A name unique among objects of the same kind (beams, bodies, joints, loads,
         constraints); ``prefix`` also numbers unnamed objects."""
         kind = self._KIND.get(prefix, "constraint")
-        used = self._names.setdefault(kind, set())
+        used = self._names.setdefault(self._NAMESPACE.get(kind, kind), set())
         if name is None:
             i = 1
             while f"{prefix}{i}" in used:
@@ -279,9 +282,13 @@ class Model:
             name = f"{prefix}{i}"
         if not isinstance(name, str) or not name:
             raise ModelError(f"name must be a non-empty string (got {name!r})")
+        if not name.isprintable():
+            raise ModelError(f"name {name!r} contains a control character (NUL, newline, tab...); "
+                             "names appear in file names and tables: use printable characters")
         if name in used:
-            raise ModelError(f"the {kind} name '{name}' is already used in this model; "
-                             f"{kind} names must be unique")
+            what = ("beams and rigid bodies" if kind in self._NAMESPACE else f"{kind}s")
+            raise ModelError(f"the name '{name}' is already used in this model; names of "
+                             f"{what} must be unique")
         used.add(name)
         return name
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .budget import check_run
 from .io.folder import claim
 from .io.scenario import Scenario
 from .simulation import checkpoint_time, simulate, solve_static
@@ -56,6 +57,9 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
     metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": list(overrides),
                 "scenario_sha1": scenario_digest(sc.path),
                 "integrator_name": sim.integrator, "initial_static": sim.initial_static}
+    if sim.integrator != "static":       # before the folder is claimed (and cleared)
+        check_run(sc.model, t_end=sim.t_end, dt=sim.dt, output_interval=sim.output_interval,
+                  out=folder, prefix="simulation.")
     with claim(folder, scenario=sc.name, overwrite=overwrite, resume=resume):
         if sim.integrator == "static":
             st = solve_static(sc.model, sc.static_options(), t=sim.t_end,

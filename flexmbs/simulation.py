@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .assembly import Assembly
+from .budget import check_run
 from .elements import ancf_cable as cable
 from .errors import ConvergenceError, ModelError, ScenarioError
 from .io.checkpoint import load_checkpoint
@@ -164,6 +165,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``.
     A :class:`ConvergenceError` carries the history so far as ``partial_result``.
     """
+    check_run(model.model if isinstance(model, Assembly) else model, t_end=t_end, dt=dt,
+              output_interval=output_interval, out=out)
     asm = model if isinstance(model, Assembly) else Assembly(
         model, redundant_constraints=redundant_constraints)
     opts = integrator or GeneralizedAlpha()
@@ -363,7 +366,8 @@ def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[Stat
     try:
         state, extra = load_checkpoint(ckpt)
     except (OSError, ValueError, KeyError) as exc:
-        raise ScenarioError(f"cannot resume: {ckpt} is not readable ({exc})") from None
+        raise ScenarioError(f"cannot resume: {exc}; the output written before it stays readable; "
+                            "run again without --resume to start over") from None
     summary: dict = {}
     if (folder / "summary.json").is_file():
         try:

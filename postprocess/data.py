@@ -62,7 +62,11 @@ def read_run(directory: str | Path) -> Run:
     name = summary.get("scenario") or (pvds[0].stem if pvds else d.name)
     frames: list[tuple[float, Path]] = []
     if pvds:
-        root = ET.parse(pvds[0]).getroot()
+        try:
+            root = ET.parse(pvds[0]).getroot()
+        except ET.ParseError as exc:
+            raise ValueError(f"{pvds[0]} is damaged ({exc}); flexmbs run --resume rewrites it "
+                             "from the checkpoint and the frames in vtu/") from None
         for ds in root.iter("DataSet"):
             frames.append((float(ds.get("timestep", "0")), (d / ds.get("file", "")).resolve()))
     header, rows = _read_csv(d / "probes.csv")

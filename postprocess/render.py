@@ -163,6 +163,27 @@ def _field_range(beam_meshes: Sequence[Any], name: str) -> tuple[float, float]:
     return (lo, hi) if hi > lo else (lo - 0.5 * (abs(lo) or 1.0), hi + 0.5 * (abs(hi) or 1.0))
 
 
+def _read_frame(pv: Any, path: Path) -> Any:
+    """One frame; a missing, empty or unreadable file is an error naming it (VTK would return
+    an empty grid and print to the terminal)."""
+    if not path.is_file():
+        raise FileNotFoundError(f"frame listed in the .pvd is missing: {path}")
+    if path.stat().st_size == 0:
+        raise ValueError(f"frame {path} is empty (0 bytes); the run that wrote it was cut off: "
+                         "flexmbs run --resume rewrites the series from its checkpoint")
+    import vtk
+
+    vtk.vtkObject.GlobalWarningDisplayOff()
+    try:
+        grid = pv.read(str(path))
+    except Exception as exc:   # noqa: BLE001 - VTK raises assorted errors on damaged files
+        raise ValueError(f"frame {path} cannot be read ({exc})") from None
+    if getattr(grid, "n_blocks", None) == 0 or getattr(grid, "n_points", 1) == 0:
+        raise ValueError(f"frame {path} holds no data (damaged or cut off); flexmbs run "
+                         "--resume rewrites the series from its checkpoint")
+    return grid
+
+
 def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: int | None = None,
            camera: str | Sequence[float] | None = None, color_by: str = "curvature_magnitude",
            window_size: tuple[int, int] = (1280, 720), tube_scale: float = 1.0,
@@ -195,6 +216,8 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
         raise ValueError(f"png_every must be >= 1 (got {png_every})")
     if tube_scale <= 0 or (radius is not None and radius <= 0):
         raise ValueError("tube_scale and radius must be > 0")
+    if not (np.isfinite(framerate) and framerate > 0):
+        raise ValueError(f"--fps: the movie frame rate must be > 0 (got {framerate:g})")
     movie_path = Path(movie) if movie is not None else None
     if movie_path is not None and movie_path.suffix.lower() not in (".mp4", ".gif"):
         raise ValueError(f"movie must end in .mp4 or .gif (got {movie_path.name})")
@@ -202,7 +225,7 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
     if w < 16 or h < 16:
         raise ValueError(f"window_size too small: {window_size}")
 
-    grids = [pv.read(str(p)) for _, p in run.frames]
+    grids = [_read_frame(pv, p) for _, p in run.frames]
     beams_all = [_block(g, 0) for g in grids]
     fields = _beam_fields(grids[0])
     if fields and color_by not in fields:

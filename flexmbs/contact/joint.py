@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..budget import MAX_SECTIONS, require_memory
 from ..constraints.interaction import Interaction, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
@@ -64,8 +65,15 @@ class Hole:
     def __post_init__(self) -> None:
         if not self.length > 0:
             raise ModelError(f"hole length must be > 0 (got {self.length})")
-        if int(self.sections) < 1:
-            raise ModelError(f"hole sections must be >= 1 (got {self.sections})")
+        n = self.sections
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ModelError(f"hole sections must be an integer >= 1 (got {n!r})")
+        if n > MAX_SECTIONS:
+            raise ModelError(f"hole sections = {n}: more than {MAX_SECTIONS} per hole; stations "
+                             f"{self.length / (n - 1):.3g} m apart resolve nothing the beam "
+                             "elements can, and each costs time in every Newton iteration; use "
+                             "fewer sections (9-21 is typical)")
+        require_memory(n_sections=int(n), what=f"hole sections = {n}", fix="use fewer sections")
 
     def stations(self) -> np.ndarray:
         """Axial positions zeta_k of the sections, from -length/2 to +length/2."""
@@ -169,6 +177,19 @@ class SlidingClearanceJoint(Interaction):
             raise ModelError(f"joint '{self.name}': the beam is not part of the model")
         if self.body not in model.bodies:
             raise ModelError(f"joint '{self.name}': the body is not part of the model")
+        # the start in the reference configuration, when the model is built (not at run time)
+        pose = self.body.pose
+        qb = np.concatenate([np.asarray(pose.position, float), np.asarray(pose.quaternion, float)])
+        self._check_start(qb, self._reference_elements(), warn=True)
+
+    def _reference_elements(self) -> np.ndarray:
+        """Centreline coordinates of every element of the beam in its reference configuration
+        (the same nodal coordinates the assembly starts from)."""
+        beam = self.beam
+        cl = beam.centerline
+        nodal = beam.element_type.reference_nodal_coordinates(cl.points, cl.tangents)
+        qe = nodal[beam.connectivity].reshape(beam.n_elem, -1)[:, beam.layout.centerline]
+        return np.ascontiguousarray(qe, dtype=float)
 
     def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
         self._body_dofs = dofs.body_dofs(self.body)
@@ -179,7 +200,8 @@ class SlidingClearanceJoint(Interaction):
         self._beam_dofs = dofs.beam_dofs(self.beam)
 
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
-        self._check_initial(q0)
+        self._check_start(q0[self._body_dofs], np.ascontiguousarray(q0[self._elem_dofs]),
+                          warn=False)
         return np.zeros(0)
 
     def _frames(self, qb: np.ndarray):  # noqa: ANN202
@@ -188,18 +210,18 @@ class SlidingClearanceJoint(Interaction):
         axes = np.ascontiguousarray(A.T)
         return A, centre, axes[0], axes[1], axes[2]
 
-    def _check_initial(self, q0: np.ndarray) -> None:
-        """The beam must cross every section plane inside the bore, and fit (no jamming)."""
-        qb = q0[self._body_dofs]
+    def _check_start(self, qb: np.ndarray, qe: np.ndarray, *, warn: bool) -> None:
+        """The beam must cross every section plane inside the bore, and fit (no jamming); it
+        should not start deep in the wall (``warn``). Sets the sections' tracking start."""
         A, centre, n, ey, ez = self._frames(qb)
-        qe = np.ascontiguousarray(q0[self._elem_dofs])
+        lengths = np.array(self.beam.centerline.lengths, dtype=float)
         R_out = self.hole.section.bounding_radius()
         R_in = self.hole.section.inscribed_radius()
         deepest = 0.0
         for k, zeta in enumerate(self.stations):
             origin = centre + zeta * n
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
+                qe, lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
             compiled = self.hole.section.compiled_shape()
             outside = (math.hypot(cy, cz) > R_out if compiled is None
                        else not section_contains(compiled[0], compiled[1], cy, cz))
@@ -218,7 +240,7 @@ class SlidingClearanceJoint(Interaction):
             deepest = max(deepest, max((c.depth for c in self.hole.section.candidates(ell)),
                                        default=0.0))
         clearance = self.hole.section.inscribed_radius() - self.beam_radius
-        if deepest > 0.05 * clearance:
+        if warn and deepest > 0.05 * clearance:
             warnings.warn(FlexmbsWarning(
                 f"joint '{self.name}': the beam starts {deepest:.3g} m into the bore wall "
                 f"({deepest / clearance:.0%} of the clearance {clearance:.3g} m), so the contact "
@@ -358,9 +380,8 @@ class SlidingClearanceJoint(Interaction):
             raise ModelError(f"joint '{self.name}': the rest direction is along the hole axis; "
                              "give one across it")
         d = d / np.linalg.norm(d)
-        cl = self.beam.centerline
-        P, T, L = np.asarray(cl.points), np.asarray(cl.tangents), np.asarray(cl.lengths)
-        qe = np.ascontiguousarray(np.concatenate([P[:-1], T[:-1], P[1:], T[1:]], axis=1))
+        L = np.asarray(self.beam.centerline.lengths, dtype=float)
+        qe = self._reference_elements()
         section = self.hole.section
         R_out = section.bounding_radius()
 

@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import GeometryError
+from ..budget import require_memory
+from ..errors import GeometryError, ModelError
 
 __all__ = [
     "Centerline",
@@ -86,6 +87,10 @@ def _check_elements(elements: object) -> int:
         raise GeometryError(f"elements must be an integer >= 1 (got {elements!r})")
     if elements < 1:
         raise GeometryError(f"elements must be >= 1 (got {elements})")
+    try:
+        require_memory(int(elements), what=f"elements = {elements}", fix="use fewer elements")
+    except ModelError as exc:
+        raise GeometryError(str(exc)) from None
     return int(elements)
 
 

@@ -54,7 +54,9 @@ def _read(path: str | os.PathLike[str]) -> Mesh:
     if not p.exists():
         raise GeometryError(f"mesh file not found: {p}")
     if p.is_dir():
-        raise GeometryError(f"mesh path is a directory, not a file: {p}")
+        raise GeometryError(f"mesh path is a folder, not a file: {p}")
+    if not p.is_file():
+        raise GeometryError(f"mesh path is not a regular file (a device or a pipe): {p}")
     import meshio
 
     # meshio prints its per-format failures and then calls sys.exit(1) when no reader accepts the

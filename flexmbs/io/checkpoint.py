@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -65,13 +66,23 @@ def save_checkpoint(path: str | os.PathLike, state: State, *, extra: dict | None
 
 
 def load_checkpoint(path: str | os.PathLike) -> tuple[State, dict]:
-    """Read a checkpoint written by :func:`save_checkpoint`: ``(State, extra)``."""
-    with np.load(Path(path), allow_pickle=False) as z:
-        if "format" not in z.files or str(z["format"]) != FORMAT:
-            raise ValueError(f"{path} is not a flexmbs checkpoint ({FORMAT})")
-        state = State(float(z["t"]), *(z[f].copy() for f in _STATE_FIELDS))
-        extra: dict[str, Any] = json.loads(str(z["extra_json"]))
-        for k in z.files:
-            if k.startswith("extra__"):
-                extra[k[len("extra__"):]] = z[k].copy()
+    """Read a checkpoint written by :func:`save_checkpoint`: ``(State, extra)``. A missing file
+    raises OSError; a damaged one (cut off, overwritten, not ours) ValueError naming it."""
+    try:
+        with np.load(Path(path), allow_pickle=False) as z:
+            if "format" not in z.files or str(z["format"]) != FORMAT:
+                raise ValueError("no flexmbs checkpoint format tag")
+            state = State(float(z["t"]), *(z[f].copy() for f in _STATE_FIELDS))
+            extra: dict[str, Any] = json.loads(str(z["extra_json"]))
+            for k in z.files:
+                if k.startswith("extra__"):
+                    extra[k[len("extra__"):]] = z[k].copy()
+    except FileNotFoundError:
+        raise
+    except (zipfile.BadZipFile, ValueError, EOFError, KeyError, TypeError, OSError) as exc:
+        text = " ".join(str(exc).split())
+        archive = isinstance(exc, (zipfile.BadZipFile, OSError)) or "pickle" in text
+        reason = "not an .npz archive" if archive else (text[:80] or type(exc).__name__)
+        raise ValueError(f"{path} is damaged or not a flexmbs checkpoint ({FORMAT}): "
+                         f"{reason}") from None
     return state, extra

@@ -104,8 +104,8 @@ def build_scenario(raw: dict[str, Any], path: str | os.PathLike[str]) -> Scenari
     root = Table(raw, "")
     root.allow(TOP_KEYS)
     name = root.string("name", p.stem)
-    if any(c in name for c in "/\\:") or name in (".", ".."):
-        raise root.fail("name", "a name usable as a folder name (no / \\ :)", name)
+    if any(c in name for c in "/\\:") or name in (".", "..") or not name.isprintable():
+        raise root.fail("name", "a name usable as a folder name (printable, no / \\ :)", name)
     description = root.get("description", "")
     if not isinstance(description, str):
         raise root.fail("description", "a string", description)

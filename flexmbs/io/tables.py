@@ -267,9 +267,10 @@ class Table:
             if not isinstance(entry, Mapping):
                 raise ScenarioError(f"{self.key(k)}[{i}]: expected a table, got {show_value(entry)}")
             name = entry.get("name")
-            if "name" in entry and (not isinstance(name, str) or not name):
-                raise ScenarioError(f"{self.key(k)}[{i}].name: expected a non-empty string, "
-                                    f"got {show_value(name)}")
+            if "name" in entry and (not isinstance(name, str) or not name
+                                    or not name.isprintable()):
+                raise ScenarioError(f"{self.key(k)}[{i}].name: expected a non-empty string of "
+                                    f"printable characters, got {show_value(name)}")
             if need_name and name is None:
                 raise ScenarioError(f"{self.key(k)}[{i}].name: missing required key "
                                     f"(expected a unique name string)")

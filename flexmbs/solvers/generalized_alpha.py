@@ -7,6 +7,7 @@ s (FORMULATION Part I §6.1). HHT is the special case alpha_m = 0 (Chung & Hulbe
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -157,6 +158,20 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
     zeros_acc = np.zeros(n)
     asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
     rhs = np.concatenate([-r_q, asm.constraint_time_terms(q0, v0, t0)])
+    bad = np.flatnonzero(~np.isfinite(rhs))
+    if bad.size:
+        i = int(bad[0])
+        where = (asm.describe_coordinate(i) if i < n else f"constraint equation {i - n}")
+        culprit = ""
+        for ld in getattr(asm.model, "loads", ()):
+            with contextlib.suppress(Exception):
+                scale = float(ld.function(t0)) if ld.function is not None else 1.0
+                if not np.isfinite(scale):
+                    culprit = f"; load '{ld.name}': its time function gives {scale} at t = {t0:g}"
+                    break
+        raise ConvergenceError(
+            f"the forces at t = {t0:g} are not finite ({float(rhs[i])} on {where}){culprit}; "
+            "loads and their time functions must stay finite")
     try:
         import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
 
@@ -167,7 +182,12 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
             f"cannot compute consistent initial accelerations: singular mass/constraint matrix "
             f"({exc}); every coordinate needs mass or a constraint") from None
     if not np.all(np.isfinite(x)):
-        raise ConvergenceError("initial accelerations are not finite (singular mass matrix?)")
+        i = int(np.flatnonzero(~np.isfinite(x))[0])
+        where = asm.describe_coordinate(i) if i < n else f"multiplier {i - n}"
+        raise ConvergenceError(
+            f"initial accelerations are not finite (first at {where}): the mass/constraint "
+            "matrix is singular or the forces overflow; every coordinate needs mass or a "
+            "constraint, and forces must stay finite")
     qdd = x[:n].copy()
     return State(t0, q0.copy(), v0.copy(), qdd, qdd.copy(), x[n:].copy())
 

@@ -81,8 +81,14 @@ def read_geometry(ctx: BuildContext, g: Table, elements: int | None, beam: Table
     if kind == "mesh":
         file = ctx.resolve(g.string("mesh"))
         group = g.string("group", None)
-        if not file.is_file():
+        if not file.exists():
             raise ScenarioError(f"{g.key('mesh')}: mesh file not found: {display_path(file)}")
+        if file.is_dir():
+            raise ScenarioError(f"{g.key('mesh')}: {display_path(file)} is a folder; give a "
+                                "mesh file (.msh, .vtu, .vtk, ...)")
+        if not file.is_file():
+            raise ScenarioError(f"{g.key('mesh')}: {display_path(file)} is not a regular file "
+                                "(a device or a pipe); give a mesh file (.msh, .vtu, .vtk, ...)")
         with at(g.key("mesh")):
             from ...geometry.mesh_input import read_curve
 

@@ -18,7 +18,7 @@ from ...contact.laws import CONTACT_LAWS, ForceLaw, RegularizedCoulomb, get_law
 from ...contact.sections import HOLE_SECTIONS, HoleSection, get_section
 from ...errors import ModelError, ScenarioError
 from ...registry import Registry
-from ..tables import Table, at
+from ..tables import Table, at, one_line
 from .context import BuildContext, Builder
 from .loads import read_function
 
@@ -70,11 +70,12 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     friction = (RegularizedCoulomb(mu=mu, eps_v=c.number("friction_velocity", 1e-3, gt=0.0))
                 if mu > 0 else None)
     tangent = t.choice("tangent", TANGENTS, "exact", what="tangent")
-    joint = SlidingClearanceJoint(
-        beam, body, hole=hole, contact=contact_law, friction=friction,
-        hole_point=h.vector("point", (0.0, 0.0, 0.0)),
-        beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
-        tangent=tangent, name=t.raw["name"])
+    with at(h.path):        # the hole against the beam: "joints[j].hole: the hole ... "
+        joint = SlidingClearanceJoint(
+            beam, body, hole=hole, contact=contact_law, friction=friction,
+            hole_point=h.vector("point", (0.0, 0.0, 0.0)),
+            beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
+            tangent=tangent, name=t.raw["name"])
     if body.name in ctx.resting:      # pose = { on_beam, s, rest = "bore" }
         direction, where = ctx.resting.pop(body.name)
         if direction is None:
@@ -87,7 +88,11 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
             joint.rest_on_beam(direction)
         except ModelError as exc:
             raise ScenarioError(f"{where}.rest: {exc}") from None
-    return ctx.model.add_joint(joint)
+    try:
+        return ctx.model.add_joint(joint)
+    except ModelError as exc:   # the start: the body's pose against the beam
+        raise ScenarioError(f"{t.path} (with rigid_bodies[{body.name}].pose): "
+                            f"{one_line(exc)}") from None
 
 
 def read_hole_section(h: Table) -> HoleSection:
