@@ -127,6 +127,9 @@ class Assembly:
             labels.extend((f"joint '{obj.name}'", c) for c in names)
             off += len(names)
         self.n_coords = off
+        if off == 0:
+            raise ModelError("the model is empty: add a beam (add_beam) or a rigid body "
+                             "(add_rigid_body) before solving")
         self._coord_labels = labels
         q0 = np.zeros(off)
         v0 = np.zeros(off)

@@ -144,21 +144,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _one_line_warnings() -> None:
-    """flexmbs' own warnings as ``flexmbs: warning: ...`` (one line); others as before."""
+    """Every warning as one line on stderr: flexmbs' own as ``flexmbs: warning: ...``, a
+    library's (numpy, meshio, ...) as ``flexmbs: warning: RuntimeWarning (numpy, file.py:12):
+    ...`` instead of Python's two lines with the source line (issue "nothing lost")."""
     import warnings
 
     from .errors import FlexmbsWarning
 
-    show = warnings.showwarning
-    if getattr(show, "flexmbs", False):
+    if getattr(warnings.showwarning, "flexmbs", False):
         return
 
     def showwarning(message: Any, category: type[Warning], filename: str, lineno: int,
                     file: Any = None, line: str | None = None) -> None:
-        if issubclass(category, FlexmbsWarning):
-            print(f"flexmbs: warning: {message}", file=sys.stderr)
-        else:
-            show(message, category, filename, lineno, file, line)
+        text = " ".join(str(message).split())
+        if not issubclass(category, FlexmbsWarning):
+            parts = Path(filename).parts
+            origin = next((p for p in reversed(parts[:-1]) if p not in ("site-packages", "lib")),
+                          "")
+            where = "/".join(x for x in (origin, Path(filename).name) if x)
+            text = f"{category.__name__} ({where}:{lineno}): {text}"
+        print(f"flexmbs: warning: {text}", file=sys.stderr)
 
     showwarning.flexmbs = True  # type: ignore[attr-defined]
     warnings.showwarning = showwarning

@@ -6,12 +6,14 @@ derives the DOF map from it. Objects are identified by name; every name is uniqu
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
+from .elements import rigid_body as rb
 from .elements.ancf_cable import CableOptions
 from .elements.layout import ElementLayout, ElementType, get_element_type
 from .elements.rigid_body import quaternion_from_matrix, rotation_matrix
@@ -143,6 +145,31 @@ class Beam:
         return float(np.sum(self.centerline.lengths))
 
     @property
+    def length_tolerance(self) -> float:
+        """How far past an end an arc length still counts as that end: the curve's own
+        discretisation uncertainty, the difference between its element lengths and the chords
+        of its nodes (a quarter circle sampled by 129 points: 1e-5), at most 1e-3 of the
+        shortest element and at least 1e-12 of the length."""
+        cl = self.centerline
+        pts = np.asarray(cl.points, float)
+        lengths = np.asarray(cl.lengths, float)
+        chords = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+        if cl.closed:
+            chords = np.append(chords, np.linalg.norm(pts[0] - pts[-1]))
+        total = float(np.sum(lengths))
+        spread = abs(total - float(np.sum(chords[: lengths.size])))
+        return max(1e-12 * total, min(spread, 1e-3 * float(lengths.min())))
+
+    def check_arc_length(self, s: float) -> float:
+        """``s`` within ``[0, length]`` up to :attr:`length_tolerance`, clamped; else
+        ModelError (lengths printed with all their digits)."""
+        tol = self.length_tolerance
+        if not -tol <= s <= self.length + tol:
+            raise ModelError(f"s = {s!r} is outside beam '{self.name}' (0 <= s <= "
+                             f"{self.length!r}, tolerance {tol:.3g})")
+        return min(max(float(s), 0.0), self.length)
+
+    @property
     def radius(self) -> float | None:
         return self.stiffness.radius
 
@@ -173,9 +200,7 @@ class Beam:
 
     def locate(self, s: float) -> tuple[int, float]:
         """Element index and local xi in [0, 1] of reference arc length ``s`` from the first node."""
-        if not -1e-12 * self.length <= s <= self.length * (1 + 1e-12):
-            raise ModelError(f"s = {s} is outside beam '{self.name}' (0 <= s <= {self.length:.6g})")
-        return self.centerline.locate(min(max(s, 0.0), self.length))
+        return self.centerline.locate(self.check_arc_length(s))
 
     def frame_at(self, s: float, *, up: ArrayLike3 | None = None) -> Pose:
         """Reference pose at arc length ``s``: x axis along the tangent, y/z completing a frame.
@@ -350,16 +375,12 @@ class Model:
                        name: str | None = None, shape: dict | None = None) -> RigidBody:
         """Add a rigid body; ``inertia`` = principal moments (3) or a 3x3 tensor, body frame,
         about the centre of mass; ``angular_velocity`` in global components."""
-        if not mass > 0:
-            raise ModelError(f"add_rigid_body: mass must be > 0 (got {mass})")
-        J = np.asarray(inertia, float)
-        if J.shape == (3,):
-            J = np.diag(J)
-        if J.shape != (3, 3) or not np.allclose(J, J.T, rtol=1e-10, atol=1e-14 * np.abs(J).max()):
-            raise ModelError("add_rigid_body: inertia must be 3 principal moments or a symmetric 3x3")
-        ev = np.linalg.eigvalsh(J)
-        if ev.min() <= 0:
-            raise ModelError(f"add_rigid_body: inertia must be positive definite (eigenvalues {ev})")
+        if not (isinstance(mass, (int, float, np.floating)) and math.isfinite(mass) and mass > 0):
+            raise ModelError(f"add_rigid_body: mass must be a finite number > 0 (got {mass!r})")
+        try:
+            J = rb.inertia_tensor(inertia)
+        except ValueError as exc:
+            raise ModelError(f"add_rigid_body: {exc}") from None
         if pose is None:
             pose = Pose.from_quaternion(position, quaternion)
         body = RigidBody(self._unique(name, "body"), mass, J, pose,

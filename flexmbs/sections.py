@@ -17,10 +17,11 @@ class Material:
     nu: float = 0.3
 
     def __post_init__(self) -> None:
-        if not self.E > 0:
-            raise ModelError(f"Material: Young's modulus E must be > 0 (got {self.E})")
-        if not self.rho >= 0:
-            raise ModelError(f"Material: density rho must be >= 0 (got {self.rho})")
+        if not (math.isfinite(self.E) and self.E > 0):
+            raise ModelError(f"Material: Young's modulus E must be a finite number > 0 "
+                             f"(got {self.E!r})")
+        if not (math.isfinite(self.rho) and self.rho >= 0):
+            raise ModelError(f"Material: density rho must be a finite number >= 0 (got {self.rho!r})")
         if not -1.0 < self.nu < 0.5:
             raise ModelError(f"Material: Poisson ratio nu must be in (-1, 0.5) (got {self.nu})")
 
@@ -36,8 +37,9 @@ class CircularSection:
     radius: float
 
     def __post_init__(self) -> None:
-        if not self.radius > 0:
-            raise ModelError(f"CircularSection: radius must be > 0 (got {self.radius})")
+        if not (math.isfinite(self.radius) and self.radius > 0):
+            raise ModelError(f"CircularSection: radius must be a finite number > 0 "
+                             f"(got {self.radius!r})")
 
     @property
     def area(self) -> float:
@@ -64,12 +66,16 @@ class BeamStiffness:
 
     def __post_init__(self) -> None:
         for key in ("axial_stiffness", "bending_stiffness"):
-            if not getattr(self, key) > 0:
-                raise ModelError(f"BeamStiffness: {key} must be > 0 (got {getattr(self, key)})")
-        if not self.mass_per_length >= 0:
-            raise ModelError(
-                f"BeamStiffness: mass_per_length must be >= 0 (got {self.mass_per_length})"
-            )
+            v = getattr(self, key)
+            if not (math.isfinite(v) and v > 0):
+                raise ModelError(f"BeamStiffness: {key} must be a finite number > 0 (got {v!r})")
+        if not (math.isfinite(self.mass_per_length) and self.mass_per_length >= 0):
+            raise ModelError(f"BeamStiffness: mass_per_length must be a finite number >= 0 "
+                             f"(got {self.mass_per_length!r})")
+        for key in ("torsional_stiffness", "radius"):
+            v = getattr(self, key)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise ModelError(f"BeamStiffness: {key} must be a finite number > 0 (got {v!r})")
 
     @classmethod
     def from_section(cls, section: CircularSection, material: Material) -> BeamStiffness:

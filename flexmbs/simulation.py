@@ -135,6 +135,9 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
 def modes(model: Model | Assembly, *, n_modes: int | None = None, static: bool = False,
           redundant_constraints: str = "error") -> Modes:
     """Linearised modes about the reference (or, with ``static=True``, the loaded equilibrium)."""
+    if n_modes is not None and (isinstance(n_modes, bool) or not isinstance(n_modes, int)
+                                or n_modes < 1):
+        raise ModelError(f"modes: n_modes must be an integer >= 1 or None (got {n_modes!r})")
     asm = model if isinstance(model, Assembly) else Assembly(
         model, redundant_constraints=redundant_constraints)
     if static:

@@ -217,3 +217,101 @@ def test_render_refuses_bad_fps_a_damaged_index_and_an_empty_frame(tmp_path, cap
     frames[1].write_bytes(b"")
     _refused(["render", str(empty), "--quiet"], capsys, frames[1].name, "is empty")
     assert not (empty / "frames").exists()
+
+
+# ---------------------------------------------------------------------------- API = scenario
+@pytest.mark.parametrize("make, text", [
+    (lambda: fm.CircularSection(math.inf), "radius must be a finite number > 0"),
+    (lambda: fm.Material(E=math.inf, rho=1e3), "E must be a finite number > 0"),
+    (lambda: fm.Material(E=1e9, rho=math.inf), "rho must be a finite number >= 0"),
+    (lambda: fm.BeamStiffness(axial_stiffness=1.0, bending_stiffness=math.nan,
+                              mass_per_length=1.0), "bending_stiffness must be a finite"),
+    (lambda: fm.NewtonOptions(max_iterations=0), "max_iterations must be an integer >= 1"),
+    (lambda: fm.NewtonOptions(relative_tolerance=-1.0), "relative_tolerance must be a finite"),
+    (lambda: fm.Model().add_rigid_body(mass=1.0, inertia=(1, 1, 5)), "triangle inequality"),
+    (lambda: fm.Model().add_rigid_body(mass=math.inf, inertia=(1, 1, 1)), "mass must be a finite"),
+    (lambda: fm.simulate(fm.Model(), t_end=0.01, dt=1e-3), "the model is empty"),
+])
+def test_api_rejects_what_the_scenario_reader_rejects(make, text):
+    with pytest.raises(fm.ModelError, match=text):
+        make()
+
+
+def test_one_inertia_check_for_api_and_scenario(tmp_path, capsys):
+    tensor = [[10, 1, 2], [1, 7, 3], [2, 3, 6]]   # principal 3.33, 7.78, 11.89 > 3.33 + 7.78
+    with pytest.raises(fm.ModelError, match="triangle inequality"):
+        fm.Model().add_rigid_body(mass=1.0, inertia=tensor)
+    _refused(["run", SLEEVE, "--set", f"rigid_bodies.sleeve.inertia={tensor}", "--out",
+              str(tmp_path / "o"), "-q"], capsys, "rigid_bodies[sleeve].inertia: principal moments",
+             "triangle inequality")
+    disc = fm.Model().add_rigid_body(mass=2.0, inertia=(0.5, 0.25, 0.25))   # on the bound
+    assert np.allclose(np.diag(disc.inertia), (0.5, 0.25, 0.25))
+
+
+def test_modes_count_is_checked():
+    model = fm.Model()
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2),
+                          section=fm.CircularSection(1e-3), material=fm.Material(E=1e9, rho=1e3))
+    model.clamp(beam.first_node)
+    with pytest.raises(fm.ModelError, match="n_modes must be an integer >= 1"):
+        fm.modes(model, n_modes=-1)
+    assert fm.modes(model, n_modes=2).omega.size == 2
+
+
+# ---------------------------------------------------------------------------- meshes
+def _quarter_arc(path, n_points=129):
+    import meshio
+
+    a = np.linspace(0.0, math.pi / 2, n_points)
+    pts = np.c_[np.cos(a), np.sin(a), np.zeros_like(a)]
+    cells = np.c_[np.arange(n_points - 1), np.arange(1, n_points)]
+    meshio.write(path, meshio.Mesh(pts, [("line", cells)]))
+
+
+def test_probe_at_the_nominal_end_of_a_mesh_curve(tmp_path, capsys):
+    """A quarter arc sampled by 129 points is 4.9e-11 shorter than pi/2 in its elements:
+    s = pi/2 is its end (within the curve's own discretisation tolerance); 1e-3 past is not,
+    and the message prints the lengths with all their digits."""
+    _quarter_arc(tmp_path / "quarter.vtu")
+    scenario = tmp_path / "q.toml"
+    scenario.write_text(
+        'name = "q"\n[simulation]\nt_end = 0.002\ndt = 1e-3\n[[beams]]\nname = "b"\n'
+        'geometry = { mesh = "quarter.vtu" }\nradius = 1e-3\nyoungs_modulus = 1e9\n'
+        'density = 1e3\n[[constraints]]\ntype = "clamp"\nbeam = "b"\nnode = "first"\n'
+        '[[probes]]\nname = "tip"\ntype = "beam_point"\nbeam = "b"\ns = 1.5707963267948966\n')
+    assert main(["run", str(scenario), "--out", str(tmp_path / "o"), "-q"]) == 0
+    scenario.write_text(scenario.read_text().replace("s = 1.5707963267948966", "s = 1.5718"))
+    line = _refused(["info", str(scenario)], capsys, "probes[tip].s", "1.570796326745416",
+                    "got 1.5718")
+    assert "tolerance" in line
+
+
+def test_a_mesh_curve_that_folds_back_is_refused(tmp_path):
+    import meshio
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 0, 0.0]])
+    meshio.write(tmp_path / "fold.vtu",
+                 meshio.Mesh(pts, [("line", np.array([[0, 1], [1, 2], [2, 3]]))]))
+    with pytest.raises(fm.GeometryError, match="folds back on itself"):
+        fm.read_curve(tmp_path / "fold.vtu")
+    # the same cell twice in one direction (two physical groups) still counts once
+    meshio.write(tmp_path / "twice.vtu",
+                 meshio.Mesh(pts[:3], [("line", np.array([[0, 1], [1, 2], [1, 2]]))]))
+    assert len(fm.read_curve(tmp_path / "twice.vtu").lengths) == 2
+
+
+def test_library_warnings_are_one_line(capsys):
+    from flexmbs.cli import _one_line_warnings
+
+    saved = warnings.showwarning
+    try:
+        _one_line_warnings()
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")
+            with np.errstate(over="warn"):
+                _ = np.float64(1e308) * 10.0
+    finally:
+        warnings.showwarning = saved
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("flexmbs: warning: RuntimeWarning ("), err
+    assert "overflow" in err[0]

@@ -66,6 +66,33 @@ __all__ = [
 
 # ---------------------------------------------------------------------------------------------
 # matrix helpers
+def inertia_tensor(inertia: object) -> np.ndarray:
+    """The body-frame inertia tensor about the centre of mass from 3 principal moments or a
+    3x3 matrix, checked: finite, symmetric, positive definite, and principal moments that a
+    body can have (each <= the sum of the other two; a thin disc sits on the bound, so it is
+    allowed a relative rounding of 1e-6). The one check of the API and the scenario reader;
+    raises ValueError with the reason."""
+    J = np.asarray(inertia, dtype=float)
+    if J.shape == (3,):
+        J = np.diag(J)
+    if J.shape != (3, 3):
+        raise ValueError(f"inertia must be 3 principal moments or a 3x3 matrix (got shape "
+                         f"{J.shape})")
+    if not np.all(np.isfinite(J)):
+        raise ValueError("inertia must be finite numbers")
+    if not np.allclose(J, J.T, rtol=1e-10, atol=1e-14 * np.abs(J).max()):
+        raise ValueError("the inertia matrix must be symmetric")
+    ev = np.linalg.eigvalsh(J)
+    if not ev.min() > 0:
+        raise ValueError(f"the inertia must be positive definite (principal moments "
+                         f"{', '.join(f'{x:.6g}' for x in ev)})")
+    if ev[2] > (ev[0] + ev[1]) * (1 + 1e-6):
+        raise ValueError(f"principal moments {', '.join(f'{x:.6g}' for x in ev)} violate the "
+                         "triangle inequality (each <= the sum of the other two): no rigid "
+                         "body has them")
+    return 0.5 * (J + J.T)
+
+
 def skew(v: np.ndarray) -> np.ndarray:
     """(...,3) -> (...,3,3) with ``skew(a) @ b = a × b``."""
     v = np.asarray(v, dtype=float)

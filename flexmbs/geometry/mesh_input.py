@@ -171,11 +171,17 @@ def _segments(cells: list[tuple[str, NDArray[np.int64]]], rep: NDArray[np.int64]
             if a == b:
                 raise GeometryError(f"{path}: a line cell starts and ends at the same point "
                                     f"{points[a].tolist()}; remove degenerate cells")
-            # the same cell listed twice (e.g. a curve in two physical groups) counts once
-            key = (a, b, interior) if a < b else (b, a, interior[::-1])
-            if key in seen:
+            # the same cell listed twice (e.g. a curve in two physical groups) counts once;
+            # listed in both directions, the curve goes out and back along it: not a beam
+            if (a, b, interior) in seen:
                 continue
-            seen.add(key)
+            if (b, a, interior[::-1]) in seen:
+                raise GeometryError(
+                    f"{path}: the curve folds back on itself: the cell from "
+                    f"{points[a].tolist()} to {points[b].tolist()} is traversed in both "
+                    "directions; a beam centreline cannot retrace itself (split it into two "
+                    "beams or remove the returning cells)")
+            seen.add((a, b, interior))
             segs.append(_Segment(a, b, interior))
     return segs
 

@@ -8,6 +8,7 @@ own force and length scales (see :class:`NewtonOptions`).
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
@@ -16,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._jit import njit
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, ModelError
 
 if TYPE_CHECKING:
     import scipy.sparse.linalg as spla
@@ -53,6 +54,21 @@ class NewtonOptions:
     line_search: bool = False
     divergence_limit: float = 1e8   # error growth factor that counts as divergence
     roundoff_factor: float = 20.0
+
+    def __post_init__(self) -> None:
+        # the one check of these values (the scenario reader builds this class)
+        n = self.max_iterations
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ModelError(f"NewtonOptions: max_iterations must be an integer >= 1 (got {n!r})")
+        for key in ("relative_tolerance", "constraint_tolerance", "refresh_ratio",
+                    "refresh_iterations", "divergence_limit", "roundoff_factor"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                    and v > 0):
+                raise ModelError(f"NewtonOptions: {key} must be a finite number > 0 (got {v!r})")
+        if not (isinstance(self.refresh_cost, (int, float)) and self.refresh_cost >= 0):
+            raise ModelError(f"NewtonOptions: refresh_cost must be >= 0 or inf "
+                             f"(got {self.refresh_cost!r})")
 
 
 class StepProblem(Protocol):

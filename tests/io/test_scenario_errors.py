@@ -150,8 +150,8 @@ bending_stiffness = 1.0
     ("zero_mass", SIM + sub(BODY, "mass = 0.2", "mass = 0.0"),
      "rigid_bodies[sleeve].mass: expected a number > 0, got 0.0"),
     ("negative_inertia", SIM + sub(BODY, "[2e-5, 4e-5, 4e-5]", "[2e-5, -4e-5, 4e-5]"),
-     "rigid_bodies[sleeve].inertia: expected 3 principal moments > 0 or a symmetric positive "
-     "definite 3x3 matrix"),
+     "rigid_bodies[sleeve].inertia: the inertia must be positive definite (principal moments "
+     "-4e-05, 2e-05, 4e-05)"),
     ("inertia_triangle", SIM + sub(BODY, "[2e-5, 4e-5, 4e-5]", "[1e-4, 1e-5, 1e-5]"),
      "rigid_bodies[sleeve].inertia: principal moments"),
     ("quaternion_not_unit", SIM + sub(BODY, "position = [0.5, 0.0, 0.0]",
@@ -162,7 +162,7 @@ bending_stiffness = 1.0
      "rigid_bodies[sleeve].pose.on_beam: no beam named 'rial' (beams: none)"),
     ("pose_s_outside_beam", SIM + BEAM + sub(BODY, "position = [0.5, 0.0, 0.0]",
                                              "on_beam = 'rail', s = 1.5"),
-     "rigid_bodies[sleeve].pose.s: expected an arc length in [0, 1]"),
+     "rigid_bodies[sleeve].pose.s: expected an arc length in [0, 1.0]"),
     ("pose_on_beam_and_position", SIM + BEAM + sub(BODY, "position = [0.5, 0.0, 0.0]",
                                                    "on_beam = 'rail', s = 0.5, position = [0,0,0]"),
      "rigid_bodies[sleeve].pose: give either { position, quaternion } or { on_beam, s, offset }"),
@@ -206,7 +206,7 @@ bending_stiffness = 1.0
      "loads[0]: give only one of 'node', 's'"),
     ("load_s_outside", SIM + BEAM + "[[loads]]\nname = 'f'\ntype = 'point'\nbeam = 'rail'\n"
                                     "s = 2.0\nforce = [0, 0, 1]\n",
-     "loads[f].s: expected an arc length in [0, 1]"),
+     "loads[f].s: expected an arc length in [0, 1.0]"),
     ("load_moment_at_s", SIM + BEAM + "[[loads]]\ntype = 'point'\nbeam = 'rail'\ns = 0.5\n"
                                       "moment = [0, 0, 1]\n",
      "loads[0].moment: moments on a beam act at nodes only"),
@@ -232,7 +232,7 @@ bending_stiffness = 1.0
      "joints[j].beam: no beam named 'rial' (beams: rail)"),
     ("probe_s_outside_beam", SIM + BEAM + "[[probes]]\nname = 'tip'\ntype = 'beam_point'\n"
                                           "beam = 'rail'\ns = 1.5\n",
-     "probes[tip].s: expected an arc length in [0, 1] (length of beam 'rail'), got 1.5"),
+     "probes[tip].s: expected an arc length in [0, 1.0] (length of beam 'rail', tolerance 1e-12), got 1.5"),
     ("probe_unknown_quantity", SIM + BEAM + "[[probes]]\nname = 'tip'\ntype = 'beam_point'\n"
                                             "beam = 'rail'\ns = 0.5\nquantity = 'strain'\n",
      "probes[tip].quantity: unknown quantity 'strain' (known: position, displacement, velocity)"),

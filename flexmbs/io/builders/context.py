@@ -72,10 +72,12 @@ class BuildContext:
     def arc_length(self, t: Table, beam: Beam, key: str = "s") -> float:
         """A reference arc length of ``beam`` (within its length)."""
         s = t.number(key)
-        if not -1e-12 * beam.length <= s <= beam.length * (1 + 1e-12):
-            raise ScenarioError(f"{t.key(key)}: expected an arc length in [0, {beam.length:.6g}] "
-                                f"(length of beam '{beam.name}'), got {show_value(s)}")
-        return min(max(s, 0.0), beam.length)
+        tol = beam.length_tolerance
+        if not -tol <= s <= beam.length + tol:
+            raise ScenarioError(f"{t.key(key)}: expected an arc length in [0, {beam.length!r}] "
+                                f"(length of beam '{beam.name}', tolerance {tol:.3g}), got "
+                                f"{show_value(s)}")
+        return beam.check_arc_length(s)
 
 
 def build_entry(registry: Registry[Builder], t: Table, ctx: BuildContext) -> Any:
