@@ -26,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import dataclasses
+import errno
 import json
 import math
 import os
@@ -93,6 +94,10 @@ def failure_reason(exc: BaseException) -> str:
     if not isinstance(exc, FlexmbsError) or not text:
         text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
     return text
+
+
+#: trailing blanks of summary.json: room for the final status on a full disk
+SUMMARY_RESERVE = 4096
 
 
 @contextlib.contextmanager
@@ -309,12 +314,34 @@ class OutputWriter:
         })
 
     def _write_summary(self, **kwargs: Any) -> None:
+        """Write ``summary.json`` atomically (temporary file, rename). The file carries
+        ``SUMMARY_RESERVE`` bytes of trailing blanks (valid JSON), so that on a full disk the
+        final status can still be written in place, into blocks the file already holds."""
+        text = json.dumps(self._summary(**kwargs), indent=2) + "\n"
+        data = (text + " " * SUMMARY_RESERVE).encode("utf-8")
         tmp = self.summary_path.with_name(f".{self.summary_path.name}.tmp")
         with _naming(self.summary_path):
-            with open(tmp, "w", encoding="utf-8") as f:
-                json.dump(self._summary(**kwargs), f, indent=2)
-                f.write("\n")
-            os.replace(tmp, self.summary_path)
+            try:
+                with open(tmp, "wb") as f:
+                    f.write(data)
+                os.replace(tmp, self.summary_path)
+            except OSError as exc:
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+                if exc.errno != errno.ENOSPC or not self._overwrite_summary(text.encode()):
+                    raise
+
+    def _overwrite_summary(self, data: bytes) -> bool:
+        """On a full disk: rewrite the existing summary in place if ``data`` fits in it."""
+        try:
+            size = self.summary_path.stat().st_size
+            if len(data) > size:
+                return False
+            with open(self.summary_path, "r+b") as f:
+                f.write(data + b" " * (size - len(data)))
+            return True
+        except OSError:
+            return False
 
     def finish(self, status: str = "completed", *, stats: Any = None, wall_time: float | None = None,
                energy_balance: dict | None = None) -> None:

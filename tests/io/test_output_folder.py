@@ -5,6 +5,8 @@ subprocesses."""
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
 import signal
@@ -155,6 +157,57 @@ def test_a_full_disk_names_the_file_sets_the_status_and_leaves_no_temporaries(tm
     assert "cantilever_000002.vtu" in summary["status"]
     assert not list(out.glob(".*.tmp")) and not list(out.glob("*.tmp"))
     assert not (out / LOCK_NAME).exists()
+
+
+@pytest.fixture
+def tiny_filesystem(tmp_path):
+    """A 400 kB tmpfs (needs the right to mount: root on Linux; skipped elsewhere)."""
+    import subprocess
+    import sys
+
+    where = tmp_path / "tiny"
+    where.mkdir()
+    if not sys.platform.startswith("linux"):
+        pytest.skip("tmpfs mounts are Linux only")
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(where)],
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here ({done.stderr.strip() or done.returncode})")
+    try:
+        yield where
+    finally:
+        subprocess.run(["umount", str(where)], check=False)
+
+
+def test_a_real_full_disk_mid_run(tiny_filesystem, capsys):
+    """Item 7 on a real file system: the run fits the disk when it starts (the up-front
+    estimate passes), then another file takes the space; the frame that no longer fits fails
+    with the file's name, summary.json says so, no temporaries remain, exit 3; the frames
+    written before stay readable."""
+    out = tiny_filesystem / "o"
+    filler = tiny_filesystem / "filler"
+
+    def fill(state, stats):      # progress callback: after 0.02 s, the disk fills up
+        if state.t > 0.02 and not filler.exists():
+            with open(filler, "wb") as f, contextlib.suppress(OSError):
+                while True:
+                    f.write(b"x" * 4096)
+                    f.flush()
+
+    from flexmbs.io.scenario import load_scenario
+    from flexmbs.runs import run_scenario
+
+    sc = load_scenario(CANTILEVER, ["simulation.t_end=0.08"])
+    with pytest.raises(OSError) as info:
+        run_scenario(sc, out, progress=lambda start, t_end, name: fill)
+    assert info.value.errno == errno.ENOSPC
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"].startswith("failed: cannot write or read")
+    assert not list(out.glob(".*.tmp")) and not list(out.glob("*.tmp"))
+    import postprocess
+
+    run = postprocess.read_run(out)
+    assert len(run.frames) >= 3 and all(p.stat().st_size > 0 for _, p in run.frames)
 
 
 EXAMPLE1 = ROOT / "examples" / "curved_beam_sleeve.toml"
