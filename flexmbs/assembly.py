@@ -219,6 +219,7 @@ class Assembly:
         lin_rhs: list[float] = []
         lin_fun: list[TimeFunction | None] = []
         lin_labels: list[str] = []
+        lin_owner: list[str] = []       # the constraint (spec name) of each linear row
         nonlinear: list[Constraint] = []
         q0 = self.q_ref
         for spec in self.model.constraints:
@@ -231,6 +232,7 @@ class Assembly:
                     lin_rhs.append(q0[d[c]])
                     lin_fun.append(None)
                     lin_labels.append(f"{k} '{spec.name}' ({node.name}) position {'xyz'[c]}")
+                    lin_owner.append(spec.name)
                 if k == "clamp":
                     slope = d[list(node.beam.layout.slope)]
                     t = q0[slope] / np.linalg.norm(q0[slope])
@@ -248,6 +250,7 @@ class Assembly:
                         lin_rhs.append(0.0)
                         lin_fun.append(None)
                         lin_labels.append(f"clamp '{spec.name}' ({node.name}) slope normal {j + 1}")
+                        lin_owner.append(spec.name)
             elif k == "prescribed":
                 tgt = spec.a
                 d = self.node_dofs(tgt) if isinstance(tgt, Node) else self.body_dofs(tgt)  # type: ignore[arg-type]
@@ -256,6 +259,7 @@ class Assembly:
                     lin_rhs.append(q0[d[c]])
                     lin_fun.append(spec.function)
                     lin_labels.append(f"prescribed '{spec.name}' component {c}")
+                    lin_owner.append(spec.name)
             elif k == "rigid":
                 node = spec.a  # type: ignore[assignment]
                 body_att = self._attachment(spec.b, None, None)
@@ -340,6 +344,7 @@ class Assembly:
             (new, fn) for new, i in enumerate(lin_keep) if (fn := lin_fun[i]) is not None]
         self._lin_coo = (np.array(rows_i, np.int64), np.array(cols_i, np.int64), np.array(vals_i, float))
         multiplier_labels = [lin_labels[i] for i in lin_keep]
+        owners = [lin_owner[i] for i in lin_keep]
 
         # ---- nonlinear rows kept
         self.nonlinear: list[_NonlinearRows] = []
@@ -355,8 +360,11 @@ class Assembly:
             self.nonlinear.append(_NonlinearRows(con, np.asarray(con.coordinates(), np.int64), keep, rows))
             multiplier_labels.extend(f"{type(con).__name__} '{con.name}' equation {con.equation_labels[j]}"
                                      for j in keep)
+            owners.extend([con.name] * keep.size)
         self.n_mult = row
         self.multiplier_labels = multiplier_labels
+        #: the constraint or joint (by name) that owns each multiplier (reactions)
+        self.multiplier_owner = owners
         self.n_total = self.n_coords + self.n_mult
         self._rows_of = {id(nl.constraint): nl for nl in self.nonlinear}
         self._interaction_constraints = {id(c) for obj in self.model.interactions

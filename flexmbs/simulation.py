@@ -81,6 +81,21 @@ class Result:
     def body_quaternion(self, body: RigidBody) -> np.ndarray:
         return self.q[:, self.assembly.body_dofs(body)[3:]]
 
+    def reaction(self, constraint: str, part: Beam | RigidBody | str | None = None,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Force and moment histories, each (n_out, 3) in global components, of the constraint
+        or joint named ``constraint`` on ``part`` (a beam or body, default the first it acts
+        on); the moment is about the body's centre of mass or the beam's first node involved
+        (:mod:`flexmbs.constraints.reactions`)."""
+        from .io.probes import ReactionProbe
+
+        probe = ReactionProbe("reaction", constraint,
+                              None if part is None else str(getattr(part, "name", part)))
+        probe.check(self.assembly)
+        vals = np.array([probe.evaluate(self.assembly, State(float(t), q, v, v, v, lam))
+                         for t, q, v, lam in zip(self.t, self.q, self.v, self.lam, strict=True)])
+        return vals[:, :3], vals[:, 3:]
+
 
 def beam_positions(asm: Assembly, beam: Beam, q: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Centreline positions (len(s), 3) of ``beam`` in configuration ``q`` at reference arc

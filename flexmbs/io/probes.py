@@ -204,6 +204,40 @@ class JointReactionProbe(Probe):
             raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
 
 
+class ReactionProbe(Probe):
+    """Force and moment of a constraint or joint on one attached part (global components;
+    moment about the body's centre of mass or the beam's first node involved), from the
+    multipliers (:mod:`flexmbs.constraints.reactions`). ``part`` defaults to the first part
+    (a body before a beam; for a joint between two bodies, the first body in the model)."""
+
+    def __init__(self, name: str, constraint: str, part: str | None = None) -> None:
+        self.name = _check_name(name)
+        self.constraint = str(constraint)
+        self.part = part
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_{k}" for k in ("fx", "fy", "fz", "mx", "my", "mz")]
+
+    def _pick(self, found: list[Any]) -> Any:
+        for r in found:
+            if self.part is None or r.part == self.part:
+                return r
+        parts = ", ".join(r.part for r in found) or "none"
+        raise ModelError(f"probe '{self.name}': constraint '{self.constraint}' does not act on "
+                         f"'{self.part}' (it acts on: {parts})")
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        from ..constraints.reactions import reactions
+
+        r = self._pick(reactions(asm, state.q, state.lam, self.constraint, float(state.t)))
+        return np.concatenate([r.force, r.moment])
+
+    def check(self, asm: Any) -> None:
+        from ..constraints.reactions import reactions
+
+        self._pick(reactions(asm, asm.q_ref, np.zeros(asm.n_mult), self.constraint))
+
+
 class ContactForceProbe(Probe):
     """Total contact force on the hole body of a clearance joint (global components)."""
 

@@ -57,7 +57,7 @@ def test_the_registries_hold_the_documented_names() -> None:
                                    "rigid", "prescribed", "joint")
     assert LOADS.names() == ("point", "distributed")
     assert set(PROBES) == {"beam_point", "body_position", "body_orientation", "body_point",
-                           "energy", "slide_coordinate", "contact_force", "joint_reaction"}
+                           "energy", "slide_coordinate", "contact_force", "joint_reaction", "reaction"}
 
 
 def test_scenario_and_python_fail_with_the_same_message() -> None:

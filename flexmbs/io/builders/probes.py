@@ -83,5 +83,22 @@ PROBES.register("slide_coordinate",
                 _joint_probe(probes.SlideCoordinateProbe, "slide_coordinate", "sliding"))
 PROBES.register("contact_force",
                 _joint_probe(probes.ContactForceProbe, "contact_force", "clearance"))
+@PROBES.register("reaction")
+def _reaction(t: Table, ctx: BuildContext) -> probes.Probe:
+    """``type = "reaction"``, ``constraint = NAME`` (a constraint or joint), ``part = NAME``
+    (optional: the beam or body it acts on)."""
+    t.allow(("name", "type", "constraint", "part"))
+    name = t.string("constraint")
+    known = [c.name for c in ctx.model.constraints] + [j.name for j in ctx.model.interactions
+                                                       if j.constraints()]
+    if name not in known:
+        raise ScenarioError(f"{t.key('constraint')}: no constraint or joint named '{name}' "
+                            f"(with reactions: {', '.join(known) or 'none'})")
+    part = t.string("part", None)
+    if part is not None and part not in ctx.beams and part not in ctx.bodies:
+        raise ScenarioError(f"{t.key('part')}: no beam or rigid body named '{part}'")
+    return probes.ReactionProbe(t.raw["name"], name, part)
+
+
 PROBES.register("joint_reaction",
                 _joint_probe(probes.JointReactionProbe, "reaction_force", "sliding"))
