@@ -128,7 +128,6 @@ def plot(out_dir: str | Path, *, compare: str | Path | None = None,
          formats: Sequence[str] = ("png", "svg")) -> list[Path]:
     """Write the figures of :func:`make_figures` into ``out_dir/figures``; returns the paths.
     A sweep folder (``sweep.csv``) gets the sweep's figures (:mod:`postprocess.sweep`)."""
-    import matplotlib.pyplot as plt
 
     from .sweep import is_sweep, plot_sweep
 
@@ -141,8 +140,13 @@ def plot(out_dir: str | Path, *, compare: str | Path | None = None,
         return plot_sweep(out_dir, formats=formats)
     run = read_run(out_dir)
     other = read_run(compare) if compare is not None else None
-    figs = make_figures(run, other)
-    folder = run.directory / "figures"
+    return save_figures(make_figures(run, other), run.directory / "figures", formats)
+
+
+def save_figures(figs: dict[str, Any], folder: Path, formats: Sequence[str]) -> list[Path]:
+    """Save every figure as ``folder/<stem>.<format>`` and close it; returns the paths."""
+    import matplotlib.pyplot as plt
+
     folder.mkdir(exist_ok=True)
     written = []
     for stem, fig in figs.items():

@@ -135,16 +135,6 @@ def sweep_figures(directory: str | Path) -> dict[str, Any]:
 
 def plot_sweep(directory: str | Path, *, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
     """Write :func:`sweep_figures` into ``directory/figures``; returns the paths."""
-    import matplotlib.pyplot as plt
+    from .plots import save_figures
 
-    figs = sweep_figures(directory)
-    folder = Path(directory) / "figures"
-    folder.mkdir(exist_ok=True)
-    written = []
-    for stem, fig in figs.items():
-        for f in formats:
-            p = folder / f"{stem}.{f}"
-            fig.savefig(p, dpi=120)
-            written.append(p)
-        plt.close(fig)
-    return written
+    return save_figures(sweep_figures(directory), Path(directory) / "figures", formats)
