@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from .data import Run, read_run
+from .figures import save_figures
 
 
 def _contact_series(run: Run) -> tuple[np.ndarray, dict[tuple[str, int], np.ndarray], np.ndarray]:
@@ -141,18 +142,3 @@ def plot(out_dir: str | Path, *, compare: str | Path | None = None,
     run = read_run(out_dir)
     other = read_run(compare) if compare is not None else None
     return save_figures(make_figures(run, other), run.directory / "figures", formats)
-
-
-def save_figures(figs: dict[str, Any], folder: Path, formats: Sequence[str]) -> list[Path]:
-    """Save every figure as ``folder/<stem>.<format>`` and close it; returns the paths."""
-    import matplotlib.pyplot as plt
-
-    folder.mkdir(exist_ok=True)
-    written = []
-    for stem, fig in figs.items():
-        for f in formats:
-            p = folder / f"{stem}.{f}"
-            fig.savefig(p, dpi=120)
-            written.append(p)
-        plt.close(fig)
-    return written

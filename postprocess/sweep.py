@@ -135,6 +135,6 @@ def sweep_figures(directory: str | Path) -> dict[str, Any]:
 
 def plot_sweep(directory: str | Path, *, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
     """Write :func:`sweep_figures` into ``directory/figures``; returns the paths."""
-    from .plots import save_figures
+    from .figures import save_figures
 
     return save_figures(sweep_figures(directory), Path(directory) / "figures", formats)
