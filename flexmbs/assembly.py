@@ -22,6 +22,7 @@ import scipy.sparse as sp
 
 from . import driver
 from .constraints.base import Attachment, Constraint
+from .constraints.drivers import JointDriver, pack_drivers
 from .constraints.joints import (
     BeamNodeRigid,
     EulerParameterNormalization,
@@ -41,6 +42,7 @@ from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_RESIDUAL, kernel
 from .loads import TimeFunction, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
 from .solvers._compiled import idle_run
+from .springs import pack_springs, spring_energy, springs_pattern
 from .terms import FunctionTable, dynamic_mode, static_mode
 
 
@@ -267,6 +269,11 @@ class Assembly:
                 q_body = q0[self.body_dofs(spec.b)] if isinstance(spec.b, RigidBody) else None
                 nonlinear.append(BeamNodeRigid.from_configuration(
                     spec.name, node_att, body_att, q0[self.node_dofs(node)], q_body))
+            elif k == "driver":
+                a = self._attachment(spec.a, spec.point_a, spec.frame_a)
+                b = self._attachment(spec.b, spec.point_b, spec.frame_b)
+                assert spec.function is not None  # Model.add_driver sets it
+                nonlinear.append(JointDriver(spec.name, a, b, spec.motion, spec.function, q0))
             else:  # generic joints and presets
                 a = self._attachment(spec.a, spec.point_a, spec.frame_a)
                 b = self._attachment(spec.b, spec.point_b, spec.frame_b)
@@ -454,6 +461,7 @@ class Assembly:
             blocks += sliding_pattern(obj, self)
         for obj in self._interactions_of("clearance"):
             blocks += clearance_pattern(obj, self)
+        blocks += springs_pattern(self.model.springs, self)
         keys = [np.arange(N, dtype=np.int64) * (N + 1)]   # the full diagonal
         for rows, cols in blocks:
             r = np.asarray(rows, np.int64)
@@ -488,6 +496,7 @@ class Assembly:
         norms = [nl.constraint for nl in self.nonlinear
                  if isinstance(nl.constraint, EulerParameterNormalization)]
         terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]
+        drivers = [nl.constraint for nl in self.nonlinear if isinstance(nl.constraint, JointDriver)]
         self.joint_lists = {k: self._interactions_of(k) for k in _INTERACTION_KINDS}
         fn_rows = [row for row, _ in self.lin_functions]
         fn_idx = [fns(fn) for _, fn in self.lin_functions]
@@ -499,6 +508,8 @@ class Assembly:
             pack_norms(norms, self), pack_terms(terms, self),
             pack_sliding(self.joint_lists["sliding"], self, fns),
             pack_clearance(self.joint_lists["clearance"], self, self.n_total),
+            pack_springs(self.model.springs, self),
+            pack_drivers(drivers, self, fns),
             np.zeros(3, np.int64))
         self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
@@ -684,6 +695,17 @@ class Assembly:
                      self.functions.values(t), dynamic_mode(), r)
         return r[n:].copy()
 
+    def constraint_velocity_terms(self, q: np.ndarray, t: float) -> np.ndarray:
+        """Right-hand side ``−Phi_t`` of the velocity-level constraints ``Phi_q v = −Phi_t``
+        (nonzero only for prescribed motion and drivers)."""
+        out = np.zeros(self.n_mult)
+        for row, fn in self.lin_functions:
+            out[row] += fn.d1(t)
+        for nl in self.nonlinear:
+            if isinstance(nl.constraint, JointDriver):
+                out[nl.rows] += nl.constraint.velocity_rhs(q[nl.coords], t)
+        return out
+
     def constraint_time_terms(self, q: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
         """Right-hand side of the acceleration-level constraints,
         ``-(Phi_q v)_q v - 2 Phi_qt v - Phi_tt`` (FORMULATION §6.1 INIT)."""
@@ -696,6 +718,9 @@ class Assembly:
         if self.m_lin:
             for row, fn in self.lin_functions:
                 out[row] += fn.d2(t)
+        for nl in self.nonlinear:
+            if isinstance(nl.constraint, JointDriver):
+                out[nl.rows] += nl.constraint.acceleration_rhs(q[nl.coords], v[nl.coords], t)
         return out
 
     def mass_matrix(self, q: np.ndarray) -> sp.csr_matrix:
@@ -727,4 +752,8 @@ class Assembly:
         if bp.dofs.size:
             kin += float(np.sum(rb.kinetic_energy(bp.mass, bp.inertia, q[bp.dofs[:, 3:]], v[bp.dofs])))
         grav = -float(self.gravity_vector @ (q - self.q_ref))
-        return {"kinetic": kin, "strain": strain, "gravity": grav, "total": kin + strain + grav}
+        out = {"kinetic": kin, "strain": strain, "gravity": grav, "total": kin + strain + grav}
+        if self.model.springs:
+            out["spring"] = spring_energy(self.system.springs, np.ascontiguousarray(q, float))
+            out["total"] += out["spring"]
+        return out

@@ -23,6 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ._jit import njit
+from .constraints.drivers import DriverPart, drivers_jacobian, drivers_residual
 from .constraints.joints import (
     NormPart,
     TermPart,
@@ -49,6 +50,7 @@ from .contact._detect import (
 from .elements.ancf_cable import beam_jacobian, beam_residual
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_residual
+from .springs import SpringPart, springs_jacobian, springs_residual
 
 __all__ = ["SystemPart", "residual", "jacobian", "post_step", "ERR_LEFT_BORE", "ERR_END_OF_BEAM",
            "KIND_OF_ERROR"]
@@ -68,6 +70,8 @@ class SystemPart(NamedTuple):
     terms: TermPart
     sliding: SlidingPart
     clearance: ClearancePart
+    springs: SpringPart
+    drivers: DriverPart
     error: np.ndarray                # (3,) [code, joint, detail] of the last error
 
 
@@ -82,9 +86,11 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     for bm in sy.beams:
         scale = max(scale, beam_residual(bm, q, v, qdd, mode, r))
     scale = max(scale, bodies_residual(sy.bodies, q, v, qdd, fv, mode, r))
+    scale = max(scale, springs_residual(sy.springs, q, v, mode, r))
     linear_residual(sy.linear, n, q, lam, fv, mode, r)
     norms_residual(sy.norms, n, q, lam, r)
     terms_residual(sy.terms, n, q, lam, r)
+    drivers_residual(sy.drivers, n, q, lam, fv, mode, r)
     scale = max(scale, sliding_residual(sy.sliding, n, q, v, lam, fv, r))
     sc, code = clearance_residual(sy.clearance, q, v, r, sy.error)
     return max(scale, sc), code
@@ -92,16 +98,19 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
 
 @njit(inline="always")
 def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
-    """Iteration matrix into ``data``; returns ``(largest diagonal beam stiffness, error code)``."""
+    """Iteration matrix into ``data``; returns ``(largest diagonal beam or spring stiffness,
+    error code)``."""
     for i in range(data.size):
         data[i] = 0.0
     kscale = 0.0
     for bm in sy.beams:
         kscale = max(kscale, beam_jacobian(bm, q, v, mode, cM, cC, cK, data))
     bodies_jacobian(sy.bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
+    kscale = max(kscale, springs_jacobian(sy.springs, q, v, mode, cC, cK, data))
     linear_jacobian(sy.linear, data)
     norms_jacobian(sy.norms, q, lam, cK, data)
     terms_jacobian(sy.terms, q, lam, cK, data)
+    drivers_jacobian(sy.drivers, q, lam, fv, mode, cK, data)
     sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data)
     code = clearance_jacobian(sy.clearance, q, v, cC, cK, data, sy.error)
     return kscale, code

@@ -22,18 +22,20 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 class TimeFunction:
-    """Base class: value and derivatives; derivatives default to central differences."""
+    """Base class: value and derivatives. The derivatives are right-sided (the motion after t:
+    the initial acceleration of a run needs them at a start where a function is often only
+    piecewise smooth); by default second-order forward differences."""
 
     def __call__(self, t: float) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def d1(self, t: float) -> float:
         h = 1e-6
-        return (self(t + h) - self(t - h)) / (2 * h)
+        return (-3.0 * self(t) + 4.0 * self(t + h) - self(t + 2 * h)) / (2 * h)
 
     def d2(self, t: float) -> float:
         h = 1e-4
-        return (self(t + h) - 2 * self(t) + self(t - h)) / (h * h)
+        return (2.0 * self(t) - 5.0 * self(t + h) + 4.0 * self(t + 2 * h) - self(t + 3 * h)) / (h * h)
 
 
 @dataclass(frozen=True)
@@ -68,6 +70,24 @@ class Ramp(TimeFunction):
         if self.smooth:
             x = 0.5 - 0.5 * math.cos(math.pi * x)
         return self.value * x
+
+    def _inside(self, t: float) -> float | None:
+        """x in [0, 1) where the ramp moves right after t, else None."""
+        return (t - self.start) / (self.end - self.start) if self.start <= t < self.end else None
+
+    def d1(self, t: float) -> float:
+        x = self._inside(t)
+        if x is None:
+            return 0.0
+        rate = self.value / (self.end - self.start)
+        return rate * 0.5 * math.pi * math.sin(math.pi * x) if self.smooth else rate
+
+    def d2(self, t: float) -> float:
+        x = self._inside(t)
+        if x is None or not self.smooth:
+            return 0.0
+        w = math.pi / (self.end - self.start)
+        return self.value * 0.5 * w * w * math.cos(math.pi * x)
 
 
 @dataclass(frozen=True, kw_only=True)

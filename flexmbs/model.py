@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -21,6 +21,7 @@ from .errors import ModelError
 from .geometry.curves import Centerline
 from .loads import TimeFunction, as_time_function
 from .sections import BeamStiffness, CircularSection, Material
+from .springs import SpringDamper, check_table
 
 if TYPE_CHECKING:  # pragma: no cover
     from .constraints.interaction import Interaction
@@ -49,6 +50,13 @@ class Pose:
 
     position: np.ndarray
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+
+    def __post_init__(self) -> None:
+        R = np.asarray(self.rotation, dtype=float)
+        if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+            raise ModelError(f"Pose rotation must be a finite 3x3 matrix (got shape {R.shape})")
+        object.__setattr__(self, "position", _vec3(self.position, "Pose position"))
+        object.__setattr__(self, "rotation", R)
 
     @property
     def quaternion(self) -> np.ndarray:
@@ -263,6 +271,7 @@ class ConstraintSpec:
     rotation: tuple[int, int, int] = (0, 0, 0)
     components: tuple[int, ...] = ()
     function: TimeFunction | None = None
+    motion: str = ""                    # drivers: "rotation" or "slide"
 
 
 @dataclass(frozen=True)
@@ -287,10 +296,12 @@ class Model:
         self.constraints: list[ConstraintSpec] = []
         self.loads: list[LoadSpec] = []
         self.interactions: list[Interaction] = []
+        self.springs: list[SpringDamper] = []
         self._names: dict[str, set[str]] = {}
 
     # ------------------------------------------------------------------ naming
-    _KIND = {"beam": "beam", "body": "rigid body", "joint": "joint", "load": "load"}
+    _KIND = {"beam": "beam", "body": "rigid body", "joint": "joint", "load": "load",
+             "spring": "spring"}
     #: kinds that share one namespace: a beam and a rigid body are both "parts" (output
     #: blocks, probes and the section view name them without saying which kind)
     _NAMESPACE = {"beam": "part", "rigid body": "part"}
@@ -492,6 +503,42 @@ class Model:
         return self._add_constraint(ConstraintSpec(kind, self._unique(name, kind), a, b, pa, pb, fa, fb,
                                                    translation=tr, rotation=ro))
 
+    def add_driver(self, joint: ConstraintSpec, function=None, *,  # noqa: ANN001 - TimeFunction-like
+                   motion: Literal["rotation", "slide"] | None = None,
+                   name: str | None = None) -> ConstraintSpec:
+        """A motor on ``joint``: its relative rotation about the joint axis (``motion =
+        "rotation"``, a revolute joint) or slide along it (``"slide"``, a prismatic joint) follows
+        ``value(t) = value(0) + function(t)`` (:mod:`flexmbs.constraints.drivers`). The driving
+        torque (force) is its reaction (``reaction`` probe, :meth:`Result.reaction`)."""
+        kind = "add_driver"
+        if not isinstance(joint, ConstraintSpec) or not any(c is joint for c in self.constraints) \
+                or joint.frame_a is None:
+            raise ModelError(f"{kind}: joint must be a revolute, prismatic or generic joint of "
+                             f"this model (got {joint!r})")
+        free_rotation = joint.rotation == (0, 1, 1)
+        free_slide = joint.translation[0] == 0 and joint.rotation[1:] == (1, 1)
+        if motion is None:
+            if free_rotation == free_slide:
+                raise ModelError(f"{kind}: joint '{joint.name}' ({joint.kind}) needs motion = "
+                                 "\"rotation\" or \"slide\"")
+            motion = "rotation" if free_rotation else "slide"
+        if motion == "rotation" and not free_rotation:
+            raise ModelError(f"{kind}: a rotation driver needs a joint that leaves only the "
+                             f"rotation about its x axis free among rotations (revolute); "
+                             f"'{joint.name}' has rotation mask {list(joint.rotation)}")
+        if motion == "slide" and not free_slide:
+            raise ModelError(f"{kind}: a slide driver needs a joint whose x translation is free "
+                             f"and whose y, z rotations are locked (prismatic); '{joint.name}' "
+                             f"has translation {list(joint.translation)}, rotation "
+                             f"{list(joint.rotation)}")
+        if motion not in ("rotation", "slide"):
+            raise ModelError(f"{kind}: motion must be \"rotation\" or \"slide\" (got {motion!r})")
+        if motion == "rotation" and (isinstance(joint.a, Node) or isinstance(joint.b, Node)):
+            raise ModelError(f"{kind}: a beam node has no rotation frame to drive")
+        return self._add_constraint(replace(
+            joint, kind="driver", name=self._unique(name, "driver"), motion=motion,
+            function=as_time_function(function if function is not None else 0.0)))
+
     def add_joint(self, joint):  # noqa: ANN001, ANN201 - any Interaction
         """Attach a joint or contact interaction (e.g. :class:`flexmbs.SlidingJoint`)."""
         from .constraints.interaction import Interaction
@@ -502,6 +549,89 @@ class Model:
         joint.name = self._unique(joint.name, "joint")
         self.interactions.append(joint)
         return joint
+
+    # ------------------------------------------------------------------ force elements
+    def add_spring_damper(self, a: Node | RigidBody | Ground, b: Node | RigidBody | Ground = GROUND,
+                          *, point_a: ArrayLike3 = (0.0, 0.0, 0.0),
+                          point_b: ArrayLike3 = (0.0, 0.0, 0.0), stiffness: float = 0.0,
+                          damping: float = 0.0, rest_length: float | None = None,
+                          preload: float = 0.0, table: Sequence[Sequence[float]] | None = None,
+                          name: str | None = None) -> SpringDamper:
+        """Translational spring-damper between two points (:mod:`flexmbs.springs`): a body
+        point (``point_*`` in the body frame), a beam node, or a fixed point of the ground
+        (``point_*`` global). Force along the line, tension positive: ``stiffness * (l -
+        rest_length)`` or the force-elongation ``table`` ([[e, f], ...], piecewise linear),
+        plus ``preload`` and ``damping * dl/dt``. ``rest_length`` defaults to the reference
+        distance."""
+        ends = []
+        for obj, pt, what in ((a, point_a, "a"), (b, point_b, "b")):
+            if isinstance(obj, RigidBody):
+                self._check_body(obj, "add_spring_damper")
+            elif isinstance(obj, Node):
+                self._check_node(obj, "add_spring_damper")
+                if np.any(np.asarray(pt, float) != 0.0):
+                    raise ModelError(f"add_spring_damper: point_{what} is not used with a beam "
+                                     "node (the spring acts at the node)")
+            elif obj is not GROUND:
+                raise ModelError(f"add_spring_damper: {what} must be a RigidBody, a beam Node or "
+                                 f"GROUND (got {obj!r})")
+            ends.append(_vec3(pt, f"point_{what}"))
+        for key, val in (("stiffness", stiffness), ("damping", damping)):
+            if not (math.isfinite(val) and val >= 0):
+                raise ModelError(f"add_spring_damper: {key} must be a finite number >= 0 "
+                                 f"(got {val!r})")
+        if not math.isfinite(preload):
+            raise ModelError(f"add_spring_damper: preload must be finite (got {preload!r})")
+        spring_name = self._unique(name, "spring")
+        tab = None if table is None else check_table(table, spring_name)
+        spring = SpringDamper(spring_name, a, b, ends[0], ends[1], float(stiffness),
+                              float(damping), 0.0, float(preload), tab)
+        length = float(np.linalg.norm(spring.end_position(1) - spring.end_position(0)))
+        if rest_length is None:
+            rest_length = length
+        if not (math.isfinite(rest_length) and rest_length >= 0):
+            raise ModelError(f"add_spring_damper: rest_length must be a finite number >= 0 "
+                             f"(got {rest_length!r})")
+        if not length > 0:
+            raise ModelError(f"spring '{spring_name}': its ends coincide in the reference "
+                             "configuration; the direction of its force is undefined")
+        spring.rest_length = float(rest_length)
+        self.springs.append(spring)
+        return spring
+
+    def add_rotational_spring(self, joint: ConstraintSpec, *, stiffness: float = 0.0,
+                              damping: float = 0.0, rest_angle: float = 0.0, preload: float = 0.0,
+                              table: Sequence[Sequence[float]] | None = None,
+                              name: str | None = None) -> SpringDamper:
+        """Rotational spring-damper about the axis of a revolute (or generic, x rotation free)
+        ``joint`` (:mod:`flexmbs.springs`): torque ``stiffness * (θ - rest_angle)`` or the
+        torque-angle ``table`` ([[θ - rest_angle, τ], ...], piecewise linear), plus ``preload``
+        and ``damping * dθ/dt``, resisting an increase of θ, the rotation of the joint's first
+        part relative to its second (0 as assembled). θ is taken within ±π of ``rest_angle``."""
+        what = "add_rotational_spring"
+        if not isinstance(joint, ConstraintSpec) or not any(c is joint for c in self.constraints) \
+                or joint.frame_a is None or joint.frame_b is None:
+            raise ModelError(f"{what}: joint must be a revolute or generic joint of this model "
+                             f"(got {joint!r})")
+        if joint.rotation != (0, 1, 1) or joint.kind == "driver":
+            raise ModelError(f"{what}: joint '{joint.name}' must leave the rotation about its x "
+                             f"axis free and lock the other two (rotation mask [0, 1, 1], got "
+                             f"{list(joint.rotation)})")
+        for key, val in (("stiffness", stiffness), ("damping", damping)):
+            if not (math.isfinite(val) and val >= 0):
+                raise ModelError(f"{what}: {key} must be a finite number >= 0 (got {val!r})")
+        for key, val in (("rest_angle", rest_angle), ("preload", preload)):
+            if not math.isfinite(val):
+                raise ModelError(f"{what}: {key} must be finite (got {val!r})")
+        spring_name = self._unique(name, "spring")
+        tab = None if table is None else check_table(table, spring_name)
+        spring = SpringDamper(spring_name, joint.a, joint.b, np.asarray(joint.point_a, float),
+                              np.asarray(joint.point_b, float), float(stiffness), float(damping),
+                              float(rest_angle), float(preload), tab,
+                              frame_a=np.asarray(joint.frame_a, float),
+                              frame_b=np.asarray(joint.frame_b, float))
+        self.springs.append(spring)
+        return spring
 
     # ------------------------------------------------------------------ loads
     def add_point_load(self, target: Node | RigidBody | tuple[Beam, float], force: ArrayLike3 = (0, 0, 0),

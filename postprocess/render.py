@@ -4,7 +4,8 @@ Beams (cells with ``block_id == 0``, VTK_LINE segments) are joined into polyline
 tubes of their section radius, coloured by a beam point field with a scalar bar; rigid bodies
 (``block_id == 1``) are translucent surfaces in their pose; contact points (``block_id == 2``)
 are spheres with arrows of the force on the beam, ``-normal_force * normal``, scaled so that the
-largest normal force of the run is 8 % of the scene diagonal. A time label sits in the upper left;
+largest normal force of the run is 8 % of the scene diagonal; translational spring-dampers
+(``block_id == 3``, lines) are drawn as thin dark-green lines. A time label sits in the upper left;
 the camera frames the bounding box of the whole motion (union over all frames), so it does not
 move during a movie.
 
@@ -290,6 +291,10 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
             transient.append(plotter.add_mesh(bodies, color="orange", opacity=0.35,
                                               smooth_shading=True, render=False,
                                               reset_camera=False))
+        springs = _block(grid, 3)
+        if springs is not None and springs.n_lines:
+            transient.append(plotter.add_mesh(springs, color="darkgreen", line_width=3,
+                                              render=False, reset_camera=False))
         contacts = _block(grid, 2)
         if contacts is not None and contacts.n_points:
             r_s = sphere_r if sphere_r is not None else 0.003 * diag

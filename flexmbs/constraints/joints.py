@@ -42,6 +42,8 @@ __all__ = [
     "prismatic",
     "fixed",
     "perpendicular_pair",
+    "relative_angle_table",
+    "slide_table",
     "TermTable",
     "term_values",
     "term_hessian",
@@ -461,6 +463,35 @@ def prismatic(name: str, a: Attachment, b: Attachment) -> GenericJoint:
 def fixed(name: str, a: Attachment, b: Attachment) -> GenericJoint:
     """Fixed (welded) joint: all 6 relative motions locked."""
     return GenericJoint(name, a, b, translation=(1, 1, 1), rotation=(1, 1, 1))
+
+
+def relative_angle_table(a: Attachment, b: Attachment, na: int) -> TermTable:
+    """The two equations ``c = (J_b e_y)·(J_a e_y)``, ``s = (J_b e_z)·(J_a e_y)`` of the relative
+    rotation of a's joint frame about b's joint x axis: with ``J_a = J_b R_x(θ)`` they are
+    ``cos θ`` and ``sin θ`` (Haug 1989 §9.4 rotational drivers). The rotational spring-damper
+    (:mod:`flexmbs.springs`, θ = atan2(s, c)) and the rotation driver
+    (:mod:`flexmbs.constraints.drivers`, Φ = s cos θ_d − c sin θ_d) both read them; ``na`` is the
+    local offset of b's coordinates (a's come first)."""
+    for att in (a, b):
+        if att.kind == "beam_node":
+            raise ModelError("a beam node has no rotation frame; an angle about a joint axis "
+                             "needs rigid bodies or ground at both ends")
+    tb = _TableBuilder()
+    ya = tb.direction(a, 0, a.frame[:, 1])
+    tb.dot(tb.direction(b, na, b.frame[:, 1]), -1, ya, -1)
+    tb.dot(tb.direction(b, na, b.frame[:, 2]), -1, ya, -1)
+    return tb.build()
+
+
+def slide_table(a: Attachment, b: Attachment, na: int) -> TermTable:
+    """The one equation ``(J_b e_x)·(x_a − x_b)``: the slide of a's joint point along b's
+    joint x axis (the prismatic driver, :mod:`flexmbs.constraints.drivers`)."""
+    if b.kind == "beam_node":
+        raise ModelError("a slide is measured along the joint axis of b, which a beam node "
+                         "does not have: attach the node as a")
+    tb = _TableBuilder()
+    tb.dot(tb.direction(b, na, b.frame[:, 0]), -1, tb.point(a, 0), tb.point(b, na))
+    return tb.build()
 
 
 # ---------------------------------------------------------------------------------------------

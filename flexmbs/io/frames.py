@@ -7,17 +7,22 @@ ParaView shows everything after opening the ``.pvd``). Blocks are told apart by 
 cell data       meaning
 ==============  =========================================================================
 ``block_id``    0 = beam centreline segment (VTK_LINE), 1 = rigid-body surface triangle
-                (VTK_TRIANGLE), 2 = contact point (VTK_VERTEX)
+                (VTK_TRIANGLE), 2 = contact point (VTK_VERTEX), 3 = spring-damper
+                (translational: VTK_LINE between its ends; rotational: VTK_VERTEX at the
+                joint point)
 ``beam_id``     index of the beam in ``model.beams`` (-1 on other blocks)
 ``body_id``     index of the body in ``model.bodies`` (-1 on other blocks)
+``spring_id``   index of the spring in ``model.springs`` (-1 on other blocks)
 ==============  =========================================================================
 
-The names behind ``beam_id``/``body_id`` are listed in ``summary.json`` (``vtu_blocks``).
+The names behind ``beam_id``/``body_id``/``spring_id`` are listed in ``summary.json`` (``vtu_blocks``).
 Point data: ``displacement``, ``velocity`` (beams, bodies; zero on contact points),
 ``arc_length`` (reference arc length from the first node), ``axial_strain``, ``curvature``
 (the curvature vector K = r'×r''/(|r'|² μ) of the cable), ``curvature_magnitude`` (beams),
 ``gap``, ``normal_force``, ``normal`` (contact points). Arrays that do not apply to a block
-hold NaN there. Field data: ``time`` and ``TimeValue`` (the name ParaView/VTK recognise).
+hold NaN there. Spring cells carry ``spring_force`` (N, or N m for a rotational spring; tension
+positive, damping included) and ``spring_extension`` (length − rest length, or angle − rest
+angle, rad). Field data: ``time`` and ``TimeValue`` (the name ParaView/VTK recognise).
 
 Beams are finely sampled polylines stored as VTK_LINE segments (meshio cannot read
 VTK_POLY_LINE): ``samples_per_element`` points per element at ξ = k/n, positions exact on the
@@ -37,6 +42,8 @@ import numpy as np
 from ..elements import ancf_cable as cable
 from ..elements import rigid_body as rb
 from ..errors import ModelError
+from ..springs import ANGLE, spring_forces, spring_points
+from ..terms import dynamic_mode
 from .surfaces import body_surface
 from .vtu import VTK_LINE, VTK_TRIANGLE, VTK_VERTEX, VTUMesh
 
@@ -44,13 +51,15 @@ if TYPE_CHECKING:
     from ..assembly import Assembly
     from ..solvers.generalized_alpha import State
 
-__all__ = ["BLOCK_BEAM", "BLOCK_BODY", "BLOCK_CONTACT", "BLOCK_NAMES", "FrameBuilder",
+__all__ = ["BLOCK_BEAM", "BLOCK_BODY", "BLOCK_CONTACT", "BLOCK_NAMES", "BLOCK_SPRING", "FrameBuilder",
            "build_frame", "contact_location"]
 
 BLOCK_BEAM = 0
 BLOCK_BODY = 1
 BLOCK_CONTACT = 2
-BLOCK_NAMES = {BLOCK_BEAM: "beam", BLOCK_BODY: "rigid_body", BLOCK_CONTACT: "contact"}
+BLOCK_SPRING = 3
+BLOCK_NAMES = {BLOCK_BEAM: "beam", BLOCK_BODY: "rigid_body", BLOCK_CONTACT: "contact",
+               BLOCK_SPRING: "spring"}
 
 
 @dataclass
@@ -172,6 +181,28 @@ class FrameBuilder:
                        "beam_id": np.full(n, -1, np.int32),
                        "body_id": np.full(n, -1, np.int32)})
 
+    def spring_mesh(self, q: np.ndarray, v: np.ndarray) -> VTUMesh:
+        """Translational springs as lines between their ends, rotational ones as a vertex at
+        the joint point (their cells in that order)."""
+        sp = self.asm.system.springs
+        x = spring_points(sp, q)
+        fo = spring_forces(sp, q, v, dynamic_mode())
+        rot = np.flatnonzero(sp.measure == ANGLE)
+        lin = np.flatnonzero(sp.measure != ANGLE)
+        order = np.concatenate([lin, rot])
+        n = order.size
+        cells: list[tuple[int, np.ndarray | list[np.ndarray]]] = []
+        if lin.size:
+            cells.append((VTK_LINE, np.column_stack([2 * lin, 2 * lin + 1]).astype(np.int64)))
+        if rot.size:
+            cells.append((VTK_VERTEX, (2 * rot)[:, None].astype(np.int64)))
+        return VTUMesh(
+            x.reshape(-1, 3), cells,
+            cell_data={"block_id": np.full(n, BLOCK_SPRING, np.int32),
+                       "beam_id": np.full(n, -1, np.int32), "body_id": np.full(n, -1, np.int32),
+                       "spring_id": order.astype(np.int32), "spring_force": fo[order, 1],
+                       "spring_extension": fo[order, 0] - sp.l0[order]})
+
     def __call__(self, state: State, *, contacts: Sequence[dict] | None = None) -> VTUMesh:
         q = np.asarray(state.q)
         v = np.asarray(state.v)
@@ -179,6 +210,8 @@ class FrameBuilder:
         parts += [self.body_mesh(i, q, v) for i in range(len(self.bodies))]
         if contacts:
             parts.append(self.contact_mesh(contacts))
+        if self.asm.model.springs:
+            parts.append(self.spring_mesh(q, v))
         mesh = VTUMesh.merge(parts)
         t = np.array([float(state.t)])
         mesh.field_data = {"time": t, "TimeValue": t.copy()}

@@ -307,7 +307,8 @@ class OutputWriter:
                       "checkpoint": self.checkpoint_path.name if self.checkpoints else None},
             "vtu_blocks": {"block_id": {str(k): v for k, v in BLOCK_NAMES.items()},
                            "beam_id": [b.name for b in model.beams],
-                           "body_id": [b.name for b in model.bodies]},
+                           "body_id": [b.name for b in model.bodies],
+                           "spring_id": [s.name for s in model.springs]},
             "hole_sections": {j.name: j.hole_record() for j in model.interactions
                               if hasattr(j, "hole_record")},
             "metadata": self.metadata,

@@ -29,6 +29,7 @@ from .builders import (
     INTEGRATORS,
     JOINTS,
     LOADS,
+    SPRINGS,
     BuildContext,
     SimulationSettings,
     build_beam,
@@ -124,6 +125,8 @@ def build_scenario(raw: dict[str, Any], path: str | os.PathLike[str]) -> Scenari
         ctx.joints[t.raw["name"]] = build_entry(JOINTS, t, ctx)
     for t in root.tables("loads", need_name=False):
         build_entry(LOADS, t, ctx)
+    for t in root.tables("springs", need_name=False):
+        build_entry(SPRINGS, t, ctx)
     probes = [build_probe(t, ctx) for t in root.tables("probes", need_name=True)]
     if probes:
         from .probes import probe_columns

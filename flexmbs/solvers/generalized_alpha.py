@@ -151,11 +151,26 @@ class _AlphaStep:
 
 
 def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: float) -> State:
-    """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0)."""
+    """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0).
+
+    With prescribed motion or drivers moving at t0 (``Phi_t != 0``), v0 is first made
+    consistent, ``Phi_q v = -Phi_t``, by the smallest change in the kinetic-energy norm:
+    [M Phi_q^T; Phi_q 0][v; mu] = [M v0; -Phi_t] (a driven part starts at its function's speed).
+    """
     n, m = asm.n_coords, asm.n_mult
     r_q = np.zeros(n)
     r_lam = np.zeros(m)
     zeros_acc = np.zeros(n)
+    nu = asm.constraint_velocity_terms(q0, t0) if m else np.zeros(0)
+    if np.any(nu != 0.0) and np.all(np.isfinite(nu)):
+        import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
+
+        asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
+        A = asm.matrix.tocsc()
+        with contextlib.suppress(RuntimeError):
+            v_new = spla.splu(A).solve(np.concatenate([A[:n, :n] @ v0, nu]))[:n]
+            if np.all(np.isfinite(v_new)):
+                v0 = v_new
     asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
     rhs = np.concatenate([-r_q, asm.constraint_time_terms(q0, v0, t0)])
     bad = np.flatnonzero(~np.isfinite(rhs))

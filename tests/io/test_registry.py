@@ -9,7 +9,7 @@ import pytest
 
 from flexmbs.contact import laws, sections
 from flexmbs.errors import ModelError, ScenarioError
-from flexmbs.io.builders import CONSTRAINTS, ELEMENTS, JOINTS, LOADS, PROBES
+from flexmbs.io.builders import CONSTRAINTS, ELEMENTS, JOINTS, LOADS, PROBES, SPRINGS
 from flexmbs.io.scenario import load_scenario
 from flexmbs.registry import Registry
 
@@ -54,8 +54,9 @@ def test_the_registries_hold_the_documented_names() -> None:
     assert ELEMENTS.names()[0] == "ancf_cable"
     assert JOINTS.names() == ("sliding", "sliding_clearance")
     assert CONSTRAINTS.names() == ("clamp", "pin", "fix_body", "spherical", "revolute", "prismatic",
-                                   "rigid", "prescribed", "joint")
+                                   "rigid", "prescribed", "joint", "driver")
     assert LOADS.names() == ("point", "distributed")
+    assert SPRINGS.names() == ("translational", "rotational")
     assert set(PROBES) == {"beam_point", "body_position", "body_orientation", "body_point",
                            "energy", "slide_coordinate", "contact_force", "joint_reaction", "reaction"}
 

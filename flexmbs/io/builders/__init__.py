@@ -10,6 +10,7 @@ joint           :data:`JOINTS`       :mod:`.joints` (hole sections and contact l
                                      registries of :mod:`flexmbs.contact`)
 load            :data:`LOADS`        :mod:`.loads` (also time functions)
 probe           :data:`PROBES`       :mod:`.probes`
+spring          :data:`SPRINGS`      :mod:`.springs` (``[[springs]] type = ...``)
 ==============  ===================  ======================================================
 
 Rigid bodies (:mod:`.bodies`) and the ``[simulation]`` table (:mod:`.simulation`) have one form
@@ -24,7 +25,8 @@ from .joints import JOINTS
 from .loads import LOADS
 from .probes import PROBES, build_probe
 from .simulation import INTEGRATORS, SimulationSettings, read_simulation
+from .springs import SPRINGS
 
-__all__ = ["CONSTRAINTS", "ELEMENTS", "INTEGRATORS", "JOINTS", "LOADS", "PROBES", "Builder",
+__all__ = ["CONSTRAINTS", "ELEMENTS", "INTEGRATORS", "JOINTS", "LOADS", "PROBES", "SPRINGS", "Builder",
            "BuildContext", "SimulationSettings", "build_beam", "build_entry", "build_probe",
            "build_rigid_body", "read_simulation"]

@@ -176,3 +176,15 @@ def _joint(t: Table, ctx: BuildContext) -> Any:
     return ctx.model.joint(a, b, point=t.vector("point"), axis=_axis(t, None), frame=frame,
                            translation=masks["translation"], rotation=masks["rotation"],
                            name=t.raw.get("name"))
+
+
+@CONSTRAINTS.register("driver")
+def _driver(t: Table, ctx: BuildContext) -> Any:
+    """A motor: the rotation (revolute) or slide (prismatic) of ``joint`` follows ``function``."""
+    t.allow(_keys("joint", "motion", "function"))
+    joint = ctx.constraint(t, "joint")
+    motion = t.get("motion", None)
+    if motion is not None and motion not in ("rotation", "slide"):
+        raise t.fail("motion", '"rotation" or "slide"', motion)
+    fn = read_function(t, "function", Constant(0.0))
+    return ctx.model.add_driver(joint, fn, motion=motion, name=t.raw.get("name"))

@@ -50,6 +50,18 @@ class BuildContext:
             raise ScenarioError(f"{t.key(key)}: no beam named '{name}' (beams: {known})")
         return self.beams[name]
 
+    def constraint(self, t: Table, key: str = "joint") -> Any:
+        """The revolute, prismatic or generic joint of ``[[constraints]]`` named by ``t[key]``
+        (defined before this entry)."""
+        name = t.string(key)
+        joints = [c for c in self.model.constraints if c.frame_a is not None and c.kind != "driver"]
+        for c in joints:
+            if c.name == name:
+                return c
+        known = ", ".join(c.name for c in joints) or "none"
+        raise ScenarioError(f"{t.key(key)}: no joint named '{name}' among the [[constraints]] "
+                            f"before this entry (joints: {known})")
+
     def body(self, t: Table, key: str = "body") -> RigidBody:
         """The rigid body named by ``t[key]``."""
         name = t.string(key)
