@@ -170,13 +170,32 @@ def _one_line_warnings() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``flexmbs`` console script; returns the exit status. Ctrl-C at any
-    moment (also while the libraries load) is one line and exit 130."""
+    """The ``flexmbs`` command; returns the exit status. Ctrl-C at any moment (also while the
+    libraries load) is one line and exit 130."""
     try:
         return _main(argv)
     except KeyboardInterrupt:
         _error("interrupted")
         return EXIT_INTERRUPTED
+
+
+def console_main() -> None:
+    """Entry point of the ``flexmbs`` console script and of ``python -m flexmbs``: runs the
+    command, then leaves with its status. Once the command has returned its files are closed,
+    so a Ctrl-C arriving then is ignored rather than ending the process by SIGINT; after an
+    interrupt, a flag left set by a Ctrl-C that landed while a library was loading could end it
+    so as well: the process leaves at once with 130."""
+    import os
+    import signal
+
+    code = main()
+    with contextlib.suppress(ValueError):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if code == EXIT_INTERRUPTED:
+        os._exit(code)
+    sys.exit(code)
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -325,16 +344,22 @@ def _terminate_like_ctrl_c() -> Callable[[], None]:
     """SIGINT, SIGTERM and SIGHUP raise :class:`~flexmbs.errors.Interrupted` (a
     KeyboardInterrupt), so a terminated run finishes like Ctrl-C: frame, checkpoint,
     ``summary.json``. A signal that lands while numba runs Python code from C (loading or
-    compiling a kernel) would be swallowed there ("Exception ignored on calling ctypes
-    callback"): it is remembered and raised again at the next progress report, and the
-    swallowed copy is not printed. Returns the function that restores the previous handlers."""
+    compiling a kernel) is not raised there (an exception inside numba can leave its
+    libraries half built: a crash or a traceback later): it is remembered and raised at the
+    next progress report; a second signal raises at once. Returns the function that restores
+    the previous handlers."""
     import signal
 
     pending: list[str] = []
 
-    def handler(signum: int, _frame: Any) -> None:
+    def handler(signum: int, frame: Any) -> None:
         name = signal.Signals(signum).name
         pending.append(name)
+        if len(pending) == 1 and _inside_compiler(frame):
+            # numba is loading or compiling a kernel: an exception there can leave its
+            # libraries half built (a crash or a traceback later); the progress report of the
+            # next step raises it instead (a second signal raises at once)
+            return
         raise Interrupted("" if name == "SIGINT" else name)
 
     previous: dict[Any, Any] = {}
@@ -362,6 +387,16 @@ def _terminate_like_ctrl_c() -> Callable[[], None]:
 
 #: the signals received by the running command (see _terminate_like_ctrl_c)
 _PENDING: list[list[str]] = []
+
+
+def _inside_compiler(frame: Any) -> bool:
+    """Whether the interrupted Python code runs inside numba or llvmlite."""
+    while frame is not None:
+        module = frame.f_globals.get("__name__", "")
+        if module.startswith(("numba.", "llvmlite.")) or module in ("numba", "llvmlite"):
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _raise_pending() -> None:
