@@ -16,12 +16,17 @@ import numpy as np
 try:  # pragma: no cover - exercised implicitly
     if os.environ.get("FLEXMBS_DISABLE_JIT", "") == "1":
         raise ImportError
+    from numba import literal_unroll
     from numba import njit as _njit
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
     _njit = None  # type: ignore[assignment]
+
+    def literal_unroll(container: Any) -> Any:  # type: ignore[misc, no-redef]
+        """Identity without numba (numba's unrolls a loop over a heterogeneous tuple)."""
+        return container
 
 
 def package_stamp(root: str | os.PathLike[str]) -> str:
@@ -115,4 +120,4 @@ def _tolerate_stale_cache(dispatcher: Any) -> Any:
 #: ``np.int64(n)``) are typed like the values a Python caller passes.
 FLAG = np.array([False, True])
 
-__all__ = ["njit", "HAVE_NUMBA", "FLAG"]
+__all__ = ["njit", "literal_unroll", "HAVE_NUMBA", "FLAG"]

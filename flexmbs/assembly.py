@@ -34,9 +34,8 @@ from .constraints.joints import (
 from .constraints.linear import linear_pattern, pack_linear
 from .constraints.sliding import pack_sliding, sliding_pattern
 from .contact.joint import clearance_pattern, pack_clearance
-from .elements import ancf_cable as cable
 from .elements import rigid_body as rb
-from .elements.layout import ElementType
+from .elements.layout import ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
 from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_RESIDUAL, kernel
 from .loads import TimeFunction, pack_loads
@@ -51,20 +50,20 @@ class BeamGroup:
     """Beams sharing an element type and its options: one packed part, one kernel call."""
 
     element_type: ElementType
-    options: cable.CableOptions
+    options: Any                     # the element's options (CableOptions for the cable)
     beams: list[Beam]
-    part: cable.BeamPart
+    part: Any                        # the element's packed part (flexmbs.elements.group)
 
     @property
     def dofs(self) -> np.ndarray:
-        return self.part.dofs
+        return np.asarray(self.part.dofs)
 
     @property
-    def props(self) -> cable.CableProperties:
+    def props(self) -> Any:
         return self.part.props
 
     @property
-    def rest(self) -> cable.CableRest:
+    def rest(self) -> Any:
         return self.part.rest
 
     @property
@@ -174,6 +173,26 @@ class Assembly:
         k = lay.node_size
         return (o + k * conn[:, :, None] + np.arange(k)[None, None, :]).reshape(-1, lay.element_size)
 
+    def centerline_dofs(self, beam: Beam) -> np.ndarray:
+        """(n_elem, 12) coordinates of the Hermite centreline ``[r0, r0′, r1, r1′]`` of every
+        element (what the centreline interpolation reads, whatever the element)."""
+        return self.element_dofs(beam)[:, beam.layout.centerline]
+
+    def beam_rest(self, beam: Beam, elements: np.ndarray | None = None) -> tuple[ElementType, Any, Any]:
+        """(its element type, the rest data of the beam's ``elements`` (default all, in order)
+        taken from its group's, the group's options): what the element's ``output_fields``
+        reads."""
+        gi, sl = self.beam_slices[id(beam)]
+        grp = self.groups[gi]
+        idx = np.arange(sl.start, sl.stop) if elements is None else sl.start + np.asarray(elements)
+        n_grp = int(grp.dofs.shape[0])
+        shared = grp.element_type.shared_rest_fields
+        rest = grp.rest
+        sliced = {f: (v[idx] if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == n_grp
+                      and f not in shared else v)
+                  for f, v in rest._asdict().items()}
+        return grp.element_type, type(rest)(**sliced), grp.options
+
     def extra_dofs(self, owner: object) -> np.ndarray:
         return self._extra_dofs[id(owner)]
 
@@ -252,6 +271,13 @@ class Assembly:
                         lin_rhs.append(0.0)
                         lin_fun.append(None)
                         lin_labels.append(f"clamp '{spec.name}' ({node.name}) slope normal {j + 1}")
+                        lin_owner.append(spec.name)
+                    tw = node.beam.layout.twist
+                    if tw is not None:      # the section's turn about the tangent (§2.3)
+                        lin_rows.append((d[tw:tw + 1], np.ones(1)))
+                        lin_rhs.append(q0[d[tw]])
+                        lin_fun.append(None)
+                        lin_labels.append(f"clamp '{spec.name}' ({node.name}) twist")
                         lin_owner.append(spec.name)
             elif k == "prescribed":
                 tgt = spec.a
@@ -417,12 +443,17 @@ class Assembly:
                     lay = node.beam.layout
                     idx, vals = d[list(lay.position)], load.force.copy()
                     if load.moment is not None:
-                        # moment on a cable node: only the part normal to the tangent does work,
-                        # Q_slope = (T x t)/|r'| (FORMULATION §1.2)
+                        # moment on a node, in the reference configuration: the part normal to
+                        # the tangent works on the slope, Q_slope = (T x t)/|r'| (FORMULATION
+                        # §1.2); on a torsion-capable element the axial part on the twist,
+                        # Q_twist = T.t (§2.3)
                         t = self.q_ref[d[list(lay.slope)]]
                         nt = np.linalg.norm(t)
                         idx = np.concatenate([idx, d[list(lay.slope)]])
                         vals = np.concatenate([vals, np.cross(load.moment, t / nt) / nt])
+                        if lay.twist is not None:
+                            idx = np.append(idx, d[lay.twist])
+                            vals = np.append(vals, np.dot(load.moment, t / nt))
                 else:
                     e, xi = beam.locate(float(s))
                     dofs = self.element_dofs(beam)[e]
@@ -488,11 +519,18 @@ class Assembly:
             pos = np.array([self.positions(d, d).reshape(-1) for d in gdofs], np.int64)
             self.groups.append(BeamGroup(etype, opts, beams,
                                          etype.pack(gdofs, props, opts, self.q_ref, pos)))
-        parts = [g.part for g in self.groups]
-        if not parts:   # a homogeneous, non-empty tuple for the compiled driver
-            parts = [cable.pack_beams(np.zeros((0, cable.LAYOUT.element_size), np.int64),
-                                      cable.empty_properties(), cable.CableOptions(), self.q_ref,
-                                      np.zeros((0, cable.LAYOUT.element_size ** 2)))]
+        # every registered element type has at least one part (empty if the model has none of
+        # its elements), in registration order: models with one group per type share one
+        # compiled signature (one compilation, one cache entry for cables, rods, or both)
+        parts = []
+        for name in ELEMENT_TYPES:
+            et = ELEMENT_TYPES.get(name)
+            mine = [g.part for g in self.groups if g.element_type is et]
+            if not mine:
+                size = et.layout.element_size
+                mine = [et.pack(np.zeros((0, size), np.int64), et.section_properties([]),
+                                et.default_options, self.q_ref, np.zeros((0, size * size), np.int64))]
+            parts += mine
         norms = [nl.constraint for nl in self.nonlinear
                  if isinstance(nl.constraint, EulerParameterNormalization)]
         terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]

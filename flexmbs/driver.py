@@ -47,7 +47,7 @@ from .contact._detect import (
     clearance_post_step_all,
     clearance_residual,
 )
-from .elements.ancf_cable import beam_jacobian, beam_residual
+from .elements.group import groups_jacobian, groups_residual
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_residual
 from .springs import SpringPart, springs_jacobian, springs_residual
@@ -62,7 +62,7 @@ KIND_OF_ERROR = {ERR_LEFT_BORE: "clearance", ERR_END_OF_BEAM: "sliding"}
 class SystemPart(NamedTuple):
     n: int                           # coordinates
     m: int                           # multipliers
-    beams: tuple                     # BeamPart per element group (a homogeneous tuple)
+    beams: tuple                     # one part per element group (any element types)
     bodies: BodiesPart
     loads: LoadsPart
     linear: LinearPart
@@ -83,8 +83,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     for i in range(n, r.size):
         r[i] = 0.0
     scale = loads_residual(sy.loads, fv, mode, r)
-    for bm in sy.beams:
-        scale = max(scale, beam_residual(bm, q, v, qdd, mode, r))
+    scale = max(scale, groups_residual(sy.beams, q, v, qdd, mode, r))
     scale = max(scale, bodies_residual(sy.bodies, q, v, qdd, fv, mode, r))
     scale = max(scale, springs_residual(sy.springs, q, v, mode, r))
     linear_residual(sy.linear, n, q, lam, fv, mode, r)
@@ -103,8 +102,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     for i in range(data.size):
         data[i] = 0.0
     kscale = 0.0
-    for bm in sy.beams:
-        kscale = max(kscale, beam_jacobian(bm, q, v, mode, cM, cC, cK, data))
+    kscale = max(kscale, groups_jacobian(sy.beams, q, v, mode, cM, cC, cK, data))
     bodies_jacobian(sy.bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
     kscale = max(kscale, springs_jacobian(sy.springs, q, v, mode, cC, cK, data))
     linear_jacobian(sy.linear, data)

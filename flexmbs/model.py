@@ -117,14 +117,15 @@ class Beam:
     stress-free reference ``centerline``."""
 
     def __init__(self, name: str, centerline: Centerline, stiffness: BeamStiffness, *,
-                 options: CableOptions, damping: float, reference_axial_strain: float) -> None:
+                 options: CableOptions | None, damping: float, reference_axial_strain: float,
+                 element: str = "ancf_cable") -> None:
         self.name = name
         self.centerline = centerline
         self.stiffness = stiffness
         self.options = options
         self.damping = float(damping)
         self.reference_axial_strain = float(reference_axial_strain)
-        self.element = "ancf_cable"
+        self.element = element
 
     @property
     def element_type(self) -> ElementType:
@@ -344,15 +345,23 @@ class Model:
     def add_beam(self, centerline: Centerline, *, section: CircularSection | BeamStiffness,
                  material: Material | None = None, name: str | None = None,
                  options: CableOptions | None = None, damping: float = 0.0,
-                 reference_axial_strain: float = 0.0, elements: int | None = None) -> Beam:
-        """Add an ANCF cable on ``centerline`` (stress-free reference).
+                 reference_axial_strain: float = 0.0, elements: int | None = None,
+                 element: str = "ancf_cable") -> Beam:
+        """Add a beam of ``element``s on ``centerline`` (stress-free reference): the 12-DOF
+        ``"ancf_cable"`` (default) or the torsion-capable 14-DOF ``"ancf_rod14"``.
 
         ``section`` is a :class:`CircularSection` (with ``material``) or explicit
         :class:`BeamStiffness`. ``damping`` is stiffness-proportional [s]: axial and bending
         damping coefficients are ``damping*EA`` and ``damping*EI``. ``reference_axial_strain``
         eps0 gives the normal force ``N = EA (eps - eps0)`` (eps0 < 0: pretension).
-        ``elements`` resamples the centreline to that many equal elements.
+        ``elements`` resamples the centreline to that many equal elements. ``options``
+        (:class:`CableOptions`) are the cable's; the rod has none. The rod needs a torsional
+        stiffness (a :class:`CircularSection` with its material gives ``G J_p``).
         """
+        etype = get_element_type(element)
+        if options is not None and element != "ancf_cable":
+            raise ModelError(f"add_beam: options (CableOptions) belong to element 'ancf_cable'; "
+                             f"element {element!r} takes none")
         if not isinstance(centerline, Centerline):
             raise ModelError("add_beam: centerline must be a flexmbs Centerline (use fm.line, "
                              "fm.arc, fm.polyline or fm.read_curve)")
@@ -372,9 +381,15 @@ class Model:
             raise ModelError("add_beam: section must be CircularSection or BeamStiffness")
         if damping < 0:
             raise ModelError(f"add_beam: damping must be >= 0 (got {damping})")
+        if etype.layout.twist is not None and stiffness.torsional_stiffness is None:
+            raise ModelError(f"add_beam: element {element!r} carries torsion and needs a "
+                             "torsional stiffness: give BeamStiffness(torsional_stiffness=...) "
+                             "or a CircularSection with a Material")
+        if element == "ancf_cable":
+            options = options or CableOptions()
         beam = Beam(self._unique(name, "beam"), centerline, stiffness,
-                    options=options or CableOptions(), damping=damping,
-                    reference_axial_strain=reference_axial_strain)
+                    options=options, damping=damping,
+                    reference_axial_strain=reference_axial_strain, element=element)
         self.beams.append(beam)
         return beam
 
@@ -455,6 +470,11 @@ class Model:
     def rigid(self, node: Node, body: RigidBody | Ground, *, name: str | None = None) -> ConstraintSpec:
         """Rigid connection of a beam node (position and slope direction) to a body or ground."""
         self._check_node(node, "rigid")
+        if node.beam.layout.twist is not None:
+            raise ModelError(f"rigid: a rigid connection of a node of element "
+                             f"'{node.beam.element}' (beam '{node.beam.name}') that includes its "
+                             "twist is not available yet; clamp the node to ground (clamp) or "
+                             "join it by position only (spherical)")
         return self._add_constraint(ConstraintSpec("rigid", self._unique(name, "rigid"), node, body))
 
     def joint(self, a: RigidBody | Node, b: RigidBody | Node | Ground = GROUND, *, point: ArrayLike3,

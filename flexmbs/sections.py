@@ -56,13 +56,17 @@ class CircularSection:
 
 @dataclass(frozen=True, kw_only=True)
 class BeamStiffness:
-    """Beam section resultants given directly: EA [N], EI [N m^2], rho A [kg/m] (optional GJ, radius)."""
+    """Beam section resultants given directly: EA [N], EI [N m^2], rho A [kg/m]; optional GJ
+    [N m^2] and twist inertia rho J_p [kg m] (the torsion-capable rod's; default for the twist
+    inertia: rho A (2 EI)/EA, the polar radius of gyration of a section with I2 = I3 = EI/E),
+    and the radius of a circular section (contact, output)."""
 
     axial_stiffness: float
     bending_stiffness: float
     mass_per_length: float
     torsional_stiffness: float | None = None
     radius: float | None = None  # contact/output radius, if the section is circular
+    twist_inertia: float | None = None
 
     def __post_init__(self) -> None:
         for key in ("axial_stiffness", "bending_stiffness"):
@@ -76,6 +80,9 @@ class BeamStiffness:
             v = getattr(self, key)
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise ModelError(f"BeamStiffness: {key} must be a finite number > 0 (got {v!r})")
+        v = self.twist_inertia
+        if v is not None and not (math.isfinite(v) and v >= 0):
+            raise ModelError(f"BeamStiffness: twist_inertia must be a finite number >= 0 (got {v!r})")
 
     @classmethod
     def from_section(cls, section: CircularSection, material: Material) -> BeamStiffness:
@@ -85,4 +92,12 @@ class BeamStiffness:
             mass_per_length=material.rho * section.area,
             torsional_stiffness=material.G * section.polar_moment,
             radius=section.radius,
+            twist_inertia=material.rho * section.polar_moment,
         )
+
+    @property
+    def polar_mass_moment(self) -> float:
+        """rho J_p per length [kg m]: :attr:`twist_inertia`, or rho A (2 EI)/EA."""
+        if self.twist_inertia is not None:
+            return self.twist_inertia
+        return self.mass_per_length * 2.0 * self.bending_stiffness / self.axial_stiffness

@@ -61,7 +61,7 @@ class Result:
     def beam_point(self, beam: Beam, s: float, quantity: str = "position") -> np.ndarray:
         """Position, displacement or velocity history of the material point at arc length ``s``."""
         e, xi = beam.locate(s)
-        S, dofs = cable.centerline_interpolation(self.assembly.element_dofs(beam),
+        S, dofs = cable.centerline_interpolation(self.assembly.centerline_dofs(beam),
                                                  beam.centerline.lengths, np.array([e]),
                                                  np.array([xi]))
 
@@ -102,7 +102,7 @@ def beam_positions(asm: Assembly, beam: Beam, q: np.ndarray, s: np.ndarray) -> n
     lengths ``s`` (measured from the first node)."""
     s = np.atleast_1d(np.asarray(s, float))
     loc = [beam.locate(float(x)) for x in s]
-    return cable.centerline_points(q, asm.element_dofs(beam), beam.centerline.lengths,
+    return cable.centerline_points(q, asm.centerline_dofs(beam), beam.centerline.lengths,
                                    np.array([a for a, _ in loc]), np.array([b for _, b in loc]))
 
 

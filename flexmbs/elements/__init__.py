@@ -1,1 +1,3 @@
-"""flexmbs.elements."""
+"""flexmbs.elements: the element types (importing the package registers them all)."""
+
+from . import ancf_cable, ancf_rod  # noqa: F401

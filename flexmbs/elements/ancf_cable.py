@@ -22,7 +22,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 
 from .._jit import FLAG, njit
-from ..terms import WITH_DAMPING, WITH_INERTIA
+from .group import add_matrix, add_residual, gather_states
 from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
 __all__ = [
@@ -50,7 +50,7 @@ __all__ = [
 LAYOUT = ElementLayout(
     name="ancf_cable", node_coordinates=("x", "y", "z", "x'", "y'", "z'"), position=(0, 1, 2),
     slope=(3, 4, 5), nodes_per_element=2,
-    output_fields=("axial_strain", "curvature"))
+    output_fields=("axial_strain", "curvature"), vector_fields=("curvature",))
 
 
 #: coordinates of an element's Hermite centreline ``[r0, r0′, r1, r1′]``: what the sliding and
@@ -135,7 +135,6 @@ class CableRest(NamedTuple):
     rest_curvature: np.ndarray   #: (n_elem, n_b, 3) K_ref
     rest_curvature_norm: np.ndarray  #: (n_elem, n_b) |K_ref|_δ = sqrt(K_ref·K_ref + δ²)
     delta_sq: np.ndarray         #: (n_elem,) δ² with δ = 1e-8/L (A-scal regularisation)
-
 
 # ---------------------------------------------------------------------------------------------
 # shape functions and quadrature
@@ -716,21 +715,31 @@ def axial_strain_and_curvature(q_e: np.ndarray, rest: CableRest, options: CableO
     ``|r′| − |r′_ref|`` (Exudyn-compatible), i.e. the strain relative to the stress-free
     reference, without ε0; ``K = r′×r″/(|r′|² μ)`` (μ = 1 for Exudyn-compatible).
     """
+    eps, K, _ = centerline_strain_and_curvature(q_e, rest.q_ref, rest.length, xi,
+                                                options.exudyn_compatible)
+    return eps, K
+
+
+def centerline_strain_and_curvature(q_e: np.ndarray, q_ref: np.ndarray, length: np.ndarray,
+                                    xi: np.ndarray, exudyn_compatible: bool = False
+                                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`axial_strain_and_curvature` of Hermite centrelines ``q_e`` (n_elem, 12) on the
+    reference ``q_ref`` (n_elem, 12), with the reference metric μ = |r′_ref| (n_elem, m)."""
     q_e = np.asarray(q_e, dtype=float)
     xi = np.atleast_1d(np.asarray(xi, dtype=float))
-    _, dS, ddS = shape_functions(xi[None, :], rest.length[:, None])
+    _, dS, ddS = shape_functions(xi[None, :], np.asarray(length, dtype=float)[:, None])
     a = _interp(dS, q_e)
     b = _interp(ddS, q_e)
     la = np.linalg.norm(a, axis=-1)
-    mu_ref = np.linalg.norm(_interp(dS, rest.q_ref), axis=-1)
-    if options.exudyn_compatible:
+    mu_ref = np.linalg.norm(_interp(dS, np.asarray(q_ref, dtype=float)), axis=-1)
+    if exudyn_compatible:
         eps = la - mu_ref
         metric = np.ones_like(mu_ref)
     else:
         eps = la / mu_ref - 1.0
         metric = mu_ref
     K = np.cross(a, b) / (la * la * metric)[..., None]
-    return eps, K
+    return eps, K, mu_ref
 
 
 # ---------------------------------------------------------------------------------------------
@@ -773,60 +782,24 @@ def _empty_rest() -> CableRest:
                      np.zeros((0, 1, 3)), z2, z1)
 
 
-def empty_properties() -> CableProperties:
-    return CableProperties(*(np.zeros(0) for _ in CableProperties._fields))
-
-
-@njit(inline="always")
-def _gather(bm, q, v, mode):  # noqa: ANN001, ANN202
-    damping = mode[WITH_DAMPING] != 0.0
-    for e in range(bm.dofs.shape[0]):
-        for k in range(12):
-            bm.qe[e, k] = q[bm.dofs[e, k]]
-            bm.ve[e, k] = v[bm.dofs[e, k]] if damping else 0.0
-
-
 @njit
 def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r_q += Q_int(q, q̇) (+ M q̈ with inertia)`` of the elements (FORMULATION I §1.2, §1.4);
     returns the largest single force (an element force entry or a row of M q̈)."""
-    _gather(bm, q, v, mode)
+    gather_states(bm, q, v, mode)
     _internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[0], FLAG[0], bm.force,
                      bm.empty, bm.empty)
-    inertia = mode[WITH_INERTIA] != 0.0
-    scale = 0.0
-    for e in range(bm.dofs.shape[0]):
-        for i in range(12):
-            s = bm.force[e, i]
-            if abs(s) > scale:
-                scale = abs(s)
-            if inertia:
-                acc = 0.0
-                for j in range(12):
-                    acc += bm.mass[e, i, j] * qdd[bm.dofs[e, j]]
-                if abs(acc) > scale:
-                    scale = abs(acc)
-                s += acc
-            r[bm.dofs[e, i]] += s
-    return scale
+    return add_residual(bm, qdd, mode, r)
 
 
 @njit
 def beam_jacobian(bm, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into the CSC ``data``; returns the largest
     diagonal stiffness entry (the scale of the rounding floor of the convergence test)."""
-    _gather(bm, q, v, mode)
+    gather_states(bm, q, v, mode)
     _internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[1], FLAG[1], bm.force,
                      bm.stiff, bm.damp)
-    kscale = 0.0
-    for e in range(bm.dofs.shape[0]):
-        for i in range(12):
-            if abs(bm.stiff[e, i, i]) > kscale:
-                kscale = abs(bm.stiff[e, i, i])
-            for j in range(12):
-                data[bm.pos[e, 12 * i + j]] += (cK * bm.stiff[e, i, j] + cC * bm.damp[e, i, j]
-                                                + cM * bm.mass[e, i, j])
-    return kscale
+    return add_matrix(bm, cM, cC, cK, data)
 
 
 def section_properties(beams: list) -> CableProperties:
@@ -853,4 +826,6 @@ ELEMENT_TYPES.register("ancf_cable", ElementType(
     layout=LAYOUT, section_properties=section_properties,
     reference_nodal_coordinates=reference_nodal_coordinates, gravity_force=gravity_force,
     distributed_force=distributed_force, point_force=point_force_vector, pack=pack_beams,
-    strain_energy=strain_energy, output_fields=output_fields))
+    strain_energy=strain_energy, output_fields=output_fields, part_type=BeamPart,
+    residual=beam_residual, jacobian=beam_jacobian, default_options=CableOptions(),
+    shared_rest_fields=("axial_xi", "bending_xi")))

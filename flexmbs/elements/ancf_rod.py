@@ -1,13 +1,9 @@
 """Element B: the 14-DOF ANCF Kirchhoff rod with a nodal twist angle (FORMULATION Part I §2).
 
-Part 1 of the element (issue "torsion rod"): coordinates, nodal triads, the interpolated material
-frame, the strain measures and the strain energy, compiled. Not yet registered as an element type:
-forces, tangent, mass, loads and the connections to the assembler follow.
-
 Per node ``[r (3), g = r′ (3), φ (1)]``; the centreline is the cable's cubic Hermite
 (:func:`flexmbs.elements.ancf_cable.hermite_basis`, the one statement of the basis). Each node has
 a fixed base ``(t̄_i, D̄_i)`` from the reference (unit tangent, a unit vector ⟂ it, by parallel
-transport along the reference nodes); its triad is
+transport along the beam's nodes, §4.6); its triad is
 
     t_i = g_i/|g_i|,   d2_i = Rot(t_i, φ_i) SR(t̄_i → t_i) D̄_i,   d3_i = t_i × d2_i
 
@@ -18,199 +14,740 @@ with the smallest rotation SR and the rotation Rot of §2.1. At ξ = x/L of an e
     d2(x) = Rot(t, ξΔθ) SR(t_0 → t) d2_0,   d3 = t × d2,
     ε = |r′|/μ − 1,  K = (r′ × r″)/(|r′|² μ),  K2 = K·d2,  K3 = K·d3,
     τ_SR = −t_0·(t × t_x)/(1 + t_0·t),   K1 = (Δθ/L + τ_SR)/μ,
-    U_e = ∫₀ᴸ ½ [EA ε² + GJ (K1 − K1⁰)² + EI2 (K2 − K2⁰)² + EI3 (K3 − K3⁰)²] μ dx
+    U_e = ∫₀ᴸ ½ [EA (ε − ε0)² + GJ (K1 − K1⁰)² + EI2 (K2 − K2⁰)² + EI3 (K3 − K3⁰)²] μ dx
 
-(μ = |r′| of the reference, the superscript 0 the same measures in the reference with φ = 0),
-5 Gauss points (§2.5). Every interior quantity comes from the current nodal triads through
-SR(t_0 → ·), which is equivariant, so U is objective; U(q_ref) = 0 for any reference.
+(μ = |r′| of the reference, the superscript 0 the same measures in the reference with φ = 0, ε0
+the reference axial strain), the curvatures at 5 Gauss points (§2.5), the axial strain at 3
+Lobatto points (0, ½, 1; free of membrane locking like the cable's default, §1.5). Every
+interior quantity comes from the current nodal triads through SR(t_0 → ·), which is
+equivariant, so U is objective; U(q_ref) = 0 for any reference.
+
+**Derivatives.** The four maps the energy is made of — a node's ``(g, φ) → (t, d2)``, the
+triads ``→ Δθ``, a point's ``(r′, r″, t_0, d2_0, Δθ) → (K1, K2, K3)`` and ``r′ → ε`` — are
+differentiated exactly (first and second derivatives) by sympy in ``tools/rod_derivatives.py``,
+which writes :mod:`flexmbs.elements._rod_derivatives`; :func:`_rod_kernel` composes them by the
+chain rule (§2.3, "hand-derived chain rules"). The generated module is the one statement of
+the maps: energy, forces, tangent, reference measures and output all call it.
+
+**Damping** is strain-rate (stiffness-proportional) damping with coefficient β:
+each generalized stress is ``C_j (e_j − e_j⁰ + β ė_j)`` (as the cable's ``d_ε = β EA``).
+
+**Mass** (§2.3): the cable's constant translational mass on (r, g) and the constant twist
+inertia ``ρJ_p L/6 [[2, 1], [1, 2]]`` on the two φ.
 """
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import FLAG, njit
+from ..errors import ModelError
+from . import ancf_cable as cable
+from ._rod_derivatives import (
+    axial,
+    axial_h,
+    curvatures,
+    curvatures_h,
+    triad,
+    triad_h,
+    twist,
+    twist_h,
+)
 from .ancf_cable import hermite_basis
-from .layout import ElementLayout
+from .group import add_matrix, add_residual, gather_states
+from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
-__all__ = ["LAYOUT", "RodProperties", "RodRest", "base_frames", "nodal_director", "rest_state",
-           "rotate_about", "smallest_rotation", "strain_energy", "strain_measures"]
+__all__ = ["LAYOUT", "RodProperties", "RodRest", "RodPart", "base_frames", "internal_forces",
+           "mass_matrix", "nodal_triads", "rest_state", "strain_energy", "strain_measures",
+           "output_fields"]
 
 LAYOUT = ElementLayout(name="ancf_rod14",
-                       node_coordinates=("x", "y", "z", "dx", "dy", "dz", "twist"),
-                       position=(0, 1, 2), slope=(3, 4, 5),
-                       output_fields=("axial_strain", "torsion", "curvature"))
+                       node_coordinates=("x", "y", "z", "x'", "y'", "z'", "twist"),
+                       position=(0, 1, 2), slope=(3, 4, 5), twist=6,
+                       output_fields=("axial_strain", "curvature", "twist", "torsion",
+                                      "torsional_moment"),
+                       vector_fields=("curvature",))
 NODE_SIZE = LAYOUT.node_size
-TWIST = LAYOUT.node_coordinates.index("twist")    #: nodal index of the twist angle φ
-N_GAUSS = 5                #: quadrature points of every term (§2.5, as verified)
+ELEMENT_SIZE = LAYOUT.element_size
+TWIST: int = LAYOUT.twist if LAYOUT.twist is not None else -1   #: nodal index of the twist φ
+N_GAUSS = 5                #: Gauss points of the curvatures (§2.5, as verified)
+N_STRAIN = 4               #: ε, K1, K2, K3
+N_Z = 13                   #: inputs of the Gauss-point map: r′, r″, t_0, d2_0, Δθ
+N_N = 7                    #: the nodal part of them: t_0, d2_0, Δθ
+N_U = 8                    #: their element inputs: g_0, φ_0, g_1, φ_1
+#: element coordinates of the centreline [r0, g0, r1, g1] and of the nodal inputs [g0, φ0, g1, φ1]
+CENTERLINE = LAYOUT.centerline
+U_COLS = np.array([a * NODE_SIZE + i for a in range(2) for i in (*LAYOUT.slope, TWIST)], np.int64)
 
 
 class RodProperties(NamedTuple):
-    """Per element: length L, EA, GJ, EI2 (about d2), EI3 (about d3)."""
+    """Section resultants per element; every field has shape ``(n_elem,)``."""
 
-    length: np.ndarray
-    EA: np.ndarray
-    GJ: np.ndarray
-    EI2: np.ndarray
-    EI3: np.ndarray
+    length: np.ndarray                  #: L [m]
+    EA: np.ndarray                      #: axial stiffness [N]
+    GJ: np.ndarray                      #: torsional stiffness [N m²]
+    EI2: np.ndarray                     #: bending stiffness about d2 [N m²]
+    EI3: np.ndarray                     #: bending stiffness about d3 [N m²]
+    mass_per_length: np.ndarray         #: ρA [kg/m]
+    twist_inertia: np.ndarray           #: ρJ_p [kg m]
+    damping: np.ndarray                 #: β [s]: stresses C (e − e⁰ + β ė)
+    reference_axial_strain: np.ndarray  #: ε0 (< 0: pretension)
 
 
 class RodRest(NamedTuple):
     """The fixed nodal bases of every element's two nodes and the reference measures at the
-    Gauss points."""
+    quadrature points: the curvatures at 5 Gauss points, the axial strain at 3 Lobatto points
+    (0, ½, 1: free of membrane locking, as the cable's default, FORMULATION I §1.5, §2.5)."""
 
-    t_bar: np.ndarray      # (n_elem, 2, 3)
-    d_bar: np.ndarray      # (n_elem, 2, 3)
-    xi: np.ndarray         # (N_GAUSS,) on [0, 1]
-    w: np.ndarray          # (N_GAUSS,) weights, sum 1
-    mu: np.ndarray         # (n_elem, N_GAUSS) |r′| of the reference
-    k0: np.ndarray         # (n_elem, N_GAUSS, 3) K1⁰, K2⁰, K3⁰
+    t_bar: np.ndarray          # (n_elem, 2, 3)
+    d_bar: np.ndarray          # (n_elem, 2, 3)
+    gauss_xi: np.ndarray       # (N_GAUSS,) on [0, 1]
+    gauss_weight: np.ndarray   # (N_GAUSS,) weights, sum 1
+    gauss_mu: np.ndarray       # (n_elem, N_GAUSS) |r′| of the reference
+    k0: np.ndarray             # (n_elem, N_GAUSS, 3) K1⁰, K2⁰, K3⁰
+    axial_xi: np.ndarray       # (N_AXIAL,)
+    axial_weight: np.ndarray   # (N_AXIAL,)
+    axial_mu: np.ndarray       # (n_elem, N_AXIAL)
+    eps0: np.ndarray           # (n_elem, 1) reference axial strain ε0
+    length: np.ndarray         # (n_elem,) L
+    q_ref: np.ndarray          # (n_elem, 14) the reference, φ = 0
+    stiffness: np.ndarray      # (n_elem, 4) EA, GJ, EI2, EI3 (for output)
+
+
+class RodWork(NamedTuple):
+    """Scratch arrays of :func:`_rod_kernel` (zeroed once: the generated maps write the same
+    nonzero entries every call)."""
+
+    x_node: np.ndarray    # (4,)
+    p_node: np.ndarray    # (6,)
+    t_val: np.ndarray     # (2, 6) t_a, d2_a
+    t_jac: np.ndarray     # (2, 6, 4)
+    t_hes: np.ndarray     # (2, 6, 4, 4)
+    x_tw: np.ndarray      # (12,)
+    p_none: np.ndarray    # (0,)
+    w_val: np.ndarray     # (1,)
+    w_jac: np.ndarray     # (1, 12)
+    w_hes: np.ndarray     # (1, 12, 12)
+    n_jac: np.ndarray     # (N_N, N_U) ∂(t0, d20, Δθ)/∂u
+    n_hes: np.ndarray     # (N_N, N_U, N_U)
+    n_hv: np.ndarray      # (N_N, N_U) n_hes · u̇
+    x_z: np.ndarray       # (N_Z,) r′, r″, t0, d20, Δθ at a point
+    p_c: np.ndarray       # (3,) ξ, L, μ
+    p_a: np.ndarray       # (1,) μ
+    c_val: np.ndarray     # (3,) K1, K2, K3
+    c_jac: np.ndarray     # (3, N_Z)
+    c_hes: np.ndarray     # (3, N_Z, N_Z)
+    a_val: np.ndarray     # (1,) ε
+    a_jac: np.ndarray     # (1, 3)
+    a_hes: np.ndarray     # (1, 3, 3)
+    z_q: np.ndarray       # (N_Z, 14) ∂z/∂q
+    e_q: np.ndarray       # (3, 14) ∂e/∂q
+    sig: np.ndarray       # (3,) generalized stresses
+    s_zz: np.ndarray      # (N_Z, N_Z) Σ σ_j ∂²e_j/∂z²
+    s_zq: np.ndarray      # (N_Z, 14)
+    z_v: np.ndarray       # (N_Z,) ∂z/∂q · q̇
+    h_q: np.ndarray       # (3, 14) ∂²e_j/∂q² · q̇
+    g_n: np.ndarray       # (N_N,) Σ_points W σ_j ∂e_j/∂n
+    hz: np.ndarray        # (N_Z,)
+    c_coef: np.ndarray    # (3,) GJ, EI2, EI3 of the element
+    a_coef: np.ndarray    # (1,) EA
+
+
+def new_work() -> RodWork:
+    z = np.zeros
+    n = ELEMENT_SIZE
+    return RodWork(z(4), z(6), z((2, 6)), z((2, 6, 4)), z((2, 6, 4, 4)), z(12), z(0), z(1),
+                   z((1, 12)), z((1, 12, 12)), z((N_N, N_U)), z((N_N, N_U, N_U)), z((N_N, N_U)),
+                   z(N_Z), z(3), z(1), z(3), z((3, N_Z)), z((3, N_Z, N_Z)), z(1), z((1, 3)),
+                   z((1, 3, 3)), z((N_Z, n)), z((3, n)), z(3), z((N_Z, N_Z)), z((N_Z, n)), z(N_Z),
+                   z((3, n)), z(N_N), z(N_Z), z(3), z(1))
 
 
 # ---------------------------------------------------------------------------------------------
-# rotations (§2.1)
-@njit(inline="always")
-def _dot(a, b):  # noqa: ANN001, ANN202
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(inline="always")
-def _cross(a, b):  # noqa: ANN001, ANN202
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
-
-
+# the nodal maps and the strain measures (values; FORMULATION I §2.1–2.2)
 @njit
-def smallest_rotation(a, b, v):  # noqa: ANN001, ANN201
-    """``SR(a → b) v = (a·b) v + (a×b)×v + ((a×b)·v)/(1 + a·b) (a×b)`` for unit a, b (§2.1;
-    singular only at b = −a)."""
-    c = _dot(a, b)
-    k = _cross(a, b)
-    kv = _cross(k, v)
-    f = _dot(k, v) / (1.0 + c)
-    return c * v + kv + f * k
-
-
-@njit
-def rotate_about(t, phi, v):  # noqa: ANN001, ANN201
-    """``Rot(t, φ) v = v cos φ + (t×v) sin φ + t (t·v)(1 − cos φ)`` for unit t (§2.1)."""
-    c = math.cos(phi)
-    s = math.sin(phi)
-    tv = _cross(t, v)
-    return c * v + s * tv + (_dot(t, v) * (1.0 - c)) * t
-
-
-@njit
-def nodal_director(g, phi, t_bar, d_bar):  # noqa: ANN001, ANN201
-    """``(t_i, d2_i)`` of a node from its slope g, twist φ and base (t̄, D̄) (§2.1)."""
-    t = g / math.sqrt(_dot(g, g))
-    return t, rotate_about(t, phi, smallest_rotation(t_bar, t, d_bar))
-
-
-# ---------------------------------------------------------------------------------------------
-# strain measures and energy (§2.2)
-@njit
-def strain_measures(q_e, L, t_bar, d_bar, xi):  # noqa: ANN001, ANN201
-    """``(|r′|, c1, c2, c3)`` at ξ of one element ``q_e (14,)``: K1 μ = c1 = Δθ/L + τ_SR,
-    K2 μ = c2 = (r′×r″)·d2/|r′|², K3 μ = c3 = (r′×r″)·d3/|r′|² (module docstring; the caller
-    divides by μ)."""
-    n = NODE_SIZE
-    g0 = q_e[3:6]
-    g1 = q_e[n + 3:n + 6]
-    t0, d20 = nodal_director(g0, q_e[TWIST], t_bar[0], d_bar[0])
-    t1, d21 = nodal_director(g1, q_e[n + TWIST], t_bar[1], d_bar[1])
-    dhat = smallest_rotation(t0, t1, d20)
-    y = _dot(_cross(dhat, d21), t1)
-    dtheta = 2.0 * math.atan(y / (1.0 + _dot(dhat, d21)))
-    _, dS, ddS, _ = hermite_basis(xi, L)
-    rp = np.zeros(3)
-    rpp = np.zeros(3)
-    for k in range(4):               # [r0, g0, r1, g1] of the 14 coordinates
-        o = (k // 2) * n + 3 * (k % 2)
+def _nodal(q_e, t_bar, d_bar, w, hessian):  # noqa: ANN001, ANN202
+    """Both nodal triads and Δθ of one element, with ``n_jac`` (and ``n_hes``): the derivatives
+    of n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1)."""
+    for a in range(2):
+        o = a * NODE_SIZE
         for c in range(3):
-            rp[c] += dS[k] * q_e[o + c] / L
-            rpp[c] += ddS[k] * q_e[o + c] / (L * L)
-    nrp = math.sqrt(_dot(rp, rp))
-    t = rp / nrp
-    tx = (rpp - _dot(t, rpp) * t) / nrp
-    d2 = rotate_about(t, xi * dtheta, smallest_rotation(t0, t, d20))
-    d3 = _cross(t, d2)
-    kappa = _cross(rp, rpp)
-    tau_sr = -_dot(t0, _cross(t, tx)) / (1.0 + _dot(t0, t))
-    inv = 1.0 / (nrp * nrp)
-    return nrp, dtheta / L + tau_sr, _dot(kappa, d2) * inv, _dot(kappa, d3) * inv
+            w.x_node[c] = q_e[o + 3 + c]
+            w.p_node[c] = t_bar[a, c]
+            w.p_node[3 + c] = d_bar[a, c]
+        w.x_node[3] = q_e[o + TWIST]
+        if hessian:
+            triad_h(w.x_node, w.p_node, w.t_val[a], w.t_jac[a], w.t_hes[a])
+        else:
+            triad(w.x_node, w.p_node, w.t_val[a], w.t_jac[a])
+        for c in range(6):
+            w.x_tw[6 * a + c] = w.t_val[a, c]
+    if hessian:
+        twist_h(w.x_tw, w.p_none, w.w_val, w.w_jac, w.w_hes)
+    else:
+        twist(w.x_tw, w.p_none, w.w_val, w.w_jac)
+    nj = w.n_jac
+    for c in range(6):
+        for k in range(4):
+            nj[c, k] = w.t_jac[0, c, k]
+            nj[c, 4 + k] = 0.0
+    for a in range(2):
+        for k in range(4):
+            s = 0.0
+            for c in range(6):
+                s += w.w_jac[0, 6 * a + c] * w.t_jac[a, c, k]
+            nj[6, 4 * a + k] = s
+    if not hessian:
+        return
+    nh = w.n_hes
+    for c in range(6):
+        for k in range(N_U):
+            for m in range(N_U):
+                nh[c, k, m] = w.t_hes[0, c, k, m] if (k < 4 and m < 4) else 0.0
+    for a in range(2):
+        for b in range(2):
+            for k in range(4):
+                for m in range(4):
+                    s = 0.0
+                    for c in range(6):
+                        jc = w.t_jac[a, c, k]
+                        if jc != 0.0:
+                            for d in range(6):
+                                s += jc * w.w_hes[0, 6 * a + c, 6 * b + d] * w.t_jac[b, d, m]
+                    if a == b:
+                        for c in range(6):
+                            s += w.w_jac[0, 6 * a + c] * w.t_hes[a, c, k, m]
+                    nh[6, 4 * a + k, 4 * b + m] = s
 
 
 @njit
-def _element_energy(q_e, props, rest, e):  # noqa: ANN001, ANN202
-    L = props.length[e]
-    total = 0.0
-    for k in range(rest.xi.size):
-        nrp, c1, c2, c3 = strain_measures(q_e, L, rest.t_bar[e], rest.d_bar[e], rest.xi[k])
-        mu = rest.mu[e, k]
-        eps = nrp / mu - 1.0
-        k1 = c1 / mu - rest.k0[e, k, 0]
-        k2 = c2 / mu - rest.k0[e, k, 1]
-        k3 = c3 / mu - rest.k0[e, k, 2]
-        dens = (props.EA[e] * eps * eps + props.GJ[e] * k1 * k1 + props.EI2[e] * k2 * k2
-                + props.EI3[e] * k3 * k3)
-        total += 0.5 * dens * mu * rest.w[k] * L
-    return total
+def _centerline_rows(q_e, L, xi, w):  # noqa: ANN001, ANN202
+    """``z_q`` rows of r′ and r″ at ξ (the others zero) and their values into ``x_z``."""
+    _, dS, ddS, _ = hermite_basis(xi, L)
+    zq = w.z_q
+    for i in range(N_Z):
+        for j in range(ELEMENT_SIZE):
+            zq[i, j] = 0.0
+    for c in range(3):
+        a = 0.0
+        b = 0.0
+        for m in range(4):
+            col = CENTERLINE[3 * m + c]
+            zq[c, col] = dS[m] / L
+            zq[3 + c, col] = ddS[m] / (L * L)
+            a += zq[c, col] * q_e[col]
+            b += zq[3 + c, col] * q_e[col]
+        w.x_z[c] = a
+        w.x_z[3 + c] = b
 
 
 @njit
-def _energies(q_e, props, rest, out):  # noqa: ANN001, ANN202
+def _curvature_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
+    """(K1, K2, K3) at ξ (after :func:`_nodal`) into ``c_val``, with ``c_jac`` (and ``c_hes``)
+    with respect to z = (r′, r″, t_0, d2_0, Δθ), and ``z_q = ∂z/∂q``."""
+    _centerline_rows(q_e, L, xi, w)
+    for c in range(3):
+        w.x_z[6 + c] = w.t_val[0, c]
+        w.x_z[9 + c] = w.t_val[0, 3 + c]
+    w.x_z[12] = w.w_val[0]
+    for c in range(N_N):
+        for k in range(N_U):
+            w.z_q[6 + c, U_COLS[k]] = w.n_jac[c, k]
+    w.p_c[0] = xi
+    w.p_c[1] = L
+    w.p_c[2] = mu
+    if hessian:
+        curvatures_h(w.x_z, w.p_c, w.c_val, w.c_jac, w.c_hes)
+    else:
+        curvatures(w.x_z, w.p_c, w.c_val, w.c_jac)
+
+
+@njit
+def _axial_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
+    """ε at ξ into ``a_val``, with ``a_jac`` (and ``a_hes``) with respect to r′ (the first three
+    rows of ``z_q``)."""
+    _centerline_rows(q_e, L, xi, w)
+    w.p_a[0] = mu
+    if hessian:
+        axial_h(w.x_z, w.p_a, w.a_val, w.a_jac, w.a_hes)
+    else:
+        axial(w.x_z, w.p_a, w.a_val, w.a_jac)
+
+
+@njit
+def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):  # noqa: ANN001, ANN202
+    """(ε, K1, K2, K3) at the points ``xi`` of one element into ``out`` (len(xi), 4); μ per point."""
+    _nodal(q_e, t_bar, d_bar, w, False)
+    for k in range(xi.size):
+        _axial_point(q_e, L, xi[k], mu[k], w, False)
+        out[k, 0] = w.a_val[0]
+        _curvature_point(q_e, L, xi[k], mu[k], w, False)
+        for j in range(3):
+            out[k, 1 + j] = w.c_val[j]
+
+
+@njit
+def _energies(q_e, props, rest, work, out):  # noqa: ANN001, ANN202
     for e in range(q_e.shape[0]):
-        out[e] = _element_energy(q_e[e], props, rest, e)
+        L = props.length[e]
+        _nodal(q_e[e], rest.t_bar[e], rest.d_bar[e], work, False)
+        total = 0.0
+        for k in range(rest.axial_xi.size):
+            mu = rest.axial_mu[e, k]
+            _axial_point(q_e[e], L, rest.axial_xi[k], mu, work, False)
+            d = work.a_val[0] - rest.eps0[e, 0]
+            total += 0.5 * props.EA[e] * d * d * mu * rest.axial_weight[k] * L
+        C = (props.GJ[e], props.EI2[e], props.EI3[e])
+        for k in range(rest.gauss_xi.size):
+            mu = rest.gauss_mu[e, k]
+            _curvature_point(q_e[e], L, rest.gauss_xi[k], mu, work, False)
+            dens = 0.0
+            for j in range(3):
+                d = work.c_val[j] - rest.k0[e, k, j]
+                dens += C[j] * d * d
+            total += 0.5 * dens * mu * rest.gauss_weight[k] * L
+        out[e] = total
 
 
 def strain_energy(q_e: np.ndarray, props: RodProperties, rest: RodRest) -> np.ndarray:
-    """Strain energy of every element, ``q_e (n_elem, 14)``."""
+    """Strain energy of every element ``q_e (n_elem, 14)`` (module docstring); (n_elem,)."""
     q = np.ascontiguousarray(q_e, dtype=float)
     out = np.empty(q.shape[0])
-    _energies(q, props, rest, out)
+    _energies(q, props, rest, new_work(), out)
+    return out
+
+
+def strain_measures(q_e: np.ndarray, t_bar: np.ndarray, d_bar: np.ndarray, length: np.ndarray,
+                    xi: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """(ε, K1, K2, K3) of every element ``q_e (n_elem, 14)`` with nodal bases ``t_bar, d_bar
+    (n_elem, 2, 3)`` at the points ``xi (m,)`` with the reference metric ``mu (n_elem, m)``:
+    (n_elem, m, 4)."""
+    q = np.ascontiguousarray(q_e, dtype=float)
+    xi = np.ascontiguousarray(xi, dtype=float)
+    out = np.empty((q.shape[0], xi.size, N_STRAIN))
+    w = new_work()
+    for e in range(q.shape[0]):
+        _strains_at(q[e], float(length[e]), t_bar[e], d_bar[e], xi,
+                    np.ascontiguousarray(mu[e], dtype=float), w, out[e])
     return out
 
 
 # ---------------------------------------------------------------------------------------------
+# internal force and its exact derivatives (FORMULATION I §2.3)
+@njit
+def _accumulate(val, jac, hes, n_z, coef, ref, W, beta, ve, w, nodal, want_k, want_c,  # noqa: ANN001, ANN202, C901, PLR0912
+                force, stiff, damp):
+    """Add one quadrature point's terms of the strains ``val`` (with their derivatives ``jac``,
+    ``hes`` with respect to the first ``n_z`` inputs z, and ``z_q = ∂z/∂q``):
+
+        σ_j = C_j (e_j − e_j⁰ + β ė_j),   Q += W Σ_j σ_j ∂e_j/∂q,
+        ∂Q/∂q += W Σ_j [C_j ∂e_j/∂q ∂e_j/∂qᵀ + σ_j z_qᵀ ∂²e_j/∂z² z_q + β C_j ∂e_j/∂q (∂²e_j/∂q² q̇)ᵀ],
+        ∂Q/∂q̇ += W Σ_j β C_j ∂e_j/∂q ∂e_j/∂qᵀ;
+
+    with ``nodal`` (z includes n = (t_0, d2_0, Δθ)) it sums W σ_j ∂e_j/∂n into ``g_n`` for the
+    term Σ_c g_n,c ∂²n_c/∂u² the element adds once."""
+    ne = ELEMENT_SIZE
+    ns = val.size
+    zq = w.z_q
+    eq = w.e_q
+    rated = beta != 0.0
+    for j in range(ns):
+        for i in range(ne):
+            s = 0.0
+            for a in range(n_z):
+                s += jac[j, a] * zq[a, i]
+            eq[j, i] = s
+        rate = 0.0
+        if rated:
+            for i in range(ne):
+                rate += eq[j, i] * ve[i]
+        w.sig[j] = coef[j] * (val[j] - ref[j] + beta * rate)
+        for i in range(ne):
+            force[i] += W * w.sig[j] * eq[j, i]
+    if want_k:
+        for a in range(n_z):
+            for b in range(n_z):
+                s = 0.0
+                for j in range(ns):
+                    s += w.sig[j] * hes[j, a, b]
+                w.s_zz[a, b] = s
+        for a in range(n_z):
+            for i in range(ne):
+                s = 0.0
+                for b in range(n_z):
+                    if w.s_zz[a, b] != 0.0:
+                        s += w.s_zz[a, b] * zq[b, i]
+                w.s_zq[a, i] = s
+        for i in range(ne):
+            for m in range(ne):
+                s = 0.0
+                for a in range(n_z):
+                    if zq[a, i] != 0.0:
+                        s += zq[a, i] * w.s_zq[a, m]
+                for j in range(ns):
+                    s += coef[j] * eq[j, i] * eq[j, m]
+                stiff[i, m] += W * s
+        if nodal:
+            for c in range(N_N):
+                s = 0.0
+                for j in range(ns):
+                    s += w.sig[j] * jac[j, 6 + c]
+                w.g_n[c] += W * s
+        if rated:
+            for a in range(n_z):
+                s = 0.0
+                for i in range(ne):
+                    s += zq[a, i] * ve[i]
+                w.z_v[a] = s
+            for j in range(ns):
+                for a in range(n_z):
+                    s = 0.0
+                    for b in range(n_z):
+                        s += hes[j, a, b] * w.z_v[b]
+                    w.hz[a] = s
+                for i in range(ne):
+                    s = 0.0
+                    for a in range(n_z):
+                        s += zq[a, i] * w.hz[a]
+                    w.h_q[j, i] = s
+                if nodal:
+                    for k in range(N_U):
+                        s = 0.0
+                        for c in range(N_N):
+                            s += jac[j, 6 + c] * w.n_hv[c, k]
+                        w.h_q[j, U_COLS[k]] += s
+                f = W * beta * coef[j]
+                for i in range(ne):
+                    for m in range(ne):
+                        stiff[i, m] += f * eq[j, i] * w.h_q[j, m]
+    if want_c and rated:
+        for j in range(ns):
+            f = W * beta * coef[j]
+            for i in range(ne):
+                for m in range(ne):
+                    damp[i, m] += f * eq[j, i] * eq[j, m]
+
+
+@njit
+def _rod_kernel(q, v, props, rest, w, want_k, want_c, force, stiff, damp):  # noqa: ANN001, ANN202
+    """Q_int = ∂U/∂q + damping, ∂Q_int/∂q, ∂Q_int/∂q̇ of every element, by the chain rule
+    through the generated maps (:func:`_accumulate`): e = e(z(q)), z = (r′, r″, n(u)),
+
+        ∂e/∂q = ∂e/∂z · ∂z/∂q,
+        ∂²e/∂q² = (∂z/∂q)ᵀ ∂²e/∂z² (∂z/∂q) + Σ_c ∂e/∂n_c ∂²n_c/∂u²   (r′, r″ are linear in q),
+
+    the axial strain at the Lobatto points, the curvatures at the Gauss points, W = w μ L."""
+    ne = ELEMENT_SIZE
+    for e in range(q.shape[0]):
+        L = props.length[e]
+        beta = props.damping[e]
+        qe = q[e]
+        ve = v[e]
+        fe = force[e]
+        ke = stiff[e if want_k else 0]       # without a tangent: a (1, 14, 14) dummy
+        ce = damp[e if want_c else 0]
+        for i in range(ne):
+            fe[i] = 0.0
+            if want_k:
+                for j in range(ne):
+                    ke[i, j] = 0.0
+            if want_c:
+                for j in range(ne):
+                    ce[i, j] = 0.0
+        w.a_coef[0] = props.EA[e]
+        w.c_coef[0] = props.GJ[e]
+        w.c_coef[1] = props.EI2[e]
+        w.c_coef[2] = props.EI3[e]
+        for k in range(rest.axial_xi.size):
+            mu = rest.axial_mu[e, k]
+            _axial_point(qe, L, rest.axial_xi[k], mu, w, want_k)
+            _accumulate(w.a_val, w.a_jac, w.a_hes, 3, w.a_coef, rest.eps0[e],
+                        rest.axial_weight[k] * mu * L, beta, ve, w, False, want_k, want_c, fe, ke,
+                        ce)
+        _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, want_k)
+        if want_k:
+            for c in range(N_N):
+                w.g_n[c] = 0.0
+                if beta != 0.0:
+                    for k in range(N_U):
+                        s = 0.0
+                        for m in range(N_U):
+                            s += w.n_hes[c, k, m] * ve[U_COLS[m]]
+                        w.n_hv[c, k] = s
+        for k in range(rest.gauss_xi.size):
+            mu = rest.gauss_mu[e, k]
+            _curvature_point(qe, L, rest.gauss_xi[k], mu, w, want_k)
+            _accumulate(w.c_val, w.c_jac, w.c_hes, N_Z, w.c_coef, rest.k0[e, k],
+                        rest.gauss_weight[k] * mu * L, beta, ve, w, True, want_k, want_c, fe, ke,
+                        ce)
+        if want_k:
+            # Σ_c (Σ_points W σ ∂e/∂n_c) ∂²n_c/∂u²
+            for k in range(N_U):
+                for m in range(N_U):
+                    s = 0.0
+                    for c in range(N_N):
+                        s += w.g_n[c] * w.n_hes[c, k, m]
+                    ke[U_COLS[k], U_COLS[m]] += s
+
+
+_NO_MATRIX = np.zeros((1, ELEMENT_SIZE, ELEMENT_SIZE))
+
+
+def internal_forces(q_e: np.ndarray, v_e: np.ndarray, props: RodProperties, rest: RodRest,
+                    force_out: np.ndarray, stiffness_out: np.ndarray | None = None,
+                    damping_out: np.ndarray | None = None) -> None:
+    """``Q_int`` (n_elem, 14) and, when given, ``∂Q_int/∂q`` and ``∂Q_int/∂q̇`` (n_elem, 14, 14)
+    into the caller's arrays (:func:`_rod_kernel`)."""
+    want_k = stiffness_out is not None
+    want_c = damping_out is not None
+    _rod_kernel(np.ascontiguousarray(q_e, dtype=float), np.ascontiguousarray(v_e, dtype=float),
+                props, rest, new_work(), want_k, want_c, force_out,
+                stiffness_out if want_k else _NO_MATRIX, damping_out if want_c else _NO_MATRIX)
+
+
+# ---------------------------------------------------------------------------------------------
 # reference
-def base_frames(slopes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def base_frames(slopes: np.ndarray, connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Nodal bases ``(t̄, D̄)`` (n_nodes, 3) of a reference with nodal slopes ``(n_nodes, 3)``:
-    D̄ by parallel transport (smallest rotations) from node to node along the curve (§4.6),
-    starting from the global axis least aligned with the first tangent. On a closed loop the
-    transport does not return to its start (holonomy); the reference twist K1⁰ absorbs it."""
+    D̄ by parallel transport (smallest rotations) along the elements ``connectivity (n_elem, 2)``
+    in order (§4.6); a chain starts from the global axis least aligned with its first tangent.
+    On a closed loop the transport does not return to its start (holonomy); the reference twist
+    K1⁰ of the closing element absorbs it."""
     g = np.asarray(slopes, dtype=float)
     t = g / np.linalg.norm(g, axis=1)[:, None]
-    d = np.empty_like(t)
-    helper = np.eye(3)[int(np.argmin(np.abs(t[0])))]
-    d0 = helper - np.dot(helper, t[0]) * t[0]
-    d[0] = d0 / np.linalg.norm(d0)
-    for i in range(1, t.shape[0]):
-        d[i] = smallest_rotation(t[i - 1], t[i], d[i - 1])
-        d[i] -= np.dot(d[i], t[i]) * t[i]
-        d[i] /= np.linalg.norm(d[i])
+    d = np.full_like(t, np.nan)
+    w = new_work()
+    val = w.t_val[0]
+    for n0, n1 in np.asarray(connectivity, dtype=np.int64):
+        if np.isnan(d[n0, 0]):
+            helper = np.eye(3)[int(np.argmin(np.abs(t[n0])))]
+            d0 = helper - np.dot(helper, t[n0]) * t[n0]
+            d[n0] = d0 / np.linalg.norm(d0)
+        if np.isnan(d[n1, 0]):
+            # d2 of node n1 with φ = 0 and base (t_n0, d_n0): SR(t_n0 → t_n1) d_n0
+            triad(np.append(t[n1], 0.0), np.concatenate([t[n0], d[n0]]), val, w.t_jac[0])
+            d1 = val[3:] - np.dot(val[3:], t[n1]) * t[n1]
+            d[n1] = d1 / np.linalg.norm(d1)
     return t, d
+
+
+def _rule(kind: str) -> tuple[np.ndarray, np.ndarray]:
+    if kind == "lobatto3":
+        return np.array([0.0, 0.5, 1.0]), np.array([1.0, 4.0, 1.0]) / 6.0
+    x, wts = np.polynomial.legendre.leggauss(N_GAUSS)
+    return 0.5 * (x + 1.0), 0.5 * wts
 
 
 def rest_state(q_ref_e: np.ndarray, props: RodProperties, t_bar: np.ndarray,
                d_bar: np.ndarray) -> RodRest:
-    """The reference measures at the Gauss points of every element (with φ = 0 there)."""
-    x, w = np.polynomial.legendre.leggauss(N_GAUSS)
-    xi, w = 0.5 * (x + 1.0), 0.5 * w
-    q = np.array(q_ref_e, dtype=float)
+    """The reference measures at the quadrature points of every element (with φ = 0 there):
+    μ = |r′_ref| and K⁰ = (K1⁰, K2⁰, K3⁰) at the Gauss points, μ at the Lobatto points."""
+    q = np.array(q_ref_e, dtype=float).reshape(-1, ELEMENT_SIZE)
     q[:, TWIST] = 0.0
     q[:, NODE_SIZE + TWIST] = 0.0
     ne = q.shape[0]
-    mu = np.empty((ne, N_GAUSS))
-    k0 = np.empty((ne, N_GAUSS, 3))
-    for e in range(ne):
-        for k in range(N_GAUSS):
-            nrp, c1, c2, c3 = strain_measures(q[e], float(props.length[e]), t_bar[e], d_bar[e],
-                                              float(xi[k]))
-            mu[e, k] = nrp
-            k0[e, k] = (c1 / nrp, c2 / nrp, c3 / nrp)
-    return RodRest(np.ascontiguousarray(t_bar, float), np.ascontiguousarray(d_bar, float),
-                   xi, w, mu, k0)
+    L = np.asarray(props.length, dtype=float)
+    t_bar = np.ascontiguousarray(t_bar, dtype=float).reshape(ne, 2, 3)
+    d_bar = np.ascontiguousarray(d_bar, dtype=float).reshape(ne, 2, 3)
+    if np.any(L <= 0.0):
+        raise ValueError("rest_state: element lengths must be positive")
+    xg, wg = _rule("gauss")
+    xa, wa = _rule("lobatto3")
+    # with μ = 1 the measures are |r′| − 1 and μ K_j: divide by the true μ
+    raw = strain_measures(q, t_bar, d_bar, L, xg, np.ones((ne, xg.size)))
+    mu_g = raw[:, :, 0] + 1.0
+    k0 = raw[:, :, 1:] / mu_g[:, :, None]
+    mu_a = strain_measures(q, t_bar, d_bar, L, xa, np.ones((ne, xa.size)))[:, :, 0] + 1.0
+    C = np.column_stack([np.asarray(getattr(props, f), dtype=float).reshape(-1)
+                         for f in ("EA", "GJ", "EI2", "EI3")]).reshape(ne, N_STRAIN)
+    c = np.ascontiguousarray
+    return RodRest(t_bar, d_bar, xg, wg, c(mu_g), c(k0), xa, wa, c(mu_a),
+                   c(np.asarray(props.reference_axial_strain, dtype=float).reshape(ne, 1)),
+                   L.copy(), q, c(C))
+
+
+def nodal_triads(slopes: np.ndarray, twist_angles: np.ndarray, t_bar: np.ndarray,
+                 d_bar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(t_i, d2_i)`` (n, 3) of nodes with slopes ``g (n, 3)`` and twists ``φ (n,)`` on their
+    bases (§2.1)."""
+    n = len(slopes)
+    t = np.empty((n, 3))
+    d2 = np.empty((n, 3))
+    w = new_work()
+    for i in range(n):
+        triad(np.append(np.asarray(slopes[i], float), float(twist_angles[i])),
+              np.concatenate([t_bar[i], d_bar[i]]), w.t_val[0], w.t_jac[0])
+        t[i] = w.t_val[0, :3]
+        d2[i] = w.t_val[0, 3:]
+    return t, d2
+
+
+# ---------------------------------------------------------------------------------------------
+# mass and external loads (constant; the cable's on the centreline coordinates, §2.3)
+def _cable_view(props: RodProperties) -> cable.CableProperties:
+    """The rod's centreline as a cable section (for the cable's mass and load integrals)."""
+    z = np.zeros_like(np.asarray(props.length, dtype=float))
+    return cable.CableProperties(props.length, props.EA, props.EI3, props.mass_per_length, z, z,
+                                 props.reference_axial_strain)
+
+
+def _on_centerline(Q: np.ndarray) -> np.ndarray:
+    out = np.zeros((Q.shape[0], ELEMENT_SIZE))
+    out[:, CENTERLINE] = Q
+    return out
+
+
+def mass_matrix(props: RodProperties) -> np.ndarray:
+    """Constant mass (n_elem, 14, 14): the cable's on (r, g) and ``ρJ_p L/6 [[2, 1], [1, 2]]``
+    on the twists (FORMULATION I §2.3)."""
+    L = np.asarray(props.length, dtype=float)
+    M = np.zeros((L.shape[0], ELEMENT_SIZE, ELEMENT_SIZE))
+    M[:, CENTERLINE[:, None], CENTERLINE[None, :]] = cable.mass_matrix(_cable_view(props))
+    tw = np.array([TWIST, NODE_SIZE + TWIST])
+    M[:, tw[:, None], tw[None, :]] = ((np.asarray(props.twist_inertia, float) * L / 6.0)[:, None, None]
+                                      * np.array([[2.0, 1.0], [1.0, 2.0]]))
+    return M
+
+
+def gravity_force(props: RodProperties, g: np.ndarray) -> np.ndarray:
+    """The cable's gravity on the centreline, none on φ; (n_elem, 14)."""
+    return _on_centerline(cable.gravity_force(_cable_view(props), g))
+
+
+def distributed_force(props: RodProperties, f: np.ndarray) -> np.ndarray:
+    """The cable's constant load per length on the centreline; (n_elem, 14)."""
+    return _on_centerline(cable.distributed_force(_cable_view(props), f))
+
+
+def point_force_vector(xi: np.ndarray, length: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """The cable's point force ``S(ξ)ᵀ F`` on the centreline; (n, 14)."""
+    return _on_centerline(cable.point_force_vector(xi, length, force))
+
+
+def reference_nodal_coordinates(points: np.ndarray, tangents: np.ndarray) -> np.ndarray:
+    """Nodal coordinates (n_nodes, 7) of the stress-free reference: ``[r, r′, φ = 0]``."""
+    return np.hstack([points, tangents, np.zeros((len(points), 1))])
+
+
+# ---------------------------------------------------------------------------------------------
+# the element group of the assembler (flexmbs.elements.group)
+class RodPart(NamedTuple):
+    """One group of rod elements, packed for the kernels."""
+
+    dofs: np.ndarray                 # (n_elem, 14) global coordinates
+    pos: np.ndarray                  # (n_elem, 196) matrix positions of the element blocks
+    props: RodProperties
+    rest: RodRest
+    mass: np.ndarray                 # (n_elem, 14, 14)
+    work: RodWork
+    qe: np.ndarray                   # work (n_elem, 14): q, q̇ of the elements, Q_int
+    ve: np.ndarray
+    force: np.ndarray
+    stiff: np.ndarray                # work (n_elem, 14, 14): ∂Q_int/∂q, ∂Q_int/∂q̇
+    damp: np.ndarray
+    empty: np.ndarray                # (1, 14, 14): a dummy tangent in the residual
+
+
+def nodal_bases(element_dofs: np.ndarray, q_ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(t̄, D̄)`` (n_elem, 2, 3) of both nodes of every element, by :func:`base_frames` along the
+    elements in order (a node is known by its twist coordinate)."""
+    D = np.asarray(element_dofs, dtype=np.int64)
+    keys = D[:, [TWIST, NODE_SIZE + TWIST]]
+    nodes, conn = np.unique(keys, return_inverse=True)
+    conn = conn.reshape(-1, 2)
+    slopes = np.empty((nodes.size, 3))
+    slope = np.asarray(LAYOUT.slope)
+    slopes[conn[:, 0]] = q_ref[D[:, slope]]
+    slopes[conn[:, 1]] = q_ref[D[:, NODE_SIZE + slope]]
+    t, d = base_frames(slopes, conn)
+    return np.ascontiguousarray(t[conn]), np.ascontiguousarray(d[conn])
+
+
+def pack_rods(element_dofs: np.ndarray, props: RodProperties, options: object, q_ref: np.ndarray,
+              positions: np.ndarray) -> RodPart:
+    """``element_dofs`` (n_elem, 14), the section resultants per element, the reference
+    coordinates (global vector) and the matrix positions (n_elem, 196) of the element blocks."""
+    D = np.ascontiguousarray(element_dofs, dtype=np.int64)
+    ne = D.shape[0]
+    t_bar, d_bar = nodal_bases(D, q_ref) if ne else (np.zeros((0, 2, 3)), np.zeros((0, 2, 3)))
+    rest = rest_state(np.ascontiguousarray(q_ref[D]), props, t_bar, d_bar)
+    n = ELEMENT_SIZE
+    return RodPart(D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, n * n), props,
+                   rest, np.ascontiguousarray(mass_matrix(props)), new_work(), np.zeros((ne, n)),
+                   np.zeros((ne, n)), np.zeros((ne, n)), np.zeros((ne, n, n)), np.zeros((ne, n, n)),
+                   np.zeros((1, n, n)))
+
+
+@njit
+def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
+    """``r_q += Q_int(q, q̇) (+ M q̈)`` of the rod elements; returns the force scale."""
+    gather_states(rp, q, v, mode)
+    _rod_kernel(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[0], FLAG[0], rp.force, rp.empty,
+                rp.empty)
+    return add_residual(rp, qdd, mode, r)
+
+
+@njit
+def rod_jacobian(rp, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into ``data``; returns the stiffness scale."""
+    gather_states(rp, q, v, mode)
+    _rod_kernel(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[1], FLAG[1], rp.force, rp.stiff,
+                rp.damp)
+    return add_matrix(rp, cM, cC, cK, data)
+
+
+def section_properties(beams: list) -> RodProperties:
+    """Section resultants per element of ``beams`` (in order): EA, GJ, EI2 = EI3 = EI, ρA, the
+    twist inertia ρJ_p and the damping β of each beam."""
+    cols: dict[str, list[np.ndarray]] = {f: [] for f in RodProperties._fields}
+    for beam in beams:
+        st = beam.stiffness
+        if st.torsional_stiffness is None:
+            raise ModelError(f"beam '{beam.name}': element 'ancf_rod14' needs a torsional "
+                             "stiffness: give BeamStiffness(torsional_stiffness=...) or a "
+                             "CircularSection with a Material")
+        values = {"length": np.asarray(beam.centerline.lengths, float), "EA": st.axial_stiffness,
+                  "GJ": st.torsional_stiffness, "EI2": st.bending_stiffness,
+                  "EI3": st.bending_stiffness, "mass_per_length": st.mass_per_length,
+                  "twist_inertia": st.polar_mass_moment, "damping": beam.damping,
+                  "reference_axial_strain": beam.reference_axial_strain}
+        for f in RodProperties._fields:
+            cols[f].append(np.broadcast_to(np.asarray(values[f], float), (beam.n_elem,)).copy())
+    return RodProperties(*(np.concatenate(cols[f]) if cols[f] else np.zeros(0)
+                           for f in RodProperties._fields))
+
+
+# ---------------------------------------------------------------------------------------------
+# output
+def output_fields(q_e: np.ndarray, rest: RodRest, options: object,
+                  xi: np.ndarray) -> dict[str, np.ndarray]:
+    """At the points ξ of every element: ``axial_strain`` ε and the ``curvature`` vector K of
+    the centreline (the cable's), the nodal ``twist`` angle φ interpolated linearly, the
+    ``torsion`` K1 − K1⁰ and the ``torsional_moment`` GJ (K1 − K1⁰) (§2.2)."""
+    q_e = np.asarray(q_e, dtype=float)
+    xi = np.atleast_1d(np.asarray(xi, dtype=float))
+    eps, K, mu = cable.centerline_strain_and_curvature(q_e[:, CENTERLINE], rest.q_ref[:, CENTERLINE],
+                                                       rest.length, xi)
+    K1 = strain_measures(q_e, rest.t_bar, rest.d_bar, rest.length, xi, mu)[:, :, 1]
+    K1_ref = strain_measures(rest.q_ref, rest.t_bar, rest.d_bar, rest.length, xi, mu)[:, :, 1]
+    torsion = K1 - K1_ref
+    twist_angle = (q_e[:, TWIST, None] * (1.0 - xi[None, :])
+                   + q_e[:, NODE_SIZE + TWIST, None] * xi[None, :])
+    return {"axial_strain": eps, "curvature": K, "twist": twist_angle, "torsion": torsion,
+            "torsional_moment": rest.stiffness[:, 1, None] * torsion}
+
+
+def _strain_energy(q_e: np.ndarray, props: RodProperties, rest: RodRest,
+                   options: object) -> np.ndarray:
+    return strain_energy(q_e, props, rest)
+
+
+#: the rod as the assembler sees it (flexmbs.elements.layout.ElementType)
+ELEMENT_TYPES.register("ancf_rod14", ElementType(
+    layout=LAYOUT, section_properties=section_properties,
+    reference_nodal_coordinates=reference_nodal_coordinates, gravity_force=gravity_force,
+    distributed_force=distributed_force, point_force=point_force_vector, pack=pack_rods,
+    strain_energy=_strain_energy, output_fields=output_fields, part_type=RodPart,
+    residual=rod_residual, jacobian=rod_jacobian, shared_rest_fields=("gauss_xi", "gauss_weight")))

@@ -27,9 +27,14 @@ class ElementLayout:
     position: tuple[int, int, int]      #: nodal indices of the centreline point r
     slope: tuple[int, int, int]         #: nodal indices of the centreline slope r′
     nodes_per_element: int = 2
+    #: nodal index of a twist angle about the tangent (torsion-capable elements), else None:
+    #: a clamp fixes it, a nodal torque does work on it
+    twist: int | None = None
     #: names of the element's own output fields (VTU point data beside the displacement and
     #: velocity every beam has), the keys :attr:`ElementType.output_fields` returns
     output_fields: tuple[str, ...] = ()
+    #: which of them are 3-vectors (the others are scalars)
+    vector_fields: tuple[str, ...] = ()
 
     @property
     def node_size(self) -> int:
@@ -73,6 +78,18 @@ class ElementType:
     #: by name: (n_elem, m) scalars or (n_elem, m, 3) vectors (VTU point data, e.g. the
     #: cable's ``axial_strain`` and ``curvature``)
     output_fields: Callable[..., dict[str, np.ndarray]]
+    #: the named tuple ``pack`` returns, and its compiled kernels (:mod:`flexmbs.elements.group`):
+    #: ``residual(part, q, v, qdd, mode, r) -> force scale`` adds ``Q_int + M q̈``,
+    #: ``jacobian(part, q, v, mode, cM, cC, cK, data) -> stiffness scale`` the matrix block
+    part_type: type
+    residual: Callable[..., float]
+    jacobian: Callable[..., float]
+    #: the options of a group when none are given (an empty group of the type, see
+    #: :meth:`flexmbs.assembly.Assembly`: every registered type has a part in every system)
+    default_options: Any = None
+    #: fields of the packed rest data shared by all elements of a group (quadrature points):
+    #: not sliced when a beam's share of its group is taken
+    shared_rest_fields: tuple[str, ...] = ()
 
 
 #: element types by scenario name

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -96,7 +96,7 @@ class FrameBuilder:
                 k = np.append(k, spe)
             ns = e.size
             L = np.asarray(beam.centerline.lengths, float)
-            S, dofs = cable.centerline_interpolation(asm.element_dofs(beam), L, e, xi_tab[k])
+            S, dofs = cable.centerline_interpolation(asm.centerline_dofs(beam), L, e, xi_tab[k])
             ref = cable.interpolate(S, dofs, asm.q_ref)
             cum = np.concatenate([[0.0], np.cumsum(L)])
             seg = np.column_stack([np.arange(ns - 1), np.arange(1, ns)])
@@ -112,7 +112,7 @@ class FrameBuilder:
             beam = model.beams[b.index]
             nseg = b.segments.shape[0]
             self._beam_const.append((
-                self._beam_rest(b), asm.element_dofs(beam),
+                asm.beam_rest(beam), asm.element_dofs(beam),
                 np.full(b.S.shape[0], np.nan if beam.radius is None else float(beam.radius)),
                 {"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
                  "beam_id": np.full(nseg, b.index, np.int32),
@@ -125,23 +125,12 @@ class FrameBuilder:
             ref = q0[:3] + pts @ rb.rotation_matrix(q0[3:]).T
             self.bodies.append((bi, d, pts, tri, ref))
 
-    def _beam_rest(self, b: _BeamSampler) -> tuple[Any, Any, Any]:
-        """(the element type's output function, the beam's slice of its group's rest data,
-        the group's options)."""
-        grp = self.asm.groups[b.group]
-        rest: Any = grp.rest
-        n_grp = int(np.asarray(grp.dofs).shape[0])
-        sliced = {f: (v[b.slc] if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == n_grp
-                      and f not in ("axial_xi", "bending_xi") else v)
-                  for f, v in rest._asdict().items()}
-        return grp.element_type.output_fields, type(rest)(**sliced), grp.options
-
     def beam_mesh(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         x = cable.interpolate(b.S, b.dofs, q)
         vel = cable.interpolate(b.S, b.dofs, v)
-        (fields_of, rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
+        (etype, rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
         point_data = {"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc}
-        fields = fields_of(q[elem_dofs], rest, options, b.xi)
+        fields = etype.output_fields(q[elem_dofs], rest, options, b.xi)
         for name in self._field_names[b.group]:
             values = fields[name]
             n_elem, m = values.shape[:2]

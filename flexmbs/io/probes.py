@@ -45,17 +45,24 @@ def _check_name(name: object) -> str:
 
 
 class BeamPointProbe(Probe):
-    """Position, displacement or velocity of the material point at reference arc length ``s``."""
+    """Position, displacement or velocity of the material point at reference arc length ``s``,
+    or one of its element's output fields there (the cable's ``axial_strain``, ``curvature``;
+    the rod's also ``twist``, ``torsion``, ``torsional_moment``)."""
 
     QUANTITIES = ("position", "displacement", "velocity")
+
+    @classmethod
+    def quantities(cls, beam: Beam) -> tuple[str, ...]:
+        """What a probe on ``beam`` can record."""
+        return cls.QUANTITIES + beam.layout.output_fields
 
     def __init__(self, name: str, beam: Beam, s: float, quantity: str = "position") -> None:
         self.name = _check_name(name)
         if not isinstance(beam, Beam):
             raise ModelError(f"probe '{name}': beam must be a Beam (got {beam!r})")
-        if quantity not in self.QUANTITIES:
-            raise ModelError(f"probe '{name}': quantity must be one of {list(self.QUANTITIES)} "
-                             f"(got {quantity!r})")
+        if quantity not in self.quantities(beam):
+            raise ModelError(f"probe '{name}': quantity must be one of "
+                             f"{list(self.quantities(beam))} (got {quantity!r})")
         s = float(s)
         if not (np.isfinite(s) and 0.0 <= s <= beam.length * (1 + 1e-12)):
             raise ModelError(f"probe '{name}': s = {s} is outside beam '{beam.name}'; valid range "
@@ -64,17 +71,25 @@ class BeamPointProbe(Probe):
         self._element, self._xi = beam.locate(min(s, beam.length))
 
     def columns(self) -> list[str]:
-        return [f"{self.name}_{c}" for c in _XYZ]
+        if self.quantity in self.QUANTITIES or self.quantity in self.beam.layout.vector_fields:
+            return [f"{self.name}_{c}" for c in _XYZ]
+        return [self.name]
 
     def check(self, asm: Any) -> None:
         if not any(b is self.beam for b in asm.model.beams):
             raise ModelError(f"probe '{self.name}': beam '{self.beam.name}' is not part of the model")
 
     def _interp(self, asm: Any, x: np.ndarray) -> np.ndarray:
-        return cable.centerline_points(x, asm.element_dofs(self.beam), self.beam.centerline.lengths,
+        return cable.centerline_points(x, asm.centerline_dofs(self.beam), self.beam.centerline.lengths,
                                        np.array([self._element]), np.array([self._xi]))[0]
 
     def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        if self.quantity not in self.QUANTITIES:
+            e = np.array([self._element])
+            etype, rest, options = asm.beam_rest(self.beam, e)
+            qe = np.asarray(state.q)[asm.element_dofs(self.beam)[e]]
+            field = etype.output_fields(qe, rest, options, np.array([self._xi]))[self.quantity]
+            return np.atleast_1d(np.asarray(field, dtype=float)[0, 0])
         if self.quantity == "velocity":
             return self._interp(asm, state.v)
         r = self._interp(asm, state.q)

@@ -6,12 +6,17 @@ a straight rod bent into a circular arc (½ EI L/ρ²)."""
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from flexmbs.elements import ancf_rod as rod
+from tests.conftest import FULL
 
 N = rod.LAYOUT.node_size
 
@@ -22,8 +27,9 @@ def _rod(points: np.ndarray, slopes: np.ndarray, lengths: np.ndarray, *, EI2=2.0
     ne = len(points) - 1
     q_e = np.hstack([nodes[:-1], nodes[1:]])
     props = rod.RodProperties(np.asarray(lengths, float), np.full(ne, 1e4), np.full(ne, 1.5),
-                              np.full(ne, EI2), np.full(ne, EI3))
-    t, d = rod.base_frames(slopes)
+                              np.full(ne, EI2), np.full(ne, EI3), np.full(ne, 0.3),
+                              np.full(ne, 0.01), np.zeros(ne), np.zeros(ne))
+    t, d = rod.base_frames(slopes, np.column_stack([np.arange(ne), np.arange(1, ne + 1)]))
     t_bar = np.stack([t[:-1], t[1:]], axis=1)
     d_bar = np.stack([d[:-1], d[1:]], axis=1)
     return nodes, q_e, props, rod.rest_state(q_e, props, t_bar, d_bar)
@@ -78,7 +84,8 @@ def test_energy_is_objective():
     rng = np.random.default_rng(4)
     pts, slopes, lengths = _helix()
     nodes, q_e, props, rest = _rod(pts, slopes, lengths, EI2=2.0, EI3=5.0)
-    t_bar, d_bar = rod.base_frames(slopes)
+    t_bar, d_bar = rod.base_frames(slopes, np.column_stack([np.arange(len(pts) - 1),
+                                                            np.arange(1, len(pts))]))
     deformed = nodes + 0.05 * rng.standard_normal(nodes.shape)
     U = rod.strain_energy(_elements(deformed), props, rest).sum()
     assert U > 1.0
@@ -86,12 +93,12 @@ def test_energy_is_objective():
     moved = deformed.copy()
     moved[:, 0:3] = deformed[:, 0:3] @ Q.T
     moved[:, 3:6] = deformed[:, 3:6] @ Q.T
+    _, d2 = rod.nodal_triads(deformed[:, 3:6], deformed[:, rod.TWIST], t_bar, d_bar)
+    t_new, base = rod.nodal_triads(moved[:, 3:6], np.zeros(len(nodes)), t_bar, d_bar)
     for i in range(len(nodes)):
-        _, d2 = rod.nodal_director(deformed[i, 3:6], deformed[i, rod.TWIST], t_bar[i], d_bar[i])
-        t_new = moved[i, 3:6] / np.linalg.norm(moved[i, 3:6])
-        base = rod.smallest_rotation(t_bar[i], t_new, d_bar[i])
-        target = Q @ d2
-        moved[i, rod.TWIST] = math.atan2(np.dot(np.cross(base, target), t_new), np.dot(base, target))
+        target = Q @ d2[i]
+        moved[i, rod.TWIST] = math.atan2(np.dot(np.cross(base[i], target), t_new[i]),
+                                         np.dot(base[i], target))
     U_moved = rod.strain_energy(_elements(moved), props, rest).sum()
     assert U_moved == pytest.approx(U, rel=1e-12)
 
@@ -125,3 +132,86 @@ def test_straight_rod_bent_into_an_arc():
         U = rod.strain_energy(_elements(bent), props, rest).sum()
         errors.append(abs(U / (0.5 * 2.0 * L / rho**2) - 1.0))
     assert errors[1] < 1e-4 and errors[1] < errors[0] / 8, errors
+
+
+def _deformed_helix(rng, beta=0.0):
+    pts, slopes, lengths = _helix(n=4)
+    nodes, q_e, props, rest = _rod(pts, slopes, lengths, EI2=2.0, EI3=5.0)
+    props = props._replace(damping=np.full(len(lengths), beta),
+                           reference_axial_strain=np.full(len(lengths), -0.01))
+    t_bar, d_bar = rest.t_bar, rest.d_bar
+    rest = rod.rest_state(q_e, props, t_bar, d_bar)
+    deformed = nodes + 0.05 * rng.standard_normal(nodes.shape)
+    deformed[:, rod.TWIST] = 0.6 * rng.standard_normal(len(nodes))
+    return _elements(deformed), props, rest
+
+
+def test_force_is_the_gradient_of_the_energy():
+    """Q_int = ∂U/∂q: central differences of the strain energy (h = 1e-6) agree with the
+    chain-rule force of the generated derivatives to 1e-7 of the largest entry."""
+    rng = np.random.default_rng(7)
+    q_e, props, rest = _deformed_helix(rng)
+    force = np.empty_like(q_e)
+    rod.internal_forces(q_e, np.zeros_like(q_e), props, rest, force)
+    h = 1e-6
+    fd = np.empty_like(q_e)
+    for i in range(q_e.shape[1]):
+        dq = np.zeros_like(q_e)
+        dq[:, i] = h
+        fd[:, i] = (rod.strain_energy(q_e + dq, props, rest)
+                    - rod.strain_energy(q_e - dq, props, rest)) / (2 * h)
+    assert np.abs(force).max() > 10.0
+    assert np.abs(fd - force).max() < 1e-7 * np.abs(force).max()
+
+
+def test_tangents_are_the_derivatives_of_the_force():
+    """∂Q_int/∂q (with the damping stresses' q-dependence) and ∂Q_int/∂q̇ against central
+    differences of the force, with strain-rate damping and a random velocity."""
+    rng = np.random.default_rng(8)
+    q_e, props, rest = _deformed_helix(rng, beta=0.05)
+    v_e = rng.standard_normal(q_e.shape)
+    n = q_e.shape[1]
+    force = np.empty_like(q_e)
+    K = np.empty(q_e.shape + (n,))
+    C = np.empty(q_e.shape + (n,))
+    rod.internal_forces(q_e, v_e, props, rest, force, K, C)
+    h = 1e-6
+    fK = np.empty_like(K)
+    fC = np.empty_like(C)
+    fp, fm = np.empty_like(q_e), np.empty_like(q_e)
+    for i in range(n):
+        dq = np.zeros_like(q_e)
+        dq[:, i] = h
+        rod.internal_forces(q_e + dq, v_e, props, rest, fp)
+        rod.internal_forces(q_e - dq, v_e, props, rest, fm)
+        fK[:, :, i] = (fp - fm) / (2 * h)
+        rod.internal_forces(q_e, v_e + dq, props, rest, fp)
+        rod.internal_forces(q_e, v_e - dq, props, rest, fm)
+        fC[:, :, i] = (fp - fm) / (2 * h)
+    assert np.abs(fK - K).max() < 1e-8 * np.abs(K).max()
+    assert np.abs(fC - C).max() < 1e-8 * np.abs(C).max()
+    assert np.abs(C).max() > 1e-3 * np.abs(K).max()
+
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _generator():
+    spec = importlib.util.spec_from_file_location("rod_derivatives", ROOT / "tools" / "rod_derivatives.py")
+    return spec, ROOT / "flexmbs" / "elements" / "_rod_derivatives.py"
+
+
+def test_generated_derivatives_are_current():
+    """The committed derivative module was written by the committed generator: its header
+    records the generator's sha256 (an edit of the generator without regenerating fails here).
+    With sympy installed and FLEXMBS_FULL=1, regenerating gives the committed text (3 min)."""
+    text = (ROOT / "flexmbs" / "elements" / "_rod_derivatives.py").read_text()
+    recorded = re.search(r"^# generator sha256: ([0-9a-f]{64})$", text, re.M)
+    assert recorded is not None
+    actual = hashlib.sha256((ROOT / "tools" / "rod_derivatives.py").read_bytes()).hexdigest()
+    assert recorded.group(1) == actual, "run python tools/rod_derivatives.py and commit its output"
+    if FULL and importlib.util.find_spec("sympy") is not None:
+        spec, target = _generator()
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        assert module.generate() == target.read_text()

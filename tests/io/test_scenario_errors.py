@@ -10,6 +10,8 @@ import pytest
 from flexmbs import ScenarioError
 from flexmbs.io.scenario import load_scenario
 
+EXPLICIT = "axial_stiffness = 1e6\nbending_stiffness = 10.0\nmass_per_length = 0.1\n"
+
 SIM = """
 [simulation]
 t_end = 1.0
@@ -121,8 +123,14 @@ CASES = [
      "beams[rail].geometry.mesh: mesh file not found: "),
     ("group_without_mesh", SIM + sub(BEAM, "geometry = {", "geometry = { group = 'rail', "),
      "beams[rail].geometry.group: 'group' selects a curve of a mesh file"),
-    ("unsupported_element", SIM + BEAM + "element = 'ancf_rod14'\n",
-     "beams[rail].element: element 'ancf_rod14' is not available in this version"),
+    ("rod_without_torsion", SIM + BEAM.replace("radius = 2e-3\nyoungs_modulus = 2.1e11\n"
+                                               "density = 7800.0\n", EXPLICIT)
+     + "element = 'ancf_rod14'\n",
+     "beams[rail].torsional_stiffness: missing: element 'ancf_rod14' carries torsion"),
+    ("rod_twist_inertia_with_material", SIM + BEAM + "element = 'ancf_rod14'\ntwist_inertia = 1.0\n",
+     "beams[rail].twist_inertia: only with an explicit section"),
+    ("cable_twist_inertia", SIM + BEAM + "twist_inertia = 1.0\n",
+     "unknown key 'twist_inertia' in beams[rail]"),
     ("unknown_element", SIM + BEAM + "element = 'timoshenko'\n",
      "beams[rail].element: unknown element 'timoshenko' (known: ancf_cable, ancf_rod14)"),
     ("mixed_section", SIM + BEAM + "axial_stiffness = 1e6\n",
@@ -235,7 +243,8 @@ bending_stiffness = 1.0
      "probes[tip].s: expected an arc length in [0, 1.0] (length of beam 'rail', tolerance 1e-12), got 1.5"),
     ("probe_unknown_quantity", SIM + BEAM + "[[probes]]\nname = 'tip'\ntype = 'beam_point'\n"
                                             "beam = 'rail'\ns = 0.5\nquantity = 'strain'\n",
-     "probes[tip].quantity: unknown quantity 'strain' (known: position, displacement, velocity)"),
+     "probes[tip].quantity: unknown quantity 'strain' (known: position, displacement, velocity, "
+     "axial_strain, curvature)"),
     ("probe_missing_name", SIM + "[[probes]]\ntype = 'energy'\n",
      "probes[0].name: missing required key"),
     ("probe_unknown_type", SIM + "[[probes]]\nname = 'x'\ntype = 'stress'\n",

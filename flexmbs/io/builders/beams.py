@@ -8,6 +8,7 @@ builder reads the element's own keys, the shared ones (:data:`BEAM_KEYS`) throug
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -43,25 +44,44 @@ def build_beam(t: Table, ctx: BuildContext) -> Beam:
 def _ancf_cable(t: Table, ctx: BuildContext) -> Beam:
     """12-DOF ANCF cable (no torsion); its options are the keys of :class:`CableOptions`."""
     t.allow((*BEAM_KEYS, "bending", "axial_rule", "bending_points", "exudyn_compatible"))
-    elements = t.integer("elements", None, ge=1)
-    centerline = read_geometry(ctx, t.table("geometry"), elements, t)
-    stiffness = read_stiffness(t)
+    centerline, stiffness = _geometry_and_section(t, ctx)
     options = CableOptions(bending=t.choice("bending", ("vector", "scalar"), "vector"),
                            axial_rule=t.choice("axial_rule", ("lobatto3", "gauss5"), "lobatto3"),
                            bending_points=t.integer("bending_points", 3, ge=2, le=3),
                            exudyn_compatible=t.boolean("exudyn_compatible", False))
-    return ctx.model.add_beam(centerline, section=stiffness, name=t.raw["name"], options=options,
-                              damping=t.number("damping", 0.0, ge=0),
-                              reference_axial_strain=t.number("reference_axial_strain", 0.0,
-                                                              gt=-1, lt=1))
+    return _add(t, ctx, centerline, stiffness, element="ancf_cable", options=options)
 
 
 @ELEMENTS.register("ancf_rod14")
 def _ancf_rod14(t: Table, ctx: BuildContext) -> Beam:
-    """Reserved name of the scenario contract (DESIGN.md): the torsion-capable rod."""
-    available = ", ".join(n for n in ELEMENTS.names() if n != "ancf_rod14")
-    raise ScenarioError(f"{t.key('element')}: element 'ancf_rod14' is not available in this "
-                        f"version (available: {available})")
+    """14-DOF ANCF rod with a nodal twist (torsion-capable): the section's torsional stiffness
+    from ``shear_modulus``/``poisson_ratio`` (with radius + youngs_modulus) or an explicit
+    ``torsional_stiffness``; ``twist_inertia`` ρJ_p [kg m] optional with an explicit section."""
+    t.allow((*BEAM_KEYS, "twist_inertia"))
+    centerline, stiffness = _geometry_and_section(t, ctx)
+    if stiffness.torsional_stiffness is None:
+        raise ScenarioError(f"{t.key('torsional_stiffness')}: missing: element 'ancf_rod14' "
+                            "carries torsion; give torsional_stiffness [N m^2] with an explicit "
+                            "section (or radius + youngs_modulus + density + poisson_ratio)")
+    if t.has("twist_inertia"):
+        if not t.has("axial_stiffness"):
+            raise ScenarioError(f"{t.key('twist_inertia')}: only with an explicit section; with "
+                                "radius + density it is density * pi r^4/2")
+        stiffness = replace(stiffness, twist_inertia=t.number("twist_inertia", gt=0))
+    return _add(t, ctx, centerline, stiffness, element="ancf_rod14", options=None)
+
+
+def _geometry_and_section(t: Table, ctx: BuildContext) -> tuple[Centerline, BeamStiffness]:
+    elements = t.integer("elements", None, ge=1)
+    return read_geometry(ctx, t.table("geometry"), elements, t), read_stiffness(t)
+
+
+def _add(t: Table, ctx: BuildContext, centerline: Centerline, stiffness: BeamStiffness, *,
+         element: str, options: CableOptions | None) -> Beam:
+    return ctx.model.add_beam(centerline, section=stiffness, name=t.raw["name"], options=options,
+                              damping=t.number("damping", 0.0, ge=0),
+                              reference_axial_strain=t.number("reference_axial_strain", 0.0,
+                                                              gt=-1, lt=1), element=element)
 
 
 def read_geometry(ctx: BuildContext, g: Table, elements: int | None, beam: Table) -> Centerline:

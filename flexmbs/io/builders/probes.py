@@ -32,7 +32,8 @@ def _beam_point(t: Table, ctx: BuildContext) -> probes.Probe:
     t.allow(("name", "type", "beam", "s", "quantity"))
     beam = ctx.beam(t)
     s = ctx.arc_length(t, beam)
-    quantity = t.choice("quantity", probes.BeamPointProbe.QUANTITIES, "position", what="quantity")
+    quantity = t.choice("quantity", probes.BeamPointProbe.quantities(beam), "position",
+                        what="quantity")
     return probes.BeamPointProbe(t.raw["name"], beam, s, quantity)
 
 

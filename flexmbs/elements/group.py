@@ -1,0 +1,150 @@
+"""An element group as the assembler sees it: the parts of every element type summed by one
+loop, whatever their element.
+
+Every element module packs a group of its elements into a named tuple (its *part*) holding at
+least ``dofs (n_elem, n)``, ``pos (n_elem, n*n)`` (matrix positions), ``mass (n_elem, n, n)``
+and the work arrays ``qe, ve, force (n_elem, n)``, ``stiff, damp (n_elem, n, n)``, and states
+its internal forces in a kernel. What is common to all elements — gathering the element
+states, adding ``Q_int + M q̈`` into the residual and ``cK K + cC C + cM M`` into the matrix —
+is stated once here (:func:`gather_states`, :func:`add_residual`, :func:`add_matrix`).
+
+The driver sums a tuple of parts of *different* types (several element types in one model) by
+:func:`groups_residual` and :func:`groups_jacobian`, ``for part in literal_unroll(parts):
+element_residual(part, ...)`` (a function of its own: numba's unrolling pass types its caller
+partially, which the step loop it would be inlined into does not survive): :func:`element_residual`
+and :func:`element_jacobian` are resolved at compile time to the kernels the part's element
+type registered (:class:`~flexmbs.elements.layout.ElementType` ``part_type``, ``residual``,
+``jacobian``), so an element is its module and its registration.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .._jit import HAVE_NUMBA, literal_unroll, njit
+from ..terms import WITH_DAMPING, WITH_INERTIA
+from .layout import ELEMENT_TYPES, ElementType
+
+__all__ = ["gather_states", "add_residual", "add_matrix", "element_residual", "element_jacobian",
+           "groups_residual", "groups_jacobian"]
+
+
+@njit(inline="always")
+def gather_states(part, q, v, mode):  # noqa: ANN001, ANN201
+    """``qe, ve`` of the part's elements from the global ``q, v`` (``ve = 0`` without damping)."""
+    damping = mode[WITH_DAMPING] != 0.0
+    dofs = part.dofs
+    for e in range(dofs.shape[0]):
+        for k in range(dofs.shape[1]):
+            part.qe[e, k] = q[dofs[e, k]]
+            part.ve[e, k] = v[dofs[e, k]] if damping else 0.0
+
+
+@njit(inline="always")
+def add_residual(part, qdd, mode, r):  # noqa: ANN001, ANN201
+    """``r += Q_int (+ M q̈ with inertia)`` from ``part.force``; returns the largest single force
+    (an element force entry or a row of M q̈)."""
+    inertia = mode[WITH_INERTIA] != 0.0
+    dofs = part.dofs
+    n = dofs.shape[1]
+    scale = 0.0
+    for e in range(dofs.shape[0]):
+        for i in range(n):
+            s = part.force[e, i]
+            if abs(s) > scale:
+                scale = abs(s)
+            if inertia:
+                acc = 0.0
+                for j in range(n):
+                    acc += part.mass[e, i, j] * qdd[dofs[e, j]]
+                if abs(acc) > scale:
+                    scale = abs(acc)
+                s += acc
+            r[dofs[e, i]] += s
+    return scale
+
+
+@njit(inline="always")
+def add_matrix(part, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` from ``part.stiff, part.damp, part.mass`` into the
+    CSC ``data``; returns the largest diagonal stiffness (the rounding floor's scale)."""
+    dofs = part.dofs
+    n = dofs.shape[1]
+    kscale = 0.0
+    for e in range(dofs.shape[0]):
+        for i in range(n):
+            if abs(part.stiff[e, i, i]) > kscale:
+                kscale = abs(part.stiff[e, i, i])
+            for j in range(n):
+                data[part.pos[e, n * i + j]] += (cK * part.stiff[e, i, j] + cC * part.damp[e, i, j]
+                                                 + cM * part.mass[e, i, j])
+    return kscale
+
+
+def _element_type_of(part_class: type) -> ElementType:
+    for name in ELEMENT_TYPES:
+        et = ELEMENT_TYPES.get(name)
+        if et.part_type is part_class:
+            return et
+    raise TypeError(f"no registered element type packs {part_class.__name__}")
+
+
+def element_residual(part: Any, q: Any, v: Any, qdd: Any, mode: Any, r: Any) -> float:
+    """``r_q += Q_int + M q̈`` of one part by its element type's kernel; the force scale."""
+    return float(_element_type_of(type(part)).residual(part, q, v, qdd, mode, r))
+
+
+def element_jacobian(part: Any, q: Any, v: Any, mode: Any, cM: float, cC: float, cK: float,
+                     data: Any) -> float:
+    """The part's matrix block by its element type's kernel; the stiffness scale."""
+    return float(_element_type_of(type(part)).jacobian(part, q, v, mode, cM, cC, cK, data))
+
+
+if HAVE_NUMBA:
+    from numba import types
+    from numba.extending import overload
+
+    def _registered(part: Any) -> ElementType | None:
+        if isinstance(part, types.BaseNamedTuple):
+            return _element_type_of(part.instance_class)  # type: ignore[attr-defined]
+        return None
+
+    @overload(element_residual)
+    def _residual_overload(part, q, v, qdd, mode, r):  # noqa: ANN001, ANN202
+        et = _registered(part)
+        if et is None:
+            return None
+        kernel = et.residual
+
+        def impl(part, q, v, qdd, mode, r):  # noqa: ANN001, ANN202
+            return kernel(part, q, v, qdd, mode, r)
+        return impl
+
+    @overload(element_jacobian)
+    def _jacobian_overload(part, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
+        et = _registered(part)
+        if et is None:
+            return None
+        kernel = et.jacobian
+
+        def impl(part, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
+            return kernel(part, q, v, mode, cM, cC, cK, data)
+        return impl
+
+
+@njit
+def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
+    """``r_q += Q_int + M q̈`` of every element group; the largest single force."""
+    scale = 0.0
+    for part in literal_unroll(parts):
+        scale = max(scale, element_residual(part, q, v, qdd, mode, r))
+    return scale
+
+
+@njit
+def groups_jacobian(parts, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """The matrix blocks of every element group; the largest diagonal stiffness."""
+    kscale = 0.0
+    for part in literal_unroll(parts):
+        kscale = max(kscale, element_jacobian(part, q, v, mode, cM, cC, cK, data))
+    return kscale

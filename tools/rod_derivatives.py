@@ -1,0 +1,173 @@
+"""Generate ``flexmbs/elements/_rod_derivatives.py``: the exact first and second derivatives of
+the 14-DOF rod's kinematic maps (FORMULATION Part I §2.1–2.2), by sympy.
+
+The rod's strain energy is a composition of four small maps, each differentiated here:
+
+- ``triad``: a node's ``(g, φ)`` -> its unit tangent ``t`` and director ``d2``
+  (``t = g/|g|``, ``d2 = Rot(t, φ) SR(t̄ → t) D̄``), 4 inputs, 6 outputs;
+- ``twist``: the two nodal triads ``(t0, d20, t1, d21)`` -> the relative twist
+  ``Δθ = 2 atan(((d̂ × d21)·t1)/(1 + d̂·d21))``, ``d̂ = SR(t0 → t1) d20``, 12 inputs;
+- ``curvatures``: at a point ξ, ``(r′, r″, t0, d20, Δθ)`` -> ``(K1, K2, K3)``, 13 inputs;
+- ``axial``: ``r′`` -> ``ε = |r′|/μ − 1`` (integrated at other points, against membrane locking).
+
+The element kernel (:mod:`flexmbs.elements.ancf_rod`) composes them by the chain rule. The
+expressions are written for inputs on their manifold (``|t0| = |d20| = 1``, ``d20 ⟂ t0``,
+``D̄ ⟂ t̄``), where ``Rot(t, φ) v = v cos φ + (t × v) sin φ`` for ``v ⟂ t``; a composition
+through the triads never leaves it, so the composite derivatives are exact.
+
+Run ``python tools/rod_derivatives.py`` after editing the formulas; the test
+``tests/elements/test_ancf_rod.py::test_generated_derivatives_are_current`` checks that the
+committed module is this script's output. Needs sympy (not a dependency of flexmbs).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+from pathlib import Path
+
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+TARGET = Path(__file__).resolve().parents[1] / "flexmbs" / "elements" / "_rod_derivatives.py"
+
+
+def generator_hash() -> str:
+    """sha256 of this script, recorded in the generated module's header."""
+    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+
+
+def _vec(name: str) -> sp.Matrix:
+    return sp.Matrix(sp.symbols(f"{name}0:3", real=True))
+
+
+def _sr(a: sp.Matrix, b: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
+    """SR(a → b) v (FORMULATION I §2.1)."""
+    c = a.dot(b)
+    k = a.cross(b)
+    return c * v + k.cross(v) + (k.dot(v) / (1 + c)) * k
+
+
+def _rot_perp(t: sp.Matrix, phi: sp.Expr, v: sp.Matrix) -> sp.Matrix:
+    """Rot(t, φ) v for v ⟂ t."""
+    return sp.cos(phi) * v + sp.sin(phi) * t.cross(v)
+
+
+def triad_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
+    g = _vec("g")
+    phi = sp.Symbol("phi", real=True)
+    tb, db = _vec("tb"), _vec("db")
+    t = g / sp.sqrt(g.dot(g))
+    d2 = _rot_perp(t, phi, _sr(tb, t, db))
+    return [*g, phi], [*tb, *db], [*t, *d2]
+
+
+def twist_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
+    t0, d20, t1, d21 = _vec("ta"), _vec("da"), _vec("tb"), _vec("db")
+    dhat = _sr(t0, t1, d20)
+    y = dhat.cross(d21).dot(t1)
+    x = dhat.dot(d21)
+    return [*t0, *d20, *t1, *d21], [], [2 * sp.atan(y / (1 + x))]
+
+
+def axial_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
+    rp = _vec("rp")
+    mu = sp.Symbol("mu", real=True)
+    return [*rp], [mu], [sp.sqrt(rp.dot(rp)) / mu - 1]
+
+
+def curvature_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
+    rp, rpp, t0, d20 = _vec("rp"), _vec("rpp"), _vec("ta"), _vec("da")
+    dth = sp.Symbol("dth", real=True)
+    xi, L, mu = sp.symbols("xi L mu", real=True)
+    n2 = rp.dot(rp)
+    nrp = sp.sqrt(n2)
+    t = rp / nrp
+    v = _sr(t0, t, d20)                     # ⟂ t
+    w = t.cross(v)
+    kap = rp.cross(rpp)
+    a = xi * dth
+    kv, kw = kap.dot(v), kap.dot(w)
+    c2 = (sp.cos(a) * kv + sp.sin(a) * kw) / n2         # κ·d2/|r′|²
+    c3 = (sp.cos(a) * kw - sp.sin(a) * kv) / n2         # κ·d3/|r′|², d3 = t × d2
+    tau = -t0.dot(t.cross(rpp)) / (nrp * (1 + t0.dot(t)))
+    return [*rp, *rpp, *t0, *d20, dth], [xi, L, mu], [(dth / L + tau) / mu, c2 / mu, c3 / mu]
+
+
+def _emit(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
+          outputs: list[sp.Expr], hessian: bool) -> str:
+    n_in, n_out = len(inputs), len(outputs)
+    exprs: list[sp.Expr] = list(outputs)
+    slots: list[str] = [f"val[{i}]" for i in range(n_out)]
+    for i, f in enumerate(outputs):
+        for a, x in enumerate(inputs):
+            d = sp.diff(f, x)
+            if d != 0:
+                exprs.append(d)
+                slots.append(f"jac[{i}, {a}]")
+    if hessian:
+        for i, f in enumerate(outputs):
+            for a, x in enumerate(inputs):
+                da = sp.diff(f, x)
+                for b in range(a, n_in):
+                    d = sp.diff(da, inputs[b])
+                    if d != 0:
+                        exprs.append(d)
+                        slots.append(f"hes[{i}, {a}, {b}]" if a == b
+                                     else f"hes[{i}, {a}, {b}] = hes[{i}, {b}, {a}]")
+    reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("w"), optimizations="basic")
+    printer = PythonCodePrinter({"fully_qualified_modules": False,
+                                                    "standard": "python3"})
+    args = ["x", "p", "val", "jac"] + (["hes"] if hessian else [])
+    lines = [f"@njit\ndef {name}({', '.join(args)}):  # noqa: ANN001, ANN201",
+             f'    """{doc}"""']
+    for i, s in enumerate(inputs):
+        lines.append(f"    {s} = x[{i}]")
+    for i, s in enumerate(params):
+        lines.append(f"    {s} = p[{i}]")
+    for sym, e in reps:
+        lines.append(f"    {sym} = {printer.doprint(e)}")
+    for slot, e in zip(slots, reduced, strict=True):
+        lines.append(f"    {slot} = {printer.doprint(e)}")
+    return "\n".join(lines) + "\n"
+
+
+def generate() -> str:
+    head = ('"""Exact derivatives of the rod\'s kinematic maps: GENERATED by tools/rod_derivatives.py '
+            '(sympy).\n\nDo not edit: change the maps in the generator and run it. Each function '
+            'takes the inputs ``x``\nand parameters ``p`` and writes the values ``val``, the '
+            'Jacobian ``jac`` (outputs x inputs) and,\nwith ``hes``, the Hessians (outputs x '
+            'inputs x inputs). Only the nonzero entries are written:\nthe caller zeroes ``jac`` '
+            'and ``hes`` once.\n"""\n# generator sha256: ' + generator_hash() + '\n'
+            '# ruff: noqa: E501\n# fmt: off\n\nfrom __future__ import '
+            'annotations\n\nfrom math import atan, cos, sin, sqrt  # noqa: F401\n\n'
+            'from .._jit import njit\n\n'
+            '__all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_h", "axial",\n'
+            '           "axial_h"]\n')
+    parts = [head]
+    maps = {"triad": (triad_map, "node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄]"),
+            "twist": (twist_map, "nodal triads -> Δθ: x = [t0, d20, t1, d21]"),
+            "curvatures": (curvature_map, "point -> (K1, K2, K3): x = [r′, r″, t0, d20, Δθ], "
+                                          "p = [ξ, L, μ]"),
+            "axial": (axial_map, "point -> ε: x = r′, p = [μ]")}
+    for name, (fn, doc) in maps.items():
+        inputs, params, outputs = fn()
+        parts.append("\n\n" + _emit(name, doc + " (values, Jacobian)", inputs, params, outputs,
+                                    False))
+        parts.append("\n\n" + _emit(name + "_h", doc + " (values, Jacobian, Hessians)", inputs,
+                                    params, outputs, True))
+    text = "".join(parts)
+    return text.replace("math.", "")
+
+
+def main() -> int:
+    text = generate()
+    if "--check" in sys.argv:
+        return 0 if TARGET.read_text() == text else 1
+    TARGET.write_text(text)
+    print(f"wrote {TARGET} ({text.count(chr(10))} lines)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
