@@ -38,7 +38,7 @@ from .elements import rigid_body as rb
 from .elements.layout import ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
 from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_RESIDUAL, kernel
-from .loads import TimeFunction, pack_loads
+from .loads import TimeFunction, moments_pattern, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
 from .solvers._compiled import idle_run
 from .springs import pack_springs, spring_energy, springs_pattern
@@ -229,7 +229,10 @@ class Assembly:
             return Attachment.rigid_body(self.body_dofs(obj),
                                          np.zeros(3) if point is None else point, frame)
         if isinstance(obj, Node):
-            return Attachment.beam_node(self.node_dofs(obj))
+            d = self.node_dofs(obj)
+            lay = obj.beam.layout
+            cols = [*lay.position, *lay.slope] + ([] if lay.twist is None else [lay.twist])
+            return Attachment.beam_node(d[cols])
         if isinstance(obj, Ground):
             return Attachment.ground(point if point is not None else np.zeros(3),
                                      frame if frame is not None else np.eye(3))
@@ -293,8 +296,11 @@ class Assembly:
                 body_att = self._attachment(spec.b, None, None)
                 node_att = self._attachment(node, None, None)
                 q_body = q0[self.body_dofs(spec.b)] if isinstance(spec.b, RigidBody) else None
+                et = node.beam.element_type
+                node_base = (None if et.node_base is None
+                             else et.node_base(self.element_dofs(node.beam), q0, node.index))
                 nonlinear.append(BeamNodeRigid.from_configuration(
-                    spec.name, node_att, body_att, q0[self.node_dofs(node)], q_body))
+                    spec.name, node_att, body_att, q0[node_att.dofs], q_body, base=node_base))
             elif k == "driver":
                 a = self._attachment(spec.a, spec.point_a, spec.frame_a)
                 b = self._attachment(spec.b, spec.point_b, spec.frame_b)
@@ -418,6 +424,7 @@ class Assembly:
         timed: list[tuple[np.ndarray, np.ndarray, TimeFunction]] = []
         body_loads: list[tuple[RigidBody, np.ndarray | None, np.ndarray, np.ndarray | None,
                                TimeFunction]] = []
+        moments: list[tuple[np.ndarray, int, np.ndarray, np.ndarray, TimeFunction]] = []
         for load in self.model.loads:
             idx: np.ndarray
             vals: np.ndarray
@@ -443,17 +450,13 @@ class Assembly:
                     lay = node.beam.layout
                     idx, vals = d[list(lay.position)], load.force.copy()
                     if load.moment is not None:
-                        # moment on a node, in the reference configuration: the part normal to
-                        # the tangent works on the slope, Q_slope = (T x t)/|r'| (FORMULATION
-                        # §1.2); on a torsion-capable element the axial part on the twist,
-                        # Q_twist = T.t (§2.3)
-                        t = self.q_ref[d[list(lay.slope)]]
-                        nt = np.linalg.norm(t)
-                        idx = np.concatenate([idx, d[list(lay.slope)]])
-                        vals = np.concatenate([vals, np.cross(load.moment, t / nt) / nt])
-                        if lay.twist is not None:
-                            idx = np.append(idx, d[lay.twist])
-                            vals = np.append(vals, np.dot(load.moment, t / nt))
+                        # a moment on a node works through its current slope (and twist):
+                        # loads.node_moment (FORMULATION §1.2, §2.3); the base tangent t̄ of
+                        # the twist is the node's reference tangent
+                        slope = d[list(lay.slope)]
+                        t = self.q_ref[slope] / np.linalg.norm(self.q_ref[slope])
+                        moments.append((slope, -1 if lay.twist is None else d[lay.twist],
+                                        load.moment, t, load.function))
                 else:
                     e, xi = beam.locate(float(s))
                     dofs = self.element_dofs(beam)[e]
@@ -470,6 +473,7 @@ class Assembly:
         self.f_const = f_const
         self.f_timed = timed
         self.body_loads = body_loads
+        self.node_moments = moments
 
     # ================================================================== pattern and packing
     def _interactions_of(self, kind: str) -> list[Any]:
@@ -493,6 +497,7 @@ class Assembly:
         for obj in self._interactions_of("clearance"):
             blocks += clearance_pattern(obj, self)
         blocks += springs_pattern(self.model.springs, self)
+        blocks += moments_pattern(self.node_moments)
         keys = [np.arange(N, dtype=np.int64) * (N + 1)]   # the full diagonal
         for rows, cols in blocks:
             r = np.asarray(rows, np.int64)
@@ -541,7 +546,7 @@ class Assembly:
         self.system = driver.SystemPart(
             self.n_coords, self.n_mult, tuple(parts),
             rb.pack_bodies(self.model.bodies, self.body_loads, self, fns),
-            pack_loads(self.f_const, self.f_timed, fns),
+            pack_loads(self.f_const, self.f_timed, self.node_moments, fns, self),
             pack_linear(self.lin_matrix, self.lin_rhs0, fn_rows, fn_idx, self),
             pack_norms(norms, self), pack_terms(terms, self),
             pack_sliding(self.joint_lists["sliding"], self, fns),

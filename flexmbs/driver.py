@@ -49,7 +49,7 @@ from .contact._detect import (
 )
 from .elements.group import groups_jacobian, groups_residual
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
-from .loads import LoadsPart, loads_residual
+from .loads import LoadsPart, loads_jacobian, loads_residual
 from .springs import SpringPart, springs_jacobian, springs_residual
 
 __all__ = ["SystemPart", "residual", "jacobian", "post_step", "ERR_LEFT_BORE", "ERR_END_OF_BEAM",
@@ -82,7 +82,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     n = sy.n
     for i in range(n, r.size):
         r[i] = 0.0
-    scale = loads_residual(sy.loads, fv, mode, r)
+    scale = loads_residual(sy.loads, q, fv, mode, r)
     scale = max(scale, groups_residual(sy.beams, q, v, qdd, mode, r))
     scale = max(scale, bodies_residual(sy.bodies, q, v, qdd, fv, mode, r))
     scale = max(scale, springs_residual(sy.springs, q, v, mode, r))
@@ -104,6 +104,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     kscale = 0.0
     kscale = max(kscale, groups_jacobian(sy.beams, q, v, mode, cM, cC, cK, data))
     bodies_jacobian(sy.bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
+    loads_jacobian(sy.loads, q, fv, mode, cK, data)
     kscale = max(kscale, springs_jacobian(sy.springs, q, v, mode, cC, cK, data))
     linear_jacobian(sy.linear, data)
     norms_jacobian(sy.norms, q, lam, cK, data)

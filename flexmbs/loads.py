@@ -18,7 +18,7 @@ from .errors import ModelError
 from .terms import LOAD_FACTOR
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .terms import FunctionTable
+    from .terms import DofMap, FunctionTable
 
 
 class TimeFunction:
@@ -177,36 +177,148 @@ def as_time_function(f: TimeFunction | Callable[[float], float] | float | None) 
 # ---------------------------------------------------------------------------------------------
 # the external-load term of the assembler (flexmbs.terms)
 class LoadsPart(NamedTuple):
-    """State-independent external forces: constant (gravity, constant loads) and timed."""
+    """External forces: constant (gravity, constant loads), timed, and moments on beam nodes
+    (which depend on the node's current slope)."""
 
     f_const: np.ndarray              # (n,) constant generalized forces
     idx: np.ndarray                  # timed loads, flattened: coordinate, value, time function
     val: np.ndarray
     fn: np.ndarray
+    m_slope: np.ndarray              # node moments: (k, 3) slope coordinates of the node
+    m_twist: np.ndarray              # (k,) its twist coordinate, −1 without one (the cable)
+    m_torque: np.ndarray             # (k, 3) the moment T (global, fixed direction)
+    m_base: np.ndarray               # (k, 3) the unit base tangent t̄ of the node's twist
+    m_fn: np.ndarray                 # (k,) time function
+    m_pos: np.ndarray                # (k, 4, 3) matrix positions of rows [g, φ] × columns g
 
 
-def pack_loads(f_const: np.ndarray, timed: list, functions: FunctionTable) -> LoadsPart:
-    """``timed``: (coordinates, values, time function) per load."""
+def pack_loads(f_const: np.ndarray, timed: list, moments: list, functions: FunctionTable,
+               dofs: DofMap) -> LoadsPart:
+    """``timed``: (coordinates, values, time function) per load; ``moments``: (slope
+    coordinates (3,), twist coordinate or −1, T (3,), base tangent (3,), time function) per
+    node moment."""
     idx = [np.asarray(i, np.int64).ravel() for i, _, _ in timed]
     val = [np.asarray(v, float).ravel() for _, v, _ in timed]
     fn = [np.full(i.size, functions(f), np.int64) for i, (_, _, f) in zip(idx, timed, strict=True)]
     cat = np.concatenate
+    k = len(moments)
+    slope = np.array([m[0] for m in moments], np.int64).reshape(k, 3)
+    twist = np.array([m[1] for m in moments], np.int64).reshape(k)
+    pos = np.full((k, 4, 3), -1, np.int64)
+    for i in range(k):
+        pos[i, :3] = dofs.positions(slope[i], slope[i]).reshape(3, 3)
+        if twist[i] >= 0:
+            pos[i, 3] = dofs.positions(twist[i:i + 1], slope[i]).reshape(3)
     return LoadsPart(np.ascontiguousarray(f_const, dtype=float),
                      cat(idx) if idx else np.zeros(0, np.int64),
-                     cat(val) if val else np.zeros(0), cat(fn) if fn else np.zeros(0, np.int64))
+                     cat(val) if val else np.zeros(0), cat(fn) if fn else np.zeros(0, np.int64),
+                     slope, twist, np.array([m[2] for m in moments], float).reshape(k, 3),
+                     np.array([m[3] for m in moments], float).reshape(k, 3),
+                     np.array([functions(m[4]) for m in moments], np.int64).reshape(k), pos)
+
+
+def moments_pattern(moments: list) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The blocks node moments write: rows [g, φ] of the node, columns g."""
+    out = []
+    for slope, twist, *_ in moments:
+        rows = np.append(slope, twist) if twist >= 0 else np.asarray(slope)
+        out.append((np.asarray(rows, np.int64), np.asarray(slope, np.int64)))
+    return out
 
 
 @njit
-def loads_residual(ld, fv, mode, r):  # noqa: ANN001, ANN201
-    """Initialises ``r_q = −λ Q_ext(t)`` (λ: load factor); returns max |r_q|."""
+def node_moment(g, T, base, twist, Q, dQ):  # noqa: ANN001, ANN201
+    """Generalized force of a moment T on a beam node with slope g, and its derivative ∂Q/∂g
+    (FORMULATION I §1.2, §2.3). With t = g/|g|, c = t̄·t:
+
+        Q_g = [T × t − (T·t)(t̄ × t)/(1 + c)] / |g|,   Q_φ = T·t        (an element with a twist)
+        Q_g = (T × t)/|g|                                               (the cable: no twist)
+
+    (the virtual rotation of the section is t × δg/|g| about the normals and, with a twist
+    coordinate, δφ plus the twist of the smallest rotation from t̄ about t). ``Q`` (4,),
+    ``dQ`` (4, 3): rows g and φ."""
+    n = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+    t = g / n
+    P = (np.eye(3) - np.outer(t, t)) / n                       # ∂t/∂g
+    Txt = np.array([T[1] * t[2] - T[2] * t[1], T[2] * t[0] - T[0] * t[2],
+                    T[0] * t[1] - T[1] * t[0]])
+    TX = np.array([[0.0, -T[2], T[1]], [T[2], 0.0, -T[0]], [-T[1], T[0], 0.0]])
+    for i in range(3):
+        Q[i] = Txt[i] / n
+        for j in range(3):
+            TP_ij = TX[i, 0] * P[0, j] + TX[i, 1] * P[1, j] + TX[i, 2] * P[2, j]
+            dQ[i, j] = TP_ij / n - Q[i] * t[j] / n
+    for j in range(3):
+        dQ[3, j] = 0.0
+    Q[3] = 0.0
+    if not twist:
+        return
+    Tt = T[0] * t[0] + T[1] * t[1] + T[2] * t[2]
+    c = base[0] * t[0] + base[1] * t[1] + base[2] * t[2]
+    bxt = np.array([base[1] * t[2] - base[2] * t[1], base[2] * t[0] - base[0] * t[2],
+                    base[0] * t[1] - base[1] * t[0]])
+    BX = np.array([[0.0, -base[2], base[1]], [base[2], 0.0, -base[0]],
+                   [-base[1], base[0], 0.0]])
+    TP = T @ P                                                  # ∂(T·t)/∂g
+    bP = base @ P                                               # ∂c/∂g
+    k = 1.0 / ((1.0 + c) * n)
+    for i in range(3):
+        B = Tt * bxt[i] * k
+        Q[i] -= B
+        for j in range(3):
+            BP_ij = BX[i, 0] * P[0, j] + BX[i, 1] * P[1, j] + BX[i, 2] * P[2, j]
+            dB = (bxt[i] * TP[j] + Tt * BP_ij) * k - B * bP[j] / (1.0 + c) - B * t[j] / n
+            dQ[i, j] -= dB
+    Q[3] = Tt
+    for j in range(3):
+        dQ[3, j] = TP[j]
+
+
+@njit
+def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
+    """Initialises ``r_q = −λ Q_ext(q, t)`` (λ: load factor); returns max |r_q|."""
     lf = mode[LOAD_FACTOR]
     n = ld.f_const.size
     for i in range(n):
         r[i] = -lf * ld.f_const[i]
     for k in range(ld.idx.size):
         r[ld.idx[k]] -= lf * fv[ld.fn[k]] * ld.val[k]
+    if ld.m_fn.size:
+        g = np.empty(3)
+        Q = np.empty(4)
+        dQ = np.empty((4, 3))
+        for k in range(ld.m_fn.size):
+            for c in range(3):
+                g[c] = q[ld.m_slope[k, c]]
+            node_moment(g, ld.m_torque[k], ld.m_base[k], ld.m_twist[k] >= 0, Q, dQ)
+            f = lf * fv[ld.m_fn[k]]
+            for c in range(3):
+                r[ld.m_slope[k, c]] -= f * Q[c]
+            if ld.m_twist[k] >= 0:
+                r[ld.m_twist[k]] -= f * Q[3]
     scale = 0.0
     for i in range(n):
         if abs(r[i]) > scale:
             scale = abs(r[i])
     return scale
+
+
+@njit
+def loads_jacobian(ld, q, fv, mode, cK, data):  # noqa: ANN001, ANN201
+    """``−cK λ ∂Q_ext/∂q`` of the node moments into ``data``."""
+    if ld.m_fn.size == 0:
+        return
+    lf = mode[LOAD_FACTOR]
+    g = np.empty(3)
+    Q = np.empty(4)
+    dQ = np.empty((4, 3))
+    for k in range(ld.m_fn.size):
+        for c in range(3):
+            g[c] = q[ld.m_slope[k, c]]
+        node_moment(g, ld.m_torque[k], ld.m_base[k], ld.m_twist[k] >= 0, Q, dQ)
+        f = cK * lf * fv[ld.m_fn[k]]
+        for i in range(4):
+            for j in range(3):
+                p = ld.m_pos[k, i, j]
+                if p >= 0:
+                    data[p] -= f * dQ[i, j]

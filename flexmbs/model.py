@@ -468,13 +468,9 @@ class Model:
                           name=name, kind="prismatic")
 
     def rigid(self, node: Node, body: RigidBody | Ground, *, name: str | None = None) -> ConstraintSpec:
-        """Rigid connection of a beam node (position and slope direction) to a body or ground."""
+        """Rigid connection of a beam node (position, slope direction and, on the rod, the turn
+        of its section) to a body or ground."""
         self._check_node(node, "rigid")
-        if node.beam.layout.twist is not None:
-            raise ModelError(f"rigid: a rigid connection of a node of element "
-                             f"'{node.beam.element}' (beam '{node.beam.name}') that includes its "
-                             "twist is not available yet; clamp the node to ground (clamp) or "
-                             "join it by position only (spherical)")
         return self._add_constraint(ConstraintSpec("rigid", self._unique(name, "rigid"), node, body))
 
     def joint(self, a: RigidBody | Node, b: RigidBody | Node | Ground = GROUND, *, point: ArrayLike3,

@@ -122,6 +122,31 @@ def _exact_tangent_models():
     sliding = next(j for j in model.interactions if isinstance(j, fm.SlidingJoint))
     sliding.friction = 0.0
     yield "kitchen_sink_exact", model
+    yield "rods_and_node_moments", rods_and_node_moments()
+
+
+def rods_and_node_moments() -> fm.Model:
+    """A damped rod arc and a cable, soft, with timed moments on nodes (whose generalized
+    forces depend on the slope): the moments' derivatives are not hidden by the stiffness."""
+    model = fm.Model()
+    section = fm.BeamStiffness(axial_stiffness=10.0, bending_stiffness=1e-2, mass_per_length=1.0,
+                               torsional_stiffness=7e-3)
+    rod = model.add_beam(fm.arc((1, 0, 0), 1.0, (0, 0, 0), -1.2, (0, 0, 1), elements=3),
+                         section=section, element="ancf_rod14", damping=0.05)
+    cable = model.add_beam(fm.line((0, 1, 0), (1, 1.3, 0.2), elements=2), section=section)
+    for beam in (rod, cable):
+        model.clamp(beam.first_node)
+        model.add_point_load(beam.last_node, moment=(0.7, -0.4, 0.9),
+                             function=lambda t: 1.0 + t)
+        model.add_point_load(beam.node(1), moment=(-0.3, 0.5, 0.2))
+    # a body held by the rod's tip (position, slope and section turn) and one by its middle node
+    tip = model.add_rigid_body(mass=0.1, inertia=(1e-3, 2e-3, 3e-3),
+                               position=tuple(rod.last_node.position + (0.05, 0.0, 0.02)))
+    model.rigid(rod.last_node, tip)
+    mid = model.add_rigid_body(mass=0.1, inertia=(1e-3, 1e-3, 1e-3),
+                               position=tuple(rod.node(2).position))
+    model.spherical(rod.node(2), mid)
+    return model
 
 
 @pytest.mark.parametrize("name, model", list(_exact_tangent_models()),

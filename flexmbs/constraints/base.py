@@ -34,7 +34,7 @@ class Attachment:
     """Where a constraint attaches: ground, a rigid body or a beam node.
 
     - ``dofs``: global coordinate indices, 7 for a rigid body (``[r, p]``), 6 for a beam node
-      (``[r, r′]``), none for ground.
+      (``[r, r′]``) or 7 with a twist (``[r, r′, φ]``), none for ground.
     - ``point``: body-frame point (rigid body) or global point (ground); unused for a beam node
       (its point is the node position).
     - ``frame``: joint frame, columns = axes, in body coordinates (rigid body) or global
@@ -51,7 +51,7 @@ class Attachment:
             raise ModelError(f"Attachment kind must be one of {sorted(_N_DOFS)} "
                              f"(got {self.kind!r})")
         dofs = np.asarray(self.dofs, dtype=np.int64).reshape(-1)
-        if dofs.size != _N_DOFS[self.kind]:
+        if dofs.size != _N_DOFS[self.kind] and not (self.kind == "beam_node" and dofs.size == 7):
             raise ModelError(f"Attachment '{self.kind}' needs {_N_DOFS[self.kind]} dofs "
                              f"(got {dofs.size})")
         point = np.asarray(self.point, dtype=float)
@@ -82,7 +82,8 @@ class Attachment:
 
     @classmethod
     def beam_node(cls, dofs: np.ndarray) -> Attachment:
-        """Beam node; ``dofs`` = global indices of [r (3), r′ (3)]."""
+        """Beam node; ``dofs`` = global indices of [r (3), r′ (3)], or [r, r′, φ] (7) for a
+        node with a twist angle (the rod)."""
         return cls("beam_node", np.asarray(dofs))
 
     @property

@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import FLAG, njit
+from ..elements.ancf_rod import node_director
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import ModelError
 from .base import Attachment, Constraint
@@ -62,7 +63,7 @@ _AXES = ("x", "y", "z")
 _ROT_PAIRS = {0: (1, 2), 1: (2, 0), 2: (0, 1)}
 
 # vector kinds (TermTable.vec_kind) and equation kinds (TermTable.eq_kind)
-CONST, BODY_POINT, BODY_DIR, NODE_POS, NODE_SLOPE = 0, 1, 2, 3, 4
+CONST, BODY_POINT, BODY_DIR, NODE_POS, NODE_SLOPE, NODE_DIRECTOR = 0, 1, 2, 3, 4, 5
 LIN, DOT = 0, 1
 
 
@@ -73,14 +74,18 @@ class TermTable(NamedTuple):
 
     A vector row v is ``c`` (CONST), ``r + A(p)s′`` (BODY_POINT, ``s′ = c``, ``[r, p] =
     q_local[o:o+7]``), ``A(p)f′`` (BODY_DIR, ``f′ = c``), ``q_local[o:o+3]`` (NODE_POS) or
-    ``q_local[o+3:o+6]`` (NODE_SLOPE), with ``o = vec_off[v]``. ``eq_vec[i] = (u1, u2, w1, w2)``
-    index rows of the same table, −1 = zero vector (w unused by LIN).
+    ``q_local[o+3:o+6]`` (NODE_SLOPE) or the director d2 of a node with a twist
+    ``[r, g, φ] = q_local[o:o+7]`` on its base (t̄, D̄) = (``c``, ``vec_d``) (NODE_DIRECTOR,
+    :func:`flexmbs.elements.ancf_rod.node_director`), with ``o = vec_off[v]``.
+    ``eq_vec[i] = (u1, u2, w1, w2)`` index rows of the same table, −1 = zero vector (w unused
+    by LIN).
     """
 
     vec_kind: np.ndarray   # int64 (nv,)
     vec_off: np.ndarray    # int64 (nv,): local offset of the attachment's first coordinate
     vec_c: np.ndarray      # float64 (nv, 3): c, s′ or f′; zeros for beam node kinds
     vec_T: np.ndarray      # float64 (nv, 3, 4, 4): point_tensor(vec_c) for body kinds, else 0
+    vec_d: np.ndarray      # float64 (nv, 3): D̄ of NODE_DIRECTOR, else 0
     eq_kind: np.ndarray    # int64 (ne,): LIN or DOT
     eq_vec: np.ndarray     # int64 (ne, 4): (u1, u2, w1, w2), −1 = absent
     eq_P: np.ndarray       # float64 (ne, 3): projection row (LIN), zeros (DOT)
@@ -89,24 +94,26 @@ class TermTable(NamedTuple):
 def _empty_table() -> TermTable:
     i, f = np.int64, np.float64
     return TermTable(np.zeros(0, i), np.zeros(0, i), np.zeros((0, 3), f), np.zeros((0, 3, 4, 4), f),
-                     np.zeros(0, i), np.zeros((0, 4), i), np.zeros((0, 3), f))
+                     np.zeros((0, 3), f), np.zeros(0, i), np.zeros((0, 4), i), np.zeros((0, 3), f))
 
 
 class _TableBuilder:
     """Collects (deduplicated) vector rows and equations into a :class:`TermTable`."""
 
     def __init__(self) -> None:
-        self._vecs: dict[tuple[int, int, bytes], int] = {}
-        self._vec_rows: list[tuple[int, int, np.ndarray]] = []
+        self._vecs: dict[tuple[int, int, bytes, bytes], int] = {}
+        self._vec_rows: list[tuple[int, int, np.ndarray, np.ndarray]] = []
         self._eqs: list[tuple[int, tuple[int, int, int, int], np.ndarray]] = []
 
-    def vec(self, kind: int, off: int, c: np.ndarray | None = None) -> int:
-        """Row index of vector (kind, off, c), added if new."""
+    def vec(self, kind: int, off: int, c: np.ndarray | None = None,
+            d: np.ndarray | None = None) -> int:
+        """Row index of vector (kind, off, c, d), added if new."""
         c = np.zeros(3) if c is None else np.array(c, dtype=np.float64).reshape(3)
-        key = (kind, off, c.tobytes())
+        d = np.zeros(3) if d is None else np.array(d, dtype=np.float64).reshape(3)
+        key = (kind, off, c.tobytes(), d.tobytes())
         if key not in self._vecs:
             self._vecs[key] = len(self._vec_rows)
-            self._vec_rows.append((kind, off, c))
+            self._vec_rows.append((kind, off, c, d))
         return self._vecs[key]
 
     def point(self, att: Attachment, off: int) -> int:
@@ -140,7 +147,8 @@ class _TableBuilder:
             body = np.array([r[0] in (BODY_POINT, BODY_DIR) for r in self._vec_rows])
             t = t._replace(vec_kind=np.array([r[0] for r in self._vec_rows], dtype=np.int64),
                            vec_off=np.array([r[1] for r in self._vec_rows], dtype=np.int64),
-                           vec_c=c, vec_T=np.ascontiguousarray(point_tensor(c) * body[:, None, None, None]))
+                           vec_c=c, vec_T=np.ascontiguousarray(point_tensor(c) * body[:, None, None, None]),
+                           vec_d=np.array([r[3] for r in self._vec_rows]))
         if self._eqs:
             t = t._replace(eq_kind=np.array([e[0] for e in self._eqs], dtype=np.int64),
                            eq_vec=np.array([e[1] for e in self._eqs], dtype=np.int64),
@@ -186,6 +194,17 @@ def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarra
         if kind == CONST:
             for k in range(3):
                 val[s, k] = table.vec_c[v, k]
+        elif kind == NODE_DIRECTOR:
+            col[s] = o + 3
+            ncol[s] = 4
+            d2 = np.empty(3)
+            jd = np.empty((3, 4))
+            node_director(q[o:o + 7], table.vec_c[v], table.vec_d[v], d2, jd, np.empty((3, 4, 4)),
+                          FLAG[0])
+            for k in range(3):
+                val[s, k] = d2[k]
+                for j in range(4):
+                    G[s, k, j] = jd[k, j]
         elif kind == NODE_POS or kind == NODE_SLOPE:  # noqa: SIM109 - compiled: no tuple search
             c0 = o if kind == NODE_POS else o + 3
             col[s] = c0
@@ -280,7 +299,23 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
         _weights(table, i, val, wt)
         for s in range(4):  # Σ_k wt_k ∂²v_k/∂p² = 2 Σ_k wt_k T_k on the body's p block
             v = table.eq_vec[i, s]
-            if v < 0 or (table.vec_kind[v] != BODY_POINT and table.vec_kind[v] != BODY_DIR):
+            if v < 0:
+                continue
+            if table.vec_kind[v] == NODE_DIRECTOR:   # Σ_k wt_k ∂²d2_k/∂(g, φ)²
+                o = table.vec_off[v]
+                d2 = np.empty(3)
+                jd = np.empty((3, 4))
+                hd = np.empty((3, 4, 4))
+                node_director(q_local[o:o + 7], table.vec_c[v], table.vec_d[v], d2, jd, hd,
+                              FLAG[1])
+                for a in range(4):
+                    for b in range(4):
+                        acc = 0.0
+                        for k in range(3):
+                            acc += wt[s, k] * hd[k, a, b]
+                        H[o + 3 + a, o + 3 + b] += li * acc
+                continue
+            if table.vec_kind[v] != BODY_POINT and table.vec_kind[v] != BODY_DIR:
                 continue
             o = table.vec_off[v] + 3
             for a in range(4):
@@ -530,17 +565,22 @@ class BeamNodeSpherical(_TermConstraint):
 
 
 class BeamNodeRigid(_TermConstraint):
-    """Rigid connection of a cable node to a body (FORMULATION I §2.3, element A: no twist eq).
+    """Rigid connection of a beam node to a body (FORMULATION I §2.3).
 
     ``r_i − (r_B + A s′) = 0`` (3 eqs, global) and ``(A n₁′)·r′_i = 0``, ``(A n₂′)·r′_i = 0``,
     where ``s′ = body.point`` and n₁′, n₂′ (columns of ``normals_body``, body coordinates, or
     global for ground) are ⟂ the node tangent. The tangential slope component stays free, so
-    the cable can stretch at the connection. Use :meth:`from_configuration` to freeze the
-    current configuration. Labels ``"x", "y", "z", "slope_n1", "slope_n2"``.
+    the beam can stretch at the connection. A node with a twist (the rod: ``node.dofs`` =
+    ``[r, r′, φ]``, its base ``(t̄, D̄)``) also holds its section: ``(A n₃′)·d2_i = 0`` with
+    n₃′ ⟂ the node's director d2 (i.e. along d3 when built, §2.3's ``(A n₂′)·d3_i = 0``
+    for the normal pair taken along the section axes). Use :meth:`from_configuration` to
+    freeze the current configuration. Labels ``"x", "y", "z", "slope_n1", "slope_n2"`` and
+    ``"twist"``.
     """
 
     def __init__(self, name: str, node: Attachment, body: Attachment,
-                 normals_body: np.ndarray) -> None:
+                 normals_body: np.ndarray, twist_normal: np.ndarray | None = None,
+                 base: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         if node.kind != "beam_node":
             raise ModelError(f"{name}: BeamNodeRigid needs a beam_node attachment first")
         if body.kind == "beam_node":
@@ -553,25 +593,36 @@ class BeamNodeRigid(_TermConstraint):
         self.node = node
         self.body = body
         self.normals_body = N.copy()
+        twisted = node.dofs.size == 7
+        if twisted and (twist_normal is None or base is None):
+            raise ModelError(f"{name}: a node with a twist needs its base (t̄, D̄) and the body "
+                             "normal holding its section (use from_configuration)")
         nb = _n_used(body)
-        self._n = 6 + nb
-        self._coords = np.concatenate([node.dofs[:6], body.dofs[:nb]])
-        self.n_equations = 5
-        self.equation_labels = ["x", "y", "z", "slope_n1", "slope_n2"]
+        nn = node.dofs.size
+        self._n = nn + nb
+        self._coords = np.concatenate([node.dofs, body.dofs[:nb]])
+        self.n_equations = 6 if twisted else 5
+        self.equation_labels = ["x", "y", "z", "slope_n1", "slope_n2"] + (["twist"] if twisted else [])
         tb = _TableBuilder()
-        tb.lin(np.eye(3), tb.point(node, 0), tb.point(body, 6))
+        tb.lin(np.eye(3), tb.point(node, 0), tb.point(body, nn))
         g = tb.vec(NODE_SLOPE, 0)
         for j in range(2):
-            tb.dot(tb.direction(body, 6, N[:, j]), -1, g, -1)
+            tb.dot(tb.direction(body, nn, N[:, j]), -1, g, -1)
+        if twisted:
+            assert twist_normal is not None and base is not None
+            d2 = tb.vec(NODE_DIRECTOR, 0, base[0], base[1])
+            tb.dot(tb.direction(body, nn, np.asarray(twist_normal, float)), -1, d2, -1)
         self.table = tb.build()
 
     @classmethod
     def from_configuration(cls, name: str, node: Attachment, body: Attachment,
                            q_node: np.ndarray, q_body: np.ndarray | None = None, *,
-                           at_node: bool = True) -> BeamNodeRigid:
+                           at_node: bool = True,
+                           base: tuple[np.ndarray, np.ndarray] | None = None) -> BeamNodeRigid:
         """Connection frozen at the given configuration.
 
-        ``q_node`` = the node's ``[r, r′]``, ``q_body`` = the body's ``[r, p]`` (None for ground).
+        ``q_node`` = the node's ``[r, r′]`` (``[r, r′, φ]`` with its ``base`` for a node with a
+        twist), ``q_body`` = the body's ``[r, p]`` (None for ground).
         The normals are ⟂ the current tangent, in body coordinates. With ``at_node`` the body
         point is replaced by the node's current position (so Φ = 0 there); otherwise
         ``body.point`` is kept.
@@ -590,7 +641,17 @@ class BeamNodeRigid(_TermConstraint):
         normals = perpendicular_pair(A.T @ q_node[3:6])
         if at_node:
             body = replace(body, point=A.T @ (q_node[:3] - origin))
-        return cls(name, node, body, normals)
+        twist_normal = None
+        if node.dofs.size == 7:
+            if base is None:
+                raise ModelError(f"{name}: a node with a twist needs its base (t̄, D̄)")
+            d2 = np.empty(3)
+            node_director(np.ascontiguousarray(q_node, dtype=float), np.asarray(base[0], float),
+                          np.asarray(base[1], float), d2, np.empty((3, 4)), np.empty((3, 4, 4)),
+                          FLAG[0])
+            t = q_node[3:6] / np.linalg.norm(q_node[3:6])
+            twist_normal = A.T @ np.cross(t, d2)
+        return cls(name, node, body, normals, twist_normal, base)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -568,6 +568,43 @@ def rest_state(q_ref_e: np.ndarray, props: RodProperties, t_bar: np.ndarray,
                    L.copy(), q, c(C))
 
 
+@njit
+def node_director(q_node, t_bar, d_bar, val, jac, hes, hessian):  # noqa: ANN001, ANN201
+    """The director d2 (3,) of a node ``q_node = [r, g, φ]`` on its base (t̄, D̄) into ``val``,
+    its derivatives with respect to (g, φ) into ``jac`` (3, 4) and, with ``hessian``, ``hes``
+    (3, 4, 4) (what a joint holding the node's section reads, §2.3)."""
+    x = np.empty(4)
+    p = np.empty(6)
+    v6 = np.empty(6)
+    j6 = np.zeros((6, 4))
+    for c in range(3):
+        x[c] = q_node[3 + c]
+        p[c] = t_bar[c]
+        p[3 + c] = d_bar[c]
+    x[3] = q_node[TWIST]
+    if hessian:
+        h6 = np.zeros((6, 4, 4))
+        triad_h(x, p, v6, j6, h6)
+        for c in range(3):
+            for a in range(4):
+                for b in range(4):
+                    hes[c, a, b] = h6[3 + c, a, b]
+    else:
+        triad(x, p, v6, j6)
+    for c in range(3):
+        val[c] = v6[3 + c]
+        for a in range(4):
+            jac[c, a] = j6[3 + c, a]
+
+
+def node_base(element_dofs: np.ndarray, q_ref: np.ndarray, node: int) -> tuple[np.ndarray, np.ndarray]:
+    """The base (t̄, D̄) of node ``node`` of a beam with element coordinates ``element_dofs``
+    (n_elem, 14): the one :func:`pack_rods` gives the elements (transport along the beam)."""
+    t_bar, d_bar = nodal_bases(element_dofs, q_ref)
+    e, a = (node, 0) if node < t_bar.shape[0] else (node - 1, 1)
+    return t_bar[e, a].copy(), d_bar[e, a].copy()
+
+
 def nodal_triads(slopes: np.ndarray, twist_angles: np.ndarray, t_bar: np.ndarray,
                  d_bar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(t_i, d2_i)`` (n, 3) of nodes with slopes ``g (n, 3)`` and twists ``φ (n,)`` on their
@@ -750,4 +787,5 @@ ELEMENT_TYPES.register("ancf_rod14", ElementType(
     reference_nodal_coordinates=reference_nodal_coordinates, gravity_force=gravity_force,
     distributed_force=distributed_force, point_force=point_force_vector, pack=pack_rods,
     strain_energy=_strain_energy, output_fields=output_fields, part_type=RodPart,
-    residual=rod_residual, jacobian=rod_jacobian, shared_rest_fields=("gauss_xi", "gauss_weight")))
+    residual=rod_residual, jacobian=rod_jacobian, shared_rest_fields=("gauss_xi", "gauss_weight"),
+    node_base=node_base))

@@ -90,6 +90,9 @@ class ElementType:
     #: fields of the packed rest data shared by all elements of a group (quadrature points):
     #: not sliced when a beam's share of its group is taken
     shared_rest_fields: tuple[str, ...] = ()
+    #: (element dofs of a beam, q_ref, node index) -> the node's base (t̄, D̄) of its twist
+    #: (elements with a twist angle): what a joint holding the node's section needs
+    node_base: Callable[[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray]] | None = None
 
 
 #: element types by scenario name

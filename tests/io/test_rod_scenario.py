@@ -118,15 +118,8 @@ def test_a_rod_scenario_writes_twist_and_torsional_moment(tmp_path):
     assert pd["torsion"] == pytest.approx(0.3 / 0.7, rel=1e-9)
 
 
-def test_a_rigid_connection_of_a_rod_node_is_refused_with_a_way_out():
+def test_a_rod_needs_a_torsional_stiffness_and_no_cable_options():
     model = fm.Model()
-    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2),
-                          section=fm.BeamStiffness(axial_stiffness=1e6, bending_stiffness=1.0,
-                                                   mass_per_length=1.0, torsional_stiffness=1.0),
-                          element="ancf_rod14")
-    body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), position=(1, 0, 0))
-    with pytest.raises(fm.ModelError, match="not available yet; clamp the node"):
-        model.rigid(beam.last_node, body)
     with pytest.raises(fm.ModelError, match="needs a torsional stiffness"):
         model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2), element="ancf_rod14",
                        section=fm.BeamStiffness(axial_stiffness=1e6, bending_stiffness=1.0,
