@@ -119,7 +119,7 @@ def _emit(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
     printer = PythonCodePrinter({"fully_qualified_modules": False,
                                                     "standard": "python3"})
     args = ["x", "p", "val", "jac"] + (["hes"] if hessian else [])
-    lines = [f"@njit\ndef {name}({', '.join(args)}):  # noqa: ANN001, ANN201",
+    lines = [f"@njit(refcount=False)\ndef {name}({', '.join(args)}):  # noqa: ANN001, ANN201",
              f'    """{doc}"""']
     for i, s in enumerate(inputs):
         lines.append(f"    {s} = x[{i}]")

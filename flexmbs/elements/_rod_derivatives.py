@@ -5,7 +5,7 @@ and parameters ``p`` and writes the values ``val``, the Jacobian ``jac`` (output
 with ``hes``, the Hessians (outputs x inputs x inputs). Only the nonzero entries are written:
 the caller zeroes ``jac`` and ``hes`` once.
 """
-# generator sha256: 687576074fee0bb6adcc35a6cb4ed4c54d51b263acb416272e05c8ad4fdd3f6e
+# generator sha256: bd42b7de94c772af4664665696aa2ee316dc815d3b02d191ff693cb0b944fcf2
 # ruff: noqa: E501
 # fmt: off
 
@@ -19,7 +19,7 @@ __all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_h",
            "axial_h"]
 
 
-@njit
+@njit(refcount=False)
 def triad(x, p, val, jac):  # noqa: ANN001, ANN201
     """node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄] (values, Jacobian)"""
     g0 = x[0]
@@ -205,7 +205,7 @@ def triad(x, p, val, jac):  # noqa: ANN001, ANN201
     jac[5, 3] = w136*w54 + w34*w40
 
 
-@njit
+@njit(refcount=False)
 def triad_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     """node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄] (values, Jacobian, Hessians)"""
     g0 = x[0]
@@ -832,7 +832,7 @@ def triad_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     hes[5, 3, 3] = -w477*w8 - w53*(g0*w55 - g1*w476)
 
 
-@njit
+@njit(refcount=False)
 def twist(x, p, val, jac):  # noqa: ANN001, ANN201
     """nodal triads -> Δθ: x = [t0, d20, t1, d21] (values, Jacobian)"""
     ta0 = x[0]
@@ -984,7 +984,7 @@ def twist(x, p, val, jac):  # noqa: ANN001, ANN201
     jac[0, 11] = w58*(tb0*w20 - tb1*w18 + w16*w31)
 
 
-@njit
+@njit(refcount=False)
 def twist_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     """nodal triads -> Δθ: x = [t0, d20, t1, d21] (values, Jacobian, Hessians)"""
     ta0 = x[0]
@@ -1818,7 +1818,7 @@ def twist_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     hes[0, 11, 11] = w719*(w34*w40*w430 - w431*w716*w724)
 
 
-@njit
+@njit(refcount=False)
 def curvatures(x, p, val, jac):  # noqa: ANN001, ANN201
     """point -> (K1, K2, K3): x = [r′, r″, t0, d20, Δθ], p = [ξ, L, μ] (values, Jacobian)"""
     rp0 = x[0]
@@ -2141,7 +2141,7 @@ def curvatures(x, p, val, jac):  # noqa: ANN001, ANN201
     jac[2, 12] = -w107*w63*xi
 
 
-@njit
+@njit(refcount=False)
 def curvatures_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     """point -> (K1, K2, K3): x = [r′, r″, t0, d20, Δθ], p = [ξ, L, μ] (values, Jacobian, Hessians)"""
     rp0 = x[0]
@@ -3926,7 +3926,7 @@ def curvatures_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     hes[2, 12, 12] = -w1509*w483*w79
 
 
-@njit
+@njit(refcount=False)
 def axial(x, p, val, jac):  # noqa: ANN001, ANN201
     """point -> ε: x = r′, p = [μ] (values, Jacobian)"""
     rp0 = x[0]
@@ -3942,7 +3942,7 @@ def axial(x, p, val, jac):  # noqa: ANN001, ANN201
     jac[0, 2] = rp2*w2
 
 
-@njit
+@njit(refcount=False)
 def axial_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
     """point -> ε: x = r′, p = [μ] (values, Jacobian, Hessians)"""
     rp0 = x[0]

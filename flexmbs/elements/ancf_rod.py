@@ -17,7 +17,7 @@ with the smallest rotation SR and the rotation Rot of §2.1. At ξ = x/L of an e
     U_e = ∫₀ᴸ ½ [EA (ε − ε0)² + GJ (K1 − K1⁰)² + EI2 (K2 − K2⁰)² + EI3 (K3 − K3⁰)²] μ dx
 
 (μ = |r′| of the reference, the superscript 0 the same measures in the reference with φ = 0, ε0
-the reference axial strain), the curvatures at 5 Gauss points (§2.5), the axial strain at 3
+the reference axial strain), the curvatures at 3 Gauss points (§2.5), the axial strain at 3
 Lobatto points (0, ½, 1; free of membrane locking like the cable's default, §1.5). Every
 interior quantity comes from the current nodal triads through SR(t_0 → ·), which is
 equivariant, so U is objective; U(q_ref) = 0 for any reference.
@@ -72,7 +72,7 @@ LAYOUT = ElementLayout(name="ancf_rod14",
 NODE_SIZE = LAYOUT.node_size
 ELEMENT_SIZE = LAYOUT.element_size
 TWIST: int = LAYOUT.twist if LAYOUT.twist is not None else -1   #: nodal index of the twist φ
-N_GAUSS = 5                #: Gauss points of the curvatures (§2.5, as verified)
+N_GAUSS = 3                #: Gauss points of the curvatures (§2.5's recommendation)
 N_STRAIN = 4               #: ε, K1, K2, K3
 N_Z = 13                   #: inputs of the Gauss-point map: r′, r″, t_0, d2_0, Δθ
 N_N = 7                    #: the nodal part of them: t_0, d2_0, Δθ
@@ -98,7 +98,7 @@ class RodProperties(NamedTuple):
 
 class RodRest(NamedTuple):
     """The fixed nodal bases of every element's two nodes and the reference measures at the
-    quadrature points: the curvatures at 5 Gauss points, the axial strain at 3 Lobatto points
+    quadrature points: the curvatures at 3 Gauss points, the axial strain at 3 Lobatto points
     (0, ½, 1: free of membrane locking, as the cable's default, FORMULATION I §1.5, §2.5)."""
 
     t_bar: np.ndarray          # (n_elem, 2, 3)
@@ -142,11 +142,11 @@ class RodWork(NamedTuple):
     a_val: np.ndarray     # (1,) ε
     a_jac: np.ndarray     # (1, 3)
     a_hes: np.ndarray     # (1, 3, 3)
-    z_q: np.ndarray       # (N_Z, 14) ∂z/∂q
+    ab: np.ndarray        # (2, 4) ∂r′/∂X_m = S′_m/L, ∂r″/∂X_m = S″_m/L² (X_m = r0, g0, r1, g1)
     e_q: np.ndarray       # (3, 14) ∂e/∂q
     sig: np.ndarray       # (3,) generalized stresses
     s_zz: np.ndarray      # (N_Z, N_Z) Σ σ_j ∂²e_j/∂z²
-    s_zq: np.ndarray      # (N_Z, 14)
+    s_zn: np.ndarray      # (N_Z, N_U) Σ σ ∂²e/∂z∂n · ∂n/∂u
     z_v: np.ndarray       # (N_Z,) ∂z/∂q · q̇
     h_q: np.ndarray       # (3, 14) ∂²e_j/∂q² · q̇
     g_n: np.ndarray       # (N_N,) Σ_points W σ_j ∂e_j/∂n
@@ -161,13 +161,13 @@ def new_work() -> RodWork:
     return RodWork(z(4), z(6), z((2, 6)), z((2, 6, 4)), z((2, 6, 4, 4)), z(12), z(0), z(1),
                    z((1, 12)), z((1, 12, 12)), z((N_N, N_U)), z((N_N, N_U, N_U)), z((N_N, N_U)),
                    z(N_Z), z(3), z(1), z(3), z((3, N_Z)), z((3, N_Z, N_Z)), z(1), z((1, 3)),
-                   z((1, 3, 3)), z((N_Z, n)), z((3, n)), z(3), z((N_Z, N_Z)), z((N_Z, n)), z(N_Z),
+                   z((1, 3, 3)), z((2, 4)), z((3, n)), z(3), z((N_Z, N_Z)), z((N_Z, N_U)), z(N_Z),
                    z((3, n)), z(N_N), z(N_Z), z(3), z(1))
 
 
 # ---------------------------------------------------------------------------------------------
 # the nodal maps and the strain measures (values; FORMULATION I §2.1–2.2)
-@njit
+@njit(refcount=False)
 def _nodal(q_e, t_bar, d_bar, w, hessian):  # noqa: ANN001, ANN202
     """Both nodal triads and Δθ of one element, with ``n_jac`` (and ``n_hes``): the derivatives
     of n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1)."""
@@ -222,39 +222,34 @@ def _nodal(q_e, t_bar, d_bar, w, hessian):  # noqa: ANN001, ANN202
                     nh[6, 4 * a + k, 4 * b + m] = s
 
 
-@njit
+@njit(refcount=False)
 def _centerline_rows(q_e, L, xi, w):  # noqa: ANN001, ANN202
-    """``z_q`` rows of r′ and r″ at ξ (the others zero) and their values into ``x_z``."""
+    """r′, r″ at ξ into ``x_z`` and their weights ``ab`` (∂z/∂q of the centreline rows: r′ and
+    r″ are Σ_m ab[·, m] X_m over the Hermite coordinates X_m = CENTERLINE[3m:3m+3])."""
     _, dS, ddS, _ = hermite_basis(xi, L)
-    zq = w.z_q
-    for i in range(N_Z):
-        for j in range(ELEMENT_SIZE):
-            zq[i, j] = 0.0
+    for m in range(4):
+        w.ab[0, m] = dS[m] / L
+        w.ab[1, m] = ddS[m] / (L * L)
     for c in range(3):
         a = 0.0
         b = 0.0
         for m in range(4):
-            col = CENTERLINE[3 * m + c]
-            zq[c, col] = dS[m] / L
-            zq[3 + c, col] = ddS[m] / (L * L)
-            a += zq[c, col] * q_e[col]
-            b += zq[3 + c, col] * q_e[col]
+            x = q_e[CENTERLINE[3 * m + c]]
+            a += w.ab[0, m] * x
+            b += w.ab[1, m] * x
         w.x_z[c] = a
         w.x_z[3 + c] = b
 
 
-@njit
+@njit(refcount=False)
 def _curvature_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
     """(K1, K2, K3) at ξ (after :func:`_nodal`) into ``c_val``, with ``c_jac`` (and ``c_hes``)
-    with respect to z = (r′, r″, t_0, d2_0, Δθ), and ``z_q = ∂z/∂q``."""
+    with respect to z = (r′, r″, t_0, d2_0, Δθ)."""
     _centerline_rows(q_e, L, xi, w)
     for c in range(3):
         w.x_z[6 + c] = w.t_val[0, c]
         w.x_z[9 + c] = w.t_val[0, 3 + c]
     w.x_z[12] = w.w_val[0]
-    for c in range(N_N):
-        for k in range(N_U):
-            w.z_q[6 + c, U_COLS[k]] = w.n_jac[c, k]
     w.p_c[0] = xi
     w.p_c[1] = L
     w.p_c[2] = mu
@@ -264,10 +259,9 @@ def _curvature_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
         curvatures(w.x_z, w.p_c, w.c_val, w.c_jac)
 
 
-@njit
+@njit(refcount=False)
 def _axial_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
-    """ε at ξ into ``a_val``, with ``a_jac`` (and ``a_hes``) with respect to r′ (the first three
-    rows of ``z_q``)."""
+    """ε at ξ into ``a_val``, with ``a_jac`` (and ``a_hes``) with respect to r′."""
     _centerline_rows(q_e, L, xi, w)
     w.p_a[0] = mu
     if hessian:
@@ -276,7 +270,45 @@ def _axial_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
         axial(w.x_z, w.p_a, w.a_val, w.a_jac)
 
 
-@njit
+@njit(refcount=False)
+def _z_dot(ab, n_jac, x, n_z, nodal, out):  # noqa: ANN001, ANN202
+    """``out = ∂z/∂q · x`` (the first ``n_z`` inputs z) for an element vector x (14,)."""
+    for c in range(3):
+        a = 0.0
+        b = 0.0
+        for m in range(4):
+            xm = x[CENTERLINE[3 * m + c]]
+            a += ab[0, m] * xm
+            b += ab[1, m] * xm
+        out[c] = a
+        if n_z > 3:
+            out[3 + c] = b
+    if nodal:
+        for c in range(N_N):
+            s = 0.0
+            for k in range(N_U):
+                s += n_jac[c, k] * x[U_COLS[k]]
+            out[6 + c] = s
+
+
+@njit(refcount=False)
+def _z_transpose(ab, n_jac, y, n_z, nodal, out):  # noqa: ANN001, ANN202
+    """``out += (∂z/∂q)ᵀ y`` for y over the first ``n_z`` inputs z."""
+    for m in range(4):
+        for c in range(3):
+            s = ab[0, m] * y[c]
+            if n_z > 3:
+                s += ab[1, m] * y[3 + c]
+            out[CENTERLINE[3 * m + c]] += s
+    if nodal:
+        for k in range(N_U):
+            s = 0.0
+            for c in range(N_N):
+                s += n_jac[c, k] * y[6 + c]
+            out[U_COLS[k]] += s
+
+
+@njit(refcount=False)
 def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):  # noqa: ANN001, ANN202
     """(ε, K1, K2, K3) at the points ``xi`` of one element into ``out`` (len(xi), 4); μ per point."""
     _nodal(q_e, t_bar, d_bar, w, False)
@@ -288,7 +320,7 @@ def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):  # noqa: ANN001, ANN202
             out[k, 1 + j] = w.c_val[j]
 
 
-@njit
+@njit(refcount=False)
 def _energies(q_e, props, rest, work, out):  # noqa: ANN001, ANN202
     for e in range(q_e.shape[0]):
         L = props.length[e]
@@ -336,92 +368,122 @@ def strain_measures(q_e: np.ndarray, t_bar: np.ndarray, d_bar: np.ndarray, lengt
 
 # ---------------------------------------------------------------------------------------------
 # internal force and its exact derivatives (FORMULATION I §2.3)
-@njit
+@njit(refcount=False)
 def _accumulate(val, jac, hes, n_z, coef, ref, W, beta, ve, w, nodal, want_k, want_c,  # noqa: ANN001, ANN202, C901, PLR0912
                 force, stiff, damp):
     """Add one quadrature point's terms of the strains ``val`` (with their derivatives ``jac``,
-    ``hes`` with respect to the first ``n_z`` inputs z, and ``z_q = ∂z/∂q``):
+    ``hes`` with respect to the first ``n_z`` inputs z; ∂z/∂q is sparse: the Hermite weights
+    ``ab`` on the centreline and, with ``nodal``, ``n_jac`` on the nodal inputs u):
 
         σ_j = C_j (e_j − e_j⁰ + β ė_j),   Q += W Σ_j σ_j ∂e_j/∂q,
-        ∂Q/∂q += W Σ_j [C_j ∂e_j/∂q ∂e_j/∂qᵀ + σ_j z_qᵀ ∂²e_j/∂z² z_q + β C_j ∂e_j/∂q (∂²e_j/∂q² q̇)ᵀ],
+        ∂Q/∂q += W Σ_j [C_j ∂e_j/∂q ∂e_j/∂qᵀ + σ_j (∂z/∂q)ᵀ ∂²e_j/∂z² ∂z/∂q
+                        + β C_j ∂e_j/∂q (∂²e_j/∂q² q̇)ᵀ],
         ∂Q/∂q̇ += W Σ_j β C_j ∂e_j/∂q ∂e_j/∂qᵀ;
 
-    with ``nodal`` (z includes n = (t_0, d2_0, Δθ)) it sums W σ_j ∂e_j/∂n into ``g_n`` for the
-    term Σ_c g_n,c ∂²n_c/∂u² the element adds once."""
+    with ``nodal`` it sums W σ_j ∂e_j/∂n into ``g_n`` for the term Σ_c g_n,c ∂²n_c/∂u² the
+    element adds once."""
     ne = ELEMENT_SIZE
     ns = val.size
-    zq = w.z_q
-    eq = w.e_q
     rated = beta != 0.0
+    # the work arrays as locals (a field of the work tuple read in a loop costs a reference
+    # count update each time)
+    eq = w.e_q
+    ab = w.ab
+    nj = w.n_jac
+    sig = w.sig
+    S = w.s_zz
+    SN = w.s_zn
+    gn = w.g_n
+    zv = w.z_v
+    hz = w.hz
+    hq = w.h_q
+    nhv = w.n_hv
     for j in range(ns):
         for i in range(ne):
-            s = 0.0
-            for a in range(n_z):
-                s += jac[j, a] * zq[a, i]
-            eq[j, i] = s
+            eq[j, i] = 0.0
+        _z_transpose(ab, nj, jac[j], n_z, nodal, eq[j])
         rate = 0.0
         if rated:
             for i in range(ne):
                 rate += eq[j, i] * ve[i]
-        w.sig[j] = coef[j] * (val[j] - ref[j] + beta * rate)
+        sig[j] = coef[j] * (val[j] - ref[j] + beta * rate)
+        f = W * sig[j]
         for i in range(ne):
-            force[i] += W * w.sig[j] * eq[j, i]
+            force[i] += f * eq[j, i]
     if want_k:
         for a in range(n_z):
-            for b in range(n_z):
+            for b in range(a, n_z):
                 s = 0.0
                 for j in range(ns):
-                    s += w.sig[j] * hes[j, a, b]
-                w.s_zz[a, b] = s
-        for a in range(n_z):
+                    s += sig[j] * hes[j, a, b]
+                S[a, b] = s
+                S[b, a] = s
+        # centreline-centreline blocks: Σ over (r′, r″) weights
+        nc = 2 if n_z > 3 else 1
+        for m in range(4):
+            for mm in range(4):
+                for c in range(3):
+                    for cc in range(3):
+                        s = 0.0
+                        for u in range(nc):
+                            for uu in range(nc):
+                                s += ab[u, m] * ab[uu, mm] * S[3 * u + c, 3 * uu + cc]
+                        stiff[CENTERLINE[3 * m + c], CENTERLINE[3 * mm + cc]] += W * s
+        if nodal:
+            # SN: rows z, columns u: Σ_c S[z, 6 + c] ∂n_c/∂u
+            for a in range(N_Z):
+                for k in range(N_U):
+                    s = 0.0
+                    for c in range(N_N):
+                        s += S[a, 6 + c] * nj[c, k]
+                    SN[a, k] = s
+            for m in range(4):
+                for c in range(3):
+                    row = CENTERLINE[3 * m + c]
+                    for k in range(N_U):
+                        s = W * (ab[0, m] * SN[c, k] + ab[1, m] * SN[3 + c, k])
+                        stiff[row, U_COLS[k]] += s
+                        stiff[U_COLS[k], row] += s
+            for k in range(N_U):
+                for kk in range(N_U):
+                    s = 0.0
+                    for c in range(N_N):
+                        s += nj[c, k] * SN[6 + c, kk]
+                    stiff[U_COLS[k], U_COLS[kk]] += W * s
+        for j in range(ns):
+            f = W * coef[j]
             for i in range(ne):
-                s = 0.0
-                for b in range(n_z):
-                    if w.s_zz[a, b] != 0.0:
-                        s += w.s_zz[a, b] * zq[b, i]
-                w.s_zq[a, i] = s
-        for i in range(ne):
-            for m in range(ne):
-                s = 0.0
-                for a in range(n_z):
-                    if zq[a, i] != 0.0:
-                        s += zq[a, i] * w.s_zq[a, m]
-                for j in range(ns):
-                    s += coef[j] * eq[j, i] * eq[j, m]
-                stiff[i, m] += W * s
+                fi = f * eq[j, i]
+                if fi != 0.0:
+                    for m in range(ne):
+                        stiff[i, m] += fi * eq[j, m]
         if nodal:
             for c in range(N_N):
                 s = 0.0
                 for j in range(ns):
-                    s += w.sig[j] * jac[j, 6 + c]
-                w.g_n[c] += W * s
+                    s += sig[j] * jac[j, 6 + c]
+                gn[c] += W * s
         if rated:
-            for a in range(n_z):
-                s = 0.0
-                for i in range(ne):
-                    s += zq[a, i] * ve[i]
-                w.z_v[a] = s
+            _z_dot(ab, nj, ve, n_z, nodal, zv)
             for j in range(ns):
                 for a in range(n_z):
                     s = 0.0
                     for b in range(n_z):
-                        s += hes[j, a, b] * w.z_v[b]
-                    w.hz[a] = s
+                        s += hes[j, a, b] * zv[b]
+                    hz[a] = s
                 for i in range(ne):
-                    s = 0.0
-                    for a in range(n_z):
-                        s += zq[a, i] * w.hz[a]
-                    w.h_q[j, i] = s
+                    hq[j, i] = 0.0
+                _z_transpose(ab, nj, hz, n_z, nodal, hq[j])
                 if nodal:
                     for k in range(N_U):
                         s = 0.0
                         for c in range(N_N):
-                            s += jac[j, 6 + c] * w.n_hv[c, k]
-                        w.h_q[j, U_COLS[k]] += s
+                            s += jac[j, 6 + c] * nhv[c, k]
+                        hq[j, U_COLS[k]] += s
                 f = W * beta * coef[j]
                 for i in range(ne):
                     for m in range(ne):
-                        stiff[i, m] += f * eq[j, i] * w.h_q[j, m]
+                        stiff[i, m] += f * eq[j, i] * hq[j, m]
     if want_c and rated:
         for j in range(ns):
             f = W * beta * coef[j]
@@ -430,7 +492,7 @@ def _accumulate(val, jac, hes, n_z, coef, ref, W, beta, ve, w, nodal, want_k, wa
                     damp[i, m] += f * eq[j, i] * eq[j, m]
 
 
-@njit
+@njit(refcount=False)
 def _rod_kernel(q, v, props, rest, w, want_k, want_c, force, stiff, damp):  # noqa: ANN001, ANN202
     """Q_int = ∂U/∂q + damping, ∂Q_int/∂q, ∂Q_int/∂q̇ of every element, by the chain rule
     through the generated maps (:func:`_accumulate`): e = e(z(q)), z = (r′, r″, n(u)),
@@ -717,7 +779,7 @@ def pack_rods(element_dofs: np.ndarray, props: RodProperties, options: object, q
                    np.zeros((1, n, n)))
 
 
-@njit
+@njit(refcount=False)
 def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r_q += Q_int(q, q̇) (+ M q̈)`` of the rod elements; returns the force scale."""
     gather_states(rp, q, v, mode)
@@ -726,7 +788,7 @@ def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     return add_residual(rp, qdd, mode, r)
 
 
-@njit
+@njit(refcount=False)
 def rod_jacobian(rp, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into ``data``; returns the stiffness scale."""
     gather_states(rp, q, v, mode)
