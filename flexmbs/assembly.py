@@ -596,6 +596,18 @@ class Assembly:
         err = self.system.error
         kind = driver.KIND_OF_ERROR.get(int(code))
         if kind is None:
+            part = self.system.beams[int(err[1])]
+            group = next((gi for gi, g in enumerate(self.groups) if g.part is part), None)
+            message = (None if group is None
+                       else self.groups[group].element_type.post_step_message)
+            if group is None or message is None:
+                return FlexmbsError(f"internal error code {code}")
+            element, slot = divmod(int(err[2]), 2)
+            for beam in self.groups[group].beams:
+                gi, sl = self.beam_slices[id(beam)]
+                if sl.start <= element < sl.stop:
+                    node = int(beam.connectivity[element - sl.start, slot])
+                    return FlexmbsError(message(beam, node, q))
             return FlexmbsError(f"internal error code {code}")
         return self.joint_lists[kind][int(err[1])].error(int(code), int(err[2]), q, t)
 

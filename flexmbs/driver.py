@@ -47,7 +47,7 @@ from .contact._detect import (
     clearance_post_step_all,
     clearance_residual,
 )
-from .elements.group import groups_jacobian, groups_residual
+from .elements.group import groups_jacobian, groups_post_step, groups_residual
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_jacobian, loads_residual
 from .springs import SpringPart, springs_jacobian, springs_residual
@@ -119,6 +119,9 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
 def post_step(sy, q, v):  # noqa: ANN001, ANN201
     """Interaction state after a converged step; must follow a :func:`residual` at this state
     (whose contact detection it reuses). Returns 0 or an ``ERR_*`` code."""
+    code = groups_post_step(sy.beams, q, sy.error)
+    if code != 0:
+        return code
     code = sliding_post_step(sy.sliding, q, sy.error)
     if code != 0:
         return code

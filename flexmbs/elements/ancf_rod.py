@@ -38,6 +38,7 @@ inertia ``ρJ_p L/6 [[2, 1], [1, 2]]`` on the two φ.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -72,6 +73,11 @@ LAYOUT = ElementLayout(name="ancf_rod14",
 NODE_SIZE = LAYOUT.node_size
 ELEMENT_SIZE = LAYOUT.element_size
 TWIST: int = LAYOUT.twist if LAYOUT.twist is not None else -1   #: nodal index of the twist φ
+#: a node whose unit tangent t has t̄·t below this after a step stops the run (about 154°; the
+#: smallest rotation from t̄ is singular at 180°, and re-basing, §2.4, is not implemented)
+TURN_LIMIT = -0.9
+#: the error code of that stop (distinct from the joints' codes, flexmbs.driver)
+ERR_NODE_TURNED = 11
 N_GAUSS = 3                #: Gauss points of the curvatures (§2.5's recommendation)
 N_STRAIN = 4               #: ε, K1, K2, K3
 N_Z = 13                   #: inputs of the Gauss-point map: r′, r″, t_0, d2_0, Δθ
@@ -797,6 +803,32 @@ def rod_jacobian(rp, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     return add_matrix(rp, cM, cC, cK, data)
 
 
+@njit(refcount=False)
+def rod_post_step(rp, q, error):  # noqa: ANN001, ANN201
+    """After a converged step: every node's tangent within :data:`TURN_LIMIT` of its base
+    tangent, else :data:`ERR_NODE_TURNED` with ``error[2]`` = 2 × element + node slot."""
+    for e in range(rp.dofs.shape[0]):
+        for a in range(2):
+            o = a * NODE_SIZE + 3
+            g0 = q[rp.dofs[e, o]]
+            g1 = q[rp.dofs[e, o + 1]]
+            g2 = q[rp.dofs[e, o + 2]]
+            tb = rp.rest.t_bar[e, a]
+            c = (tb[0] * g0 + tb[1] * g1 + tb[2] * g2) / math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+            if c < TURN_LIMIT:
+                error[2] = 2 * e + a
+                return ERR_NODE_TURNED
+    return 0
+
+
+def node_turned_message(beam: object, node: int, q: np.ndarray) -> str:
+    """The one-line message of :data:`ERR_NODE_TURNED`."""
+    limit = math.degrees(math.acos(TURN_LIMIT))
+    return (f"beam '{getattr(beam, 'name', beam)}' node {node}: its tangent turned more than "
+            f"{limit:.0f}° from its reference direction; the rod's nodal frames are not re-based "
+            "yet (FORMULATION §2.4): start from a reference closer to the deformed shape")
+
+
 def section_properties(beams: list) -> RodProperties:
     """Section resultants per element of ``beams`` (in order): EA, GJ, EI2 = EI3 = EI, ρA, the
     twist inertia ρJ_p and the damping β of each beam."""
@@ -850,4 +882,4 @@ ELEMENT_TYPES.register("ancf_rod14", ElementType(
     distributed_force=distributed_force, point_force=point_force_vector, pack=pack_rods,
     strain_energy=_strain_energy, output_fields=output_fields, part_type=RodPart,
     residual=rod_residual, jacobian=rod_jacobian, shared_rest_fields=("gauss_xi", "gauss_weight"),
-    node_base=node_base))
+    node_base=node_base, post_step=rod_post_step, post_step_message=node_turned_message))

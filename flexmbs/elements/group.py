@@ -21,12 +21,14 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from .._jit import HAVE_NUMBA, literal_unroll, njit
 from ..terms import WITH_DAMPING, WITH_INERTIA
 from .layout import ELEMENT_TYPES, ElementType
 
 __all__ = ["gather_states", "add_residual", "add_matrix", "element_residual", "element_jacobian",
-           "groups_residual", "groups_jacobian"]
+           "element_post_step", "groups_residual", "groups_jacobian", "groups_post_step"]
 
 
 @njit(inline="always")
@@ -94,6 +96,12 @@ def element_residual(part: Any, q: Any, v: Any, qdd: Any, mode: Any, r: Any) -> 
     return float(_element_type_of(type(part)).residual(part, q, v, qdd, mode, r))
 
 
+def element_post_step(part: Any, q: Any, error: Any) -> int:
+    """The part's check after a converged step (0: none or passed; else its error code)."""
+    check = _element_type_of(type(part)).post_step
+    return 0 if check is None else int(check(part, q, error))
+
+
 def element_jacobian(part: Any, q: Any, v: Any, mode: Any, cM: float, cC: float, cK: float,
                      data: Any) -> float:
     """The part's matrix block by its element type's kernel; the stiffness scale."""
@@ -118,6 +126,21 @@ if HAVE_NUMBA:
 
         def impl(part, q, v, qdd, mode, r):  # noqa: ANN001, ANN202
             return kernel(part, q, v, qdd, mode, r)
+        return impl
+
+    @overload(element_post_step)
+    def _post_step_overload(part, q, error):  # noqa: ANN001, ANN202
+        et = _registered(part)
+        if et is None:
+            return None
+        check = et.post_step
+        if check is None:
+            def none(part, q, error):  # noqa: ANN001, ANN202
+                return np.int64(0)
+            return none
+
+        def impl(part, q, error):  # noqa: ANN001, ANN202
+            return np.int64(check(part, q, error))
         return impl
 
     @overload(element_jacobian)
@@ -148,3 +171,20 @@ def groups_jacobian(parts, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN20
     for part in literal_unroll(parts):
         kscale = max(kscale, element_jacobian(part, q, v, mode, cM, cC, cK, data))
     return kscale
+
+
+@njit
+def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
+    """The element groups' checks after a converged step: the first error code (``error[1]`` =
+    the part's position in ``parts``), or 0."""
+    k = 0
+    found = 0
+    for part in literal_unroll(parts):
+        if found == 0:
+            code = element_post_step(part, q, error)
+            if code != 0:
+                found = code
+                error[0] = code
+                error[1] = k
+        k += 1  # noqa: SIM113 - numba cannot enumerate a literal_unroll
+    return found

@@ -93,6 +93,11 @@ class ElementType:
     #: (element dofs of a beam, q_ref, node index) -> the node's base (t̄, D̄) of its twist
     #: (elements with a twist angle): what a joint holding the node's section needs
     node_base: Callable[[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray]] | None = None
+    #: optional compiled check after a converged step, ``post_step(part, q, error) -> code``
+    #: (0, or an error code with ``error[2]`` = 2 × element + node slot), and the message of
+    #: its code: ``(beam, node index, q) -> str``
+    post_step: Callable[..., int] | None = None
+    post_step_message: Callable[[Any, int, np.ndarray], str] | None = None
 
 
 #: element types by scenario name

@@ -256,3 +256,20 @@ def test_helical_spring_axial_stiffness():
     assert abs(errors[0]) > 2 * abs(errors[1]), errors
     G, d, D = 2e11 / 2.6, 1e-3, 2 * R
     assert F / delta == pytest.approx(G * d**4 / (8 * D**3 * coils), rel=1e-3)
+
+
+def test_a_node_turning_past_the_frame_limit_stops_the_run_with_its_name():
+    """Re-basing (§2.4) is not implemented: a rod whose end moment rolls it beyond the limit
+    (here 3π/2 at the tip) stops after the step that turned a node past about 154° from its
+    reference direction, with a message naming the beam and node (instead of failing in the
+    singular smallest rotation)."""
+    model = fm.Model()
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=8), name="rolled",
+                          section=_section(EA=1e7, EI=1.0, GJ=0.7), element=ROD)
+    model.clamp(beam.first_node)
+    model.add_point_load(beam.last_node, moment=(0, -1.5 * np.pi, 0),
+                         function=fm.Ramp(start=0.0, end=1.0))
+    with pytest.raises(fm.FlexmbsError, match=r"beam 'rolled' node \d+: its tangent turned more "
+                                              r"than 154°"):
+        fm.simulate(model, t_end=1.0, dt=0.01, integrator=fm.GeneralizedAlpha(rho_inf=0.5),
+                    record_energy=False)
