@@ -84,8 +84,8 @@ class ElementType:
     part_type: type
     residual: Callable[..., float]
     jacobian: Callable[..., float]
-    #: the options of a group when none are given (an empty group of the type, see
-    #: :meth:`flexmbs.assembly.Assembly`: every registered type has a part in every system)
+    #: the options of a group when none are given (the empty group of the default element
+    #: type that every system holds, see :meth:`flexmbs.assembly.Assembly`)
     default_options: Any = None
     #: fields of the packed rest data shared by all elements of a group (quadrature points):
     #: not sliced when a beam's share of its group is taken
