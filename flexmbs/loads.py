@@ -274,6 +274,14 @@ def node_moment(g, T, base, twist, Q, dQ):  # noqa: ANN001, ANN201
         dQ[3, j] = TP[j]
 
 
+@njit(inline="always")
+def _moment_of(ld, k, q, g, Q, dQ):  # noqa: ANN001, ANN202
+    """``Q``, ``dQ`` of node moment k at ``q`` (``g``: scratch for the node's slope)."""
+    for c in range(3):
+        g[c] = q[ld.m_slope[k, c]]
+    node_moment(g, ld.m_torque[k], ld.m_base[k], ld.m_twist[k] >= 0, Q, dQ)
+
+
 @njit
 def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
     """Initialises ``r_q = −λ Q_ext(q, t)`` (λ: load factor); returns max |r_q|."""
@@ -288,9 +296,7 @@ def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
         Q = np.empty(4)
         dQ = np.empty((4, 3))
         for k in range(ld.m_fn.size):
-            for c in range(3):
-                g[c] = q[ld.m_slope[k, c]]
-            node_moment(g, ld.m_torque[k], ld.m_base[k], ld.m_twist[k] >= 0, Q, dQ)
+            _moment_of(ld, k, q, g, Q, dQ)
             f = lf * fv[ld.m_fn[k]]
             for c in range(3):
                 r[ld.m_slope[k, c]] -= f * Q[c]
@@ -313,9 +319,7 @@ def loads_jacobian(ld, q, fv, mode, cK, data):  # noqa: ANN001, ANN201
     Q = np.empty(4)
     dQ = np.empty((4, 3))
     for k in range(ld.m_fn.size):
-        for c in range(3):
-            g[c] = q[ld.m_slope[k, c]]
-        node_moment(g, ld.m_torque[k], ld.m_base[k], ld.m_twist[k] >= 0, Q, dQ)
+        _moment_of(ld, k, q, g, Q, dQ)
         f = cK * lf * fv[ld.m_fn[k]]
         for i in range(4):
             for j in range(3):
