@@ -617,10 +617,11 @@ def print_info(sc: Any, asm: Any, file: TextIO) -> None:
         k = b.stiffness
         opts = getattr(b, "options", None)
         p(f"  {b.name}: {b.n_elem} elements, {b.n_nodes} nodes, length {_fmt(b.length)} m"
-          f"{', closed' if b.closed else ''}")
+          f"{', closed' if b.closed else ''} (element {b.element})")
         p(f"    EA {_fmt(k.axial_stiffness)} N, EI {_fmt(k.bending_stiffness)} N m^2, "
           f"rhoA {_fmt(k.mass_per_length)} kg/m"
           + (f", GJ {_fmt(k.torsional_stiffness)} N m^2" if k.torsional_stiffness else "")
+          + (f", rhoJp {_fmt(k.polar_mass_moment)} kg m" if b.layout.twist is not None else "")
           + (f", radius {_fmt(k.radius)} m" if k.radius else ""))
         p(f"    damping {_fmt(b.damping)} s, reference axial strain "
           f"{_fmt(b.reference_axial_strain)}" + (f", options {opts}" if opts is not None else ""))

@@ -86,7 +86,7 @@ def test_info_prints_model(capsys):
     assert main(["info", CANTILEVER, "--set", "beams.rod.elements=8"]) == EXIT_OK
     text = capsys.readouterr().out
     assert "coordinates  54" in text and "multipliers  5" in text   # 9 nodes x 6
-    assert "rod: 8 elements, 9 nodes, length 1 m" in text
+    assert "rod: 8 elements, 9 nodes, length 1 m (element ancf_cable)" in text
     assert "clamp1: clamp rod.node[0], 5 equations" in text
     assert "probes (2)" in text and "tip_x, tip_y, tip_z" in text
     assert "dropped redundant equations (0)" in text and "GeneralizedAlpha(" in text
