@@ -35,9 +35,9 @@ from .constraints.linear import linear_pattern, pack_linear
 from .constraints.sliding import pack_sliding, sliding_pattern
 from .contact.joint import clearance_pattern, pack_clearance
 from .elements import rigid_body as rb
-from .elements.layout import ELEMENT_TYPES, ElementType
+from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
-from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_RESIDUAL, kernel
+from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel
 from .loads import TimeFunction, moments_pattern, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
 from .solvers._compiled import idle_run
@@ -556,7 +556,9 @@ class Assembly:
             pack_clearance(self.joint_lists["clearance"], self, self.n_total),
             pack_springs(self.model.springs, self),
             pack_drivers(drivers, self, fns),
-            np.zeros(3, np.int64))
+            np.zeros(3, np.int64),
+            np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
+                          if g.element_type.rebase is not None), BASE_RECORD)))
         self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
         self._r = np.zeros(self.n_total)
@@ -656,28 +658,70 @@ class Assembly:
 
     def _kernel(self, op: int, q: np.ndarray, v: np.ndarray, qdd: np.ndarray, lam: np.ndarray,
                 fv: np.ndarray, mode: np.ndarray, out: np.ndarray,
-                coef: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> tuple[float, int]:
+                coef: tuple[float, float, float] = (0.0, 0.0, 0.0), *,
+                run: Any = None) -> tuple[float, int]:
         """One evaluation through :func:`flexmbs.kernel.kernel` (``out``: the residual for
         ``OP_RESIDUAL``, the CSC data of the iteration matrix for ``OP_JACOBIAN``)."""
         r, data = (self._r, out) if op == OP_JACOBIAN else (out, self._data)
         value, code = kernel(op, self.system, q, v, qdd, lam, fv.reshape(1, -1), mode,
-                             np.array(coef, dtype=float), r, data, self._idle_run)
+                             np.array(coef, dtype=float), r, data,
+                             self._idle_run if run is None else run)
         return float(value), int(code)
 
-    def post_step(self, q: np.ndarray, v: np.ndarray, t: float) -> None:
-        """Interaction state after a converged step (may raise :class:`SimulationStopped`)."""
+    def post_step(self, q: np.ndarray, v: np.ndarray, t: float, qdd: np.ndarray | None = None,
+                  acc: np.ndarray | None = None) -> None:
+        """Interaction state after a converged step (may raise :class:`SimulationStopped`),
+        then the nodal frames re-based where needed (FORMULATION §2.4), which changes the
+        twist entries of ``q, v`` and of ``qdd, acc`` (when given) in place."""
         python = self.python_interactions()
-        q = np.ascontiguousarray(q, dtype=float)
-        v = np.ascontiguousarray(v, dtype=float)
+        for name, arr in (("q", q), ("v", v), ("qdd", qdd), ("acc", acc)):
+            if arr is not None and not (isinstance(arr, np.ndarray) and arr.dtype == float
+                                        and arr.flags.c_contiguous and arr.shape == (self.n_coords,)):
+                raise TypeError(f"post_step: {name} must be a contiguous float array of "
+                                f"{self.n_coords} coordinates (it is changed in place)")
         lam = np.zeros(self.n_mult)
         fv, mode = self.functions.values(t), dynamic_mode()
         _, code = self._kernel(OP_RESIDUAL, q, v, np.zeros_like(q), lam, fv, mode, self._r)
         if not code:
-            _, code = self._kernel(OP_POST_STEP, q, v, q, lam, fv, mode, self._r)
+            run = self._idle_run._replace(a=acc if acc is not None else np.zeros(0))
+            _, code = self._kernel(OP_POST_STEP, q, v, qdd if qdd is not None else np.zeros(0),
+                                   lam, fv, mode, self._r, run=run)
         if code:
             raise self.error_exception(code, q, t)
         for obj in python:
             obj.post_step(q, v, t)
+
+    def rebase_frames(self, q: np.ndarray) -> int:
+        """Re-base the nodal frames of a static solution ``q`` (changed in place) whose
+        tangents turned far from their bases (FORMULATION §2.4); the number of re-based nodes.
+        Raises :class:`FlexmbsError` if a node turned past the frames' limit."""
+        if self.system.bases.shape[0] == 0:
+            return 0
+        count, code = self._kernel(OP_REBASE, q, np.zeros_like(q), np.zeros(0),
+                                   np.zeros(self.n_mult), self.functions.values(0.0),
+                                   static_mode(1.0), self._r)
+        if code:
+            raise self.error_exception(code, q, 0.0)
+        return int(count)
+
+    def node_bases(self) -> np.ndarray:
+        """Every twisting node's current base: records ``[twist coordinate, t̄ (3), D̄ (3)]``
+        (FORMULATION §2.4; what a checkpoint carries)."""
+        rows = [g.element_type.bases(g.part) for g in self.groups if g.element_type.bases]
+        return np.vstack(rows) if rows else np.zeros((0, BASE_RECORD))
+
+    def set_node_bases(self, records: np.ndarray) -> None:
+        """Give the nodes of ``records`` (:meth:`node_bases`) their bases in every holder: the
+        elements, joints and node moments (a resumed run)."""
+        records = np.asarray(records, dtype=float).reshape(-1, BASE_RECORD)
+        log = self.system.bases
+        if records.shape[0] > log.shape[0]:
+            raise ValueError(f"{records.shape[0]} nodal bases for a model with {log.shape[0]} "
+                             "twisting node slots")
+        log[:records.shape[0]] = records
+        self._kernel(OP_SET_BASES, np.zeros(self.n_coords), np.zeros(self.n_coords), np.zeros(0),
+                     np.zeros(self.n_mult), self.functions.values(0.0), static_mode(1.0), self._r,
+                     (float(records.shape[0]), 0.0, 0.0))
 
     # ---------------------------------------------------------------- DofMap / MatrixSink
     def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -802,8 +846,11 @@ class Assembly:
         kin = 0.0
         strain = 0.0
         for grp in self.groups:
-            ve = v[grp.dofs]
-            kin += 0.5 * float(np.einsum("ei,eij,ej->", ve, grp.mass, ve))
+            if grp.element_type.kinetic_energy is not None:
+                kin += grp.element_type.kinetic_energy(grp.part, q, v)
+            else:
+                ve = v[grp.dofs]
+                kin += 0.5 * float(np.einsum("ei,eij,ej->", ve, grp.mass, ve))
             strain += float(np.sum(grp.element_type.strain_energy(q[grp.dofs], grp.props, grp.rest,
                                                                   grp.options)))
         bp = self.system.bodies

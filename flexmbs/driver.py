@@ -31,6 +31,7 @@ from .constraints.joints import (
     norms_residual,
     terms_jacobian,
     terms_residual,
+    terms_set_bases,
 )
 from .constraints.linear import LinearPart, linear_jacobian, linear_residual
 from .constraints.sliding import (
@@ -47,13 +48,19 @@ from .contact._detect import (
     clearance_post_step_all,
     clearance_residual,
 )
-from .elements.group import groups_jacobian, groups_post_step, groups_residual
+from .elements.group import (
+    groups_jacobian,
+    groups_post_step,
+    groups_rebase,
+    groups_residual,
+    groups_set_bases,
+)
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
-from .loads import LoadsPart, loads_jacobian, loads_residual
+from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
 from .springs import SpringPart, springs_jacobian, springs_residual
 
-__all__ = ["SystemPart", "residual", "jacobian", "post_step", "ERR_LEFT_BORE", "ERR_END_OF_BEAM",
-           "KIND_OF_ERROR"]
+__all__ = ["SystemPart", "residual", "jacobian", "post_step", "rebase", "rebase_static", "set_bases",
+           "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "KIND_OF_ERROR"]
 
 #: term kind whose joint list ``error[1]`` indexes, per error code
 KIND_OF_ERROR = {ERR_LEFT_BORE: "clearance", ERR_END_OF_BEAM: "sliding"}
@@ -73,6 +80,7 @@ class SystemPart(NamedTuple):
     springs: SpringPart
     drivers: DriverPart
     error: np.ndarray                # (3,) [code, joint, detail] of the last error
+    bases: np.ndarray                # (nodes with a twist, 7) re-based nodes' records (§2.4)
 
 
 @njit(inline="always")
@@ -102,7 +110,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     for i in range(data.size):
         data[i] = 0.0
     kscale = 0.0
-    kscale = max(kscale, groups_jacobian(sy.beams, q, v, mode, cM, cC, cK, data))
+    kscale = max(kscale, groups_jacobian(sy.beams, q, v, qdd, mode, cM, cC, cK, data))
     bodies_jacobian(sy.bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
     loads_jacobian(sy.loads, q, fv, mode, cK, data)
     kscale = max(kscale, springs_jacobian(sy.springs, q, v, mode, cC, cK, data))
@@ -116,9 +124,10 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
 
 
 @njit(inline="always")
-def post_step(sy, q, v):  # noqa: ANN001, ANN201
-    """Interaction state after a converged step; must follow a :func:`residual` at this state
-    (whose contact detection it reuses). Returns 0 or an ``ERR_*`` code."""
+def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
+    """Interaction state after a converged step, then the nodal frames re-based where needed
+    (:func:`rebase`); must follow a :func:`residual` at this state (whose contact detection it
+    reuses). Returns 0 or an ``ERR_*`` code (then nothing is changed)."""
     code = groups_post_step(sy.beams, q, sy.error)
     if code != 0:
         return code
@@ -126,4 +135,39 @@ def post_step(sy, q, v):  # noqa: ANN001, ANN201
     if code != 0:
         return code
     clearance_post_step_all(sy.clearance)
+    rebase(sy, q, v, qdd, acc)
     return 0
+
+
+@njit(inline="always")
+def rebase(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
+    """Nodes whose tangent turned far from its base get a new chart (FORMULATION §2.4): the
+    element groups change their coordinates (``q, v, qdd`` and the integrator's ``acc``; an
+    empty array is left out) and record the new bases, which the joints and node moments
+    holding those nodes then read. Returns the number of re-based nodes."""
+    count = groups_rebase(sy.beams, q, v, qdd, acc, sy.bases)
+    if count > 0:
+        set_bases(sy, sy.bases, count, False)
+    return count
+
+
+@njit(inline="always")
+def rebase_static(sy, q):  # noqa: ANN001, ANN201
+    """:func:`rebase` of a static solution ``q`` (no rates) after the elements' checks; returns
+    ``(re-based nodes, 0)`` or ``(0, error code)``."""
+    code = groups_post_step(sy.beams, q, sy.error)
+    if code != 0:
+        return 0, code
+    empty = np.zeros(0)
+    return rebase(sy, q, empty, empty, empty), 0
+
+
+@njit(inline="always")
+def set_bases(sy, log, stop, elements):  # noqa: ANN001, ANN201
+    """Every holder of a node listed in ``log[:stop]`` (records ``[twist coordinate, t̄, D̄]``)
+    takes its base: joints and node moments, and with ``elements`` the element groups too (a
+    resumed run; after :func:`rebase` they have them already)."""
+    if elements:
+        groups_set_bases(sy.beams, log, stop)
+    terms_set_bases(sy.terms, log, stop)
+    loads_set_bases(sy.loads, log, stop)

@@ -15,7 +15,12 @@ holds the step loop.
 - ``OP_JACOBIAN``: the iteration matrix ``cM M + cC C + cK K`` (``coef = [cM, cC, cK]``) with
   its constraint borders into ``data``; returns ``(stiffness scale, error code)``;
 - ``OP_POST_STEP``: interaction state after a converged step (after an ``OP_RESIDUAL`` at the
-  same state); returns ``(0, error code)``;
+  same state) and re-basing of nodal frames, which changes ``q, v, qdd`` and ``run.a`` in place;
+  returns ``(0, error code)``;
+- ``OP_REBASE``: only the re-basing of a static solution ``q``; returns ``(number of re-based
+  nodes, error code)``;
+- ``OP_SET_BASES``: the nodal bases of the records ``system.bases[:coef[0]]`` into every
+  holder (a resumed run); returns ``(0, 0)``;
 - ``OP_STEPS``: up to ``run.n_steps`` generalized-α steps (``fv[k]`` = time-function values at
   the end of step k); returns ``(status, 0)``.
 
@@ -26,12 +31,13 @@ one-row ``fv``, so that every call has the same argument types (one signature, o
 from __future__ import annotations
 
 from ._jit import njit
-from .driver import jacobian, post_step, residual
+from .driver import jacobian, post_step, rebase_static, residual, set_bases
 from .solvers._compiled import alpha_run
 
-__all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "kernel", "kernels_cached"]
+__all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE", "OP_SET_BASES",
+           "kernel", "kernels_cached"]
 
-OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP = range(4)
+OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES = range(6)
 
 
 @njit
@@ -42,7 +48,13 @@ def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: A
     if op == OP_JACOBIAN:
         return jacobian(system, q, v, qdd, lam, fv[0], mode, coef[0], coef[1], coef[2], data)
     if op == OP_POST_STEP:
-        return 0.0, post_step(system, q, v)
+        return 0.0, post_step(system, q, v, qdd, run.a)
+    if op == OP_REBASE:
+        count, code = rebase_static(system, q)
+        return float(count), code
+    if op == OP_SET_BASES:
+        set_bases(system, system.bases, int(coef[0]), True)
+        return 0.0, 0
     return float(alpha_run(system, q, v, qdd, lam, fv, mode, r, data, run)), 0
 
 

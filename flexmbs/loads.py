@@ -283,6 +283,17 @@ def _moment_of(ld, k, q, g, Q, dQ):  # noqa: ANN001, ANN202
 
 
 @njit
+def loads_set_bases(ld, log, stop):  # noqa: ANN001, ANN201
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
+    moments on them read the new base tangent."""
+    for k in range(ld.m_twist.size):
+        for j in range(stop):
+            if ld.m_twist[k] >= 0 and np.int64(log[j, 0]) == ld.m_twist[k]:
+                for c in range(3):
+                    ld.m_base[k, c] = log[j, 1 + c]
+
+
+@njit
 def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
     """Initialises ``r_q = −λ Q_ext(q, t)`` (λ: load factor); returns max |r_q|."""
     lf = mode[LOAD_FACTOR]

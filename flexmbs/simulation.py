@@ -286,6 +286,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                          sections=interaction_sections(asm, s), probe_values=values,
                          energy=energy,
                          checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm),
+                                           "node_bases": asm.node_bases(),
                                            **{f"solver_{k}": v for k, v in solver_now.items()}})
         if observer is not None:
             observer(s)
@@ -435,6 +436,12 @@ def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[Stat
                             f"{state.lam.size} multipliers (this run: {asm.n_coords}, {asm.n_mult})")
     if not (math.isfinite(state.t) and np.all(np.isfinite(state.q))):
         raise ScenarioError(f"cannot resume: {ckpt} holds a non-finite state")
+    bases = extra.get("node_bases")
+    if bases is not None and np.size(bases):
+        try:
+            asm.set_node_bases(np.asarray(bases, dtype=float))
+        except ValueError as exc:
+            raise ScenarioError(f"cannot resume: {ckpt}: {exc}") from None
     saved = extra.get("interactions") or {}
     for i, obj in enumerate(asm.model.interactions):
         key = str(getattr(obj, "name", i))

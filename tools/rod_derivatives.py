@@ -8,7 +8,12 @@ The rod's strain energy is a composition of four small maps, each differentiated
 - ``twist``: the two nodal triads ``(t0, d20, t1, d21)`` -> the relative twist
   ``Δθ = 2 atan(((d̂ × d21)·t1)/(1 + d̂·d21))``, ``d̂ = SR(t0 → t1) d20``, 12 inputs;
 - ``curvatures``: at a point ξ, ``(r′, r″, t0, d20, Δθ)`` -> ``(K1, K2, K3)``, 13 inputs;
-- ``axial``: ``r′`` -> ``ε = |r′|/μ − 1`` (integrated at other points, against membrane locking).
+- ``axial``: ``r′`` -> ``ε = |r′|/μ − 1`` (integrated at other points, against membrane locking);
+- ``spin``: a node's ``(g, ġ)`` -> the spin of its chart about the tangent,
+  ``w = ω_SR·t = −t̄·(t × ṫ)/(1 + t̄·t)`` (§2.4; linear in ġ: ``w = b·ġ``), with what the
+  section's kinetic energy ``½ ρJ_p ω²``, ``ω = φ̇ + w``, needs for its Lagrange equations:
+  ``b = ∂w/∂ġ``, ``s = (∂w/∂g)·ġ`` (so ``ω̇ = φ̈ + b·g̈ + s``) and the gyroscopic vector
+  ``c = (∂b/∂g − (∂b/∂g)ᵀ) ġ``; first derivatives only.
 
 The element kernel (:mod:`flexmbs.elements.ancf_rod`) composes them by the chain rule. The
 expressions are written for inputs on their manifold (``|t0| = |d20| = 1``, ``d20 ⟂ t0``,
@@ -94,6 +99,20 @@ def curvature_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
     return [*rp, *rpp, *t0, *d20, dth], [xi, L, mu], [(dth / L + tau) / mu, c2 / mu, c3 / mu]
 
 
+def spin_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
+    g, gd, tb = _vec("g"), _vec("gd"), _vec("tb")
+    n = sp.sqrt(g.dot(g))
+    t = g / n
+    td = (gd - t * t.dot(gd)) / n
+    w = -tb.dot(t.cross(td)) / (1 + tb.dot(t))
+    b = [sp.diff(w, x) for x in gd]
+    dw = [sp.diff(w, x) for x in g]
+    s = sum(dw[j] * gd[j] for j in range(3))
+    c = [sum((sp.diff(b[i], g[j]) - sp.diff(b[j], g[i])) * gd[j] for j in range(3))
+         for i in range(3)]
+    return [*g, *gd], [*tb], [w, *b, s, *c]
+
+
 def _emit(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
           outputs: list[sp.Expr], hessian: bool) -> str:
     n_in, n_out = len(inputs), len(outputs)
@@ -143,7 +162,7 @@ def generate() -> str:
             'annotations\n\nfrom math import atan, cos, sin, sqrt  # noqa: F401\n\n'
             'from .._jit import njit\n\n'
             '__all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_h", "axial",\n'
-            '           "axial_h"]\n')
+            '           "axial_h", "spin"]\n')
     parts = [head]
     maps = {"triad": (triad_map, "node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄]"),
             "twist": (twist_map, "nodal triads -> Δθ: x = [t0, d20, t1, d21]"),
@@ -156,6 +175,9 @@ def generate() -> str:
                                     False))
         parts.append("\n\n" + _emit(name + "_h", doc + " (values, Jacobian, Hessians)", inputs,
                                     params, outputs, True))
+    inputs, params, outputs = spin_map()
+    parts.append("\n\n" + _emit("spin", "node (g, ġ) -> (w, b, s, c): x = [g, ġ], p = [t̄] "
+                                  "(values, Jacobian)", inputs, params, outputs, False))
     text = "".join(parts)
     return text.replace("math.", "")
 

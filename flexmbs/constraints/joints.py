@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from .._jit import FLAG, njit
+from ..elements.ancf_rod import TWIST as NODE_TWIST
 from ..elements.ancf_rod import node_director
 from ..elements.rigid_body import point_tensor, rotation_matrix
 from ..errors import ModelError
@@ -804,6 +805,26 @@ def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
             lr = lam[row]
             for k in range(nloc):
                 r[tm.coords[c0 + k]] += tm.jac[i - e0, k] * lr
+
+
+@njit
+def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
+    the directors (NODE_DIRECTOR) of joints holding them read the new bases."""
+    table = tm.table
+    for c in range(tm.coord_ptr.size - 1):
+        c0 = tm.coord_ptr[c]
+        for i in range(tm.eq_ptr[c], tm.eq_ptr[c + 1]):
+            for s in range(4):
+                v = table.eq_vec[i, s]
+                if v < 0 or table.vec_kind[v] != NODE_DIRECTOR:
+                    continue
+                twist = tm.coords[c0 + table.vec_off[v] + NODE_TWIST]
+                for j in range(stop):
+                    if np.int64(log[j, 0]) == twist:
+                        for k in range(3):
+                            table.vec_c[v, k] = log[j, 1 + k]
+                            table.vec_d[v, k] = log[j, 4 + k]
 
 
 @njit

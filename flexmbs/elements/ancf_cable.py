@@ -793,7 +793,7 @@ def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit
-def beam_jacobian(bm, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def beam_jacobian(bm, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into the CSC ``data``; returns the largest
     diagonal stiffness entry (the scale of the rounding floor of the convergence test)."""
     gather_states(bm, q, v, mode)

@@ -45,12 +45,14 @@ import numpy as np
 
 from .._jit import FLAG, njit
 from ..errors import ModelError
+from ..terms import WITH_INERTIA
 from . import ancf_cable as cable
 from ._rod_derivatives import (
     axial,
     axial_h,
     curvatures,
     curvatures_h,
+    spin,
     triad,
     triad_h,
     twist,
@@ -73,16 +75,21 @@ LAYOUT = ElementLayout(name="ancf_rod14",
 NODE_SIZE = LAYOUT.node_size
 ELEMENT_SIZE = LAYOUT.element_size
 TWIST: int = LAYOUT.twist if LAYOUT.twist is not None else -1   #: nodal index of the twist φ
-#: a node whose unit tangent t has t̄·t below this after a step stops the run (about 154°; the
-#: smallest rotation from t̄ is singular at 180°, and re-basing, §2.4, is not implemented)
+SLOPE: int = LAYOUT.slope[0]   #: nodal index of the slope's first component
+#: a node whose unit tangent t has t̄·t below this after a converged step is re-based (§2.4:
+#: its tangent turned more than 120° from its base t̄)
+REBASE_LIMIT = -0.5
+#: a node whose tangent turned past this (about 154°) within one step fails the step (the
+#: smallest rotation from t̄ is singular at 180°): the integrator retries with a smaller step
 TURN_LIMIT = -0.9
-#: the error code of that stop (distinct from the joints' codes, flexmbs.driver)
+#: the error code of that failure (distinct from the joints' codes, flexmbs.driver)
 ERR_NODE_TURNED = 11
 N_GAUSS = 3                #: Gauss points of the curvatures (§2.5's recommendation)
 N_STRAIN = 4               #: ε, K1, K2, K3
 N_Z = 13                   #: inputs of the Gauss-point map: r′, r″, t_0, d2_0, Δθ
 N_N = 7                    #: the nodal part of them: t_0, d2_0, Δθ
 N_U = 8                    #: their element inputs: g_0, φ_0, g_1, φ_1
+N_SPIN = 8                 #: outputs of the generated ``spin`` map: w, b (3), s, c (3)
 #: element coordinates of the centreline [r0, g0, r1, g1] and of the nodal inputs [g0, φ0, g1, φ1]
 CENTERLINE = LAYOUT.centerline
 U_COLS = np.array([a * NODE_SIZE + i for a in range(2) for i in (*LAYOUT.slope, TWIST)], np.int64)
@@ -103,12 +110,16 @@ class RodProperties(NamedTuple):
 
 
 class RodRest(NamedTuple):
-    """The fixed nodal bases of every element's two nodes and the reference measures at the
+    """The nodal bases of every element's two nodes and the reference measures at the
     quadrature points: the curvatures at 3 Gauss points, the axial strain at 3 Lobatto points
-    (0, ½, 1: free of membrane locking, as the cable's default, FORMULATION I §1.5, §2.5)."""
+    (0, ½, 1: free of membrane locking, as the cable's default, FORMULATION I §1.5, §2.5).
+    ``t_bar, d_bar`` are the current bases (changed by re-basing, §2.4; a checkpoint carries
+    them), ``t_ref, d_ref`` the reference's (with ``q_ref`` they give the reference measures)."""
 
     t_bar: np.ndarray          # (n_elem, 2, 3)
     d_bar: np.ndarray          # (n_elem, 2, 3)
+    t_ref: np.ndarray          # (n_elem, 2, 3)
+    d_ref: np.ndarray          # (n_elem, 2, 3)
     gauss_xi: np.ndarray       # (N_GAUSS,) on [0, 1]
     gauss_weight: np.ndarray   # (N_GAUSS,) weights, sum 1
     gauss_mu: np.ndarray       # (n_elem, N_GAUSS) |r′| of the reference
@@ -159,6 +170,13 @@ class RodWork(NamedTuple):
     hz: np.ndarray        # (N_Z,)
     c_coef: np.ndarray    # (3,) GJ, EI2, EI3 of the element
     a_coef: np.ndarray    # (1,) EA
+    s_x: np.ndarray       # (6,) g, ġ of a node (twist inertia)
+    s_p: np.ndarray       # (3,) its base tangent t̄
+    s_y: np.ndarray       # (2, N_SPIN) w, b, s, c of both nodes
+    s_jac: np.ndarray     # (2, N_SPIN, 6) their derivatives with respect to (g, ġ)
+    s_d: np.ndarray       # (2, 2, 3) per node: the matrix rows of w and of ẇ (g columns)
+    s_m: np.ndarray       # (3, 2) per node: M_φ ω, M_φ ω̇, M_φ ẇ
+    s_o: np.ndarray       # (3, 2) per node: ω, ω̇, ẇ
 
 
 def new_work() -> RodWork:
@@ -168,7 +186,8 @@ def new_work() -> RodWork:
                    z((1, 12)), z((1, 12, 12)), z((N_N, N_U)), z((N_N, N_U, N_U)), z((N_N, N_U)),
                    z(N_Z), z(3), z(1), z(3), z((3, N_Z)), z((3, N_Z, N_Z)), z(1), z((1, 3)),
                    z((1, 3, 3)), z((2, 4)), z((3, n)), z(3), z((N_Z, N_Z)), z((N_Z, N_U)), z(N_Z),
-                   z((3, n)), z(N_N), z(N_Z), z(3), z(1))
+                   z((3, n)), z(N_N), z(N_Z), z(3), z(1), z(6), z(3), z((2, N_SPIN)),
+                   z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -631,7 +650,8 @@ def rest_state(q_ref_e: np.ndarray, props: RodProperties, t_bar: np.ndarray,
     C = np.column_stack([np.asarray(getattr(props, f), dtype=float).reshape(-1)
                          for f in ("EA", "GJ", "EI2", "EI3")]).reshape(ne, N_STRAIN)
     c = np.ascontiguousarray
-    return RodRest(t_bar, d_bar, xg, wg, c(mu_g), c(k0), xa, wa, c(mu_a),
+    return RodRest(t_bar.copy(), d_bar.copy(), t_bar.copy(), d_bar.copy(), xg, wg, c(mu_g), c(k0),
+                   xa, wa, c(mu_a),
                    c(np.asarray(props.reference_axial_strain, dtype=float).reshape(ne, 1)),
                    L.copy(), q, c(C))
 
@@ -753,6 +773,7 @@ class RodPart(NamedTuple):
     stiff: np.ndarray                # work (n_elem, 14, 14): ∂Q_int/∂q, ∂Q_int/∂q̇
     damp: np.ndarray
     empty: np.ndarray                # (1, 14, 14): a dummy tangent in the residual
+    limits: np.ndarray               # (2,) cosines t̄·t: re-base below [0], fail a step below [1]
 
 
 def nodal_bases(element_dofs: np.ndarray, q_ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -782,51 +803,255 @@ def pack_rods(element_dofs: np.ndarray, props: RodProperties, options: object, q
     return RodPart(D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, n * n), props,
                    rest, np.ascontiguousarray(mass_matrix(props)), new_work(), np.zeros((ne, n)),
                    np.zeros((ne, n)), np.zeros((ne, n)), np.zeros((ne, n, n)), np.zeros((ne, n, n)),
-                   np.zeros((1, n, n)))
+                   np.zeros((1, n, n)), np.array([REBASE_LIMIT, TURN_LIMIT]))
 
 
 @njit(refcount=False)
 def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
-    """``r_q += Q_int(q, q̇) (+ M q̈)`` of the rod elements; returns the force scale."""
+    """``r_q += Q_int(q, q̇) (+ M q̈ and the sections' spin inertia)`` of the rod elements;
+    returns the force scale."""
     gather_states(rp, q, v, mode)
     _rod_kernel(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[0], FLAG[0], rp.force, rp.empty,
                 rp.empty)
-    return add_residual(rp, qdd, mode, r)
+    scale = add_residual(rp, qdd, mode, r)
+    if mode[WITH_INERTIA] != 0.0:
+        scale = max(scale, _spin_inertia(rp, q, v, qdd, r, r, 0.0, 0.0, 0.0, FLAG[0]))
+    return scale
 
 
 @njit(refcount=False)
-def rod_jacobian(rp, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
-    """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into ``data``; returns the stiffness scale."""
+def rod_jacobian(rp, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+    """``cK ∂Q/∂q + cC ∂Q/∂q̇ + cM ∂Q/∂q̈`` of the internal and inertial forces into ``data``;
+    returns the stiffness scale."""
     gather_states(rp, q, v, mode)
     _rod_kernel(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[1], FLAG[1], rp.force, rp.stiff,
                 rp.damp)
-    return add_matrix(rp, cM, cC, cK, data)
+    kscale = add_matrix(rp, cM, cC, cK, data)
+    if mode[WITH_INERTIA] != 0.0:
+        _spin_inertia(rp, q, v, qdd, data, data, cM, cC, cK, FLAG[1])
+    return kscale
+
+
+@njit(refcount=False)
+def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):  # noqa: ANN001, ANN202, C901, PLR0912
+    """The sections' spin inertia beyond the constant ``M_φ φ̈`` (§2.3, §2.4): the twist
+    kinetic energy ``½ ωᵀ M_φ ω`` per element counts the spin ``ω_a = φ̇_a + w_a`` of each
+    node's section (``w_a = b_a·ġ_a`` the spin of its chart, generated ``spin`` map), so the
+    motion does not depend on the charts and a re-basing keeps it. Lagrange's equations add
+
+        ΔQ_φa = (M_φ ẇ)_a,   ΔQ_ga = (M_φ ω̇)_a b_a + (M_φ ω)_a c_a,   ẇ = b·g̈ + s,
+
+    into ``r`` (returns the largest term), or with ``matrix`` their exact derivatives
+    ``cK ∂/∂q + cC ∂/∂q̇ + cM ∂/∂q̈`` into ``data``."""
+    w = rp.work
+    y = w.s_y
+    Y = w.s_jac
+    D = w.s_d
+    o_ = w.s_o
+    m_ = w.s_m
+    scale = 0.0
+    n = ELEMENT_SIZE
+    for e in range(rp.dofs.shape[0]):
+        mp = rp.props.twist_inertia[e] * rp.props.length[e] / 6.0
+        if mp == 0.0:
+            continue
+        for a in range(2):
+            o = a * NODE_SIZE + SLOPE
+            for c in range(3):
+                w.s_x[c] = q[rp.dofs[e, o + c]]
+                w.s_x[3 + c] = v[rp.dofs[e, o + c]]
+                w.s_p[c] = rp.rest.t_bar[e, a, c]
+            spin(w.s_x, w.s_p, y[a], Y[a])
+            k = rp.dofs[e, a * NODE_SIZE + TWIST]
+            wd = y[a, 4]
+            for c in range(3):
+                wd += y[a, 1 + c] * qdd[rp.dofs[e, o + c]]
+            o_[0, a] = v[k] + y[a, 0]
+            o_[1, a] = qdd[k] + wd
+            o_[2, a] = wd
+        for j in range(3):
+            for a in range(2):
+                m_[j, a] = mp * (2.0 * o_[j, a] + o_[j, 1 - a])
+        if not matrix:
+            for a in range(2):
+                o = a * NODE_SIZE + SLOPE
+                f = m_[2, a]
+                r[rp.dofs[e, a * NODE_SIZE + TWIST]] += f
+                scale = max(scale, abs(f))
+                for c in range(3):
+                    f = m_[1, a] * y[a, 1 + c] + m_[0, a] * y[a, 5 + c]
+                    r[rp.dofs[e, o + c]] += f
+                    scale = max(scale, abs(f))
+            continue
+        for b in range(2):
+            o = b * NODE_SIZE + SLOPE
+            for j in range(3):
+                D[b, 0, j] = cK * Y[b, 0, j] + cC * Y[b, 0, 3 + j]
+                dk = Y[b, 4, j]
+                dc = Y[b, 4, 3 + j]
+                for i in range(3):
+                    gi = qdd[rp.dofs[e, o + i]]
+                    dk += gi * Y[b, 1 + i, j]
+                    dc += gi * Y[b, 1 + i, 3 + j]
+                D[b, 1, j] = cK * dk + cC * dc + cM * y[b, 1 + j]
+        for a in range(2):
+            ra = a * NODE_SIZE
+            for b in range(2):
+                cb = b * NODE_SIZE
+                mab = mp * (2.0 if a == b else 1.0)
+                for j in range(3):
+                    col = cb + SLOPE + j
+                    data[rp.pos[e, n * (ra + TWIST) + col]] += mab * D[b, 1, j]
+                    for i in range(3):
+                        val = mab * (y[a, 1 + i] * D[b, 1, j] + y[a, 5 + i] * D[b, 0, j])
+                        if a == b:
+                            val += (m_[1, a] * (cK * Y[a, 1 + i, j] + cC * Y[a, 1 + i, 3 + j])
+                                    + m_[0, a] * (cK * Y[a, 5 + i, j] + cC * Y[a, 5 + i, 3 + j]))
+                        data[rp.pos[e, n * (ra + SLOPE + i) + col]] += val
+                for i in range(3):
+                    data[rp.pos[e, n * (ra + SLOPE + i) + cb + TWIST]] += mab * (
+                        y[a, 1 + i] * cM + y[a, 5 + i] * cC)
+    return scale
 
 
 @njit(refcount=False)
 def rod_post_step(rp, q, error):  # noqa: ANN001, ANN201
     """After a converged step: every node's tangent within :data:`TURN_LIMIT` of its base
-    tangent, else :data:`ERR_NODE_TURNED` with ``error[2]`` = 2 × element + node slot."""
+    tangent (``rp.limits[1]``), else :data:`ERR_NODE_TURNED` with ``error[2]`` = 2 × element +
+    node slot."""
     for e in range(rp.dofs.shape[0]):
         for a in range(2):
-            o = a * NODE_SIZE + 3
-            g0 = q[rp.dofs[e, o]]
-            g1 = q[rp.dofs[e, o + 1]]
-            g2 = q[rp.dofs[e, o + 2]]
-            tb = rp.rest.t_bar[e, a]
-            c = (tb[0] * g0 + tb[1] * g1 + tb[2] * g2) / math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
-            if c < TURN_LIMIT:
+            if _base_cosine(rp, q, e, a) < rp.limits[1]:
                 error[2] = 2 * e + a
                 return ERR_NODE_TURNED
     return 0
+
+
+@njit(inline="always")
+def _base_cosine(rp, q, e, a):  # noqa: ANN001, ANN202
+    """t̄·t of node slot ``a`` of element ``e``: the cosine of its tangent's turn from its base."""
+    o = a * NODE_SIZE + SLOPE
+    g0 = q[rp.dofs[e, o]]
+    g1 = q[rp.dofs[e, o + 1]]
+    g2 = q[rp.dofs[e, o + 2]]
+    tb = rp.rest.t_bar[e, a]
+    return (tb[0] * g0 + tb[1] * g1 + tb[2] * g2) / math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+
+
+@njit
+def rod_rebase(rp, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN201
+    """Re-base every node whose tangent turned past :data:`REBASE_LIMIT` (``rp.limits[0]``) from
+    its base (§2.4):
+    ``t̄ ← t, D̄ ← d2, φ ← 0`` (the triad, hence every strain, unchanged), ``φ̇ ← φ̇ + ω_SR·t``
+    (the physical spin kept), ``φ̈`` and the integrator's acceleration-like ``acc`` by the
+    rate of that spin (each left out when its array is empty). Each re-based node is appended
+    to ``log`` (records of :data:`~flexmbs.elements.layout.BASE_RECORD`: twist coordinate, t̄,
+    D̄) from row ``count``; returns the new count. Empty ``v, qdd, acc``: a static solution.
+    The spin ``ω = φ̇ + w`` and its rate (the twist inertia's, :func:`_spin_inertia`) are the
+    same in both charts, so the motion continues unchanged."""
+    x = np.empty(4)
+    p = np.empty(6)
+    val = np.empty(6)
+    jac = np.empty((6, 4))
+    xs = np.empty(6)
+    ys = np.empty(N_SPIN)
+    js = np.zeros((N_SPIN, 6))
+    for e in range(rp.dofs.shape[0]):
+        for a in range(2):
+            if _base_cosine(rp, q, e, a) >= rp.limits[0]:
+                continue
+            o = a * NODE_SIZE + SLOPE
+            k = rp.dofs[e, a * NODE_SIZE + TWIST]
+            tb = rp.rest.t_bar[e, a]
+            for c in range(3):
+                x[c] = q[rp.dofs[e, o + c]]
+                xs[c] = x[c]
+                xs[3 + c] = v[rp.dofs[e, o + c]] if v.size > 0 else 0.0
+                p[c] = tb[c]
+                p[3 + c] = rp.rest.d_bar[e, a, c]
+            x[3] = q[k]
+            triad(x, p, val, jac)
+            # the chart's spin w = b·ġ and its rate ẇ = b·g̈ + s (generated ``spin``, §2.4)
+            spin(xs, p[:3], ys, js)
+            if qdd.size > 0:
+                qdd[k] += ys[4]
+                for c in range(3):
+                    qdd[k] += ys[1 + c] * qdd[rp.dofs[e, o + c]]
+            if acc.size > 0:
+                acc[k] += ys[4]
+                for c in range(3):
+                    acc[k] += ys[1 + c] * acc[rp.dofs[e, o + c]]
+            if v.size > 0:
+                v[k] += ys[0]
+            q[k] = 0.0
+            # the new base: t̄ = t, D̄ = d2 made exactly orthonormal to it
+            dt = val[0] * val[3] + val[1] * val[4] + val[2] * val[5]
+            dn = 0.0
+            for c in range(3):
+                val[3 + c] -= dt * val[c]
+                dn += val[3 + c] * val[3 + c]
+            dn = math.sqrt(dn)
+            log[count, 0] = k
+            for c in range(3):
+                log[count, 1 + c] = val[c]
+                log[count, 4 + c] = val[3 + c] / dn
+            count = rod_set_bases(rp, log, count, count + 1)
+    return count
+
+
+@njit
+def rod_set_bases(rp, log, start, stop):  # noqa: ANN001, ANN201
+    """Give the nodes of ``log[start:stop]`` (records ``[twist coordinate, t̄, D̄]``) their bases in
+    every element that holds them; returns ``stop``."""
+    for i in range(start, stop):
+        k = np.int64(log[i, 0])
+        for e in range(rp.dofs.shape[0]):
+            for a in range(2):
+                if rp.dofs[e, a * NODE_SIZE + TWIST] == k:
+                    for c in range(3):
+                        rp.rest.t_bar[e, a, c] = log[i, 1 + c]
+                        rp.rest.d_bar[e, a, c] = log[i, 4 + c]
+    return stop
+
+
+def rod_bases(rp: RodPart) -> np.ndarray:
+    """The current base of every node of the part: (n_nodes, 7) records (what a
+    checkpoint carries, :func:`rod_set_bases` takes)."""
+    keys = rp.dofs[:, [TWIST, NODE_SIZE + TWIST]].ravel()
+    _, first = np.unique(keys, return_index=True)
+    e, a = np.divmod(first, 2)
+    return np.column_stack([keys[first].astype(float), rp.rest.t_bar[e, a], rp.rest.d_bar[e, a]])
+
+
+def rod_kinetic_energy(rp: RodPart, q: np.ndarray, v: np.ndarray) -> float:
+    """Kinetic energy of the part: the centreline's ``½ q̇ᵀ M q̇`` and the sections' spin
+    ``½ ωᵀ M_φ ω`` per element with ``ω = φ̇ + w`` (:func:`_spin_inertia`)."""
+    ve = v[rp.dofs]
+    phi_dot = ve[:, [TWIST, NODE_SIZE + TWIST]]
+    omega = phi_dot.copy()
+    ys = np.empty(N_SPIN)
+    js = np.zeros((N_SPIN, 6))
+    slope = SLOPE + np.arange(3)
+    for e in range(rp.dofs.shape[0]):
+        for a in range(2):
+            cols = rp.dofs[e, a * NODE_SIZE + slope]
+            spin(np.concatenate([q[cols], v[cols]]), np.ascontiguousarray(rp.rest.t_bar[e, a]), ys,
+                 js)
+            omega[e, a] += ys[0]
+    m_phi = np.asarray(rp.props.twist_inertia, float) * np.asarray(rp.props.length, float) / 6.0
+    def twist_energy(x: np.ndarray) -> np.ndarray:      # ½ xᵀ M_φ x per element
+        return m_phi * (x[:, 0] ** 2 + x[:, 0] * x[:, 1] + x[:, 1] ** 2)
+
+    return float(0.5 * np.einsum("ei,eij,ej->", ve, rp.mass, ve)
+                 + np.sum(twist_energy(omega) - twist_energy(phi_dot)))
 
 
 def node_turned_message(beam: object, node: int, q: np.ndarray) -> str:
     """The one-line message of :data:`ERR_NODE_TURNED`."""
     limit = math.degrees(math.acos(TURN_LIMIT))
     return (f"beam '{getattr(beam, 'name', beam)}' node {node}: its tangent turned more than "
-            f"{limit:.0f}° from its reference direction; the rod's nodal frames are not re-based "
-            "yet (FORMULATION §2.4): start from a reference closer to the deformed shape")
+            f"{limit:.0f}° from its base within one step (re-basing, FORMULATION §2.4, follows "
+            "turns between steps): take a smaller time step or more load steps")
 
 
 def section_properties(beams: list) -> RodProperties:
@@ -862,7 +1087,7 @@ def output_fields(q_e: np.ndarray, rest: RodRest, options: object,
     eps, K, mu = cable.centerline_strain_and_curvature(q_e[:, CENTERLINE], rest.q_ref[:, CENTERLINE],
                                                        rest.length, xi)
     K1 = strain_measures(q_e, rest.t_bar, rest.d_bar, rest.length, xi, mu)[:, :, 1]
-    K1_ref = strain_measures(rest.q_ref, rest.t_bar, rest.d_bar, rest.length, xi, mu)[:, :, 1]
+    K1_ref = strain_measures(rest.q_ref, rest.t_ref, rest.d_ref, rest.length, xi, mu)[:, :, 1]
     torsion = K1 - K1_ref
     twist_angle = (q_e[:, TWIST, None] * (1.0 - xi[None, :])
                    + q_e[:, NODE_SIZE + TWIST, None] * xi[None, :])
@@ -882,4 +1107,6 @@ ELEMENT_TYPES.register("ancf_rod14", ElementType(
     distributed_force=distributed_force, point_force=point_force_vector, pack=pack_rods,
     strain_energy=_strain_energy, output_fields=output_fields, part_type=RodPart,
     residual=rod_residual, jacobian=rod_jacobian, shared_rest_fields=("gauss_xi", "gauss_weight"),
-    node_base=node_base, post_step=rod_post_step, post_step_message=node_turned_message))
+    node_base=node_base, post_step=rod_post_step, post_step_message=node_turned_message,
+    rebase=rod_rebase, set_bases=rod_set_bases, bases=rod_bases,
+    kinetic_energy=rod_kinetic_energy))

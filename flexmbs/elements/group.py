@@ -28,7 +28,8 @@ from ..terms import WITH_DAMPING, WITH_INERTIA
 from .layout import ELEMENT_TYPES, ElementType
 
 __all__ = ["gather_states", "add_residual", "add_matrix", "element_residual", "element_jacobian",
-           "element_post_step", "groups_residual", "groups_jacobian", "groups_post_step"]
+           "element_post_step", "element_rebase", "element_set_bases", "groups_residual",
+           "groups_jacobian", "groups_post_step", "groups_rebase", "groups_set_bases"]
 
 
 @njit(inline="always")
@@ -102,10 +103,23 @@ def element_post_step(part: Any, q: Any, error: Any) -> int:
     return 0 if check is None else int(check(part, q, error))
 
 
-def element_jacobian(part: Any, q: Any, v: Any, mode: Any, cM: float, cC: float, cK: float,
-                     data: Any) -> float:
+def element_rebase(part: Any, q: Any, v: Any, qdd: Any, acc: Any, log: Any, count: int) -> int:
+    """Re-base the part's nodal frames that need it (elements with charts, FORMULATION §2.4);
+    the new count of records in ``log``."""
+    rebase = _element_type_of(type(part)).rebase
+    return count if rebase is None else int(rebase(part, q, v, qdd, acc, log, count))
+
+
+def element_set_bases(part: Any, log: Any, start: int, stop: int) -> int:
+    """Give the part's nodes listed in ``log[start:stop]`` their bases; returns ``stop``."""
+    set_bases = _element_type_of(type(part)).set_bases
+    return stop if set_bases is None else int(set_bases(part, log, start, stop))
+
+
+def element_jacobian(part: Any, q: Any, v: Any, qdd: Any, mode: Any, cM: float, cC: float,
+                     cK: float, data: Any) -> float:
     """The part's matrix block by its element type's kernel; the stiffness scale."""
-    return float(_element_type_of(type(part)).jacobian(part, q, v, mode, cM, cC, cK, data))
+    return float(_element_type_of(type(part)).jacobian(part, q, v, qdd, mode, cM, cC, cK, data))
 
 
 if HAVE_NUMBA:
@@ -143,15 +157,45 @@ if HAVE_NUMBA:
             return np.int64(check(part, q, error))
         return impl
 
+    @overload(element_rebase)
+    def _rebase_overload(part, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN202
+        et = _registered(part)
+        if et is None:
+            return None
+        rebase = et.rebase
+        if rebase is None:
+            def none(part, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN202
+                return count
+            return none
+
+        def impl(part, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN202
+            return rebase(part, q, v, qdd, acc, log, count)
+        return impl
+
+    @overload(element_set_bases)
+    def _set_bases_overload(part, log, start, stop):  # noqa: ANN001, ANN202
+        et = _registered(part)
+        if et is None:
+            return None
+        set_bases = et.set_bases
+        if set_bases is None:
+            def none(part, log, start, stop):  # noqa: ANN001, ANN202
+                return stop
+            return none
+
+        def impl(part, log, start, stop):  # noqa: ANN001, ANN202
+            return set_bases(part, log, start, stop)
+        return impl
+
     @overload(element_jacobian)
-    def _jacobian_overload(part, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
+    def _jacobian_overload(part, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
         et = _registered(part)
         if et is None:
             return None
         kernel = et.jacobian
 
-        def impl(part, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
-            return kernel(part, q, v, mode, cM, cC, cK, data)
+        def impl(part, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
+            return kernel(part, q, v, qdd, mode, cM, cC, cK, data)
         return impl
 
 
@@ -165,11 +209,11 @@ def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit
-def groups_jacobian(parts, q, v, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def groups_jacobian(parts, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """The matrix blocks of every element group; the largest diagonal stiffness."""
     kscale = 0.0
     for part in literal_unroll(parts):
-        kscale = max(kscale, element_jacobian(part, q, v, mode, cM, cC, cK, data))
+        kscale = max(kscale, element_jacobian(part, q, v, qdd, mode, cM, cC, cK, data))
     return kscale
 
 
@@ -188,3 +232,20 @@ def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
                 error[1] = k
         k += 1  # noqa: SIM113 - numba cannot enumerate a literal_unroll
     return found
+
+
+@njit
+def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
+    """Re-base the nodal frames of every element group that has charts (FORMULATION §2.4) after
+    a converged step; returns the number of records written to ``log``."""
+    count = 0
+    for part in literal_unroll(parts):
+        count = element_rebase(part, q, v, qdd, acc, log, count)
+    return count
+
+
+@njit
+def groups_set_bases(parts, log, stop):  # noqa: ANN001, ANN201
+    """Give every listed node (``log[:stop]``) its base, in whichever group holds it."""
+    for part in literal_unroll(parts):
+        element_set_bases(part, log, 0, stop)

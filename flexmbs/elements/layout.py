@@ -80,7 +80,7 @@ class ElementType:
     output_fields: Callable[..., dict[str, np.ndarray]]
     #: the named tuple ``pack`` returns, and its compiled kernels (:mod:`flexmbs.elements.group`):
     #: ``residual(part, q, v, qdd, mode, r) -> force scale`` adds ``Q_int + M q̈``,
-    #: ``jacobian(part, q, v, mode, cM, cC, cK, data) -> stiffness scale`` the matrix block
+    #: ``jacobian(part, q, v, qdd, mode, cM, cC, cK, data) -> stiffness scale`` the matrix block
     part_type: type
     residual: Callable[..., float]
     jacobian: Callable[..., float]
@@ -98,7 +98,22 @@ class ElementType:
     #: its code: ``(beam, node index, q) -> str``
     post_step: Callable[..., int] | None = None
     post_step_message: Callable[[Any, int, np.ndarray], str] | None = None
+    #: elements whose nodal frames change charts (the rod, FORMULATION §2.4): compiled
+    #: ``rebase(part, q, v, qdd, acc, log, count) -> count`` after a converged step (appends a
+    #: record ``[twist coordinate, t̄ (3), D̄ (3)]`` per re-based node to ``log``),
+    #: ``set_bases(part, log, start, stop)`` takes such records (a resumed run), ``bases(part)``
+    #: lists every node's current one
+    rebase: Callable[..., int] | None = None
+    set_bases: Callable[..., int] | None = None
+    bases: Callable[[Any], np.ndarray] | None = None
+    #: ``(part, q, v) -> kinetic energy`` of elements whose inertia is not the constant mass
+    #: alone (the rod's spinning sections); default ``½ q̇ᵀ M q̇``
+    kinetic_energy: Callable[[Any, np.ndarray, np.ndarray], float] | None = None
 
+
+#: columns of a re-basing record (:attr:`ElementType.rebase`): the node's twist coordinate, its
+#: new base t̄ (3) and D̄ (3)
+BASE_RECORD = 7
 
 #: element types by scenario name
 ELEMENT_TYPES: Registry[ElementType] = Registry("element")

@@ -240,7 +240,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
         if renew_jacobian(info[INFO_STEP_ITS], info[INFO_CYC_STEPS], info[INFO_CYC_ITS],
                           refresh_cost):
             info[INFO_RENEW] = 1.0
-        code = post_step(model, q, v)
+        code = post_step(model, q, v, qdd, a)
         if code == 0:
             info[INFO_DONE] += 1.0
             continue

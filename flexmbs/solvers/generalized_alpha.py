@@ -260,9 +260,10 @@ class _PythonStepper:
         return 1
 
     def finish_chunk(self) -> None:
-        """Interaction state after the converged step (may stop the run)."""
+        """Interaction state after the converged step (may stop the run), nodal frames
+        re-based."""
         st = self.state
-        self.step.asm.post_step(st.q, st.v, st.t)
+        self.step.asm.post_step(st.q, st.v, st.t, st.qdd, st.a)
 
     def totals(self) -> tuple[int, int, int]:
         t = self.newton.total

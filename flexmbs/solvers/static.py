@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..assembly import Assembly
-from ..errors import ConvergenceError, ModelError
+from ..errors import ConvergenceError, FlexmbsError, ModelError
 from .newton import Newton, NewtonOptions
 
 
@@ -112,6 +112,15 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
                 raise ConvergenceError(
                     f"static solve failed at load factor {factor:.4g} (increment below "
                     f"{o.min_increment:g}): {exc}") from None
+            continue
+        try:
+            asm.rebase_frames(q)       # new nodal charts where tangents turned far (§2.4)
+        except FlexmbsError as exc:    # a node turned past the frames' limit: smaller increment
+            prob.restore(saved)
+            inc *= 0.5
+            if inc < o.min_increment:
+                raise ConvergenceError(f"static solve failed at load factor {factor:.4g}: "
+                                       f"{exc}") from None
             continue
         factor = trial
         n_inc += 1

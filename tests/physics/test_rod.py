@@ -192,28 +192,6 @@ def test_released_curved_rod_conserves_energy_with_rho_inf_one():
     assert E2[-1] < E2[1] * (1 - 1e-3)
 
 
-@pytest.mark.parametrize("element, turn", [("ancf_cable", 2 * np.pi), (ROD, np.pi / 2)])
-def test_an_end_moment_rolls_a_cantilever_into_a_circular_arc(element, turn):
-    """A moment M about a fixed axis at the tip of a straight cantilever (dead load, its work
-    through the tip's current slope): the beam bends into an arc of radius EI/M turning by
-    M L/EI, the tip at (ρ sin θ, 0, ρ(1 − cos θ)) (inextensible, exact for any angle). The
-    cable rolls into a full circle; the rod turns its tip by 90° (its nodal frames need
-    re-basing beyond about 120°, §2.4). 16 elements, 20 load steps: 1e-4 of L."""
-    EI, L = 1.0, 1.0
-    M = turn * EI / L
-    model = fm.Model()
-    beam = model.add_beam(fm.line((0, 0, 0), (L, 0, 0), elements=16),
-                          section=_section(EA=1e7, EI=EI, GJ=0.7), element=element)
-    model.clamp(beam.first_node)
-    model.add_point_load(beam.last_node, moment=(0, -M, 0))
-    asm = Assembly(model)
-    st = fm.solve_static(asm, fm.StaticOptions(load_steps=20))
-    rho = EI / M
-    tip = st.q[asm.node_dofs(beam.last_node)[:3]]
-    exact = np.array([rho * np.sin(turn), 0.0, rho * (1 - np.cos(turn))])
-    assert np.abs(tip - exact).max() < 1e-4 * L
-
-
 def _helical_spring(elements_per_coil: int, coils: int = 4, R: float = 0.01, pitch: float = 2e-3,
                     F: float = 0.1) -> tuple[float, fm.BeamStiffness, float]:
     """A helical spring clamped at its foot; its head rigidly fixed to an end plate that slides
@@ -262,19 +240,3 @@ def test_helical_spring_axial_stiffness():
     G, d, D = 2e11 / 2.6, 1e-3, 2 * R
     assert F / delta == pytest.approx(G * d**4 / (8 * D**3 * coils), rel=1e-3)
 
-
-def test_a_node_turning_past_the_frame_limit_stops_the_run_with_its_name():
-    """Re-basing (§2.4) is not implemented: a rod whose end moment rolls it beyond the limit
-    (here 3π/2 at the tip) stops after the step that turned a node past about 154° from its
-    reference direction, with a message naming the beam and node (instead of failing in the
-    singular smallest rotation)."""
-    model = fm.Model()
-    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=8), name="rolled",
-                          section=_section(EA=1e7, EI=1.0, GJ=0.7), element=ROD)
-    model.clamp(beam.first_node)
-    model.add_point_load(beam.last_node, moment=(0, -1.5 * np.pi, 0),
-                         function=fm.Ramp(start=0.0, end=1.0))
-    with pytest.raises(fm.FlexmbsError, match=r"beam 'rolled' node \d+: its tangent turned more "
-                                              r"than 154°"):
-        fm.simulate(model, t_end=1.0, dt=0.01, integrator=fm.GeneralizedAlpha(rho_inf=0.5),
-                    record_energy=False)
