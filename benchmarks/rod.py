@@ -3,8 +3,8 @@ our bound is 2x per element-step).
 
 Two measures, both in one process run:
 
-1. the element kernels alone (internal force; force + tangent) per element, on a deformed
-   helix of 64 elements, best of 20 calls;
+1. an element group's compiled residual (internal force, M q̈, the rod's spin inertia) and
+   matrix block per element, on a deformed helix of 64 elements in motion;
 2. the dynamic cantilever of ``cantilever.py`` (generalized-alpha, h = 1e-3, modified Newton)
    built of either element, wall time per step and per element-step.
 
@@ -25,27 +25,31 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from exudyn_models import CANTILEVER  # noqa: E402
 
 import flexmbs as fm  # noqa: E402
+from flexmbs._jit import njit  # noqa: E402
 from flexmbs.assembly import Assembly  # noqa: E402
-from flexmbs.elements import ancf_cable as cable  # noqa: E402
-from flexmbs.elements import ancf_rod as rod  # noqa: E402
+from flexmbs.elements.group import element_jacobian, element_residual  # noqa: E402
+from flexmbs.terms import dynamic_mode  # noqa: E402
 
 
-def _best(fn, repeats: int = 20) -> float:
-    fn()
-    best = float("inf")
+@njit
+def _residuals(part, q, v, qdd, mode, r, repeats):  # noqa: ANN001, ANN202
     for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t)
-    return best
+        element_residual(part, q, v, qdd, mode, r)
 
 
-def kernel_costs(n: int = 64) -> dict[str, float]:
-    """µs per element of the internal force and of force + tangent, cable and rod, on a helix
-    deformed at random (same centreline for both)."""
+@njit
+def _jacobians(part, q, v, qdd, mode, data, repeats):  # noqa: ANN001, ANN202
+    for _ in range(repeats):
+        element_jacobian(part, q, v, qdd, mode, 1.0, 0.5, 0.25, data)
+
+
+def kernel_costs(n: int = 64, repeats: int = 200) -> dict[str, float]:
+    """µs per element of an element group's residual (internal force, M q̈ and, for the rod, the
+    spin inertia) and of its iteration-matrix block (the compiled functions the solvers call),
+    cable and rod, on a helix deformed at random with random velocities and accelerations;
+    best of 5 runs of ``repeats`` calls."""
     s = np.linspace(0.0, 4 * np.pi, n + 1)
     pts = np.column_stack([0.3 * np.cos(s), 0.3 * np.sin(s), 0.03 * s])
-    model = fm.Model()
     out = {}
     rng = np.random.default_rng(0)
     for element in ("ancf_cable", "ancf_rod14"):
@@ -54,27 +58,23 @@ def kernel_costs(n: int = 64) -> dict[str, float]:
                        section=fm.BeamStiffness(axial_stiffness=1e6, bending_stiffness=1.0,
                                                 mass_per_length=1.0, torsional_stiffness=0.8))
         asm = Assembly(model)
-        grp = asm.groups[0]
+        part = next(p for p in asm.system.beams if p.dofs.shape[0] == n)
         q = asm.q_ref + 0.01 * rng.standard_normal(asm.n_coords)
-        qe = np.ascontiguousarray(q[grp.dofs])
-        ve = np.zeros_like(qe)
-        f = np.empty_like(qe)
-        k = np.empty(qe.shape + (qe.shape[1],))
-        if element == "ancf_cable":
-            def force(qe=qe, ve=ve, f=f, grp=grp) -> None:
-                cable.internal_forces(qe, ve, grp.props, grp.rest, grp.options, f)
-
-            def tangent(qe=qe, ve=ve, f=f, k=k, grp=grp) -> None:
-                cable.internal_forces(qe, ve, grp.props, grp.rest, grp.options, f, k)
-        else:
-            def force(qe=qe, ve=ve, f=f, grp=grp) -> None:
-                rod.internal_forces(qe, ve, grp.props, grp.rest, f)
-
-            def tangent(qe=qe, ve=ve, f=f, k=k, grp=grp) -> None:
-                rod.internal_forces(qe, ve, grp.props, grp.rest, f, k)
-        out[f"{element} force"] = 1e6 * _best(force) / n
-        out[f"{element} tangent"] = 1e6 * _best(tangent) / n
+        v, qdd = rng.standard_normal((2, asm.n_coords))
+        mode = dynamic_mode()
+        r = np.zeros(asm.n_coords)
+        data = np.zeros(asm.matrix.nnz)
+        for what, fn, args in (("force", _residuals, (r,)), ("tangent", _jacobians, (data,))):
+            fn(part, q, v, qdd, mode, *args, 1)
+            best = min(_timed(fn, part, q, v, qdd, mode, *args, repeats) for _ in range(5))
+            out[f"{element} {what}"] = 1e6 * best / repeats / n
     return out
+
+
+def _timed(fn, *args) -> float:  # noqa: ANN001
+    t = time.perf_counter()
+    fn(*args)
+    return time.perf_counter() - t
 
 
 def cantilever(element: str, n_elem: int, t_end: float) -> dict:
@@ -101,8 +101,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--t-end", type=float, default=0.5)
     args = ap.parse_args(argv)
     k = kernel_costs()
-    print("element kernels, µs per element (deformed helix, 64 elements):")
-    for what in ("force", "tangent"):
+    print("element group residual and matrix block, µs per element (deformed helix, 64 elements):")
+    for what in ("force", "tangent"):  # residual, matrix block
         c, r = k[f"ancf_cable {what}"], k[f"ancf_rod14 {what}"]
         print(f"  {what:8s} cable {c:7.2f}   rod {r:7.2f}   rod/cable {r / c:5.2f}")
     print(f"dynamic cantilever (h = 1e-3, t_end = {args.t_end}):")

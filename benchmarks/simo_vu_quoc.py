@@ -50,10 +50,16 @@ def run_exudyn(elements_per_arm: int, *, dt: float = DT, t_end: float = T_END,
     """Exudyn 1.13: ``ObjectBeamGeometricallyExact`` on Euler-parameter nodes, implicit
     generalized-α; returns the times and the elbow and tip z displacements."""
     import exudyn as exu
-    from exudyn.itemInterface import (LoadForceVector, GenericJoint, MarkerNodeRigid,
-                                      NodePointGround, NodeRigidBodyEP,
-                                      ObjectBeamGeometricallyExact, ObjectRigidBody,
-                                      SensorNode)
+    from exudyn.itemInterface import (
+        GenericJoint,
+        LoadForceVector,
+        MarkerNodeRigid,
+        NodePointGround,
+        NodeRigidBodyEP,
+        ObjectBeamGeometricallyExact,
+        ObjectRigidBody,
+        SensorNode,
+    )
     from exudyn.rigidBodyUtilities import RotationMatrix2EulerParameters, RotationMatrixZ
 
     SC = exu.SystemContainer()

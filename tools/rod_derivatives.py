@@ -15,6 +15,9 @@ The rod's strain energy is a composition of four small maps, each differentiated
   ``b = ∂w/∂ġ``, ``s = (∂w/∂g)·ġ`` (so ``ω̇ = φ̈ + b·g̈ + s``) and the gyroscopic vector
   ``c = (∂b/∂g − (∂b/∂g)ᵀ) ġ``; first derivatives only.
 
+Besides values with Jacobians (``name``) and with Hessians (``name_h``): ``curvatures_wh``, only
+the weighted sum ``Σ_j σ_j ∂²K_j/∂z²`` the tangent needs without damping (half the work of
+the three Hessians), and ``spin_value``, the spin map without its Jacobian (for the residual).
 The element kernel (:mod:`flexmbs.elements.ancf_rod`) composes them by the chain rule. The
 expressions are written for inputs on their manifold (``|t0| = |d20| = 1``, ``d20 ⟂ t0``,
 ``D̄ ⟂ t̄``), where ``Rot(t, φ) v = v cos φ + (t × v) sin φ`` for ``v ⟂ t``; a composition
@@ -113,12 +116,37 @@ def spin_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
     return [*g, *gd], [*tb], [w, *b, s, *c]
 
 
+def _weighted_hessian(inputs: list[sp.Symbol], outputs: list[sp.Expr],
+                      weights: list[sp.Symbol]) -> tuple[list[sp.Expr], list[str]]:
+    """The entries of ``Σ_j weights_j ∂²outputs_j/∂x²`` (upper triangle mirrored) and their slots
+    in ``hes`` (inputs x inputs)."""
+    exprs: list[sp.Expr] = []
+    slots: list[str] = []
+    for a, x in enumerate(inputs):
+        first = [sp.diff(f, x) for f in outputs]
+        for b in range(a, len(inputs)):
+            d = sum(wj * sp.diff(fa, inputs[b]) for wj, fa in zip(weights, first, strict=True))
+            if d != 0:
+                exprs.append(d)
+                slots.append(f"hes[{a}, {b}]" if a == b else f"hes[{a}, {b}] = hes[{b}, {a}]")
+    return exprs, slots
+
+
 def _emit(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
-          outputs: list[sp.Expr], hessian: bool) -> str:
+          outputs: list[sp.Expr], hessian: bool, *, jacobian: bool = True,
+          weights: list[sp.Symbol] | None = None) -> str:
+    """A compiled function of the map: the values and (``jacobian``) the Jacobian and
+    (``hessian``) the Hessians; or, with ``weights`` (extra parameters after ``params``), only
+    the weighted sum of the Hessians ``Σ_j w_j ∂²f_j/∂x²`` into ``hes``."""
     n_in, n_out = len(inputs), len(outputs)
-    exprs: list[sp.Expr] = list(outputs)
-    slots: list[str] = [f"val[{i}]" for i in range(n_out)]
-    for i, f in enumerate(outputs):
+    if weights is not None:
+        exprs, slots = _weighted_hessian(inputs, outputs, weights)
+        params = [*params, *weights]
+        args = ["x", "p", "hes"]
+        return _code(name, doc, inputs, params, exprs, slots, args)
+    exprs = list(outputs)
+    slots = [f"val[{i}]" for i in range(n_out)]
+    for i, f in enumerate(outputs if jacobian else []):
         for a, x in enumerate(inputs):
             d = sp.diff(f, x)
             if d != 0:
@@ -134,10 +162,15 @@ def _emit(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
                         exprs.append(d)
                         slots.append(f"hes[{i}, {a}, {b}]" if a == b
                                      else f"hes[{i}, {a}, {b}] = hes[{i}, {b}, {a}]")
+    args = ["x", "p", "val"] + (["jac"] if jacobian else []) + (["hes"] if hessian else [])
+    return _code(name, doc, inputs, params, exprs, slots, args)
+
+
+def _code(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
+          exprs: list[sp.Expr], slots: list[str], args: list[str]) -> str:
     reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("w"), optimizations="basic")
     printer = PythonCodePrinter({"fully_qualified_modules": False,
                                                     "standard": "python3"})
-    args = ["x", "p", "val", "jac"] + (["hes"] if hessian else [])
     lines = [f"@njit(refcount=False)\ndef {name}({', '.join(args)}):  # noqa: ANN001, ANN201",
              f'    """{doc}"""']
     for i, s in enumerate(inputs):
@@ -158,11 +191,11 @@ def generate() -> str:
             'Jacobian ``jac`` (outputs x inputs) and,\nwith ``hes``, the Hessians (outputs x '
             'inputs x inputs). Only the nonzero entries are written:\nthe caller zeroes ``jac`` '
             'and ``hes`` once.\n"""\n# generator sha256: ' + generator_hash() + '\n'
-            '# ruff: noqa: E501\n# fmt: off\n\nfrom __future__ import '
+            '# ruff: noqa: E501, F841\n# fmt: off\n\nfrom __future__ import '
             'annotations\n\nfrom math import atan, cos, sin, sqrt  # noqa: F401\n\n'
             'from .._jit import njit\n\n'
-            '__all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_h", "axial",\n'
-            '           "axial_h", "spin"]\n')
+            '__all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_h",\n'
+            '           "curvatures_wh", "axial", "axial_h", "spin", "spin_value"]\n')
     parts = [head]
     maps = {"triad": (triad_map, "node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄]"),
             "twist": (twist_map, "nodal triads -> Δθ: x = [t0, d20, t1, d21]"),
@@ -175,9 +208,17 @@ def generate() -> str:
                                     False))
         parts.append("\n\n" + _emit(name + "_h", doc + " (values, Jacobian, Hessians)", inputs,
                                     params, outputs, True))
+        if name == "curvatures":
+            sig = list(sp.symbols("sig0:3", real=True))
+            parts.append("\n\n" + _emit(name + "_wh", doc + ", σ: the weighted Hessian "
+                                        "Σ_j σ_j ∂²K_j/∂x² only (p = [ξ, L, μ, σ])", inputs,
+                                        params, outputs, False, weights=sig))
     inputs, params, outputs = spin_map()
-    parts.append("\n\n" + _emit("spin", "node (g, ġ) -> (w, b, s, c): x = [g, ġ], p = [t̄] "
-                                  "(values, Jacobian)", inputs, params, outputs, False))
+    spin_doc = "node (g, ġ) -> (w, b, s, c): x = [g, ġ], p = [t̄]"
+    parts.append("\n\n" + _emit("spin", spin_doc + " (values, Jacobian)", inputs, params,
+                                  outputs, False))
+    parts.append("\n\n" + _emit("spin_value", spin_doc + " (values)", inputs, params, outputs,
+                                  False, jacobian=False))
     text = "".join(parts)
     return text.replace("math.", "")
 

@@ -25,9 +25,10 @@ equivariant, so U is objective; U(q_ref) = 0 for any reference.
 **Derivatives.** The four maps the energy is made of — a node's ``(g, φ) → (t, d2)``, the
 triads ``→ Δθ``, a point's ``(r′, r″, t_0, d2_0, Δθ) → (K1, K2, K3)`` and ``r′ → ε`` — are
 differentiated exactly (first and second derivatives) by sympy in ``tools/rod_derivatives.py``,
-which writes :mod:`flexmbs.elements._rod_derivatives`; :func:`_rod_kernel` composes them by the
-chain rule (§2.3, "hand-derived chain rules"). The generated module is the one statement of
-the maps: energy, forces, tangent, reference measures and output all call it.
+which writes :mod:`flexmbs.elements._rod_derivatives`; :func:`_rod_forces` and
+:func:`_rod_tangents` compose them by the chain rule (§2.3, "hand-derived chain rules"). The
+generated module is the one statement of the maps: energy, forces, tangent, reference measures
+and output all call it.
 
 **Damping** is strain-rate (stiffness-proportional) damping with coefficient β:
 each generalized stress is ``C_j (e_j − e_j⁰ + β ė_j)`` (as the cable's ``d_ε = β EA``).
@@ -52,7 +53,9 @@ from ._rod_derivatives import (
     axial_h,
     curvatures,
     curvatures_h,
+    curvatures_wh,
     spin,
+    spin_value,
     triad,
     triad_h,
     twist,
@@ -134,7 +137,7 @@ class RodRest(NamedTuple):
 
 
 class RodWork(NamedTuple):
-    """Scratch arrays of :func:`_rod_kernel` (zeroed once: the generated maps write the same
+    """Scratch arrays of the element kernels (zeroed once: the generated maps write the same
     nonzero entries every call)."""
 
     x_node: np.ndarray    # (4,)
@@ -151,7 +154,7 @@ class RodWork(NamedTuple):
     n_hes: np.ndarray     # (N_N, N_U, N_U)
     n_hv: np.ndarray      # (N_N, N_U) n_hes · u̇
     x_z: np.ndarray       # (N_Z,) r′, r″, t0, d20, Δθ at a point
-    p_c: np.ndarray       # (3,) ξ, L, μ
+    p_c: np.ndarray       # (6,) ξ, L, μ (and σ for ``curvatures_wh``)
     p_a: np.ndarray       # (1,) μ
     c_val: np.ndarray     # (3,) K1, K2, K3
     c_jac: np.ndarray     # (3, N_Z)
@@ -162,8 +165,8 @@ class RodWork(NamedTuple):
     ab: np.ndarray        # (2, 4) ∂r′/∂X_m = S′_m/L, ∂r″/∂X_m = S″_m/L² (X_m = r0, g0, r1, g1)
     e_q: np.ndarray       # (3, 14) ∂e/∂q
     sig: np.ndarray       # (3,) generalized stresses
-    s_zz: np.ndarray      # (N_Z, N_Z) Σ σ_j ∂²e_j/∂z²
-    s_zn: np.ndarray      # (N_Z, N_U) Σ σ ∂²e/∂z∂n · ∂n/∂u
+    s_zz: np.ndarray      # (N_Z, N_Z) A = W Σ_j (σ_j ∂²e_j/∂z² + C_j ∂e_j/∂z ∂e_j/∂zᵀ)
+    s_zn: np.ndarray      # (N_Z, N_U) scratch: p_nn ∂n/∂u (first N_N rows)
     z_v: np.ndarray       # (N_Z,) ∂z/∂q · q̇
     h_q: np.ndarray       # (3, 14) ∂²e_j/∂q² · q̇
     g_n: np.ndarray       # (N_N,) Σ_points W σ_j ∂e_j/∂n
@@ -177,6 +180,12 @@ class RodWork(NamedTuple):
     s_d: np.ndarray       # (2, 2, 3) per node: the matrix rows of w and of ẇ (g columns)
     s_m: np.ndarray       # (3, 2) per node: M_φ ω, M_φ ω̇, M_φ ẇ
     s_o: np.ndarray       # (3, 2) per node: ω, ω̇, ẇ
+    y_z: np.ndarray       # (N_Z,) W Σ σ_j ∂e_j/∂z at a point
+    p_cn: np.ndarray      # (12, N_N) Σ_points centreline-nodal block of A
+    p_nn: np.ndarray      # (N_N, N_N) Σ_points nodal-nodal block of A
+    h_w: np.ndarray       # (1, N_Z, N_Z) Σ_j σ_j ∂²K_j/∂z² (generated ``curvatures_wh``)
+    one: np.ndarray       # (1,) 1.0: the weight of ``h_w``
+    w_x: np.ndarray       # (12, N_U) ∂²Δθ/∂t² · ∂t/∂u
 
 
 def new_work() -> RodWork:
@@ -184,22 +193,33 @@ def new_work() -> RodWork:
     n = ELEMENT_SIZE
     return RodWork(z(4), z(6), z((2, 6)), z((2, 6, 4)), z((2, 6, 4, 4)), z(12), z(0), z(1),
                    z((1, 12)), z((1, 12, 12)), z((N_N, N_U)), z((N_N, N_U, N_U)), z((N_N, N_U)),
-                   z(N_Z), z(3), z(1), z(3), z((3, N_Z)), z((3, N_Z, N_Z)), z(1), z((1, 3)),
+                   z(N_Z), z(6), z(1), z(3), z((3, N_Z)), z((3, N_Z, N_Z)), z(1), z((1, 3)),
                    z((1, 3, 3)), z((2, 4)), z((3, n)), z(3), z((N_Z, N_Z)), z((N_Z, N_U)), z(N_Z),
                    z((3, n)), z(N_N), z(N_Z), z(3), z(1), z(6), z(3), z((2, N_SPIN)),
-                   z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)))
+                   z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)), z(N_Z), z((12, N_N)),
+                   z((N_N, N_N)), z((1, N_Z, N_Z)), np.ones(1),
+                   z((12, N_U)))
 
 
 # ---------------------------------------------------------------------------------------------
 # the nodal maps and the strain measures (values; FORMULATION I §2.1–2.2)
 @njit(refcount=False)
-def _nodal(q_e, t_bar, d_bar, w, hessian):  # noqa: ANN001, ANN202
+def _nodal(q_e, t_bar, d_bar, w, hessian, shared=False):  # noqa: ANN001, ANN202
     """Both nodal triads and Δθ of one element, with ``n_jac`` (and ``n_hes``): the derivatives
-    of n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1)."""
-    for a in range(2):
+    of n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1). ``shared``: node 0 is the
+    previous element's node 1, whose triad (same ``hessian``) is still in the work arrays."""
+    if shared:
+        for c in range(6):
+            w.t_val[0, c] = w.t_val[1, c]
+            for k in range(4):
+                w.t_jac[0, c, k] = w.t_jac[1, c, k]
+                if hessian:
+                    for m in range(4):
+                        w.t_hes[0, c, k, m] = w.t_hes[1, c, k, m]
+    for a in range(1 if shared else 0, 2):
         o = a * NODE_SIZE
         for c in range(3):
-            w.x_node[c] = q_e[o + 3 + c]
+            w.x_node[c] = q_e[o + SLOPE + c]
             w.p_node[c] = t_bar[a, c]
             w.p_node[3 + c] = d_bar[a, c]
         w.x_node[3] = q_e[o + TWIST]
@@ -207,6 +227,7 @@ def _nodal(q_e, t_bar, d_bar, w, hessian):  # noqa: ANN001, ANN202
             triad_h(w.x_node, w.p_node, w.t_val[a], w.t_jac[a], w.t_hes[a])
         else:
             triad(w.x_node, w.p_node, w.t_val[a], w.t_jac[a])
+    for a in range(2):
         for c in range(6):
             w.x_tw[6 * a + c] = w.t_val[a, c]
     if hessian:
@@ -231,20 +252,26 @@ def _nodal(q_e, t_bar, d_bar, w, hessian):  # noqa: ANN001, ANN202
         for k in range(N_U):
             for m in range(N_U):
                 nh[c, k, m] = w.t_hes[0, c, k, m] if (k < 4 and m < 4) else 0.0
-    for a in range(2):
+    # ∂²Δθ/∂u² = J_tᵀ (∂²Δθ/∂t²) J_t + Σ ∂Δθ/∂t ∂²t/∂u², J_t block diagonal (12 x 8), in
+    # two stages: X = (∂²Δθ/∂t²) J_t first
+    X = w.w_x
+    for i in range(12):
         for b in range(2):
-            for k in range(4):
-                for m in range(4):
-                    s = 0.0
+            for m in range(4):
+                s = 0.0
+                for d in range(6):
+                    s += w.w_hes[0, i, 6 * b + d] * w.t_jac[b, d, m]
+                X[i, 4 * b + m] = s
+    for a in range(2):
+        for k in range(4):
+            for col in range(N_U):
+                s = 0.0
+                for c in range(6):
+                    s += w.t_jac[a, c, k] * X[6 * a + c, col]
+                if col // 4 == a:
                     for c in range(6):
-                        jc = w.t_jac[a, c, k]
-                        if jc != 0.0:
-                            for d in range(6):
-                                s += jc * w.w_hes[0, 6 * a + c, 6 * b + d] * w.t_jac[b, d, m]
-                    if a == b:
-                        for c in range(6):
-                            s += w.w_jac[0, 6 * a + c] * w.t_hes[a, c, k, m]
-                    nh[6, 4 * a + k, 4 * b + m] = s
+                        s += w.w_jac[0, 6 * a + c] * w.t_hes[a, c, k, col - 4 * a]
+                nh[6, 4 * a + k, col] = s
 
 
 @njit(refcount=False)
@@ -394,122 +421,131 @@ def strain_measures(q_e: np.ndarray, t_bar: np.ndarray, d_bar: np.ndarray, lengt
 # ---------------------------------------------------------------------------------------------
 # internal force and its exact derivatives (FORMULATION I §2.3)
 @njit(refcount=False)
-def _accumulate(val, jac, hes, n_z, coef, ref, W, beta, ve, w, nodal, want_k, want_c,  # noqa: ANN001, ANN202, C901, PLR0912
-                force, stiff, damp):
-    """Add one quadrature point's terms of the strains ``val`` (with their derivatives ``jac``,
-    ``hes`` with respect to the first ``n_z`` inputs z; ∂z/∂q is sparse: the Hermite weights
-    ``ab`` on the centreline and, with ``nodal``, ``n_jac`` on the nodal inputs u):
+def _point_force(val, jac, n_z, coef, ref, W, beta, ve, w, nodal, force):  # noqa: ANN001, ANN202
+    """Add one quadrature point's force of the strains ``val`` (with their derivatives ``jac``
+    with respect to the first ``n_z`` inputs z; ∂z/∂q is sparse: the Hermite weights ``ab`` on
+    the centreline and, with ``nodal``, ``n_jac`` on the nodal inputs u):
 
-        σ_j = C_j (e_j − e_j⁰ + β ė_j),   Q += W Σ_j σ_j ∂e_j/∂q,
-        ∂Q/∂q += W Σ_j [C_j ∂e_j/∂q ∂e_j/∂qᵀ + σ_j (∂z/∂q)ᵀ ∂²e_j/∂z² ∂z/∂q
-                        + β C_j ∂e_j/∂q (∂²e_j/∂q² q̇)ᵀ],
-        ∂Q/∂q̇ += W Σ_j β C_j ∂e_j/∂q ∂e_j/∂qᵀ;
+        σ_j = C_j (e_j − e_j⁰ + β ė_j),   Q += (∂z/∂q)ᵀ y,   y = W Σ_j σ_j ∂e_j/∂z.
 
-    with ``nodal`` it sums W σ_j ∂e_j/∂n into ``g_n`` for the term Σ_c g_n,c ∂²n_c/∂u² the
-    element adds once."""
-    ne = ELEMENT_SIZE
+    The centreline rows are added here; the nodal part of y, through the same ∂n/∂u at every
+    point, is summed into ``g_n`` for :func:`_nodal_force` to add once per element. Leaves
+    σ in ``sig`` and, with damping, ∂z/∂q q̇ in ``z_v`` for :func:`_point_tangent`."""
     ns = val.size
     rated = beta != 0.0
     # the work arrays as locals (a field of the work tuple read in a loop costs a reference
     # count update each time)
-    eq = w.e_q
+    ab = w.ab
+    sig = w.sig
+    yz = w.y_z
+    zv = w.z_v
+    if rated:
+        _z_dot(ab, w.n_jac, ve, n_z, nodal, zv)
+    for a in range(n_z):
+        yz[a] = 0.0
+    for j in range(ns):
+        rate = 0.0
+        if rated:
+            for a in range(n_z):
+                rate += jac[j, a] * zv[a]
+        sig[j] = coef[j] * (val[j] - ref[j] + beta * rate)
+        f = W * sig[j]
+        for a in range(n_z):
+            yz[a] += f * jac[j, a]
+    if n_z > 3:
+        for m in range(4):
+            for c in range(3):
+                force[CENTERLINE[3 * m + c]] += ab[0, m] * yz[c] + ab[1, m] * yz[3 + c]
+    else:
+        for m in range(4):
+            for c in range(3):
+                force[CENTERLINE[3 * m + c]] += ab[0, m] * yz[c]
+    if nodal:
+        gn = w.g_n
+        for c in range(N_N):
+            gn[c] += yz[6 + c]
+
+
+@njit(refcount=False)
+def _point_tangent(jac, hes, h_sig, n_z, coef, W, beta, w, nodal, want_c, stiff, damp):  # noqa: ANN001, ANN202, C901, PLR0912
+    """Add one quadrature point's tangents (after :func:`_point_force`, with its ``sig`` and
+    ``z_v``; ``hes`` the strains' Hessians with respect to z and ``h_sig = sig``, or, without
+    damping, their sum weighted by σ, ``hes[0] = Σ_j σ_j ∂²e_j/∂z²`` and ``h_sig = [1]``):
+
+        ∂Q/∂q += (∂z/∂q)ᵀ A ∂z/∂q + β Σ_j C_j ∂e_j/∂q (∂²e_j/∂q² q̇)ᵀ,
+        A = W Σ_j (σ_j ∂²e_j/∂z² + C_j ∂e_j/∂z ∂e_j/∂zᵀ),
+        ∂Q/∂q̇ += W β Σ_j C_j ∂e_j/∂q ∂e_j/∂qᵀ   (with ``want_c``).
+
+    The centreline blocks of A are added here; with ``nodal`` its centreline-nodal and
+    nodal-nodal blocks are summed into ``p_cn``, ``p_nn`` for :func:`_nodal_tangent`."""
+    ne = ELEMENT_SIZE
+    ns = jac.shape[0]
+    nh = h_sig.size
     ab = w.ab
     nj = w.n_jac
-    sig = w.sig
-    S = w.s_zz
-    SN = w.s_zn
-    gn = w.g_n
+    A = w.s_zz
+    nc = 2 if n_z > 3 else 1
+    for a in range(n_z):
+        for b in range(a, n_z):
+            s = 0.0
+            for j in range(nh):
+                s += h_sig[j] * hes[j, a, b]
+            for j in range(ns):
+                s += coef[j] * jac[j, a] * jac[j, b]
+            A[a, b] = W * s
+            A[b, a] = W * s
+    # centreline-centreline blocks: Σ over the (r′, r″) weights
+    for m in range(4):
+        for mm in range(4):
+            for c in range(3):
+                row = CENTERLINE[3 * m + c]
+                for cc in range(3):
+                    s = 0.0
+                    for u in range(nc):
+                        for uu in range(nc):
+                            s += ab[u, m] * ab[uu, mm] * A[3 * u + c, 3 * uu + cc]
+                    stiff[row, CENTERLINE[3 * mm + cc]] += s
+    if nodal:
+        pcn = w.p_cn
+        pnn = w.p_nn
+        for m in range(4):
+            for c in range(3):
+                for k in range(N_N):
+                    pcn[3 * m + c, k] += ab[0, m] * A[c, 6 + k] + ab[1, m] * A[3 + c, 6 + k]
+        for c in range(N_N):
+            for k in range(N_N):
+                pnn[c, k] += A[6 + c, 6 + k]
+    if beta == 0.0:
+        return
+    eq = w.e_q
     zv = w.z_v
-    hz = w.hz
-    hq = w.h_q
-    nhv = w.n_hv
     for j in range(ns):
         for i in range(ne):
             eq[j, i] = 0.0
         _z_transpose(ab, nj, jac[j], n_z, nodal, eq[j])
-        rate = 0.0
-        if rated:
-            for i in range(ne):
-                rate += eq[j, i] * ve[i]
-        sig[j] = coef[j] * (val[j] - ref[j] + beta * rate)
-        f = W * sig[j]
-        for i in range(ne):
-            force[i] += f * eq[j, i]
-    if want_k:
+    hz = w.hz
+    hq = w.h_q
+    nhv = w.n_hv
+    for j in range(ns):
         for a in range(n_z):
-            for b in range(a, n_z):
-                s = 0.0
-                for j in range(ns):
-                    s += sig[j] * hes[j, a, b]
-                S[a, b] = s
-                S[b, a] = s
-        # centreline-centreline blocks: Σ over (r′, r″) weights
-        nc = 2 if n_z > 3 else 1
-        for m in range(4):
-            for mm in range(4):
-                for c in range(3):
-                    for cc in range(3):
-                        s = 0.0
-                        for u in range(nc):
-                            for uu in range(nc):
-                                s += ab[u, m] * ab[uu, mm] * S[3 * u + c, 3 * uu + cc]
-                        stiff[CENTERLINE[3 * m + c], CENTERLINE[3 * mm + cc]] += W * s
+            s = 0.0
+            for b in range(n_z):
+                s += hes[j, a, b] * zv[b]
+            hz[a] = s
+        for i in range(ne):
+            hq[j, i] = 0.0
+        _z_transpose(ab, nj, hz, n_z, nodal, hq[j])
         if nodal:
-            # SN: rows z, columns u: Σ_c S[z, 6 + c] ∂n_c/∂u
-            for a in range(N_Z):
-                for k in range(N_U):
-                    s = 0.0
-                    for c in range(N_N):
-                        s += S[a, 6 + c] * nj[c, k]
-                    SN[a, k] = s
-            for m in range(4):
-                for c in range(3):
-                    row = CENTERLINE[3 * m + c]
-                    for k in range(N_U):
-                        s = W * (ab[0, m] * SN[c, k] + ab[1, m] * SN[3 + c, k])
-                        stiff[row, U_COLS[k]] += s
-                        stiff[U_COLS[k], row] += s
             for k in range(N_U):
-                for kk in range(N_U):
-                    s = 0.0
-                    for c in range(N_N):
-                        s += nj[c, k] * SN[6 + c, kk]
-                    stiff[U_COLS[k], U_COLS[kk]] += W * s
-        for j in range(ns):
-            f = W * coef[j]
-            for i in range(ne):
-                fi = f * eq[j, i]
-                if fi != 0.0:
-                    for m in range(ne):
-                        stiff[i, m] += fi * eq[j, m]
-        if nodal:
-            for c in range(N_N):
                 s = 0.0
-                for j in range(ns):
-                    s += sig[j] * jac[j, 6 + c]
-                gn[c] += W * s
-        if rated:
-            _z_dot(ab, nj, ve, n_z, nodal, zv)
-            for j in range(ns):
-                for a in range(n_z):
-                    s = 0.0
-                    for b in range(n_z):
-                        s += hes[j, a, b] * zv[b]
-                    hz[a] = s
-                for i in range(ne):
-                    hq[j, i] = 0.0
-                _z_transpose(ab, nj, hz, n_z, nodal, hq[j])
-                if nodal:
-                    for k in range(N_U):
-                        s = 0.0
-                        for c in range(N_N):
-                            s += jac[j, 6 + c] * nhv[c, k]
-                        hq[j, U_COLS[k]] += s
-                f = W * beta * coef[j]
-                for i in range(ne):
-                    for m in range(ne):
-                        stiff[i, m] += f * eq[j, i] * hq[j, m]
-    if want_c and rated:
+                for c in range(N_N):
+                    s += jac[j, 6 + c] * nhv[c, k]
+                hq[j, U_COLS[k]] += s
+        f = W * beta * coef[j]
+        for i in range(ne):
+            for m in range(ne):
+                stiff[i, m] += f * eq[j, i] * hq[j, m]
+    if want_c:
         for j in range(ns):
             f = W * beta * coef[j]
             for i in range(ne):
@@ -518,14 +554,102 @@ def _accumulate(val, jac, hes, n_z, coef, ref, W, beta, ve, w, nodal, want_k, wa
 
 
 @njit(refcount=False)
-def _rod_kernel(q, v, props, rest, w, want_k, want_c, force, stiff, damp):  # noqa: ANN001, ANN202
-    """Q_int = ∂U/∂q + damping, ∂Q_int/∂q, ∂Q_int/∂q̇ of every element, by the chain rule
-    through the generated maps (:func:`_accumulate`): e = e(z(q)), z = (r′, r″, n(u)),
+def _nodal_force(w, force):  # noqa: ANN001, ANN202
+    """``Q_u += (∂n/∂u)ᵀ g_n``: the nodal part of an element's force (:func:`_point_force`)."""
+    nj = w.n_jac
+    gn = w.g_n
+    for k in range(N_U):
+        s = 0.0
+        for c in range(N_N):
+            s += nj[c, k] * gn[c]
+        force[U_COLS[k]] += s
+
+
+@njit(refcount=False)
+def _nodal_tangent(w, stiff):  # noqa: ANN001, ANN202
+    """The nodal blocks of an element's tangent (:func:`_point_tangent`) through ∂n/∂u: the
+    centreline-nodal ``p_cn ∂n/∂u`` (both ways) and ``(∂n/∂u)ᵀ p_nn ∂n/∂u + Σ_c g_n,c
+    ∂²n_c/∂u²``."""
+    nj = w.n_jac
+    gn = w.g_n
+    pcn = w.p_cn
+    pnn = w.p_nn
+    nh = w.n_hes
+    tmp = w.s_zn
+    for i in range(CENTERLINE.size):
+        row = CENTERLINE[i]
+        for k in range(N_U):
+            s = 0.0
+            for c in range(N_N):
+                s += pcn[i, c] * nj[c, k]
+            stiff[row, U_COLS[k]] += s
+            stiff[U_COLS[k], row] += s
+    for c in range(N_N):
+        for k in range(N_U):
+            s = 0.0
+            for d in range(N_N):
+                s += pnn[c, d] * nj[d, k]
+            tmp[c, k] = s
+    for k in range(N_U):
+        for kk in range(N_U):
+            s = 0.0
+            for c in range(N_N):
+                s += nj[c, k] * tmp[c, kk] + gn[c] * nh[c, k, kk]
+            stiff[U_COLS[k], U_COLS[kk]] += s
+
+
+@njit(refcount=False)
+def _element_coefficients(props, e, w):  # noqa: ANN001, ANN202
+    """The section stiffnesses C_j of element ``e`` into the work arrays."""
+    w.a_coef[0] = props.EA[e]
+    w.c_coef[0] = props.GJ[e]
+    w.c_coef[1] = props.EI2[e]
+    w.c_coef[2] = props.EI3[e]
+
+
+@njit(refcount=False)
+def _element_forces(q, v, props, rest, w, e, force):  # noqa: ANN001, ANN202
+    """Element ``e``'s internal force into ``force`` (zeroed here); :func:`_rod_tangents` makes
+    the same pass with the tangents."""
+    L = props.length[e]
+    beta = props.damping[e]
+    qe = q[e]
+    ve = v[e]
+    for i in range(ELEMENT_SIZE):
+        force[i] = 0.0
+    _element_coefficients(props, e, w)
+    for k in range(rest.axial_xi.size):
+        mu = rest.axial_mu[e, k]
+        _axial_point(qe, L, rest.axial_xi[k], mu, w, FLAG[0])
+        _point_force(w.a_val, w.a_jac, 3, w.a_coef, rest.eps0[e], rest.axial_weight[k] * mu * L,
+                     beta, ve, w, False, force)
+    # a node shared with the previous element has the same inputs: its triad is reused
+    _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, FLAG[0], e > 0 and _same_node(q, rest, e))
+    for c in range(N_N):
+        w.g_n[c] = 0.0
+    for k in range(rest.gauss_xi.size):
+        mu = rest.gauss_mu[e, k]
+        _curvature_point(qe, L, rest.gauss_xi[k], mu, w, FLAG[0])
+        _point_force(w.c_val, w.c_jac, N_Z, w.c_coef, rest.k0[e, k],
+                     rest.gauss_weight[k] * mu * L, beta, ve, w, True, force)
+    _nodal_force(w, force)
+
+
+@njit(refcount=False)
+def _rod_forces(q, v, props, rest, w, force):  # noqa: ANN001, ANN202
+    """Q_int = ∂U/∂q + damping of every element (:func:`_point_force`; FORMULATION I §2.2,
+    the axial strain at the Lobatto points, the curvatures at the Gauss points, W = w μ L)."""
+    for e in range(q.shape[0]):
+        _element_forces(q, v, props, rest, w, e, force[e])
+
+
+@njit(refcount=False)
+def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: ANN001, ANN202, C901
+    """Q_int, ∂Q_int/∂q and (with ``want_c``) ∂Q_int/∂q̇ of every element, by the chain rule
+    through the generated maps: e = e(z(q)), z = (r′, r″, n(u)),
 
         ∂e/∂q = ∂e/∂z · ∂z/∂q,
-        ∂²e/∂q² = (∂z/∂q)ᵀ ∂²e/∂z² (∂z/∂q) + Σ_c ∂e/∂n_c ∂²n_c/∂u²   (r′, r″ are linear in q),
-
-    the axial strain at the Lobatto points, the curvatures at the Gauss points, W = w μ L."""
+        ∂²e/∂q² = (∂z/∂q)ᵀ ∂²e/∂z² (∂z/∂q) + Σ_c ∂e/∂n_c ∂²n_c/∂u²   (r′, r″ are linear in q)."""
     ne = ELEMENT_SIZE
     for e in range(q.shape[0]):
         L = props.length[e]
@@ -533,50 +657,69 @@ def _rod_kernel(q, v, props, rest, w, want_k, want_c, force, stiff, damp):  # no
         qe = q[e]
         ve = v[e]
         fe = force[e]
-        ke = stiff[e if want_k else 0]       # without a tangent: a (1, 14, 14) dummy
+        ke = stiff[e]
         ce = damp[e if want_c else 0]
         for i in range(ne):
-            fe[i] = 0.0
-            if want_k:
-                for j in range(ne):
-                    ke[i, j] = 0.0
-            if want_c:
+            for j in range(ne):
+                ke[i, j] = 0.0
+        if want_c:
+            for i in range(ne):
                 for j in range(ne):
                     ce[i, j] = 0.0
-        w.a_coef[0] = props.EA[e]
-        w.c_coef[0] = props.GJ[e]
-        w.c_coef[1] = props.EI2[e]
-        w.c_coef[2] = props.EI3[e]
+        for i in range(ne):
+            fe[i] = 0.0
+        _element_coefficients(props, e, w)
         for k in range(rest.axial_xi.size):
             mu = rest.axial_mu[e, k]
-            _axial_point(qe, L, rest.axial_xi[k], mu, w, want_k)
-            _accumulate(w.a_val, w.a_jac, w.a_hes, 3, w.a_coef, rest.eps0[e],
-                        rest.axial_weight[k] * mu * L, beta, ve, w, False, want_k, want_c, fe, ke,
-                        ce)
-        _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, want_k)
-        if want_k:
-            for c in range(N_N):
-                w.g_n[c] = 0.0
-                if beta != 0.0:
-                    for k in range(N_U):
-                        s = 0.0
-                        for m in range(N_U):
-                            s += w.n_hes[c, k, m] * ve[U_COLS[m]]
-                        w.n_hv[c, k] = s
+            W = rest.axial_weight[k] * mu * L
+            _axial_point(qe, L, rest.axial_xi[k], mu, w, FLAG[1])
+            _point_force(w.a_val, w.a_jac, 3, w.a_coef, rest.eps0[e], W, beta, ve, w, False, fe)
+            _point_tangent(w.a_jac, w.a_hes, w.sig[:1], 3, w.a_coef, W, beta, w, False, want_c,
+                           ke, ce)
+        # a node shared with the previous element has the same inputs: its triad is reused
+        _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, FLAG[1], e > 0 and _same_node(q, rest, e))
+        for c in range(N_N):
+            w.g_n[c] = 0.0
+            for k in range(N_N):
+                w.p_nn[c, k] = 0.0
+            for i in range(CENTERLINE.size):
+                w.p_cn[i, c] = 0.0
+            if beta != 0.0:
+                for k in range(N_U):
+                    s = 0.0
+                    for m in range(N_U):
+                        s += w.n_hes[c, k, m] * ve[U_COLS[m]]
+                    w.n_hv[c, k] = s
         for k in range(rest.gauss_xi.size):
             mu = rest.gauss_mu[e, k]
-            _curvature_point(qe, L, rest.gauss_xi[k], mu, w, want_k)
-            _accumulate(w.c_val, w.c_jac, w.c_hes, N_Z, w.c_coef, rest.k0[e, k],
-                        rest.gauss_weight[k] * mu * L, beta, ve, w, True, want_k, want_c, fe, ke,
-                        ce)
-        if want_k:
-            # Σ_c (Σ_points W σ ∂e/∂n_c) ∂²n_c/∂u²
-            for k in range(N_U):
-                for m in range(N_U):
-                    s = 0.0
-                    for c in range(N_N):
-                        s += w.g_n[c] * w.n_hes[c, k, m]
-                    ke[U_COLS[k], U_COLS[m]] += s
+            W = rest.gauss_weight[k] * mu * L
+            damped = beta != 0.0
+            _curvature_point(qe, L, rest.gauss_xi[k], mu, w, damped)
+            _point_force(w.c_val, w.c_jac, N_Z, w.c_coef, rest.k0[e, k], W, beta, ve, w, True, fe)
+            if damped:      # the rate terms need each strain's Hessian
+                _point_tangent(w.c_jac, w.c_hes, w.sig, N_Z, w.c_coef, W, beta, w, True, want_c,
+                               ke, ce)
+            else:
+                for j in range(3):
+                    w.p_c[3 + j] = w.sig[j]
+                curvatures_wh(w.x_z, w.p_c, w.h_w[0])
+                _point_tangent(w.c_jac, w.h_w, w.one, N_Z, w.c_coef, W, beta, w, True, want_c,
+                               ke, ce)
+        _nodal_force(w, fe)
+        _nodal_tangent(w, ke)
+
+
+@njit(refcount=False)
+def _same_node(q, rest, e):  # noqa: ANN001, ANN202
+    """Whether node 0 of element ``e`` has exactly the inputs (g, φ, t̄, D̄) of node 1 of
+    element ``e − 1`` (a shared node: its triad is the same)."""
+    for i in range(SLOPE, NODE_SIZE):
+        if q[e, i] != q[e - 1, NODE_SIZE + i]:
+            return False
+    for c in range(3):
+        if rest.t_bar[e, 0, c] != rest.t_bar[e - 1, 1, c] or rest.d_bar[e, 0, c] != rest.d_bar[e - 1, 1, c]:
+            return False
+    return True
 
 
 _NO_MATRIX = np.zeros((1, ELEMENT_SIZE, ELEMENT_SIZE))
@@ -586,12 +729,16 @@ def internal_forces(q_e: np.ndarray, v_e: np.ndarray, props: RodProperties, rest
                     force_out: np.ndarray, stiffness_out: np.ndarray | None = None,
                     damping_out: np.ndarray | None = None) -> None:
     """``Q_int`` (n_elem, 14) and, when given, ``∂Q_int/∂q`` and ``∂Q_int/∂q̇`` (n_elem, 14, 14)
-    into the caller's arrays (:func:`_rod_kernel`)."""
-    want_k = stiffness_out is not None
+    into the caller's arrays (:func:`_rod_forces`, :func:`_rod_tangents`; without a tangent,
+    no damping matrix)."""
+    q = np.ascontiguousarray(q_e, dtype=float)
+    v = np.ascontiguousarray(v_e, dtype=float)
+    if stiffness_out is None:
+        _rod_forces(q, v, props, rest, new_work(), force_out)
+        return
     want_c = damping_out is not None
-    _rod_kernel(np.ascontiguousarray(q_e, dtype=float), np.ascontiguousarray(v_e, dtype=float),
-                props, rest, new_work(), want_k, want_c, force_out,
-                stiffness_out if want_k else _NO_MATRIX, damping_out if want_c else _NO_MATRIX)
+    _rod_tangents(q, v, props, rest, new_work(), want_c, force_out, stiffness_out,
+                  damping_out if want_c else _NO_MATRIX)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -811,8 +958,7 @@ def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r_q += Q_int(q, q̇) (+ M q̈ and the sections' spin inertia)`` of the rod elements;
     returns the force scale."""
     gather_states(rp, q, v, mode)
-    _rod_kernel(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[0], FLAG[0], rp.force, rp.empty,
-                rp.empty)
+    _rod_forces(rp.qe, rp.ve, rp.props, rp.rest, rp.work, rp.force)
     scale = add_residual(rp, qdd, mode, r)
     if mode[WITH_INERTIA] != 0.0:
         scale = max(scale, _spin_inertia(rp, q, v, qdd, r, r, 0.0, 0.0, 0.0, FLAG[0]))
@@ -824,8 +970,7 @@ def rod_jacobian(rp, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """``cK ∂Q/∂q + cC ∂Q/∂q̇ + cM ∂Q/∂q̈`` of the internal and inertial forces into ``data``;
     returns the stiffness scale."""
     gather_states(rp, q, v, mode)
-    _rod_kernel(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[1], FLAG[1], rp.force, rp.stiff,
-                rp.damp)
+    _rod_tangents(rp.qe, rp.ve, rp.props, rp.rest, rp.work, FLAG[1], rp.force, rp.stiff, rp.damp)
     kscale = add_matrix(rp, cM, cC, cK, data)
     if mode[WITH_INERTIA] != 0.0:
         _spin_inertia(rp, q, v, qdd, data, data, cM, cC, cK, FLAG[1])
@@ -851,17 +996,29 @@ def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):  # noqa: ANN001, 
     m_ = w.s_m
     scale = 0.0
     n = ELEMENT_SIZE
+    previous = False       # y[1] (and Y[1]) hold node 1 of element e − 1
     for e in range(rp.dofs.shape[0]):
         mp = rp.props.twist_inertia[e] * rp.props.length[e] / 6.0
         if mp == 0.0:
+            previous = False
             continue
         for a in range(2):
             o = a * NODE_SIZE + SLOPE
-            for c in range(3):
-                w.s_x[c] = q[rp.dofs[e, o + c]]
-                w.s_x[3 + c] = v[rp.dofs[e, o + c]]
-                w.s_p[c] = rp.rest.t_bar[e, a, c]
-            spin(w.s_x, w.s_p, y[a], Y[a])
+            if a == 0 and previous and _same_spin_node(rp, e):
+                for i in range(N_SPIN):
+                    y[0, i] = y[1, i]
+                    if matrix:
+                        for c in range(6):
+                            Y[0, i, c] = Y[1, i, c]
+            else:
+                for c in range(3):
+                    w.s_x[c] = q[rp.dofs[e, o + c]]
+                    w.s_x[3 + c] = v[rp.dofs[e, o + c]]
+                    w.s_p[c] = rp.rest.t_bar[e, a, c]
+                if matrix:
+                    spin(w.s_x, w.s_p, y[a], Y[a])
+                else:
+                    spin_value(w.s_x, w.s_p, y[a])
             k = rp.dofs[e, a * NODE_SIZE + TWIST]
             wd = y[a, 4]
             for c in range(3):
@@ -869,6 +1026,7 @@ def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):  # noqa: ANN001, 
             o_[0, a] = v[k] + y[a, 0]
             o_[1, a] = qdd[k] + wd
             o_[2, a] = wd
+        previous = True
         for j in range(3):
             for a in range(2):
                 m_[j, a] = mp * (2.0 * o_[j, a] + o_[j, 1 - a])
@@ -912,6 +1070,19 @@ def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):  # noqa: ANN001, 
                     data[rp.pos[e, n * (ra + SLOPE + i) + cb + TWIST]] += mab * (
                         y[a, 1 + i] * cM + y[a, 5 + i] * cC)
     return scale
+
+
+@njit(refcount=False)
+def _same_spin_node(rp, e):  # noqa: ANN001, ANN202
+    """Whether node 0 of element ``e`` is node 1 of element ``e − 1`` with the same base tangent
+    (then its spin map is the same)."""
+    for i in range(SLOPE, SLOPE + 3):
+        if rp.dofs[e, i] != rp.dofs[e - 1, NODE_SIZE + i]:
+            return False
+    for c in range(3):  # noqa: SIM110 - a loop, not all(generator), in compiled code
+        if rp.rest.t_bar[e, 0, c] != rp.rest.t_bar[e - 1, 1, c]:
+            return False
+    return True
 
 
 @njit(refcount=False)

@@ -249,7 +249,7 @@ def test_simo_vu_quoc_right_angle_cantilever():
     bending and torsion. Reference: Exudyn's geometrically exact beam (80 elements per arm,
     same model, bending rotary inertia negligible because the Euler–Bernoulli rod has none),
     stored in tests/data. Measured: 8 elements per arm within 0.83 % of the amplitudes over
-    15 s, 16 within 0.38 %, 32 within 0.12 % (against Exudyn with 160)."""
+    15 s, 16 within 0.38 %, 32 within 0.11 % (against Exudyn with 160)."""
     from benchmarks.simo_vu_quoc import REFERENCE, run_flexmbs
 
     ref = np.loadtxt(REFERENCE, delimiter=",")
