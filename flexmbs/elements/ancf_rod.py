@@ -52,7 +52,6 @@ from ._rod_derivatives import (
     axial,
     axial_h,
     curvatures,
-    curvatures_h,
     curvatures_wh,
     spin,
     spin_value,
@@ -186,6 +185,7 @@ class RodWork(NamedTuple):
     h_w: np.ndarray       # (1, N_Z, N_Z) Σ_j σ_j ∂²K_j/∂z² (generated ``curvatures_wh``)
     one: np.ndarray       # (1,) 1.0: the weight of ``h_w``
     w_x: np.ndarray       # (12, N_U) ∂²Δθ/∂t² · ∂t/∂u
+    unit: np.ndarray      # (3, 3) identity: weights picking one curvature's Hessian
 
 
 def new_work() -> RodWork:
@@ -198,42 +198,37 @@ def new_work() -> RodWork:
                    z((3, n)), z(N_N), z(N_Z), z(3), z(1), z(6), z(3), z((2, N_SPIN)),
                    z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)), z(N_Z), z((12, N_N)),
                    z((N_N, N_N)), z((1, N_Z, N_Z)), np.ones(1),
-                   z((12, N_U)))
+                   z((12, N_U)), np.eye(3))
 
 
 # ---------------------------------------------------------------------------------------------
 # the nodal maps and the strain measures (values; FORMULATION I §2.1–2.2)
 @njit(refcount=False)
-def _nodal(q_e, t_bar, d_bar, w, hessian, shared=False):  # noqa: ANN001, ANN202
-    """Both nodal triads and Δθ of one element, with ``n_jac`` (and ``n_hes``): the derivatives
-    of n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1). ``shared``: node 0 is the
-    previous element's node 1, whose triad (same ``hessian``) is still in the work arrays."""
-    if shared:
-        for c in range(6):
-            w.t_val[0, c] = w.t_val[1, c]
-            for k in range(4):
-                w.t_jac[0, c, k] = w.t_jac[1, c, k]
-                if hessian:
-                    for m in range(4):
-                        w.t_hes[0, c, k, m] = w.t_hes[1, c, k, m]
-    for a in range(1 if shared else 0, 2):
-        o = a * NODE_SIZE
-        for c in range(3):
-            w.x_node[c] = q_e[o + SLOPE + c]
-            w.p_node[c] = t_bar[a, c]
-            w.p_node[3 + c] = d_bar[a, c]
-        w.x_node[3] = q_e[o + TWIST]
-        if hessian:
-            triad_h(w.x_node, w.p_node, w.t_val[a], w.t_jac[a], w.t_hes[a])
-        else:
-            triad(w.x_node, w.p_node, w.t_val[a], w.t_jac[a])
-    for a in range(2):
-        for c in range(6):
-            w.x_tw[6 * a + c] = w.t_val[a, c]
-    if hessian:
-        twist_h(w.x_tw, w.p_none, w.w_val, w.w_jac, w.w_hes)
-    else:
-        twist(w.x_tw, w.p_none, w.w_val, w.w_jac)
+def _node_inputs(q_e, t_bar, d_bar, w, a):  # noqa: ANN001, ANN202
+    """Node slot ``a``'s (g, φ) into ``x_node`` and its base (t̄, D̄) into ``p_node``."""
+    o = a * NODE_SIZE
+    for c in range(3):
+        w.x_node[c] = q_e[o + SLOPE + c]
+        w.p_node[c] = t_bar[a, c]
+        w.p_node[3 + c] = d_bar[a, c]
+    w.x_node[3] = q_e[o + TWIST]
+
+
+@njit(refcount=False)
+def _shared_triad(w, hessian):  # noqa: ANN001, ANN202
+    """Node 0's triad (and its Hessian) is the previous element's node 1: copy slot 1 to 0."""
+    for c in range(6):
+        w.t_val[0, c] = w.t_val[1, c]
+        for k in range(4):
+            w.t_jac[0, c, k] = w.t_jac[1, c, k]
+            if hessian:
+                for m in range(4):
+                    w.t_hes[0, c, k, m] = w.t_hes[1, c, k, m]
+
+
+@njit(refcount=False)
+def _nodal_jacobian(w):  # noqa: ANN001, ANN202
+    """``x_tw`` from both triads, and ``n_jac`` = ∂(t_0, d2_0, Δθ)/∂u (after the twist map)."""
     nj = w.n_jac
     for c in range(6):
         for k in range(4):
@@ -245,8 +240,42 @@ def _nodal(q_e, t_bar, d_bar, w, hessian, shared=False):  # noqa: ANN001, ANN202
             for c in range(6):
                 s += w.w_jac[0, 6 * a + c] * w.t_jac[a, c, k]
             nj[6, 4 * a + k] = s
-    if not hessian:
-        return
+
+
+@njit(refcount=False)
+def _twist_inputs(w):  # noqa: ANN001, ANN202
+    for a in range(2):
+        for c in range(6):
+            w.x_tw[6 * a + c] = w.t_val[a, c]
+
+
+@njit(refcount=False)
+def _nodal(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
+    """Both nodal triads and Δθ of one element, with ``n_jac``: the derivatives of
+    n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1). ``shared``: node 0 is the
+    previous element's node 1, whose triad is still in the work arrays."""
+    if shared:
+        _shared_triad(w, False)
+    for a in range(1 if shared else 0, 2):
+        _node_inputs(q_e, t_bar, d_bar, w, a)
+        triad(w.x_node, w.p_node, w.t_val[a], w.t_jac[a])
+    _twist_inputs(w)
+    twist(w.x_tw, w.p_none, w.w_val, w.w_jac)
+    _nodal_jacobian(w)
+
+
+@njit(refcount=False)
+def _nodal_hessian(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
+    """:func:`_nodal` with the second derivatives ``n_hes`` (the tangent's; ``shared`` as
+    there, the previous element's Hessian too)."""
+    if shared:
+        _shared_triad(w, True)
+    for a in range(1 if shared else 0, 2):
+        _node_inputs(q_e, t_bar, d_bar, w, a)
+        triad_h(w.x_node, w.p_node, w.t_val[a], w.t_jac[a], w.t_hes[a])
+    _twist_inputs(w)
+    twist_h(w.x_tw, w.p_none, w.w_val, w.w_jac, w.w_hes)
+    _nodal_jacobian(w)
     nh = w.n_hes
     for c in range(6):
         for k in range(N_U):
@@ -294,9 +323,9 @@ def _centerline_rows(q_e, L, xi, w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _curvature_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
-    """(K1, K2, K3) at ξ (after :func:`_nodal`) into ``c_val``, with ``c_jac`` (and ``c_hes``)
-    with respect to z = (r′, r″, t_0, d2_0, Δθ)."""
+def _curvature_point(q_e, L, xi, mu, w):  # noqa: ANN001, ANN202
+    """(K1, K2, K3) at ξ (after :func:`_nodal`) into ``c_val``, with ``c_jac`` with respect to
+    z = (r′, r″, t_0, d2_0, Δθ)."""
     _centerline_rows(q_e, L, xi, w)
     for c in range(3):
         w.x_z[6 + c] = w.t_val[0, c]
@@ -305,21 +334,23 @@ def _curvature_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
     w.p_c[0] = xi
     w.p_c[1] = L
     w.p_c[2] = mu
-    if hessian:
-        curvatures_h(w.x_z, w.p_c, w.c_val, w.c_jac, w.c_hes)
-    else:
-        curvatures(w.x_z, w.p_c, w.c_val, w.c_jac)
+    curvatures(w.x_z, w.p_c, w.c_val, w.c_jac)
 
 
 @njit(refcount=False)
-def _axial_point(q_e, L, xi, mu, w, hessian):  # noqa: ANN001, ANN202
-    """ε at ξ into ``a_val``, with ``a_jac`` (and ``a_hes``) with respect to r′."""
+def _curvature_hessian(w, weights, out):  # noqa: ANN001, ANN202
+    """``out = Σ_j weights_j ∂²K_j/∂z²`` at the point of the last :func:`_curvature_point`."""
+    for j in range(3):
+        w.p_c[3 + j] = weights[j]
+    curvatures_wh(w.x_z, w.p_c, out)
+
+
+@njit(refcount=False)
+def _axial_point(q_e, L, xi, mu, w):  # noqa: ANN001, ANN202
+    """ε at ξ into ``a_val``, with ``a_jac`` with respect to r′."""
     _centerline_rows(q_e, L, xi, w)
     w.p_a[0] = mu
-    if hessian:
-        axial_h(w.x_z, w.p_a, w.a_val, w.a_jac, w.a_hes)
-    else:
-        axial(w.x_z, w.p_a, w.a_val, w.a_jac)
+    axial(w.x_z, w.p_a, w.a_val, w.a_jac)
 
 
 @njit(refcount=False)
@@ -365,9 +396,9 @@ def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):  # noqa: ANN001, ANN202
     """(ε, K1, K2, K3) at the points ``xi`` of one element into ``out`` (len(xi), 4); μ per point."""
     _nodal(q_e, t_bar, d_bar, w, False)
     for k in range(xi.size):
-        _axial_point(q_e, L, xi[k], mu[k], w, False)
+        _axial_point(q_e, L, xi[k], mu[k], w)
         out[k, 0] = w.a_val[0]
-        _curvature_point(q_e, L, xi[k], mu[k], w, False)
+        _curvature_point(q_e, L, xi[k], mu[k], w)
         for j in range(3):
             out[k, 1 + j] = w.c_val[j]
 
@@ -380,13 +411,13 @@ def _energies(q_e, props, rest, work, out):  # noqa: ANN001, ANN202
         total = 0.0
         for k in range(rest.axial_xi.size):
             mu = rest.axial_mu[e, k]
-            _axial_point(q_e[e], L, rest.axial_xi[k], mu, work, False)
+            _axial_point(q_e[e], L, rest.axial_xi[k], mu, work)
             d = work.a_val[0] - rest.eps0[e, 0]
             total += 0.5 * props.EA[e] * d * d * mu * rest.axial_weight[k] * L
         C = (props.GJ[e], props.EI2[e], props.EI3[e])
         for k in range(rest.gauss_xi.size):
             mu = rest.gauss_mu[e, k]
-            _curvature_point(q_e[e], L, rest.gauss_xi[k], mu, work, False)
+            _curvature_point(q_e[e], L, rest.gauss_xi[k], mu, work)
             dens = 0.0
             for j in range(3):
                 d = work.c_val[j] - rest.k0[e, k, j]
@@ -620,16 +651,16 @@ def _element_forces(q, v, props, rest, w, e, force):  # noqa: ANN001, ANN202
     _element_coefficients(props, e, w)
     for k in range(rest.axial_xi.size):
         mu = rest.axial_mu[e, k]
-        _axial_point(qe, L, rest.axial_xi[k], mu, w, FLAG[0])
+        _axial_point(qe, L, rest.axial_xi[k], mu, w)
         _point_force(w.a_val, w.a_jac, 3, w.a_coef, rest.eps0[e], rest.axial_weight[k] * mu * L,
                      beta, ve, w, False, force)
     # a node shared with the previous element has the same inputs: its triad is reused
-    _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, FLAG[0], e > 0 and _same_node(q, rest, e))
+    _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, e > 0 and _same_node(q, rest, e))
     for c in range(N_N):
         w.g_n[c] = 0.0
     for k in range(rest.gauss_xi.size):
         mu = rest.gauss_mu[e, k]
-        _curvature_point(qe, L, rest.gauss_xi[k], mu, w, FLAG[0])
+        _curvature_point(qe, L, rest.gauss_xi[k], mu, w)
         _point_force(w.c_val, w.c_jac, N_Z, w.c_coef, rest.k0[e, k],
                      rest.gauss_weight[k] * mu * L, beta, ve, w, True, force)
     _nodal_force(w, force)
@@ -672,12 +703,13 @@ def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: AN
         for k in range(rest.axial_xi.size):
             mu = rest.axial_mu[e, k]
             W = rest.axial_weight[k] * mu * L
-            _axial_point(qe, L, rest.axial_xi[k], mu, w, FLAG[1])
+            _axial_point(qe, L, rest.axial_xi[k], mu, w)
+            axial_h(w.x_z, w.p_a, w.a_val, w.a_jac, w.a_hes)
             _point_force(w.a_val, w.a_jac, 3, w.a_coef, rest.eps0[e], W, beta, ve, w, False, fe)
             _point_tangent(w.a_jac, w.a_hes, w.sig[:1], 3, w.a_coef, W, beta, w, False, want_c,
                            ke, ce)
         # a node shared with the previous element has the same inputs: its triad is reused
-        _nodal(qe, rest.t_bar[e], rest.d_bar[e], w, FLAG[1], e > 0 and _same_node(q, rest, e))
+        _nodal_hessian(qe, rest.t_bar[e], rest.d_bar[e], w, e > 0 and _same_node(q, rest, e))
         for c in range(N_N):
             w.g_n[c] = 0.0
             for k in range(N_N):
@@ -693,16 +725,15 @@ def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: AN
         for k in range(rest.gauss_xi.size):
             mu = rest.gauss_mu[e, k]
             W = rest.gauss_weight[k] * mu * L
-            damped = beta != 0.0
-            _curvature_point(qe, L, rest.gauss_xi[k], mu, w, damped)
+            _curvature_point(qe, L, rest.gauss_xi[k], mu, w)
             _point_force(w.c_val, w.c_jac, N_Z, w.c_coef, rest.k0[e, k], W, beta, ve, w, True, fe)
-            if damped:      # the rate terms need each strain's Hessian
+            if beta != 0.0:      # the rate terms need each strain's Hessian
+                for j in range(3):
+                    _curvature_hessian(w, w.unit[j], w.c_hes[j])
                 _point_tangent(w.c_jac, w.c_hes, w.sig, N_Z, w.c_coef, W, beta, w, True, want_c,
                                ke, ce)
             else:
-                for j in range(3):
-                    w.p_c[3 + j] = w.sig[j]
-                curvatures_wh(w.x_z, w.p_c, w.h_w[0])
+                _curvature_hessian(w, w.sig, w.h_w[0])
                 _point_tangent(w.c_jac, w.h_w, w.one, N_Z, w.c_coef, W, beta, w, True, want_c,
                                ke, ce)
         _nodal_force(w, fe)
