@@ -490,8 +490,9 @@ def cmd_run(args: argparse.Namespace) -> int:
             from .kernel import kernels_cached
 
             if not kernels_cached():
-                print("flexmbs: first run here: compiling the numba kernels (once, about a "
-                      "minute; cached for later runs)", file=sys.stderr, flush=True)
+                print("flexmbs: first run here: compiling the numba kernels (once, 2-3 minutes, "
+                      "about 5 with rod elements; cached for later runs)", file=sys.stderr,
+                      flush=True)
         outcome = run_scenario(sc, out, overrides=overrides, resume=args.resume is not None,
                                overwrite=bool(getattr(args, "overwrite", False)),
                                progress=progress)
