@@ -100,14 +100,19 @@ def njit(*args: Any, refcount: bool = True, **kwargs: Any) -> Any:
     kernels that neither allocate nor keep an array beyond the call (they only read and write
     their callers' arrays): every view or field of a tuple of arrays otherwise costs an atomic
     increment and decrement, which made the rod's element kernel 4x slower (measured: 9.1 ->
-    2.3 µs per element residual). Falls back to the default if numba does not know the option."""
+    2.3 µs per element residual). The flag is always set explicitly: numba compiles a callee
+    that leaves it unset with its first caller's setting (``nrt`` is inherited), so a kernel
+    that allocates would otherwise fail to compile when first called from one without
+    reference counting, or be cached without it. A ``refcount=False`` function must neither
+    allocate nor return arrays (nor call a function that returns one). Falls back to the
+    default if numba does not know the option."""
     if _njit is None:
         if len(args) == 1 and callable(args[0]) and not kwargs:
             return args[0]
         return lambda f: f
     kwargs.setdefault("cache", True)
-    if not refcount and _NRT_OPTION:
-        kwargs["_nrt"] = False
+    if _NRT_OPTION:
+        kwargs["_nrt"] = refcount
     if len(args) == 1 and callable(args[0]):
         return _tolerate_stale_cache(_njit(**kwargs)(args[0]))
     decorate = _njit(*args, **kwargs)

@@ -158,7 +158,7 @@ def rebase_static(sy, q):  # noqa: ANN001, ANN201
     code = groups_post_step(sy.beams, q, sy.error)
     if code != 0:
         return 0, code
-    empty = np.zeros(0)
+    empty = q[:0]
     return rebase(sy, q, empty, empty, empty), 0
 
 

@@ -24,6 +24,10 @@ holds the step loop.
 - ``OP_STEPS``: up to ``run.n_steps`` generalized-α steps (``fv[k]`` = time-function values at
   the end of step k); returns ``(status, 0)``.
 
+The entry is compiled without numba's reference counting (``njit(refcount=False)``): it only
+passes the system's arrays on, and the counting of every array of every part at each of its
+calls made it the largest single compile cost (docs/design-notes.md, "Cost of compilation").
+
 Callers that only evaluate pass :func:`~flexmbs.solvers._compiled.idle_run` as ``run`` and a
 one-row ``fv``, so that every call has the same argument types (one signature, one library).
 """
@@ -40,7 +44,7 @@ __all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE"
 OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES = range(6)
 
 
-@njit
+@njit(refcount=False)
 def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: ANN001, ANN201
     """See the module docstring."""
     if op == OP_RESIDUAL:
