@@ -186,6 +186,7 @@ class RodWork(NamedTuple):
     one: np.ndarray       # (1,) 1.0: the weight of ``h_w``
     w_x: np.ndarray       # (12, N_U) ∂²Δθ/∂t² · ∂t/∂u
     unit: np.ndarray      # (3, 3) identity: weights picking one curvature's Hessian
+    p_cc: np.ndarray      # (12, 12) Σ_points centreline-centreline block of (∂z/∂q)ᵀ A ∂z/∂q
 
 
 def new_work() -> RodWork:
@@ -198,7 +199,7 @@ def new_work() -> RodWork:
                    z((3, n)), z(N_N), z(N_Z), z(3), z(1), z(6), z(3), z((2, N_SPIN)),
                    z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)), z(N_Z), z((12, N_N)),
                    z((N_N, N_N)), z((1, N_Z, N_Z)), np.ones(1),
-                   z((12, N_U)), np.eye(3))
+                   z((12, N_U)), np.eye(3), z((12, 12)))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -507,8 +508,9 @@ def _point_tangent(jac, hes, h_sig, n_z, coef, W, beta, w, nodal, want_c, stiff,
         A = W Σ_j (σ_j ∂²e_j/∂z² + C_j ∂e_j/∂z ∂e_j/∂zᵀ),
         ∂Q/∂q̇ += W β Σ_j C_j ∂e_j/∂q ∂e_j/∂qᵀ   (with ``want_c``).
 
-    The centreline blocks of A are added here; with ``nodal`` its centreline-nodal and
-    nodal-nodal blocks are summed into ``p_cn``, ``p_nn`` for :func:`_nodal_tangent`."""
+    The centreline-centreline block is summed into ``p_cc`` (:func:`_centerline_tangent` adds
+    it once per element); with ``nodal`` the centreline-nodal and nodal-nodal blocks of A into
+    ``p_cn``, ``p_nn`` for :func:`_nodal_tangent`."""
     ne = ELEMENT_SIZE
     ns = jac.shape[0]
     nh = h_sig.size
@@ -525,17 +527,24 @@ def _point_tangent(jac, hes, h_sig, n_z, coef, W, beta, w, nodal, want_c, stiff,
                 s += coef[j] * jac[j, a] * jac[j, b]
             A[a, b] = W * s
             A[b, a] = W * s
-    # centreline-centreline blocks: Σ over the (r′, r″) weights
-    for m in range(4):
-        for mm in range(4):
-            for c in range(3):
-                row = CENTERLINE[3 * m + c]
-                for cc in range(3):
-                    s = 0.0
-                    for u in range(nc):
-                        for uu in range(nc):
-                            s += ab[u, m] * ab[uu, mm] * A[3 * u + c, 3 * uu + cc]
-                    stiff[row, CENTERLINE[3 * mm + cc]] += s
+    # centreline-centreline block, Σ_u,u' ab[u, m] A[3u + c, 3u' + c'] ab[u', m'] over the
+    # (r′, r″) weights, into ``p_cc`` (scattered once per element): the pairs c ≤ c' only
+    # (A is symmetric), each through T = A_cc' ab first
+    pcc = w.p_cc
+    for c in range(3):
+        for cc in range(c, 3):
+            for mm in range(4):
+                t0 = A[c, cc] * ab[0, mm]
+                t1 = 0.0
+                if nc == 2:
+                    t0 += A[c, 3 + cc] * ab[1, mm]
+                    t1 = A[3 + c, cc] * ab[0, mm] + A[3 + c, 3 + cc] * ab[1, mm]
+                col = 3 * mm + cc
+                for m in range(4):
+                    s = ab[0, m] * t0 + ab[1, m] * t1
+                    pcc[3 * m + c, col] += s
+                    if cc != c:
+                        pcc[col, 3 * m + c] += s
     if nodal:
         pcn = w.p_cn
         pnn = w.p_nn
@@ -594,6 +603,17 @@ def _nodal_force(w, force):  # noqa: ANN001, ANN202
         for c in range(N_N):
             s += nj[c, k] * gn[c]
         force[U_COLS[k]] += s
+
+
+@njit(refcount=False)
+def _centerline_tangent(w, stiff):  # noqa: ANN001, ANN202
+    """The centreline-centreline block of an element's tangent, summed over its points in
+    ``p_cc`` (:func:`_point_tangent`), into the element matrix."""
+    pcc = w.p_cc
+    for i in range(CENTERLINE.size):
+        row = CENTERLINE[i]
+        for j in range(CENTERLINE.size):
+            stiff[row, CENTERLINE[j]] += pcc[i, j]
 
 
 @njit(refcount=False)
@@ -700,6 +720,9 @@ def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: AN
         for i in range(ne):
             fe[i] = 0.0
         _element_coefficients(props, e, w)
+        for i in range(CENTERLINE.size):
+            for j in range(CENTERLINE.size):
+                w.p_cc[i, j] = 0.0
         for k in range(rest.axial_xi.size):
             mu = rest.axial_mu[e, k]
             W = rest.axial_weight[k] * mu * L
@@ -737,6 +760,7 @@ def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: AN
                 _point_tangent(w.c_jac, w.h_w, w.one, N_Z, w.c_coef, W, beta, w, True, want_c,
                                ke, ce)
         _nodal_force(w, fe)
+        _centerline_tangent(w, ke)
         _nodal_tangent(w, ke)
 
 
