@@ -490,8 +490,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             from .kernel import kernels_cached
 
             if not kernels_cached():
-                print("flexmbs: first run here: compiling the numba kernels (once, 2-3 minutes, "
-                      "about 5 with rod elements; cached for later runs)", file=sys.stderr,
+                print("flexmbs: first run here: compiling the numba kernels (once, about 2 "
+                      "minutes, 3-4 with rod elements; cached for later runs)", file=sys.stderr,
                       flush=True)
         outcome = run_scenario(sc, out, overrides=overrides, resume=args.resume is not None,
                                overwrite=bool(getattr(args, "overwrite", False)),

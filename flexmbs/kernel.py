@@ -64,7 +64,7 @@ def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: A
 
 def kernels_cached() -> bool:
     """Whether numba's on-disk cache holds a compiled :func:`kernel` (else the first run
-    compiles it, a one-time cost of 2–5 minutes, README)."""
+    compiles it, a one-time cost of 2–4 minutes, README)."""
     try:
         return bool(kernel._cache._cache_file._load_index())
     except Exception:   # no numba, caching disabled, or numba internals changed  # noqa: BLE001
