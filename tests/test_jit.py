@@ -79,3 +79,80 @@ def test_kernels_are_stamped_with_every_kernel_module(tmp_path):
 
         locator = kernel._cache._impl._locator
         assert locator.get_source_stamp() == package_stamp(root)
+
+
+def _arrays_returned_without_refcount(dispatchers) -> list[str]:  # noqa: ANN001
+    """Compiled signatures of reference-count-free kernels whose result holds an array (the
+    caller would release a reference it was never given, ``_jit.njit``)."""
+    from numba.core import types
+
+    def holds_array(t) -> bool:  # noqa: ANN001
+        if isinstance(t, types.Array):
+            return True
+        if isinstance(t, types.BaseTuple):
+            return any(holds_array(x) for x in t)
+        return False
+
+    found = []
+    for d in dispatchers:
+        if d.targetoptions.get("_nrt") is not False:
+            continue
+        cache = getattr(getattr(d, "_cache", None), "_cache_file", None)
+        for key in (cache._load_index() if cache is not None else {}):
+            d.compile(key[0])   # every signature on disk (loaded, not compiled again)
+        found += [f"{d.py_func.__module__}.{d.py_func.__name__}{sig}"
+                  for sig in d.nopython_signatures if holds_array(sig.return_type)]
+    return found
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="compiled kernels only")
+def test_reference_counting_is_stated_and_kept_where_arrays_are_returned():
+    """Every flexmbs kernel states numba's ``_nrt`` flag (a callee that leaves it unset takes
+    its first caller's, and the contact kernels allocate), and none compiled without reference
+    counting returns an array: checked on every signature in numba's cache (at least those of
+    a model with cable, rigid body, joints and a clearance joint, Example 1, and of a clamped
+    rod, built here), with a planted offender to show that the check sees one."""
+    import importlib
+    import pkgutil
+
+    import numpy as np
+    from numba.core.registry import CPUDispatcher
+
+    import flexmbs as fm
+    from flexmbs._jit import _NRT_OPTION, njit
+    from flexmbs.assembly import Assembly
+    from flexmbs.io.scenario import load_scenario
+
+    if not _NRT_OPTION:
+        pytest.skip("this numba does not know the _nrt option")
+    for model in (load_scenario(ROOT / "examples" / "curved_beam_sleeve.toml").model, None):
+        if model is None:
+            model = fm.Model()
+            beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2), element="ancf_rod14",
+                                  section=fm.BeamStiffness(axial_stiffness=1e6, bending_stiffness=1.0,
+                                                           mass_per_length=1.0,
+                                                           torsional_stiffness=0.8))
+            model.clamp(beam.first_node)
+        asm = Assembly(model)
+        n, m = asm.n_coords, asm.n_total - asm.n_coords
+        asm.evaluate(asm.q_ref, np.zeros(n), np.zeros(n), np.zeros(m), 0.0, np.zeros(n),
+                     np.zeros(m), matrix=(1.0, 0.0, 1.0))
+    dispatchers = {}
+    for info in pkgutil.walk_packages(fm.__path__, "flexmbs."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        for obj in vars(module).values():
+            if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == info.name:
+                dispatchers[id(obj)] = obj
+    assert len(dispatchers) > 100
+    unstated = [d.py_func.__name__ for d in dispatchers.values() if "_nrt" not in d.targetoptions]
+    assert unstated == []
+    assert _arrays_returned_without_refcount(dispatchers.values()) == []
+
+    @njit(refcount=False, cache=False)
+    def planted(a):  # noqa: ANN001, ANN202 - numba accepts only an argument here
+        return a
+
+    planted(np.ones(3))
+    assert len(_arrays_returned_without_refcount([planted])) == 1
