@@ -192,14 +192,15 @@ class RodWork(NamedTuple):
 def new_work() -> RodWork:
     z = np.zeros
     n = ELEMENT_SIZE
+    nc = CENTERLINE.size
     return RodWork(z(4), z(6), z((2, 6)), z((2, 6, 4)), z((2, 6, 4, 4)), z(12), z(0), z(1),
                    z((1, 12)), z((1, 12, 12)), z((N_N, N_U)), z((N_N, N_U, N_U)), z((N_N, N_U)),
                    z(N_Z), z(6), z(1), z(3), z((3, N_Z)), z((3, N_Z, N_Z)), z(1), z((1, 3)),
                    z((1, 3, 3)), z((2, 4)), z((3, n)), z(3), z((N_Z, N_Z)), z((N_Z, N_U)), z(N_Z),
                    z((3, n)), z(N_N), z(N_Z), z(3), z(1), z(6), z(3), z((2, N_SPIN)),
-                   z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)), z(N_Z), z((12, N_N)),
+                   z((2, N_SPIN, 6)), z((2, 2, 3)), z((3, 2)), z((3, 2)), z(N_Z), z((nc, N_N)),
                    z((N_N, N_N)), z((1, N_Z, N_Z)), np.ones(1),
-                   z((12, N_U)), np.eye(3), z((12, 12)))
+                   z((12, N_U)), np.eye(3), z((nc, nc)))
 
 
 # ---------------------------------------------------------------------------------------------
