@@ -90,12 +90,20 @@ class TermTable(NamedTuple):
     eq_kind: np.ndarray    # int64 (ne,): LIN or DOT
     eq_vec: np.ndarray     # int64 (ne, 4): (u1, u2, w1, w2), −1 = absent
     eq_P: np.ndarray       # float64 (ne, 3): projection row (LIN), zeros (DOT)
+    directors: np.ndarray | None  # int64: the NODE_DIRECTOR rows; None when there are none
+    #   (the kernels then compile none of the rod's code: :func:`_node_director`)
 
 
 def _empty_table() -> TermTable:
     i, f = np.int64, np.float64
     return TermTable(np.zeros(0, i), np.zeros(0, i), np.zeros((0, 3), f), np.zeros((0, 3, 4, 4), f),
-                     np.zeros((0, 3), f), np.zeros(0, i), np.zeros((0, 4), i), np.zeros((0, 3), f))
+                     np.zeros((0, 3), f), np.zeros(0, i), np.zeros((0, 4), i), np.zeros((0, 3), f),
+                     None)
+
+
+def _director_rows(vec_kind: np.ndarray) -> np.ndarray | None:
+    rows = np.flatnonzero(vec_kind == NODE_DIRECTOR).astype(np.int64)
+    return rows if rows.size else None
 
 
 class _TableBuilder:
@@ -150,6 +158,7 @@ class _TableBuilder:
                            vec_off=np.array([r[1] for r in self._vec_rows], dtype=np.int64),
                            vec_c=c, vec_T=np.ascontiguousarray(point_tensor(c) * body[:, None, None, None]),
                            vec_d=np.array([r[3] for r in self._vec_rows]))
+            t = t._replace(directors=_director_rows(t.vec_kind))
         if self._eqs:
             t = t._replace(eq_kind=np.array([e[0] for e in self._eqs], dtype=np.int64),
                            eq_vec=np.array([e[1] for e in self._eqs], dtype=np.int64),
@@ -169,11 +178,20 @@ def concatenate_tables(tables: list[TermTable]) -> tuple[TermTable, np.ndarray]:
         return _empty_table(), eq_ptr
     shift = np.cumsum([0] + [t.vec_kind.size for t in tables[:-1]], dtype=np.int64)
     fields = {f: np.ascontiguousarray(np.concatenate([getattr(t, f) for t in tables]))
-              for f in TermTable._fields}
+              for f in TermTable._fields if f != "directors"}
     fields["eq_vec"] = np.ascontiguousarray(np.concatenate(
         [np.where(t.eq_vec >= 0, t.eq_vec + s, -1) for t, s in zip(tables, shift, strict=True)]),
         dtype=np.int64)
-    return TermTable(**fields), eq_ptr
+    return TermTable(**fields, directors=_director_rows(fields["vec_kind"])), eq_ptr
+
+
+@njit
+def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):  # noqa: ANN001, ANN202
+    """:func:`flexmbs.elements.ancf_rod.node_director` for a table that has node directors. For
+    one without (``directors`` None) numba prunes the call by the argument's type, so models
+    without them compile none of the rod's code (about 10 s of a first run)."""
+    if directors is not None:
+        node_director(q_node, t_bar, d_bar, val, jac, hes, hessian)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -200,8 +218,8 @@ def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarra
             ncol[s] = 4
             d2 = np.empty(3)
             jd = np.empty((3, 4))
-            node_director(q[o:o + 7], table.vec_c[v], table.vec_d[v], d2, jd, np.empty((3, 4, 4)),
-                          FLAG[0])
+            _node_director(table.directors, q[o:o + 7], table.vec_c[v], table.vec_d[v], d2, jd,
+                           np.empty((3, 4, 4)), FLAG[0])
             for k in range(3):
                 val[s, k] = d2[k]
                 for j in range(4):
@@ -307,8 +325,8 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
                 d2 = np.empty(3)
                 jd = np.empty((3, 4))
                 hd = np.empty((3, 4, 4))
-                node_director(q_local[o:o + 7], table.vec_c[v], table.vec_d[v], d2, jd, hd,
-                              FLAG[1])
+                _node_director(table.directors, q_local[o:o + 7], table.vec_c[v], table.vec_d[v],
+                               d2, jd, hd, FLAG[1])
                 for a in range(4):
                     for b in range(4):
                         acc = 0.0

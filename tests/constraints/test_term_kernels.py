@@ -23,12 +23,14 @@ from flexmbs.constraints.joints import (
     CONST,
     DOT,
     LIN,
+    NODE_DIRECTOR,
     NODE_POS,
     NODE_SLOPE,
     BeamNodeRigid,
     BeamNodeSpherical,
     GenericJoint,
     TermTable,
+    _TableBuilder,
     concatenate_tables,
     revolute,
     spherical,
@@ -156,8 +158,19 @@ def test_table_semantics():
     assert set(t.vec_off.tolist()) == {0, 7}
     n = BeamNodeRigid("n", Attachment.beam_node(NODE), g, np.eye(3)[:, :2])
     assert set(n.table.vec_kind.tolist()) == {NODE_POS, NODE_SLOPE, CONST}
+    assert n.table.directors is None           # no rod code compiled for such tables
     for arr in n.table:
-        assert arr.flags.c_contiguous
+        assert arr is None or arr.flags.c_contiguous
+    # node directors (rods) are listed, also after concatenation (rows shifted)
+    tb = _TableBuilder()
+    tb.lin(np.eye(3), tb.vec(NODE_POS, 0), tb.vec(CONST, 0, (1.0, 0.0, 0.0)))
+    tb.dot(tb.vec(NODE_DIRECTOR, 0, (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), -1,
+           tb.vec(CONST, 0, (0.0, 0.0, 1.0)), -1)
+    rod = tb.build()
+    assert rod.directors.tolist() == [2]
+    both, _ = concatenate_tables([n.table, rod])
+    assert both.directors.tolist() == [n.table.vec_kind.size + 2]
+    assert concatenate_tables([n.table, n.table])[0].directors is None
 
 
 def _mixed_constraints(rng: np.random.Generator) -> list:
