@@ -803,11 +803,18 @@ def base_frames(slopes: np.ndarray, connectivity: np.ndarray) -> tuple[np.ndarra
     """Nodal bases ``(t̄, D̄)`` (n_nodes, 3) of a reference with nodal slopes ``(n_nodes, 3)``:
     D̄ by parallel transport (smallest rotations) along the elements ``connectivity (n_elem, 2)``
     in order (§4.6); a chain starts from the global axis least aligned with its first tangent.
-    On a closed loop the transport does not return to its start (holonomy); the reference twist
-    K1⁰ of the closing element absorbs it."""
+
+    On a closed loop the transport does not return to its start: the element that closes the
+    loop would carry the whole holonomy α ∈ (−π, π] as its reference twist Δθ⁰. The bases of
+    the loop's m nodes are therefore turned about their tangents by k α/m (k = 0 … m − 1 along
+    the loop), which gives every element of the loop the same reference twist α/m. The strain
+    measures K − K⁰ do not depend on the bases, but the relative twist Δθ is an angle in
+    (−π, π]: a closing element with Δθ⁰ near ±π would wrap after a small deformation and
+    its energy would jump."""
     g = np.asarray(slopes, dtype=float)
     t = g / np.linalg.norm(g, axis=1)[:, None]
     d = np.full_like(t, np.nan)
+    parent = np.full(t.shape[0], -1, dtype=np.int64)     # the node a node's base came from
     w = new_work()
     val = w.t_val[0]
     for n0, n1 in np.asarray(connectivity, dtype=np.int64):
@@ -820,7 +827,32 @@ def base_frames(slopes: np.ndarray, connectivity: np.ndarray) -> tuple[np.ndarra
             triad(np.append(t[n1], 0.0), np.concatenate([t[n0], d[n0]]), val, w.t_jac[0])
             d1 = val[3:] - np.dot(val[3:], t[n1]) * t[n1]
             d[n1] = d1 / np.linalg.norm(d1)
+            parent[n1] = n0
+        else:
+            _spread_holonomy(t, d, parent, n0, n1, w)
     return t, d
+
+
+def _spread_holonomy(t: np.ndarray, d: np.ndarray, parent: np.ndarray, last: int, first: int,
+                     w: RodWork) -> None:
+    """Turn the bases of the loop closed by the element ``last → first`` so that its reference
+    twist is shared by all the loop's elements (:func:`base_frames`); the loop is the path of
+    the transport from ``first`` to ``last`` (nothing is done if ``first`` is not on it).
+    Turning D̄ of a node b by β_b about t̄_b adds β_b − β_a to the relative twist of an
+    element a → b: with β = k α/m at the k-th node of the loop every element gets α/m."""
+    path = [last]
+    while path[-1] != first and parent[path[-1]] >= 0:
+        path.append(int(parent[path[-1]]))
+    if path[-1] != first:
+        return
+    loop = np.array(path[::-1], dtype=np.int64)           # first, …, last
+    for a, node in enumerate((last, first)):
+        w.x_tw[6 * a:6 * a + 3] = t[node]
+        w.x_tw[6 * a + 3:6 * a + 6] = d[node]
+    twist(w.x_tw, w.p_none, w.w_val, w.w_jac)
+    beta = np.arange(loop.size) * (w.w_val[0] / loop.size)
+    tl, dl = t[loop], d[loop]
+    d[loop] = np.cos(beta)[:, None] * dl + np.sin(beta)[:, None] * np.cross(tl, dl)
 
 
 def _rule(kind: str) -> tuple[np.ndarray, np.ndarray]:
