@@ -6,7 +6,9 @@ The rod's strain energy is a composition of four small maps, each differentiated
 - ``triad``: a node's ``(g, φ)`` -> its unit tangent ``t`` and director ``d2``
   (``t = g/|g|``, ``d2 = Rot(t, φ) SR(t̄ → t) D̄``), 4 inputs, 6 outputs;
 - ``twist``: the two nodal triads ``(t0, d20, t1, d21)`` -> the relative twist
-  ``Δθ = 2 atan(((d̂ × d21)·t1)/(1 + d̂·d21))``, ``d̂ = SR(t0 → t1) d20``, 12 inputs;
+  ``Δθ = atan2((d̂ × d21)·t1, d̂·d21)``, ``d̂ = SR(t0 → t1) d20``, 12 inputs (atan2, not
+  the half-angle form 2 atan(y/(1 + x)), which divides by zero at Δθ = ±π: an element may
+  twist past π, the kernel adds the whole turns of its nodal twists);
 - ``curvatures``: at a point ξ, ``(r′, r″, t0, d20, Δθ)`` -> ``(K1, K2, K3)``, 13 inputs;
 - ``axial``: ``r′`` -> ``ε = |r′|/μ − 1`` (integrated at other points, against membrane locking);
 - ``spin``: a node's ``(g, ġ)`` -> the spin of its chart about the tangent,
@@ -77,7 +79,7 @@ def twist_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
     dhat = _sr(t0, t1, d20)
     y = dhat.cross(d21).dot(t1)
     x = dhat.dot(d21)
-    return [*t0, *d20, *t1, *d21], [], [2 * sp.atan(y / (1 + x))]
+    return [*t0, *d20, *t1, *d21], [], [sp.atan2(y, x)]
 
 
 def axial_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
@@ -194,7 +196,7 @@ def generate() -> str:
             'inputs x inputs). Only the nonzero entries are written:\nthe caller zeroes ``jac`` '
             'and ``hes`` once.\n"""\n# generator sha256: ' + generator_hash() + '\n'
             '# ruff: noqa: E501, F841\n# fmt: off\n\nfrom __future__ import '
-            'annotations\n\nfrom math import atan, cos, sin, sqrt  # noqa: F401\n\n'
+            'annotations\n\nfrom math import atan, atan2, cos, sin, sqrt  # noqa: F401\n\n'
             'from .._jit import njit\n\n'
             '__all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_wh", "axial",\n'
             '           "axial_h", "spin", "spin_value"]\n')

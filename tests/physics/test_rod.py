@@ -91,6 +91,49 @@ def test_uniform_twist_of_a_cantilever_under_an_end_torque():
     assert np.abs(pos - beam.centerline.points).max() < 1e-12
 
 
+
+def test_an_element_twists_by_several_turns_and_keeps_them_through_rebasing():
+    """A straight cantilever of 2 elements under an end torque twisted by up to 1.5 turns per
+    element: the twist is T x/GJ (exact for the linear interpolation) and the output torsional
+    moment T, though the relative twist of an element is an angle the triads give only within
+    (−π, π]. Turned rigidly by 150° about z (past the re-basing limit, §2.4), every node gets a
+    new base and keeps its φ, and the energy stays ½ GJ Σ Δθ²/L_e (closed form): re-basing
+    keeps the whole turns. Before, an element wrapped past 180° and the static solve failed."""
+    GJ, L, n = 0.7, 2.0, 2
+    for turns in (0.55, 0.8, 1.5):
+        T = 2 * np.pi * turns * n * GJ / L
+        model = fm.Model()
+        beam = model.add_beam(fm.line((0, 0, 0), (L, 0, 0), elements=n), section=_section(GJ=GJ),
+                              element=ROD)
+        model.clamp(beam.first_node)
+        model.add_point_load(beam.last_node, moment=(T, 0, 0))
+        asm = Assembly(model)
+        st = fm.solve_static(asm, fm.StaticOptions(load_steps=4 * n * int(np.ceil(turns))))
+        dofs = asm.beam_dofs(beam).reshape(beam.n_nodes, -1)
+        tw = dofs[:, beam.layout.twist]
+        x = beam.centerline.arc_length_of_nodes()
+        assert st.q[tw] == pytest.approx(T * x / GJ, rel=1e-9)
+        grp = asm.groups[0]
+        out = grp.element_type.output_fields(st.q[grp.dofs], grp.rest, grp.options,
+                                             np.linspace(0, 1, 5))
+        assert out["torsional_moment"] == pytest.approx(T, rel=1e-9)
+        energy = 0.5 * GJ * n * (2 * np.pi * turns) ** 2 / (L / n)
+        assert asm.energies(st.q, np.zeros_like(st.q))["strain"] == pytest.approx(energy, rel=1e-9)
+
+        q = st.q.copy()
+        c, s_ = np.cos(np.radians(150)), np.sin(np.radians(150))
+        R = np.array([[c, -s_, 0], [s_, c, 0], [0, 0, 1]])
+        for cols in (dofs[:, :3], dofs[:, 3:6]):
+            q[cols] = q[cols] @ R.T
+        phi = q[tw].copy()
+        old = asm.node_bases().copy()
+        asm.post_step(q, np.zeros_like(q), 0.0)
+        new = asm.node_bases()
+        assert np.all(np.abs(new[:, 1:4] - old[:, 1:4]).max(axis=1) > 0.5)   # every node re-based
+        np.testing.assert_array_equal(q[tw], phi)
+        assert asm.energies(q, np.zeros_like(q))["strain"] == pytest.approx(energy, rel=1e-9)
+
+
 def test_torsional_frequencies_of_a_cantilever():
     """ω_k = (2k − 1) π/(2L) √(GJ/ρJ_p) (a clamped-free shaft). With the linear twist field and
     its consistent inertia the first three converge from above at O(h²); the modes are found
