@@ -134,6 +134,49 @@ def test_an_element_twists_by_several_turns_and_keeps_them_through_rebasing():
         assert asm.energies(q, np.zeros_like(q))["strain"] == pytest.approx(energy, rel=1e-9)
 
 
+
+def test_greenhill_twisted_shaft_buckles_at_the_classical_torque():
+    """A straight shaft clamped at both ends and twisted uniformly by θ (an equilibrium for any
+    θ) loses stability when the smallest eigenvalue of its tangent stiffness crosses zero: at
+    the torque T L/EI = 2 × 4.4934… (the root of tan x = x; Greenhill, clamped ends). The
+    critical θ converges at O(h⁴): relative errors 3.0e-2, 2.2e-3 and 1.4e-4 with 4, 8 and 16
+    elements (measured). With 4 elements each element is twisted by 3.3 rad at the critical
+    load, past π."""
+    from scipy.optimize import brentq
+
+    EI, GJ, L = 1.0, 0.7, 1.0
+    exact = 2 * brentq(lambda x: np.tan(x) - x, 4.0, 4.6) * EI / L
+    errors = []
+    for n in (4, 8, 16):
+        model = fm.Model()
+        beam = model.add_beam(fm.line((0, 0, 0), (L, 0, 0), elements=n),
+                              section=_section(EA=1e4, EI=EI, GJ=GJ), element=ROD)
+        asm = Assembly(model)
+        twists = asm.beam_dofs(beam).reshape(beam.n_nodes, -1)[:, beam.layout.twist]
+        free = asm.beam_dofs(beam).reshape(beam.n_nodes, -1)[1:-1].ravel()  # both ends held
+        x = beam.centerline.arc_length_of_nodes()
+        size = asm.n_coords
+
+        def smallest_eigenvalue(theta: float, asm=asm, twists=twists, free=free, x=x,
+                                size=size) -> float:
+            q = asm.q_ref.copy()
+            q[twists] = theta * x / L
+            r_q, r_lam = np.zeros(size), np.zeros(asm.n_mult)
+            asm.evaluate(q, np.zeros(size), None, np.zeros(asm.n_mult), 0.0, r_q, r_lam,
+                         matrix=(0.0, 0.0, 1.0), with_damping=False)
+            assert np.abs(r_q[free]).max() < 1e-12                 # an equilibrium
+            K = asm.matrix[:size, :size].toarray()[np.ix_(free, free)]
+            return float(np.linalg.eigvalsh(0.5 * (K + K.T))[0])
+
+        theta = brentq(smallest_eigenvalue, 5.0, 20.0, xtol=1e-12)
+        errors.append(GJ * theta / L / exact - 1.0)
+        if n == 4:
+            assert theta / n > np.pi                      # each element twisted past π
+    assert np.all(np.array(errors) > 0) and errors[2] < 2e-4
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all((rates > 3.6) & (rates < 4.4)), (errors, rates)
+
+
 def test_torsional_frequencies_of_a_cantilever():
     """ω_k = (2k − 1) π/(2L) √(GJ/ρJ_p) (a clamped-free shaft). With the linear twist field and
     its consistent inertia the first three converge from above at O(h²); the modes are found
