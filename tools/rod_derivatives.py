@@ -7,8 +7,7 @@ The rod's strain energy is a composition of four small maps, each differentiated
   (``t = g/|g|``, ``d2 = Rot(t, φ) SR(t̄ → t) D̄``), 4 inputs, 6 outputs;
 - ``twist``: the two nodal triads ``(t0, d20, t1, d21)`` -> the relative twist
   ``Δθ = atan2((d̂ × d21)·t1, d̂·d21)``, ``d̂ = SR(t0 → t1) d20``, 12 inputs (atan2, not
-  the half-angle form 2 atan(y/(1 + x)), which divides by zero at Δθ = ±π: an element may
-  twist past π, the kernel adds the whole turns of its nodal twists);
+  the half-angle form 2 atan(y/(1 + x)), which divides by zero at Δθ = ±π);
 - ``curvatures``: at a point ξ, ``(r′, r″, t0, d20, Δθ)`` -> ``(K1, K2, K3)``, 13 inputs;
 - ``axial``: ``r′`` -> ``ε = |r′|/μ − 1`` (integrated at other points, against membrane locking);
 - ``spin``: a node's ``(g, ġ)`` -> the spin of its chart about the tangent,

@@ -5,7 +5,7 @@ and parameters ``p`` and writes the values ``val``, the Jacobian ``jac`` (output
 with ``hes``, the Hessians (outputs x inputs x inputs). Only the nonzero entries are written:
 the caller zeroes ``jac`` and ``hes`` once.
 """
-# generator sha256: efe6ac12a70c8edab7776449bbc1efa35ef2d70223194c97d0d7b36cbcc2643a
+# generator sha256: 55fff12cb293777e92394b67f2745778e23d52d06ae1097f977494efaa4f5b13
 # ruff: noqa: E501, F841
 # fmt: off
 

@@ -10,7 +10,7 @@ transport along the beam's nodes, §4.6); its triad is
 with the smallest rotation SR and the rotation Rot of §2.1. At ξ = x/L of an element (§2.2):
 
     t = r′/|r′|,  t_x = (r″ − t (t·r″))/|r′|,   d̂ = SR(t_0 → t_1) d2_0,
-    Δθ = atan2((d̂ × d2_1)·t_1, d̂·d2_1) + 2πk   (k: the whole turns of φ_1 − φ_0),
+    Δθ = atan2((d̂ × d2_1)·t_1, d̂·d2_1)   (an angle in (−π, π]: < 180° of twist per element),
     d2(x) = Rot(t, ξΔθ) SR(t_0 → t) d2_0,   d3 = t × d2,
     ε = |r′|/μ − 1,  K = (r′ × r″)/(|r′|² μ),  K2 = K·d2,  K3 = K·d3,
     τ_SR = −t_0·(t × t_x)/(1 + t_0·t),   K1 = (Δθ/L + τ_SR)/μ,
@@ -252,19 +252,6 @@ def _twist_inputs(w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _continuous_twist(q_e, w):  # noqa: ANN001, ANN202
-    """The relative twist Δθ (``w.w_val[0]``) continuous in the nodal twists, not only within
-    (−π, π]: since d2_a = Rot(t_a, φ_a) e_a with the untwisted director e_a = SR(t̄_a → t_a) D̄_a,
-    Δθ = φ_1 − φ_0 + Δθ_e exactly, where Δθ_e, the relative twist of e_0 and e_1, stays small
-    (it comes from the tangents' turns and the bases). The generated map gives Δθ modulo 2π;
-    adding the whole turns of φ_1 − φ_0 lets an element twist by any angle. The derivatives are
-    unchanged."""
-    dphi = q_e[NODE_SIZE + TWIST] - q_e[TWIST]
-    rest = w.w_val[0] - dphi
-    w.w_val[0] = dphi + (rest - 2.0 * math.pi * round(rest / (2.0 * math.pi)))
-
-
-@njit(refcount=False)
 def _nodal(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
     """Both nodal triads and Δθ of one element, with ``n_jac``: the derivatives of
     n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1). ``shared``: node 0 is the
@@ -276,7 +263,6 @@ def _nodal(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
         triad(w.x_node, w.p_node, w.t_val[a], w.t_jac[a])
     _twist_inputs(w)
     twist(w.x_tw, w.p_none, w.w_val, w.w_jac)
-    _continuous_twist(q_e, w)
     _nodal_jacobian(w)
 
 
@@ -291,7 +277,6 @@ def _nodal_hessian(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
         triad_h(w.x_node, w.p_node, w.t_val[a], w.t_jac[a], w.t_hes[a])
     _twist_inputs(w)
     twist_h(w.x_tw, w.p_none, w.w_val, w.w_jac, w.w_hes)
-    _continuous_twist(q_e, w)
     _nodal_jacobian(w)
     nh = w.n_hes
     for c in range(6):
@@ -1216,8 +1201,7 @@ def _base_cosine(rp, q, e, a):  # noqa: ANN001, ANN202
 def rod_rebase(rp, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN201
     """Re-base every node whose tangent turned past :data:`REBASE_LIMIT` (``rp.limits[0]``) from
     its base (§2.4):
-    ``t̄ ← t, D̄ ← SR(t̄ → t) D̄`` (the untwisted director; φ and the triad, hence every strain
-    and the whole turns of the twist, unchanged), ``φ̇ ← φ̇ + ω_SR·t``
+    ``t̄ ← t, D̄ ← d2, φ ← 0`` (the triad, hence every strain, unchanged), ``φ̇ ← φ̇ + ω_SR·t``
     (the physical spin kept), ``φ̈`` and the integrator's acceleration-like ``acc`` by the
     rate of that spin (each left out when its array is empty). Each re-based node is appended
     to ``log`` (records of :data:`~flexmbs.elements.layout.BASE_RECORD`: twist coordinate, t̄,
@@ -1244,7 +1228,7 @@ def rod_rebase(rp, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN201
                 xs[3 + c] = v[rp.dofs[e, o + c]] if v.size > 0 else 0.0
                 p[c] = tb[c]
                 p[3 + c] = rp.rest.d_bar[e, a, c]
-            x[3] = 0.0
+            x[3] = q[k]
             triad(x, p, val, jac)
             # the chart's spin w = b·ġ and its rate ẇ = b·g̈ + s (generated ``spin``, §2.4)
             spin(xs, p[:3], ys, js)
@@ -1258,7 +1242,8 @@ def rod_rebase(rp, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN201
                     acc[k] += ys[1 + c] * acc[rp.dofs[e, o + c]]
             if v.size > 0:
                 v[k] += ys[0]
-            # the new base: t̄ = t, D̄ = the untwisted director made exactly orthonormal to it
+            q[k] = 0.0
+            # the new base: t̄ = t, D̄ = d2 made exactly orthonormal to it
             dt = val[0] * val[3] + val[1] * val[4] + val[2] * val[5]
             dn = 0.0
             for c in range(3):
