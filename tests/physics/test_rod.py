@@ -233,18 +233,19 @@ def test_released_curved_rod_conserves_energy_with_rho_inf_one():
     assert E2[-1] < E2[1] * (1 - 1e-3)
 
 
-def _closed_loop(n: int, seam: int) -> tuple[fm.Model, fm.Beam, np.ndarray]:
-    """A closed, non-planar loop r(s) = (cos s + a cos 2s, sin s − a sin 2s, h sin 3s) of n rod
-    elements whose first node lies at parameter index ``seam``; returns its tangents too."""
+def _closed_loop(n: int, seam: int, scale: float = 1.0,
+                 twist_inertia: float | None = None) -> tuple[fm.Model, fm.Beam, np.ndarray]:
+    """A closed, non-planar loop r(s) = scale (cos s + a cos 2s, sin s − a sin 2s, h sin 3s) of n
+    rod elements whose first node lies at parameter index ``seam``; returns its tangents too."""
     a, h = 0.2, 0.2
     s = np.roll(np.linspace(0.0, 2 * np.pi, n, endpoint=False), -seam)
-    pts = np.column_stack([np.cos(s) + a * np.cos(2 * s), np.sin(s) - a * np.sin(2 * s),
-                           h * np.sin(3 * s)])
+    pts = scale * np.column_stack([np.cos(s) + a * np.cos(2 * s), np.sin(s) - a * np.sin(2 * s),
+                                   h * np.sin(3 * s)])
     tan = np.column_stack([-np.sin(s) - 2 * a * np.sin(2 * s), np.cos(s) - 2 * a * np.cos(2 * s),
                            3 * h * np.cos(3 * s)])
     model = fm.Model()
-    beam = model.add_beam(fm.polyline(pts, tan, closed=True), section=_section(EA=1e4),
-                          element=ROD)
+    beam = model.add_beam(fm.polyline(pts, scale * tan, closed=True), element=ROD,
+                          section=_section(EA=1e4, twist_inertia=twist_inertia))
     return model, beam, tan / np.linalg.norm(tan, axis=1)[:, None]
 
 
@@ -307,15 +308,7 @@ def test_a_closed_loop_tumbles_freely_through_rebasing():
     from flexmbs.elements._rod_derivatives import triad, twist
 
     n = 24
-    s = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-    a, h = 0.2, 0.2
-    pts = 0.5 * np.column_stack([np.cos(s) + a * np.cos(2 * s), np.sin(s) - a * np.sin(2 * s),
-                                 h * np.sin(3 * s)])
-    tan = 0.5 * np.column_stack([-np.sin(s) - 2 * a * np.sin(2 * s),
-                                 np.cos(s) - 2 * a * np.cos(2 * s), 3 * h * np.cos(3 * s)])
-    model = fm.Model()
-    beam = model.add_beam(fm.polyline(pts, tan, closed=True), element=ROD,
-                          section=_section(EA=1e4, twist_inertia=0.01))
+    model, beam, _ = _closed_loop(n, 0, scale=0.5, twist_inertia=0.01)
     asm = Assembly(model)
     omega = np.array([1.5, 1.5, 4.0])
     nodes = [asm.node_dofs(beam.node(i)) for i in range(n)]
