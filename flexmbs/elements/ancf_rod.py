@@ -850,9 +850,12 @@ def _spread_holonomy(t: np.ndarray, d: np.ndarray, parent: np.ndarray, last: int
         w.x_tw[6 * a:6 * a + 3] = t[node]
         w.x_tw[6 * a + 3:6 * a + 6] = d[node]
     twist(w.x_tw, w.p_none, w.w_val, w.w_jac)
-    beta = np.arange(loop.size) * (w.w_val[0] / loop.size)
-    tl, dl = t[loop], d[loop]
-    d[loop] = np.cos(beta)[:, None] * dl + np.sin(beta)[:, None] * np.cross(tl, dl)
+    step = w.w_val[0] / loop.size
+    for k, node in enumerate(loop):
+        # Rot(t, β) D̄ is the triad map's director with φ = β on the base (t, D̄) itself
+        triad(np.append(t[node], k * step), np.concatenate([t[node], d[node]]), w.t_val[0],
+              w.t_jac[0])
+        d[node] = w.t_val[0, 3:]
 
 
 def _rule(kind: str) -> tuple[np.ndarray, np.ndarray]:
