@@ -861,4 +861,7 @@ class Assembly:
         if self.model.springs:
             out["spring"] = spring_energy(self.system.springs, np.ascontiguousarray(q, float))
             out["total"] += out["spring"]
+        if self.joint_lists["clearance"]:
+            out["contact"] = sum(j.contact_energy(q) for j in self.joint_lists["clearance"])
+            out["total"] += out["contact"]
         return out

@@ -28,6 +28,7 @@ from .sections import (
     section_boundary,
     section_contains,
 )
+from .stationary import line_model_points, stationary_pair
 from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
@@ -46,15 +47,18 @@ SHAPE_SAMPLES = 128
 
 
 @njit
-def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out, r_b,  # noqa: ANN001, ANN201, C901
-                   shape, params, R_out, R_in, out):
+def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out, r_b,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0915
+                   shape, params, R_out, R_in, consistent, out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
     ``A`` = hole body rotation (columns: hole axis, e_y, e_z); ``shape``, ``params``: the
     compiled section (:func:`flexmbs.contact.sections.section_boundary`), ``R_out``/``R_in`` its
     bounding and inscribed radii. Circles take the closed-form quartic (§3), other shapes the
-    generic common-normal detector (§6). The section crossings start at the warm starts
+    generic common-normal detector (§6); with ``consistent`` each point is instead a stationary
+    pair of the wall and the beam axis (§4b, :mod:`flexmbs.contact.stationary`), seeded by the
+    line model, and its row's ``depth`` is the penetration ``r_b − |x − Y|`` (``phi`` = ψ).
+    The section crossings start at the warm starts
     ``(elem_ws, xi_ws)`` and are written to ``(elem_out, xi_out)`` (the same arrays to update
     the warm starts)."""
     n = A[:, 0].copy()
@@ -82,6 +86,43 @@ def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, x
             return -1 - k   # the beam axis left the bore: the penetration is no longer defined
         if math.hypot(cy, cz) + a < R_in:
             continue   # broad phase: ellipse strictly inside the bore
+        if consistent:
+            # line-model seeds within half the clearance of contact, converged on the axis
+            m = line_model_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES, psis,
+                                  kinds, depths)
+            first = count
+            for j in range(m):
+                if r_b - depths[j] <= -0.5 * (R_in - r_b) or count >= out.shape[0]:
+                    continue
+                psi, kind, eP, xiP, ell, _, Q = stationary_pair(qe, lengths, origin, ey, ez,
+                                                                shape, params, psis[j],
+                                                                kinds[j], e, xi)
+                if ell >= r_b:
+                    continue
+                dup = False
+                for i in range(first, count):
+                    if _angle_distance(out[i, 11], psi) < 1e-7:
+                        dup = True
+                if dup:
+                    continue
+                row = out[count]
+                row[0] = k
+                row[1] = j
+                row[2] = kind
+                row[3] = eP
+                row[4] = xiP
+                row[5] = Q[0]
+                row[6] = Q[1]
+                row[7] = Q[2]
+                row[8] = a
+                row[9] = b
+                row[10] = r_b - ell
+                row[11] = psi
+                row[12] = 0.0
+                row[13] = 0.0
+                row[14] = psi
+                count += 1
+            continue
         if shape == SHAPE_CIRCLE:
             R = params[0]
             cphi, ckind = circle_stationary_points(cy, cz, eax, eay, a, b, R)
@@ -222,9 +263,9 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
 
 @njit
 def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
-                     elem_out, xi_out, r_b, shape, params, R_out, R_in, law, mu, eps_v, approach,
-                     active, psi_track, qe, rows, want_tangent, exact, r_q, K_out, C_out, elem_k,
-                     elem_i):
+                     elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, mu, eps_v,
+                     approach, active, psi_track, qe, rows, want_tangent, exact, r_q, K_out, C_out,
+                     elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
@@ -244,7 +285,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
         for k in range(CENTERLINE_SIZE):
             qe[e, k] = q[elem_dofs[e, k]]
     m = detect_section(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out,
-                       r_b, shape, params, R_out, R_in, rows)
+                       r_b, shape, params, R_out, R_in, consistent, rows)
     if m < 0:
         return m, 0, 0.0
     Qc = np.empty(N_LOCAL)
@@ -286,12 +327,13 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
             if abs(Qc[c]) > scale:
                 scale = abs(Qc[c])
         if want_tangent and exact:
-            eI = elem_out[k]
+            eI = eP if consistent else elem_out[k]
             for c in range(3):
                 u_o[c] = hole_point[c] + (stations[k] if c == 0 else 0.0)
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
             contact_tangent(qb, vb, u_o, qe[eI], lengths[eI], xi_out[k], qe[eP], ve, lengths[eP],
-                            xiP, row[14], Y, Yp, Ypp, r_b, law, mu, eps_v, v_app, Qx, KX, C)
+                            xiP, row[14], Y, Yp, Ypp, r_b, law, mu, eps_v, v_app, consistent, Qx,
+                            KX, C)
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]
@@ -317,14 +359,15 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
 
 @njit
 def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,  # noqa: ANN001, ANN201, PLR0913
-                        xi_ws, r_b, shape, params, R_out, R_in, law, mu, eps_v, approach, active,
-                        psi_track, qe, rows, scratch):
+                        xi_ws, r_b, shape, params, R_out, R_in, consistent, law, mu, eps_v, approach,
+                        active, psi_track, qe, rows, scratch):
     """After a converged step: warm starts of the section crossings moved to the new state and
     the contacts tracked (:func:`clearance_update`). Returns 0, or ``−1 − k`` (axis left the
     bore). ``scratch`` receives the (discarded) residual."""
     m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
-                               xi_ws, elem_ws, xi_ws, r_b, shape, params, R_out, R_in, law, mu,
-                               eps_v, approach, active, psi_track, qe, rows, FLAG[0], FLAG[0],
+                               xi_ws, elem_ws, xi_ws, r_b, shape, params, R_out, R_in, consistent,
+                               law, mu, eps_v, approach, active, psi_track, qe, rows, FLAG[0],
+                               FLAG[0],
                                scratch,
                                np.empty((0, N_LOCAL, N_EXT)), np.empty((0, N_LOCAL, N_LOCAL)),
                                np.empty(0, np.int64), np.empty(0, np.int64))
@@ -353,6 +396,7 @@ class ClearancePart(NamedTuple):
     params: np.ndarray               # (nj, 4) its parameters
     R_out: np.ndarray                # (nj,) bounding radius of the section
     R_in: np.ndarray                 # (nj,) inscribed radius
+    consistent: np.ndarray           # (nj,) detection: stationary pairs (§4b), else the paper's
     law: np.ndarray                  # (nj, 5)
     mu: np.ndarray
     eps_v: np.ndarray
@@ -391,7 +435,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
         cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
-        cl.law[j], cl.mu[j], cl.eps_v[j],
+        cl.consistent[j], cl.law[j], cl.mu[j], cl.eps_v[j],
         cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
         cl.exact[j], r, K, C, elem, elem_i)
     cl.n_candidates[j] = m

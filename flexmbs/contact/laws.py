@@ -39,6 +39,7 @@ __all__ = [
     "LAWS",
     "get_law",
     "law_force",
+    "law_energy",
     "coulomb_force",
 ]
 
@@ -69,6 +70,16 @@ def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
     if f <= 0.0:
         return 0.0, 0.0, 0.0
     return f, kt, ct
+
+
+@njit
+def law_energy(law, delta):  # noqa: ANN001, ANN201
+    """Potential ``Φ(δ) = Kδⁿ⁺¹/(n + 1)`` of the elastic part of :func:`law_force` (``Φ′ = Kδⁿ``;
+    0 for ``δ ≤ 0``): the section potential of FORMULATION II §4b. The damping terms have none."""
+    if delta <= 0.0:
+        return 0.0
+    n = law[1]
+    return law[0] * delta ** (n + 1.0) / (n + 1.0)
 
 
 @njit

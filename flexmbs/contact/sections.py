@@ -41,6 +41,7 @@ __all__ = [
     "inside_evolute",
     "jamming",
     "circle_stationary_points",
+    "trig_quadratic_roots",
 ]
 
 
@@ -207,11 +208,13 @@ class HoleSection(ABC):
 
 # ---------------------------------------------------------------------------------------------
 @njit
-def _circle_f(phi, a, b, da, db):  # noqa: ANN001, ANN202
+def _trig_f(phi, al, be, ga):  # noqa: ANN001, ANN202
+    """``f = al sin φ cos φ + be sin φ + ga cos φ`` and ``f′`` (the stationarity condition of a
+    quadratic trigonometric polynomial, FORMULATION II §3)."""
     s = math.sin(phi)
     c = math.cos(phi)
-    f = (b * b - a * a) * s * c + a * da * s - b * db * c
-    df = (b * b - a * a) * (c * c - s * s) + a * da * c + b * db * s
+    f = al * s * c + be * s + ga * c
+    df = al * (c * c - s * s) + be * c - ga * s
     return f, df
 
 
@@ -481,14 +484,10 @@ def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out,
 def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (FORMULATION II §3).
 
-    Closed form: with ``f = D′ = (b² − a²) sin φ cos φ + a d_a sin φ − b d_b cos φ`` and
-    ``t = tan((φ − φ0)/2)``, ``f (1 + t²)²`` is a quartic in t (for φ0 = 0:
-    ``b d_b t⁴ + 2(a d_a + a² − b²)t³ + 2(a d_a − a² + b²)t − b d_b``); φ0 ∈ {kπ/4} maximises
-    the leading coefficient ``f(φ0 + π)`` (no root near t = ∞), real roots by
-    :func:`quartic_real_roots` (nearly-real ones accepted), 4 Newton polishing steps on f,
-    residual check, duplicates removed. Returns ``(phi (k,), kind (k,))`` with
-    ``kind = +1`` for maxima (``f' < 0``), ``−1`` for minima. Degenerate a ≈ b centred (f ≡ 0):
-    no points if ``a ≤ R``, else the four axis points as maxima (uniform penetration, net force 0).
+    ``f = D′ = (b² − a²) sin φ cos φ + a d_a sin φ − b d_b cos φ`` solved in closed form by
+    :func:`trig_quadratic_roots`. Returns ``(phi (k,), kind (k,))`` with ``kind = +1`` for
+    maxima (``f' < 0``), ``−1`` for minima. Degenerate a ≈ b centred (f ≡ 0): no points if
+    ``a ≤ R``, else the four axis points as maxima (uniform penetration, net force 0).
     """
     da = -(cx * eax + cy * eay)          # d = O − c, O = 0
     db = -(cx * (-eay) + cy * eax)
@@ -499,13 +498,25 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
             return (np.array([0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi]),
                     np.array([1, 1, 1, 1], dtype=np.int64))
         return np.empty(0), np.empty(0, dtype=np.int64)
-    # t = tan((φ − φ0)/2) with φ0 chosen so that f(φ0 + π) (the leading coefficient) is far
-    # from 0: no root near t = ∞, a well-conditioned quartic
-    al, be, ga = b * b - a * a, a * da, -b * db
+    phis = np.empty(5)
+    signs = np.empty(5, dtype=np.int64)
+    nf = trig_quadratic_roots(b * b - a * a, a * da, -b * db, scale, phis, signs)
+    return phis[:nf], -signs[:nf]
+
+
+@njit
+def trig_quadratic_roots(al, be, ga, scale, phis, signs):  # noqa: ANN001, ANN201
+    """Roots of ``f(φ) = al sin φ cos φ + be sin φ + ga cos φ`` on [0, 2π) into ``phis`` (≥ 5)
+    with the sign of ``f′`` into ``signs``; returns their number (at most 4).
+
+    Closed form (FORMULATION II §3): with ``t = tan((φ − φ0)/2)``, ``f (1 + t²)²`` is a quartic
+    in t; φ0 ∈ {kπ/4} maximises the leading coefficient ``f(φ0 + π)`` (no root near t = ∞),
+    real roots by :func:`quartic_real_roots` (nearly-real ones accepted), 4 Newton polishing
+    steps on f, residual check against ``1e-10 scale``, duplicates removed."""
     phi0 = 0.0
     best = -1.0
     for k in range(8):
-        f_inf, _ = _circle_f(k * 0.25 * np.pi + np.pi, a, b, da, db)
+        f_inf, _ = _trig_f(k * 0.25 * np.pi + np.pi, al, be, ga)
         if abs(f_inf) > best:
             best = abs(f_inf)
             phi0 = k * 0.25 * np.pi
@@ -524,21 +535,19 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     if abs(c4) <= 1e-8 * cmax:
         seeds[ns] = phi0 + np.pi
         ns += 1
-    phis = np.empty(ns)
-    kinds = np.empty(ns, dtype=np.int64)
     nf = 0
     ftol = 1e-10 * scale
     for i in range(ns):
         phi = seeds[i]
         for _ in range(4):
-            f, df = _circle_f(phi, a, b, da, db)
+            f, df = _trig_f(phi, al, be, ga)
             if df == 0.0:
                 break
             step = -f / df
             if abs(step) > 0.3:
                 step = 0.3 if step > 0 else -0.3
             phi += step
-        f, df = _circle_f(phi, a, b, da, db)
+        f, df = _trig_f(phi, al, be, ga)
         if abs(f) > ftol:
             continue
         phi = phi % (2.0 * np.pi)
@@ -551,9 +560,9 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
         if dup:
             continue
         phis[nf] = phi
-        kinds[nf] = 1 if df < 0.0 else -1
+        signs[nf] = 1 if df > 0.0 else -1
         nf += 1
-    return phis[:nf], kinds[:nf]
+    return nf
 
 
 #: scenario name -> hole section class (``hole = { shape = "circle", radius = ... }``)

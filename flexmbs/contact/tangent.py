@@ -76,55 +76,11 @@ def _d_dot(a, Da, b, Db, out):  # noqa: ANN001, ANN202
 
 
 @njit
-def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law, mu,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                    eps_v, approach_velocity, Qc, K, C):
-    """Force and exact tangent of one detected contact.
-
-    ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin; ``qI``
-    (12), ``LI``, ``xiI``: crossing element, its length and the crossing; ``qP``, ``vP``,
-    ``LP``, ``xiP``: the element of the closest point and ξ_P (converged); ``phi``: the
-    ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
-    section at the contact's ψ and its first and second ψ-derivatives (section coordinates, from
-    the hole shape's boundary kernel, e.g. :func:`flexmbs.contact.sections.circle_boundary`);
-    ``law``, ``mu``, ``eps_v``, ``approach_velocity`` as in
-    :func:`flexmbs.contact.pair.contact_force`. Writes ``Qc`` (N_LOCAL) on ``[r_H, p, e_P]``,
-    ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P] and ``C`` (N_LOCAL, N_LOCAL) =
-    −∂Q_c/∂[ṙ_H, ṗ, ė_P]. Returns ``(g, ġ, f_N)``.
-    """
+def _paper_hole_point(qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y, Yp, Ypp):  # noqa: ANN001, ANN202, PLR0913, PLR0915
+    """Wall point ``Q = o + Y(ψ)`` of the paper's detection and its derivative (3, N_EXT): the
+    crossing ξ_I, the section ellipse and the 2-D common normal differentiated implicitly
+    (FORMULATION II §2–§3)."""
     NX = N_EXT
-    p = qb[3:7]
-    A = rotation(p)
-    Te = _body_basis()
-    # body basis n, e_y, e_z (columns of A) and their derivatives 2T(e_j)p
-    nvec = A[:, 0].copy()
-    ey = A[:, 1].copy()
-    ez = A[:, 2].copy()
-    Dn = np.zeros((3, NX))
-    Dey = np.zeros((3, NX))
-    Dez = np.zeros((3, NX))
-    unit = np.zeros(3)
-    for j in range(3):
-        unit[:] = 0.0
-        unit[j] = 1.0
-        Bj = _t_times(Te, unit, p)
-        for c in range(3):
-            for i in range(4):
-                if j == 0:
-                    Dn[c, 3 + i] = Bj[c, i]
-                elif j == 1:
-                    Dey[c, 3 + i] = Bj[c, i]
-                else:
-                    Dez[c, 3 + i] = Bj[c, i]
-    # section origin o = r_H + A u_o
-    o = np.empty(3)
-    Do = np.zeros((3, NX))
-    Bo = _t_times(Te, u_o, p)
-    for c in range(3):
-        o[c] = qb[c] + A[c, 0] * u_o[0] + A[c, 1] * u_o[1] + A[c, 2] * u_o[2]
-        Do[c, c] = 1.0
-        for i in range(4):
-            Do[c, 3 + i] = Bo[c, i]
-
     # ---- crossing: h(ξ_I) = n·(r_I − o) = 0
     SI, dSI, _ = shape_xi(xiI, LI)
     rI, rxI, rxxI = element_point(qI, LI, xiI)
@@ -226,6 +182,131 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
                          + (Yp[0] * ey[c] + Yp[1] * ez[c]) * dpsi)
     for c in range(3):
         Qd[c] = o[c] + Y[0] * ey[c] + Y[1] * ez[c]
+    return Qd, DQd
+
+
+@njit
+def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+    """Wall point ``Q = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` of the consistent pair (FORMULATION II §4b)
+    and its derivative (3, N_EXT): ψ moves with the coordinates by the implicit-function theorem
+    on ``r₁ = (x − Q)·x_ξ = 0``, ``r₂ = (x − Q)·Q_ψ = 0`` (x on e_P at ξ_P), ``[Δξ, Δψ] =
+    −H⁻¹[∂r₁, ∂r₂]`` with the Hessian H of ``½|x − Q|²`` in (ξ, ψ). No column of a crossing
+    element: the pair depends on the body and e_P only."""
+    NX = N_EXT
+    SP, dSP, _ = shape_xi(xiP, LP)
+    x, rx, rxx = element_point(qP, LP, xiP)
+    Qd = np.empty(3)
+    Qp = np.empty(3)
+    Qpp = np.empty(3)
+    for c in range(3):
+        Qd[c] = o[c] + Y[0] * ey[c] + Y[1] * ez[c]
+        Qp[c] = Yp[0] * ey[c] + Yp[1] * ez[c]
+        Qpp[c] = Ypp[0] * ey[c] + Ypp[1] * ez[c]
+    u = x - Qd
+    h11 = (rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
+           + u[0] * rxx[0] + u[1] * rxx[1] + u[2] * rxx[2])
+    h12 = -(rx[0] * Qp[0] + rx[1] * Qp[1] + rx[2] * Qp[2])
+    h22 = (-(Qp[0] * Qp[0] + Qp[1] * Qp[1] + Qp[2] * Qp[2])
+           + u[0] * Qpp[0] + u[1] * Qpp[1] + u[2] * Qpp[2])
+    # r₂ = u·Q_ψ: ∂r₂/∂ξ = x_ξ·Q_ψ = −h12, ∂r₂/∂ψ = h22; r₁: ∂/∂ξ = h11, ∂/∂ψ = h12
+    det = h11 * h22 + h12 * h12
+    singular = abs(det) <= 1e-12 * (h11 * h11 + 2.0 * h12 * h12 + h22 * h22)
+    DQd = np.empty((3, NX))
+    for j in range(NX):
+        dQ0 = Do[0, j] + Y[0] * Dey[0, j] + Y[1] * Dez[0, j]
+        dQ1 = Do[1, j] + Y[0] * Dey[1, j] + Y[1] * Dez[1, j]
+        dQ2 = Do[2, j] + Y[0] * Dey[2, j] + Y[1] * Dez[2, j]
+        dQp0 = Yp[0] * Dey[0, j] + Yp[1] * Dez[0, j]
+        dQp1 = Yp[0] * Dey[1, j] + Yp[1] * Dez[1, j]
+        dQp2 = Yp[0] * Dey[2, j] + Yp[1] * Dez[2, j]
+        dx0 = 0.0
+        dx1 = 0.0
+        dx2 = 0.0
+        drx0 = 0.0
+        drx1 = 0.0
+        drx2 = 0.0
+        if j >= P_OFF:
+            m = (j - P_OFF) // 3
+            c = (j - P_OFF) % 3
+            if c == 0:
+                dx0 = SP[m]
+                drx0 = dSP[m]
+            elif c == 1:
+                dx1 = SP[m]
+                drx1 = dSP[m]
+            else:
+                dx2 = SP[m]
+                drx2 = dSP[m]
+        du0 = dx0 - dQ0
+        du1 = dx1 - dQ1
+        du2 = dx2 - dQ2
+        dr1 = du0 * rx[0] + du1 * rx[1] + du2 * rx[2] + u[0] * drx0 + u[1] * drx1 + u[2] * drx2
+        dr2 = du0 * Qp[0] + du1 * Qp[1] + du2 * Qp[2] + u[0] * dQp0 + u[1] * dQp1 + u[2] * dQp2
+        # [h11, h12; −h12, h22] [Δξ, Δψ] = −[dr1, dr2]
+        dpsi = 0.0 if singular else -(h11 * dr2 + h12 * dr1) / det
+        DQd[0, j] = dQ0 + Qp[0] * dpsi
+        DQd[1, j] = dQ1 + Qp[1] * dpsi
+        DQd[2, j] = dQ2 + Qp[2] * dpsi
+    return Qd, DQd
+
+
+@njit
+def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law, mu,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+                    eps_v, approach_velocity, consistent, Qc, K, C):
+    """Force and exact tangent of one detected contact.
+
+    ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin; ``qI``
+    (12), ``LI``, ``xiI``: crossing element, its length and the crossing; ``qP``, ``vP``,
+    ``LP``, ``xiP``: the element of the closest point and ξ_P (converged); ``phi``: the
+    ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
+    section at the contact's ψ and its first and second ψ-derivatives (section coordinates, from
+    the hole shape's boundary kernel, e.g. :func:`flexmbs.contact.sections.circle_boundary`);
+    ``law``, ``mu``, ``eps_v``, ``approach_velocity`` as in
+    :func:`flexmbs.contact.pair.contact_force`; ``consistent``: the contact is a stationary pair
+    of FORMULATION II §4b (:mod:`flexmbs.contact.stationary`; ``qI``, ``xiI``, ``phi`` unused,
+    the e_I columns zero), else the paper's 2-D common normal. Writes ``Qc`` (N_LOCAL) on ``[r_H, p, e_P]``,
+    ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P] and ``C`` (N_LOCAL, N_LOCAL) =
+    −∂Q_c/∂[ṙ_H, ṗ, ė_P]. Returns ``(g, ġ, f_N)``.
+    """
+    NX = N_EXT
+    p = qb[3:7]
+    A = rotation(p)
+    Te = _body_basis()
+    # body basis n, e_y, e_z (columns of A) and their derivatives 2T(e_j)p
+    nvec = A[:, 0].copy()
+    ey = A[:, 1].copy()
+    ez = A[:, 2].copy()
+    Dn = np.zeros((3, NX))
+    Dey = np.zeros((3, NX))
+    Dez = np.zeros((3, NX))
+    unit = np.zeros(3)
+    for j in range(3):
+        unit[:] = 0.0
+        unit[j] = 1.0
+        Bj = _t_times(Te, unit, p)
+        for c in range(3):
+            for i in range(4):
+                if j == 0:
+                    Dn[c, 3 + i] = Bj[c, i]
+                elif j == 1:
+                    Dey[c, 3 + i] = Bj[c, i]
+                else:
+                    Dez[c, 3 + i] = Bj[c, i]
+    # section origin o = r_H + A u_o
+    o = np.empty(3)
+    Do = np.zeros((3, NX))
+    Bo = _t_times(Te, u_o, p)
+    for c in range(3):
+        o[c] = qb[c] + A[c, 0] * u_o[0] + A[c, 1] * u_o[1] + A[c, 2] * u_o[2]
+        Do[c, c] = 1.0
+        for i in range(4):
+            Do[c, 3 + i] = Bo[c, i]
+
+    if consistent:
+        Qd, DQd = _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp)
+    else:
+        Qd, DQd = _paper_hole_point(qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y,
+                                    Yp, Ypp)
     # ---- body coordinates u_Q = Aᵀ(Q − r_H) and the body point Q = r_H + A u_Q it acts at
     w = Qd - qb[0:3]
     uQ = np.empty(3)

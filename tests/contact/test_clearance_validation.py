@@ -122,12 +122,16 @@ def test_motion_converges_to_the_clearance_free_joint():
 
 # --------------------------------------------------------------------- two points, one section
 R_BORE, R_BEAM, OFFSET = 2.2e-3, 2e-3, 2.5e-4
-#: bifurcation tilt: the minor vertex (2.25 mm from the hole centre) becomes a local minimum of
-#: the distance when a^2/b = r_b / cos^2(theta) exceeds 2.25 mm
-THETA_SPLIT = math.degrees(math.acos(math.sqrt(R_BEAM / (R_BEAM + OFFSET))))
+#: bifurcation tilt of the paper's detection: the minor vertex (2.25 mm from the hole centre)
+#: becomes a local minimum of the distance when a^2/b = r_b / cos^2(theta) exceeds 2.25 mm
+#: (FORMULATION II §3); of the consistent detection: the wall's point nearest the axis leaves
+#: the vertex when R sin^2(theta) exceeds the offset, the distance from the wall point
+#: R(cos psi, sin psi) to the tilted axis being sqrt(cos^2(theta) y^2 + (z - offset)^2) (§4b)
+THETA_SPLIT = {"paper": math.degrees(math.acos(math.sqrt(R_BEAM / (R_BEAM + OFFSET)))),
+               "consistent": math.degrees(math.asin(math.sqrt(OFFSET / R_BORE)))}
 
 
-def _tilted_sleeve(theta_deg: float):
+def _tilted_sleeve(theta_deg: float, detection: str = "consistent"):
     """Straight rod (r_b = 2 mm) along x and a one-section hole (R = 2.2 mm) tilted by theta
     about z, its centre 0.25 mm below the rod axis: the ellipse's minor axis is z and the
     minor vertex lies 50 um beyond the bore wall for every theta."""
@@ -138,16 +142,24 @@ def _tilted_sleeve(theta_deg: float):
     body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), position=(0.5, 0.0, -OFFSET),
                                 quaternion=(math.cos(h), 0.0, 0.0, math.sin(h)))
     joint = model.add_joint(fm.SlidingClearanceJoint(beam, body, hole=fm.CircleHole(R_BORE, 1e-4, 1),
-                                                     contact=fm.LinearPenalty(stiffness=1e6)))
+                                                     contact=fm.LinearPenalty(stiffness=1e6),
+                                                     detection=detection))
     asm = Assembly(model)
     rows = joint.output(asm, asm.q_ref, np.zeros(asm.n_coords), np.zeros(asm.n_mult), 0.0)
     return joint, asm, rows
 
 
-def _brute_force_maxima(theta_deg: float, n: int = 200_001) -> np.ndarray:
-    """Section angles psi (from e_y = A y towards e_z = z) of the local maxima of |X - O| over
-    the ellipse X(phi) sampled at n points (independent of the detector)."""
+def _brute_force_maxima(theta_deg: float, detection: str, n: int = 200_001) -> np.ndarray:
+    """Section angles psi (from e_y = A y towards e_z = z) of the contact points, sampled at n
+    points (independent of the detector): ``"paper"``, the local maxima of |X - O| over the
+    ellipse X(phi); ``"consistent"``, the local minima, below r_b, of the distance from the
+    wall point R(cos psi, sin psi) to the straight rod axis."""
     th = math.radians(theta_deg)
+    if detection == "consistent":
+        psi = np.linspace(-np.pi, np.pi, n, endpoint=False)
+        ell = np.hypot(math.cos(th) * R_BORE * np.cos(psi), R_BORE * np.sin(psi) - OFFSET)
+        is_min = (ell < np.roll(ell, 1)) & (ell < np.roll(ell, -1)) & (ell < R_BEAM)
+        return np.sort(psi[is_min])
     phi = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
     # section coordinates: ellipse centre (0, OFFSET), major axis along e_y, a = r_b / cos theta
     y = R_BEAM / math.cos(th) * np.cos(phi)
@@ -157,42 +169,51 @@ def _brute_force_maxima(theta_deg: float, n: int = 200_001) -> np.ndarray:
     return np.sort(np.arctan2(z[is_max], y[is_max]))
 
 
-def test_two_contact_points_in_one_section():
+@pytest.mark.parametrize("detection", ["consistent", "paper"])
+def test_two_contact_points_in_one_section(detection):  # noqa: ANN001
     """FORMULATION II §3: with r_b/R < cos(theta) < sqrt(r_b/R) (0.909 < cos 21 deg = 0.934 <
     0.953) and the minor vertex pushed into the wall, a^2/b = 2.29 mm > |X - O| = 2.25 mm: the
     vertex is a local minimum of the distance and two symmetric maxima appear.
 
-    Reference: dense sampling of the ellipse (2e5 points) in the section plane and, for the
-    gap, the exact distance of the hole point Q from the straight rod axis (|Q_yz| - r_b).
+    The consistent detection (§4b) splits at 19.70 deg (R sin^2 theta = offset), so 21 deg
+    shows two points there too.
+
+    Reference: dense sampling (2e5 points) of the ellipse in the section plane (paper) or of
+    the wall's distance from the rod axis (consistent) and, for the gap, the exact distance of
+    the hole point Q from the straight rod axis (|Q_yz| - r_b).
     Checked: two maxima (+) and the penetrating minimum (-) at the vertex; the maxima's hole
     points lie at the sampled maxima's angles (5e-5 rad, measured 9e-6; the sampling step
     is 3e-5 rad) with
     equal gaps (1e-9 relative); every gap equals |Q_yz| - r_b (1e-12 m). Below the split
     (theta = 10 deg) one point only."""
     theta = 21.0
-    joint, asm, rows = _tilted_sleeve(theta)
+    joint, asm, rows = _tilted_sleeve(theta, detection)
     maxima = [r for r in rows if r["normal_force"] > 0]
     minima = [r for r in rows if r["normal_force"] < 0]
     assert len(maxima) == 2 and len(minima) == 1
     assert maxima[0]["gap"] == pytest.approx(maxima[1]["gap"], rel=1e-9)
-    assert maxima[0]["a"] ** 2 / maxima[0]["b"] > R_BEAM + OFFSET > R_BORE
+    assert theta > THETA_SPLIT[detection]
+    if detection == "paper":
+        assert maxima[0]["a"] ** 2 / maxima[0]["b"] > R_BEAM + OFFSET > R_BORE
     th = math.radians(theta)
     e_y, e_z, origin = np.array([-math.sin(th), math.cos(th), 0.0]), np.array([0, 0, 1.0]), \
         np.array([0.5, 0.0, -OFFSET])
     psi = np.sort([math.atan2((r["position"] - origin) @ e_z, (r["position"] - origin) @ e_y)
                    for r in maxima])
-    np.testing.assert_allclose(psi, _brute_force_maxima(theta), atol=5e-5)
+    np.testing.assert_allclose(psi, _brute_force_maxima(theta, detection), atol=5e-5)
     assert (minima[0]["position"] - origin) @ e_z == pytest.approx(R_BORE, rel=1e-9)  # vertex
     for r in rows:
         Q = r["position"]
         assert r["gap"] == pytest.approx(math.hypot(Q[1], Q[2]) - R_BEAM, abs=1e-12)
-    _, _, rows_small = _tilted_sleeve(10.0)
+    _, _, rows_small = _tilted_sleeve(10.0, detection)
     assert len(rows_small) == 1
-    assert len(_brute_force_maxima(10.0)) == 1
+    assert len(_brute_force_maxima(10.0, detection)) == 1
 
 
-def test_section_force_is_continuous_across_the_split():
-    """At the pitchfork theta* = 19.47 deg (a^2/b = 2.25 mm) one maximum splits into two
+@pytest.mark.parametrize("detection", ["consistent", "paper"])
+def test_section_force_is_continuous_across_the_split(detection):  # noqa: ANN001
+    """At the pitchfork theta* = 19.47 deg (paper: a^2/b = 2.25 mm; consistent: 19.70 deg) one
+    maximum splits into two
     maxima and a penetrating minimum, all with the same depth; the rule "+maxima, -minima"
     (FORMULATION II §3) keeps the section force continuous.
 
@@ -206,8 +227,8 @@ def test_section_force_is_continuous_across_the_split():
     jumps, naive = [], []
     for eps in (1e-1, 1e-2, 1e-3, 1e-4):
         F, Fmax, counts = [], [], []
-        for th in (THETA_SPLIT - eps, THETA_SPLIT + eps):
-            joint, asm, rows = _tilted_sleeve(th)
+        for th in (THETA_SPLIT[detection] - eps, THETA_SPLIT[detection] + eps):
+            joint, asm, rows = _tilted_sleeve(th, detection)
             F.append(joint.contact_force(asm.q_ref, np.zeros(asm.n_coords)))
             Fmax.append(sum(r["normal_force"] * r["normal"] for r in rows if r["normal_force"] > 0))
             counts.append(len(rows))

@@ -66,7 +66,7 @@ def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray,
     circle_boundary(R_BORE, psi, Y, Yp, Ypp)
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
     g, _, f = contact_tangent(qb, vel[:7], u_o, qI, L_ELEM, xi, qP, vel[7:], L_ELEM, xp, phi, Y, Yp,
-                              Ypp, R_BEAM, law, mu, 1e-3, 0.3, Qc, K, C)
+                              Ypp, R_BEAM, law, mu, 1e-3, 0.3, False, Qc, K, C)
     return Qc, (K, C, xi, phi, xp, g, f)
 
 

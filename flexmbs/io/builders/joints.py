@@ -56,9 +56,10 @@ def _sliding(t: Table, ctx: BuildContext) -> Any:
 @JOINTS.register("sliding_clearance")
 def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     """``type = "sliding_clearance"``: SlidingClearanceJoint, FORMULATION Part II §1-§8."""
-    from ...contact.joint import TANGENTS, Hole, SlidingClearanceJoint
+    from ...contact.joint import DETECTIONS, TANGENTS, Hole, SlidingClearanceJoint
 
-    t.allow(("name", "type", "beam", "body", "hole", "contact", "beam_radius", "tangent"))
+    t.allow(("name", "type", "beam", "body", "hole", "contact", "beam_radius", "tangent",
+             "detection"))
     beam = ctx.beam(t)
     body = ctx.body(t)
     h = t.table("hole")
@@ -70,12 +71,14 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     friction = (RegularizedCoulomb(mu=mu, eps_v=c.number("friction_velocity", 1e-3, gt=0.0))
                 if mu > 0 else None)
     tangent = t.choice("tangent", TANGENTS, "exact", what="tangent")
+    detection = (t.choice("detection", DETECTIONS, "consistent", what="detection")
+                 if t.has("detection") else None)
     with at(h.path):        # the hole against the beam: "joints[j].hole: the hole ... "
         joint = SlidingClearanceJoint(
             beam, body, hole=hole, contact=contact_law, friction=friction,
             hole_point=h.vector("point", (0.0, 0.0, 0.0)),
             beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
-            tangent=tangent, name=t.raw["name"])
+            tangent=tangent, detection=detection, name=t.raw["name"])
     if body.name in ctx.resting:      # pose = { on_beam, s, rest = "bore" }
         direction, where = ctx.resting.pop(body.name)
         if direction is None:

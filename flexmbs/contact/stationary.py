@@ -1,0 +1,188 @@
+"""The consistent contact pair of a hole section (FORMULATION II §4b; issue "the clearance contact
+as the exact gradient of a potential").
+
+In hole section k the wall is the closed curve ``Y(ψ) = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` (moving with
+the hole body) and the beam axis the curve ``x(ξ)``. A contact pair is a stationary point of
+``D(ξ, ψ) = ½|x(ξ) − Y(ψ)|²``:
+
+    (x − Y)·x_ξ = 0,   (x − Y)·Y_ψ = 0,   δ = r_b − |x − Y|,
+
+a minimum in ξ (the closest point of the axis to the wall point) and a minimum (contact
+point, kind +1) or a maximum (kind −1) of the reduced ``D(ψ) = min_ξ D(ξ, ψ)``. By the envelope
+theorem the gradient of ``δ`` at such a pair is that of the distance between the two points
+held as material points, so the penalty force ``f(δ) n`` at the pair is exactly ``−∂Φ(δ)/∂q``
+(``Φ′ = f``), and the section potential ``Σ_max Φ(δ⁺) − Σ_min Φ(δ⁺)`` (continuous through the
+pitchfork at ``a²/b = R`` and through folds) has the signed sum of the point forces as its
+gradient.
+
+Seeds: the same stationary points for the tangent line of the axis at the section crossing
+(the *line model*): the distance of a wall point ``w`` (in-plane, from the crossing) to that line
+is ``ℓ² = wᵀ(I − sin²θ e_a e_aᵀ)w``, a quadratic form, so for a circular bore ``½ dℓ²/dφ`` is
+the trigonometric polynomial of :func:`~flexmbs.contact.sections.trig_quadratic_roots`
+(closed form, at most four points, the right count on either side of the pitchfork); other
+sections sample it. Each seed is then converged on the curved axis by a safeguarded Newton
+on the reduced ``D(ψ)`` (inner closest-point projection; ``D″ = H_ψψ − H_ξψ²/H_ξξ``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import njit
+from ..elements.centerline import bracketed_newton_step, closest_point_kernel
+from .sections import SHAPE_CIRCLE, section_boundary, trig_quadratic_roots
+
+__all__ = ["line_model_points", "stationary_pair", "PAIR_MAX_ITER"]
+
+#: Newton iterations of the reduced pair problem at most (2–4 from a line-model seed)
+PAIR_MAX_ITER = 30
+#: largest step of the section angle per iteration [rad]
+PAIR_MAX_STEP = 0.3
+
+
+@njit
+def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+    """``f = ½ dℓ²/dψ``, ``f′`` and ``ℓ²`` of the line model at ψ (section coordinates)."""
+    section_boundary(kind, params, psi, Y, Yp, Ypp)
+    w0 = Y[0] - cy
+    w1 = Y[1] - cz
+    wa = w0 * eax + w1 * eay
+    pa = Yp[0] * eax + Yp[1] * eay
+    qa = Ypp[0] * eax + Ypp[1] * eay
+    f = w0 * Yp[0] + w1 * Yp[1] - s2 * wa * pa
+    df = Yp[0] * Yp[0] + Yp[1] * Yp[1] - s2 * pa * pa + w0 * Ypp[0] + w1 * Ypp[1] - s2 * wa * qa
+    ell2 = w0 * w0 + w1 * w1 - s2 * wa * wa
+    return f, df, ell2
+
+
+@njit
+def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, kind_out,  # noqa: ANN001, ANN201
+                      ell_out):
+    """Stationary points of the distance between the section wall and the tangent line of the
+    beam axis (the seeds of :func:`stationary_pair`): crossing ``(cy, cz)``, major axis
+    ``(eax, eay)`` and semi-axes ``a ≥ b`` of the section ellipse (``sin²θ = 1 − b²/a²``).
+    Writes ψ, kind (+1 a minimum of the distance, i.e. a maximum of the penetration; −1 a
+    maximum) and the line-model distance ℓ; returns their number. Circles in closed form, other
+    sections by ``samples`` samples of ``½ dℓ²/dψ``, bracketed Newton."""
+    s2 = max(0.0, 1.0 - (b / a) ** 2)
+    Y = np.empty(2)
+    Yp = np.empty(2)
+    Ypp = np.empty(2)
+    count = 0
+    if kind == SHAPE_CIRCLE:
+        R = params[0]
+        ca = cy * eax + cz * eay
+        cb = -cy * eay + cz * eax
+        al = R * R * s2
+        be = R * ca * (1.0 - s2)
+        ga = -R * cb
+        scale = R * R + R * math.hypot(cy, cz)
+        if max(abs(al), abs(be), abs(ga)) <= 1e-13 * scale:
+            return 0          # a centred, aligned axis: the whole wall at one distance
+        phis = np.empty(5)
+        signs = np.empty(5, dtype=np.int64)
+        n = trig_quadratic_roots(al, be, ga, scale, phis, signs)
+        alpha = math.atan2(eay, eax)
+        for i in range(n):
+            if count >= psi_out.size:
+                break
+            psi = (alpha + phis[i]) % (2.0 * np.pi)
+            _, _, ell2 = _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp)
+            psi_out[count] = psi
+            kind_out[count] = signs[i]
+            ell_out[count] = math.sqrt(max(ell2, 0.0))
+            count += 1
+        return count
+    h = 2.0 * np.pi / samples
+    scale = 1e-13 * params[0] * params[0]
+    F0, _, _ = _line_model_f(kind, params, cy, cz, eax, eay, s2, 0.0, Y, Yp, Ypp)
+    Fi = F0
+    for i in range(samples):
+        lo = i * h
+        hi = lo + h
+        Fj = F0
+        if i + 1 < samples:
+            Fj, _, _ = _line_model_f(kind, params, cy, cz, eax, eay, s2, hi, Y, Yp, Ypp)
+        if Fi == 0.0 or Fi * Fj < 0.0:
+            flo = Fi
+            s = 0.5 * (lo + hi) if Fi != 0.0 else lo
+            for _ in range(60):
+                f, df, _ = _line_model_f(kind, params, cy, cz, eax, eay, s2, s, Y, Yp, Ypp)
+                if abs(f) <= scale or hi - lo < 1e-15:
+                    break
+                s, lo, hi, flo = bracketed_newton_step(s, f, df, lo, hi, flo)
+            _, df, ell2 = _line_model_f(kind, params, cy, cz, eax, eay, s2, s, Y, Yp, Ypp)
+            if count < psi_out.size:
+                psi_out[count] = s % (2.0 * np.pi)
+                kind_out[count] = 1 if df > 0.0 else -1
+                ell_out[count] = math.sqrt(max(ell2, 0.0))
+                count += 1
+        Fi = Fj
+    return count
+
+
+@njit
+def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+    """Wall point at ψ, its closest axis point and the reduced ``D′(ψ)``, ``D″(ψ)``."""
+    section_boundary(shape, params, psi, Y, Yp, Ypp)
+    W = np.empty(3)
+    Wp = np.empty(3)
+    Wpp = np.empty(3)
+    for c in range(3):
+        W[c] = origin[c] + Y[0] * ey[c] + Y[1] * ez[c]
+        Wp[c] = Yp[0] * ey[c] + Yp[1] * ez[c]
+        Wpp[c] = Ypp[0] * ey[c] + Ypp[1] * ez[c]
+    e, x, P, rx, rxx = closest_point_kernel(qe, lengths, W, elem, xi, 1e-14, np.int64(30))
+    u0 = P[0] - W[0]
+    u1 = P[1] - W[1]
+    u2 = P[2] - W[2]
+    d1 = -(u0 * Wp[0] + u1 * Wp[1] + u2 * Wp[2])
+    h11 = (rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
+           + u0 * rxx[0] + u1 * rxx[1] + u2 * rxx[2])
+    h12 = -(rx[0] * Wp[0] + rx[1] * Wp[1] + rx[2] * Wp[2])
+    h22 = Wp[0] * Wp[0] + Wp[1] * Wp[1] + Wp[2] * Wp[2] - (u0 * Wpp[0] + u1 * Wpp[1] + u2 * Wpp[2])
+    d2 = h22 - h12 * h12 / h11 if h11 > 0.0 else h22
+    ell = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+    speed = math.sqrt(Wp[0] * Wp[0] + Wp[1] * Wp[1] + Wp[2] * Wp[2])
+    return e, x, d1, d2, ell, speed, W
+
+
+@njit
+def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, elem0, xi0):  # noqa: ANN001, ANN201
+    """Converge one contact pair of a section from a seed (FORMULATION II §4b).
+
+    Safeguarded Newton on the reduced ``D(ψ) = min_ξ ½|x(ξ) − Y(ψ)|²``: from a kind +1 seed it
+    descends to a minimum of D (a maximum of the penetration), from a kind −1 seed it ascends to
+    a maximum (a step of ``PAIR_MAX_STEP`` downhill, or uphill, where D″ has the wrong sign);
+    each iterate projects the wall point on the axis (:func:`closest_point_kernel`, warm).
+    Returns ``(psi, kind, elem, xi, ell, converged, Q (3,))``: section angle, kind by the sign
+    of D″ at the result, element and parameter of the axis point, distance ``|x − Y|`` and the
+    wall point."""
+    psi = psi0
+    e = elem0
+    x = xi0
+    Y = np.empty(2)
+    Yp = np.empty(2)
+    Ypp = np.empty(2)
+    ok = False
+    e, x, d1, d2, ell, speed, W = _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, e,
+                                              x, Y, Yp, Ypp)
+    for _ in range(PAIR_MAX_ITER):
+        if abs(d1) <= 1e-13 * speed * max(ell, 1e-3 * speed):
+            ok = True
+            break
+        if d2 * kind0 > 0.0:
+            step = -d1 / d2
+        else:
+            step = -PAIR_MAX_STEP * kind0 * (1.0 if d1 > 0.0 else -1.0)
+        step = max(-PAIR_MAX_STEP, min(PAIR_MAX_STEP, step))
+        if abs(step) <= 1e-15:
+            ok = True
+            break
+        psi += step
+        e, x, d1, d2, ell, speed, W = _pair_state(qe, lengths, origin, ey, ez, shape, params, psi,
+                                                  e, x, Y, Yp, Ypp)
+    kind = 1 if d2 > 0.0 else -1
+    return psi % (2.0 * np.pi), kind, e, x, ell, ok, W

@@ -1,0 +1,182 @@
+"""The clearance contact as the exact gradient of a potential (FORMULATION II §4b; issue "the
+clearance contact as the exact gradient of a potential, at every crossing angle").
+
+A straight or slightly bent wire (r_b = 0.8 mm unless said) held through a thin eyelet (0.2 mm
+long, 3 sections, linear penalty k = 2e5 N/m), the eyelet turned by θ from the wire and pushed
+across it. The contact's generalized force is read from the joint's residual and compared with
+central differences of the section potential ``Σ_max Φ(δ) − Σ_min Φ(δ)``
+(:meth:`SlidingClearanceJoint.contact_energy`): the independent reference is the potential
+itself, evaluated by the detection at perturbed coordinates. The paper's detection fails these
+tests (it is not a gradient once the crossing is oblique), which each test shows too."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import flexmbs as fm
+from flexmbs.assembly import Assembly
+
+WIRE_R = 0.8e-3
+STIFFNESS = 2e5
+FD_STEP = 1e-8
+GRADIENT_TOL = 1e-7
+
+
+def eyelet_on_wire(theta: float, push: float, axis: str = "y", *, r_b: float = WIRE_R,
+                   hole: fm.Hole | None = None, detection: str = "consistent",
+                   stiffness: float = STIFFNESS, damping: float = 0.0, free: bool = False,
+                   elements: int = 8):  # noqa: ANN201
+    """Wire along x from −0.1 to 0.1 m (clamped at both ends), eyelet at x = 3 mm turned by θ
+    about y (its axis towards z), pushed by ``push`` along its y (the section ellipse's minor
+    axis: two points past a²/b = R) or z (major axis). Returns (model, joint, body, wire)."""
+    model = fm.Model(gravity=(0, 0, 0))
+    wire = model.add_beam(fm.line((-0.1, 0, 0), (0.1, 0, 0), elements=elements), name="wire",
+                          section=fm.CircularSection(r_b),
+                          material=fm.Material(E=7e10, rho=2700))
+    model.clamp(wire.first_node)
+    model.clamp(wire.last_node)
+    c, s = math.cos(theta), math.sin(theta)
+    A = np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+    pose = fm.Pose(np.array([0.003, 0.0, 0.0]) + push * A[:, 1 if axis == "y" else 2], A)
+    body = model.add_rigid_body(mass=2e-3, inertia=(2e-8, 1e-6, 1e-6), pose=pose, name="eyelet")
+    if not free:
+        model.fix_body(body)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # starting in the wall is the point here
+        joint = model.add_joint(fm.SlidingClearanceJoint(
+            wire, body, hole=hole or fm.CircleHole(2e-3, 0.2e-3, 3), detection=detection,
+            contact=fm.LinearPenalty(stiffness=stiffness, damping=damping)))
+    return model, joint, body, wire
+
+
+def _tangent_directions(p: np.ndarray) -> np.ndarray:
+    """Three unit directions tangent to the unit sphere of Euler parameters at p."""
+    return np.linalg.svd(np.eye(4) - np.outer(p, p))[0][:, :3].T
+
+
+def gradient_error(joint, body, asm: Assembly, q: np.ndarray) -> tuple[float, dict]:  # noqa: ANN001
+    """max |r − ∂V/∂q| / max |r| over the body's translations and rotations (tangent to the
+    Euler-parameter constraint: the radial part is the normalisation's) and the wire elements
+    at the eyelet; and the kinds of the points per section."""
+    v = np.zeros_like(q)
+    r = np.zeros(asm.n_coords)
+    joint.evaluate(None, q, v, None, 0.0, r, None)
+    bd = asm.body_dofs(body)
+    ed = joint._elem_dofs[3:5].ravel()
+    pairs = []
+    for i in np.r_[bd[:3], ed]:
+        e = np.zeros_like(q)
+        e[i] = FD_STEP
+        pairs.append(((joint.contact_energy(q + e) - joint.contact_energy(q - e)) / (2 * FD_STEP),
+                      r[i]))
+    for d in _tangent_directions(q[bd[3:]]):
+        e = np.zeros_like(q)
+        e[bd[3:]] = FD_STEP * d
+        pairs.append(((joint.contact_energy(q + e) - joint.contact_energy(q - e)) / (2 * FD_STEP),
+                      r[bd[3:]] @ d))
+    fd, res = np.array(pairs).T
+    kinds: dict[int, list[int]] = {}
+    for k, _j, kind, *_ in joint._contacts(q, v, False, False):
+        kinds.setdefault(k, []).append(kind)
+    return float(np.max(np.abs(res - fd)) / np.max(np.abs(res))), kinds
+
+
+def _bent(asm: Assembly, joint, seed: int = 1) -> np.ndarray:  # noqa: ANN001
+    """Reference coordinates with the wire's two elements at the eyelet bent a little."""
+    q = asm.q_ref.copy()
+    ed = joint._elem_dofs[3:5].ravel()
+    q[ed] += 2e-5 * np.random.default_rng(seed).standard_normal(ed.size)
+    return q
+
+
+SUPER_ROUND = dict(a=2.4e-3, b=2.0e-3, exponent=2.0)
+SUPER_SQUARE = dict(a=2.4e-3, b=2.0e-3, exponent=4.0)
+GRADIENT_CASES = [  # θ [deg], push, axis, wire radius, hole (None: circle R = 2 mm), points
+    (5, 1.21e-3, "z", WIRE_R, None, 1),
+    (20, 1.22e-3, "z", WIRE_R, None, 1),
+    (35, 1.23e-3, "y", WIRE_R, None, 1),
+    (50, 1.22e-3, "y", WIRE_R, None, 1),
+    (55, 1.23e-3, "y", WIRE_R, None, 2),
+    (60, 1.22e-3, "y", WIRE_R, None, 2),
+    (75, 1.52e-3, "y", 0.5e-3, None, 2),
+    (75, 0.3e-3, "z", 0.5e-3, None, 1),
+    (40, 1.63e-3, "y", WIRE_R, SUPER_SQUARE, 1),
+    (60, 1.40e-3, "z", WIRE_R, SUPER_SQUARE, 1),
+    (55, 1.62e-3, "y", WIRE_R, SUPER_ROUND, 2),
+    (60, 1.62e-3, "y", WIRE_R, dict(SUPER_ROUND, exponent=2.3), 2),
+]
+
+
+@pytest.mark.parametrize(("deg", "push", "axis", "r_b", "hole", "points"), GRADIENT_CASES)
+def test_contact_force_is_the_gradient_of_the_section_potential(deg, push, axis, r_b, hole,  # noqa: ANN001
+                                                                points):
+    """Force = −∂V/∂q by central differences, 5°–75°, one and two points per section, circle
+    and superellipse bores: 1e-7 relative (measured ≤ 6e-9)."""
+    bore = fm.SuperellipseHole(**hole, length=0.2e-3, sections=3) if hole else None
+    model, joint, body, _ = eyelet_on_wire(math.radians(deg), push, axis, r_b=r_b, hole=bore)
+    asm = Assembly(model)
+    err, kinds = gradient_error(joint, body, asm, _bent(asm, joint))
+    most = max(kinds[k].count(1) for k in kinds)
+    assert most == 1 if points == 1 else most >= 2
+    assert err < GRADIENT_TOL
+
+
+@pytest.mark.parametrize(("deg", "push", "floor"), [(55, 1.23e-3, 0.05), (60, 1.22e-3, 0.2)])
+def test_the_papers_detection_is_not_a_gradient_at_steep_crossings(deg, push, floor):  # noqa: ANN001
+    """The same check with ``detection = "paper"``: off by 10 % at 55°, 40 % at 60° (why the
+    consistent detection is the default)."""
+    model, joint, body, _ = eyelet_on_wire(math.radians(deg), push, detection="paper")
+    asm = Assembly(model)
+    err, _ = gradient_error(joint, body, asm, _bent(asm, joint))
+    assert err > floor
+
+
+def _loop_work(detection: str, n: int, deg: tuple[float, float], push: tuple[float, float]
+               ) -> tuple[float, float]:
+    """Work of the contact force on the eyelet around a closed loop of poses (turned from
+    deg[0] to deg[1] and pushed from push[0] to push[1] across the wire, an ellipse in that
+    plane) by the trapezoidal rule over n poses, and the absolute work along it."""
+    model, joint, body, _ = eyelet_on_wire(math.radians(deg[0]), push[0], detection=detection)
+    asm = Assembly(model)
+    bd = asm.body_dofs(body)
+    q = asm.q_ref.copy()
+    v = np.zeros_like(q)
+    t_mid, t_amp = 0.5 * (deg[0] + deg[1]), 0.5 * (deg[1] - deg[0])
+    p_mid, p_amp = 0.5 * (push[0] + push[1]), 0.5 * (push[1] - push[0])
+    forces, poses = [], []
+    for s in np.linspace(0.0, 2 * np.pi, n + 1):
+        th = math.radians(t_mid + t_amp * math.cos(s))
+        c, si = math.cos(th), math.sin(th)
+        A = np.array([[c, 0.0, -si], [0.0, 1.0, 0.0], [si, 0.0, c]])
+        pose = fm.Pose(np.array([0.003, 0.0, 0.0]) + (p_mid + p_amp * math.sin(s)) * A[:, 1], A)
+        q[bd[:3]] = pose.position
+        q[bd[3:]] = pose.quaternion
+        r = np.zeros(asm.n_coords)
+        joint.evaluate(None, q, v, None, 0.0, r, None)
+        forces.append(-r[bd])
+        poses.append(q[bd].copy())
+    F, X = np.array(forces), np.array(poses)
+    dW = 0.5 * np.einsum("ij,ij->i", F[1:] + F[:-1], np.diff(X, axis=0))
+    return float(np.sum(dW)), float(np.sum(np.abs(dW)))
+
+
+@pytest.mark.parametrize(("deg", "push"), [((10.0, 20.0), (1.205e-3, 1.215e-3)),
+                                           ((44.0, 54.0), (1.21e-3, 1.25e-3)),
+                                           ((46.0, 56.0), (1.21e-3, 1.25e-3))])
+def test_closed_loop_work_vanishes_with_the_loops_refinement(deg, push):  # noqa: ANN001
+    """The contact does no work around a closed loop of poses: the trapezoidal loop work falls
+    like n⁻² (n = 40 → 160: at least 10×) to below 1e-4 of the work along the loop; the
+    paper's detection keeps a loop work of several % at 44°–56° whatever the refinement."""
+    ratios = []
+    for n in (40, 80, 160):
+        w, along = _loop_work("consistent", n, deg, push)
+        ratios.append(abs(w) / along)
+    assert ratios[-1] < 1e-4
+    assert ratios[-1] < 0.1 * ratios[0] or ratios[-1] < 1e-9
+    if deg[0] > 40:
+        w, along = _loop_work("paper", 160, deg, push)
+        assert abs(w) / along > 1e-2
