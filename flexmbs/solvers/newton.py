@@ -92,6 +92,10 @@ class NewtonStats:
     history: list[float] = field(default_factory=list)
 
 
+#: halvings of a Newton step whose iterate the model rejects, before the solve fails
+RETREATS = 10
+
+
 @njit
 def renew_jacobian(step_its, cycle_steps, cycle_its, refresh_cost):  # noqa: ANN001, ANN201
     """Renewal rule for modified Newton: refresh the Jacobian at the next step when the last
@@ -169,8 +173,9 @@ class Newton:
         if self._rhs is None or self._rhs.size != problem.n:
             self._rhs = np.zeros(problem.n)
         rhs = self._rhs
+        retreat: tuple[object, np.ndarray] | None = None
         for it in range(o.max_iterations + 1):
-            r_q, r_lam, scale = problem.evaluate(need)
+            r_q, r_lam, scale = self._evaluate(problem, need, stats, retreat)
             stats.residual_evaluations += 1
             err, worst = self.error(r_q, r_lam, scale, problem.stiffness_scale())
             stats.history.append(err)
@@ -202,7 +207,9 @@ class Newton:
             dx = self.lu.solve(rhs)  # type: ignore[union-attr]
             if o.line_search:
                 self._line_search(problem, dx, err)
+                retreat = None
             else:
+                retreat = (problem.save(), dx)
                 problem.apply(dx, 1.0)
             its_since += 1
             err_prev = err
@@ -213,12 +220,39 @@ class Newton:
             f"Newton did not converge in {stats.iterations} iterations (scaled error "
             f"{stats.history[-1]:.3g}, 1 = tolerance; worst equation: {problem.describe(worst)})")
 
+    @staticmethod
+    def _evaluate(problem: StepProblem, need: bool, stats: NewtonStats,
+                  retreat: tuple[object, np.ndarray] | None
+                  ) -> tuple[np.ndarray, np.ndarray, float]:
+        """``problem.evaluate``; an iterate the model rejects (a ConvergenceError of the
+        evaluation, e.g. a beam axis pushed through a bore wall by a full step from a start in
+        penetration) is retreated towards the last accepted one by halving the step, up to
+        ``RETREATS`` times, before the solve fails (issue "the clearance contact as the exact
+        gradient of a potential", item 6)."""
+        alpha = 1.0
+        while True:
+            try:
+                return problem.evaluate(need)
+            except ConvergenceError:
+                if retreat is None or alpha < 0.5 ** RETREATS:
+                    raise
+            saved, dx = retreat
+            problem.restore(saved)
+            alpha *= 0.5
+            problem.apply(dx, alpha)
+            stats.residual_evaluations += 1
+
     def _line_search(self, problem: StepProblem, dx: np.ndarray, err0: float) -> None:
         saved = problem.save()
         alpha = 1.0
         for _ in range(8):
             problem.apply(dx, alpha)
-            r_q, r_lam, scale = problem.evaluate(False)
+            try:
+                r_q, r_lam, scale = problem.evaluate(False)
+            except ConvergenceError:    # a rejected iterate: a shorter step
+                problem.restore(saved)
+                alpha *= 0.5
+                continue
             err, _ = self.error(r_q, r_lam, scale, problem.stiffness_scale())
             if np.isfinite(err) and err < (1 - 1e-4 * alpha) * err0:
                 return
