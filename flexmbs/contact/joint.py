@@ -119,8 +119,8 @@ class SlidingClearanceJoint(Interaction):
 
     - ``"exact"`` (default): the exact derivative of the contact forces, with the hole point
       sliding along the bore as the detection moves it (:mod:`flexmbs.contact.tangent`):
-      quadratic Newton, the right linearised modes. Circular bores (compiled); other bores fall
-      back to ``"gauss_newton"`` until their section has a compiled boundary kernel;
+      quadratic Newton, the right linearised modes. Compiled sections (circle, superellipse);
+      a Python-defined section falls back to ``"gauss_newton"``;
     - ``"gauss_newton"``: ``k BᵀB`` (FORMULATION §5), no stiffness along the bore wall;
     - ``"frozen_point"``: adds the geometric terms that are exact for a hole point frozen as a
       material point of the hole (Python path). The true geometric stiffness of a beam pressed

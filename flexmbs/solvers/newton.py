@@ -52,6 +52,7 @@ class NewtonOptions:
     refresh_iterations: float = 10.0  # ... or more further iterations are predicted
     refresh_cost: float = 5.0         # renewal rule between steps (cost of a refresh, iterations)
     line_search: bool = False
+    retreats: int = 0                # halvings of a step whose iterate the model rejects
     divergence_limit: float = 1e8   # error growth factor that counts as divergence
     roundoff_factor: float = 20.0
 
@@ -66,6 +67,9 @@ class NewtonOptions:
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                     and v > 0):
                 raise ModelError(f"NewtonOptions: {key} must be a finite number > 0 (got {v!r})")
+        r = self.retreats
+        if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 0:
+            raise ModelError(f"NewtonOptions: retreats must be an integer >= 0 (got {r!r})")
         if not (isinstance(self.refresh_cost, (int, float)) and self.refresh_cost >= 0):
             raise ModelError(f"NewtonOptions: refresh_cost must be >= 0 or inf "
                              f"(got {self.refresh_cost!r})")
@@ -90,10 +94,6 @@ class NewtonStats:
     factorizations: int = 0
     residual_evaluations: int = 0
     history: list[float] = field(default_factory=list)
-
-
-#: halvings of a Newton step whose iterate the model rejects, before the solve fails
-RETREATS = 10
 
 
 @njit
@@ -175,7 +175,7 @@ class Newton:
         rhs = self._rhs
         retreat: tuple[object, np.ndarray] | None = None
         for it in range(o.max_iterations + 1):
-            r_q, r_lam, scale = self._evaluate(problem, need, stats, retreat)
+            r_q, r_lam, scale = self._evaluate(problem, need, stats, retreat, o.retreats)
             stats.residual_evaluations += 1
             err, worst = self.error(r_q, r_lam, scale, problem.stiffness_scale())
             stats.history.append(err)
@@ -222,19 +222,19 @@ class Newton:
 
     @staticmethod
     def _evaluate(problem: StepProblem, need: bool, stats: NewtonStats,
-                  retreat: tuple[object, np.ndarray] | None
+                  retreat: tuple[object, np.ndarray] | None, retreats: int
                   ) -> tuple[np.ndarray, np.ndarray, float]:
         """``problem.evaluate``; an iterate the model rejects (a ConvergenceError of the
         evaluation, e.g. a beam axis pushed through a bore wall by a full step from a start in
         penetration) is retreated towards the last accepted one by halving the step, up to
-        ``RETREATS`` times, before the solve fails (issue "the clearance contact as the exact
+        ``retreats`` times, before the solve fails (issue "the clearance contact as the exact
         gradient of a potential", item 6)."""
         alpha = 1.0
         while True:
             try:
                 return problem.evaluate(need)
             except ConvergenceError:
-                if retreat is None or alpha < 0.5 ** RETREATS:
+                if retreat is None or alpha <= 0.5 ** retreats:
                     raise
             saved, dx = retreat
             problem.restore(saved)

@@ -20,7 +20,9 @@ class StaticOptions:
     ``stabilizer`` (FORMULATION §6.5, Exudyn's stabilizerODE2term) adds the mass-proportional
     term ``c_s (1 - load^2) M`` to the Newton matrix only: it regularises slack cables and
     contacts that are not yet closed in the first increments, and vanishes at full load, so
-    the equilibrium found is unchanged.
+    the equilibrium found is unchanged. Newton halves a step whose iterate the model rejects
+    (``newton.retreats``, 10 here): the load factor does not scale a penetration the model
+    starts with, so halving the increment would not help.
     """
 
     load_steps: int = 1
@@ -28,7 +30,7 @@ class StaticOptions:
     stabilizer: float = 0.0       # c_s [1/s^2]: adds c_s (1 - load^2) M to the Newton matrix
     easy_iterations: int = 4
     newton: NewtonOptions = field(default_factory=lambda: NewtonOptions(
-        modified=False, line_search=False, max_iterations=30))
+        modified=False, line_search=False, max_iterations=30, retreats=10))
 
 
 @dataclass

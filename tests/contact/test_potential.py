@@ -32,7 +32,7 @@ TOL_BEAM = 1e-3
 def eyelet_on_wire(theta: float, push: float, axis: str = "y", *, r_b: float = WIRE_R,
                    hole: fm.Hole | None = None, detection: str = "consistent",
                    stiffness: float = STIFFNESS, damping: float = 0.0, free: bool = False,
-                   law: ForceLaw | None = None,
+                   law: ForceLaw | None = None, friction: float | None = None,
                    elements: int = 8, at: float = 0.003, half: float = 0.1):  # noqa: ANN201
     """Wire along x from −half to half (0.1 m; clamped at both ends), eyelet at x = ``at`` turned by θ
     about y (its axis towards z), pushed by ``push`` along its y (the section ellipse's minor
@@ -53,6 +53,7 @@ def eyelet_on_wire(theta: float, push: float, axis: str = "y", *, r_b: float = W
         warnings.simplefilter("ignore")   # starting in the wall is the point here
         joint = model.add_joint(fm.SlidingClearanceJoint(
             wire, body, hole=hole or fm.CircleHole(2e-3, 0.2e-3, 3), detection=detection,
+            friction=friction,
             contact=law or fm.LinearPenalty(stiffness=stiffness, damping=damping)))
     return model, joint, body, wire
 
@@ -222,6 +223,43 @@ def test_exact_tangent_equals_central_differences_and_is_symmetric(deg, push):  
     T = np.hstack([basis, rot])
     Kt = T.T @ K @ T
     assert np.abs(Kt - Kt.T).max() <= 1e-9 * np.abs(Kt).max()
+
+
+@pytest.mark.parametrize("deg", [30.0, 55.0])
+def test_damping_and_friction_act_at_the_pair_with_an_exact_tangent(deg):  # noqa: ANN001
+    """Damping and friction at the same points (item 5): with a damped penalty (20 N s/m)
+    and regularised Coulomb friction (μ = 0.3) at a sliding, rocking state the iteration
+    matrix's stiffness and damping parts equal central differences of the assembled residual
+    in q and in q̇ (1e-6 relative); neither is symmetric now."""
+    model, joint, body, wire = eyelet_on_wire(math.radians(deg), 1.23e-3, free=True,
+                                              damping=20.0, friction=0.3)
+    asm = Assembly(model)
+    n, m = asm.n_coords, asm.n_mult
+    q = _bent(asm, joint)
+    rng = np.random.default_rng(3)
+    v = 1e-2 * rng.standard_normal(n)
+    a, lam = np.zeros(n), np.zeros(m)
+    rq, rl = np.zeros(n), np.zeros(m)
+    assert joint._contacts(q, v, False, False)
+    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
+    K = asm.matrix.toarray()[:n, :n]
+    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 1.0, 0.0))
+    C = asm.matrix.toarray()[:n, :n]
+
+    def res(q_: np.ndarray, v_: np.ndarray) -> np.ndarray:
+        r1, r2 = np.zeros(n), np.zeros(m)
+        asm.evaluate(q_, v_, a, lam, 0.0, r1, r2)
+        return r1
+
+    idx = np.r_[asm.body_dofs(body), joint._elem_dofs[3:5].ravel()]
+    for j in idx:
+        e = np.zeros(n)
+        e[j] = FD_STEP
+        col = (res(q + e, v) - res(q - e, v)) / (2 * FD_STEP)
+        assert np.abs(K[idx, j] - col[idx]).max() <= 1e-6 * np.abs(K[np.ix_(idx, idx)]).max()
+        e[j] = 1e-7
+        colv = (res(q, v + e) - res(q, v - e)) / 2e-7
+        assert np.abs(C[idx, j] - colv[idx]).max() <= 1e-6 * np.abs(C[np.ix_(idx, idx)]).max()
 
 
 STATIC_GRID = [(deg, push) for deg in (50.0, 52.0, 53.5, 54.0, 56.0, 58.0, 60.0)
