@@ -28,7 +28,7 @@ from .sections import (
     section_boundary,
     section_contains,
 )
-from .stationary import line_model_points, stationary_pair
+from .stationary import PAIR_MARGIN, line_model_points, stationary_pair
 from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
@@ -87,16 +87,15 @@ def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, x
         if math.hypot(cy, cz) + a < R_in:
             continue   # broad phase: ellipse strictly inside the bore
         if consistent:
-            # line-model seeds within half the clearance of contact, converged on the axis
+            # line-model seeds near contact, converged on the axis
             m = line_model_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES, psis,
                                   kinds, depths)
             first = count
             for j in range(m):
-                if r_b - depths[j] <= -0.5 * (R_in - r_b) or count >= out.shape[0]:
+                if r_b - depths[j] <= -PAIR_MARGIN * (R_in - r_b) or count >= out.shape[0]:
                     continue
-                psi, kind, eP, xiP, ell, _, Q = stationary_pair(qe, lengths, origin, ey, ez,
-                                                                shape, params, psis[j],
-                                                                kinds[j], e, xi)
+                psi, kind, eP, xiP, ell, _, Q0, Q1, Q2 = stationary_pair(
+                    qe, lengths, origin, ey, ez, shape, params, psis[j], kinds[j], e, xi)
                 if ell >= r_b:
                     continue
                 dup = False
@@ -111,9 +110,9 @@ def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, x
                 row[2] = kind
                 row[3] = eP
                 row[4] = xiP
-                row[5] = Q[0]
-                row[6] = Q[1]
-                row[7] = Q[2]
+                row[5] = Q0
+                row[6] = Q1
+                row[7] = Q2
                 row[8] = a
                 row[9] = b
                 row[10] = r_b - ell

@@ -504,6 +504,11 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
     return phis[:nf], -signs[:nf]
 
 
+_H = math.sqrt(0.5)
+#: sin(kπ/4), k = 0..7 (cos(kπ/4) = sin((k + 2)π/4))
+_SIN_QUARTER = (0.0, _H, 1.0, _H, 0.0, -_H, -1.0, -_H)
+
+
 @njit
 def trig_quadratic_roots(al, be, ga, scale, phis, signs):  # noqa: ANN001, ANN201
     """Roots of ``f(φ) = al sin φ cos φ + be sin φ + ga cos φ`` on [0, 2π) into ``phis`` (≥ 5)
@@ -515,13 +520,17 @@ def trig_quadratic_roots(al, be, ga, scale, phis, signs):  # noqa: ANN001, ANN20
     steps on f, residual check against ``1e-10 scale``, duplicates removed."""
     phi0 = 0.0
     best = -1.0
-    for k in range(8):
-        f_inf, _ = _trig_f(k * 0.25 * np.pi + np.pi, al, be, ga)
-        if abs(f_inf) > best:
-            best = abs(f_inf)
+    s0 = 0.0
+    c0 = 1.0
+    for k in range(8):    # f(kπ/4 + π) from the table of sin, cos at kπ/4 (no sincos)
+        sk = _SIN_QUARTER[k]
+        ck = _SIN_QUARTER[(k + 2) % 8]
+        f_inf = abs(al * sk * ck - be * sk - ga * ck)
+        if f_inf > best:
+            best = f_inf
             phi0 = k * 0.25 * np.pi
-    s0 = math.sin(phi0)
-    c0 = math.cos(phi0)
+            s0 = sk
+            c0 = ck
     u0 = be * s0 + ga * c0
     u1 = 2.0 * (be * c0 - ga * s0)
     asc = al * s0 * c0
@@ -547,6 +556,8 @@ def trig_quadratic_roots(al, be, ga, scale, phis, signs):  # noqa: ANN001, ANN20
             if abs(step) > 0.3:
                 step = 0.3 if step > 0 else -0.3
             phi += step
+            if abs(step) <= 1e-15 * (1.0 + abs(phi)):
+                break
         f, df = _trig_f(phi, al, be, ga)
         if abs(f) > ftol:
             continue

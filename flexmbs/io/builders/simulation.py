@@ -18,7 +18,7 @@ PREDICTORS = ("constant_acceleration", "zero_acceleration")
 
 _NEWTON_KEYS = {"max_iterations": "int", "relative_tolerance": "pos", "constraint_tolerance": "pos",
                 "modified": "bool", "line_search": "bool", "refresh_ratio": "ratio",
-                "refresh_iterations": "pos", "refresh_cost": "pos"}
+                "refresh_iterations": "pos", "refresh_cost": "pos", "retreats": "count"}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -77,7 +77,8 @@ def read_simulation(t: Table) -> SimulationSettings:
         for k, kind in _NEWTON_KEYS.items():
             if not nt.has(k):
                 continue
-            newton[k] = (nt.integer(k, ge=1) if kind == "int" else nt.boolean(k) if kind == "bool"
+            newton[k] = (nt.integer(k, ge=1) if kind == "int" else nt.integer(k, ge=0)
+                         if kind == "count" else nt.boolean(k) if kind == "bool"
                          else nt.number(k, gt=0, lt=1) if kind == "ratio" else nt.number(k, gt=0))
     gx, gy, gz = (float(x) for x in gravity)
     return SimulationSettings(
