@@ -862,6 +862,6 @@ class Assembly:
             out["spring"] = spring_energy(self.system.springs, np.ascontiguousarray(q, float))
             out["total"] += out["spring"]
         if self.joint_lists["clearance"]:
-            out["contact"] = sum(j.contact_energy(q) for j in self.joint_lists["clearance"])
+            out["contact"] = sum(j.contact_energy(q, v) for j in self.joint_lists["clearance"])
             out["total"] += out["contact"]
         return out

@@ -555,15 +555,17 @@ class SlidingClearanceJoint(Interaction):
         e, xi, *_ = closest_point(qe, self._lengths, centre, int(self._elem[k]), float(self._xi[k]))
         return float(np.sum(self._lengths[:e]) + xi * self._lengths[e])
 
-    def contact_energy(self, q: np.ndarray) -> float:
+    def contact_energy(self, q: np.ndarray, v: np.ndarray | None = None) -> float:
         """Potential of the contact forces at ``q``: ``Σ_k [Σ_max Φ(δ) − Σ_min Φ(δ)]`` over the
         sections' penetrating points (``Φ`` = :func:`~flexmbs.contact.laws.law_energy`,
         FORMULATION II §4b). With ``detection="consistent"`` the elastic contact forces are
-        exactly its negative gradient; with ``"paper"`` only at small crossing angles."""
+        exactly its negative gradient; with ``"paper"`` only at small crossing angles. ``v``
+        does not change it; passing the state's velocities reuses the detection of the output
+        rows at the same state."""
         law = self.contact.parameters()
+        v = np.zeros_like(q) if v is None else v
         return float(sum(kind * law_energy(law, -res.gap)
-                         for _k, _j, kind, _eP, res, *_ in self._contacts(q, np.zeros_like(q),
-                                                                          False, False)))
+                         for _k, _j, kind, _eP, res, *_ in self._contacts(q, v, False, False)))
 
     def contact_force(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total contact force on the hole body (global components)."""
