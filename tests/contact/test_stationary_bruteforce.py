@@ -32,8 +32,11 @@ def _element(c: np.ndarray, t: np.ndarray, bow: np.ndarray) -> np.ndarray:
 
 
 def _brute_force(qe: np.ndarray, shape: int, params: np.ndarray, r_b: float
-                 ) -> list[tuple[float, float]]:
-    """(wall angle, depth) of every local minimum of the wall-to-axis distance below r_b."""
+                 ) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """(wall angle, depth) of the local minima of the wall-to-axis distance below r_b: those
+    that stand out of the sampling's noise (deeper by 5 DEPTH_TOL than the distance a few
+    samples to either side), and all of them (the sampled axis makes small false minima on a
+    flat stretch of the distance, next to a pitchfork)."""
     xi = np.linspace(0.0, 1.0, M_AXIS)
     S = np.array([shape_xi(x, L_ELEM)[0] for x in xi])            # (M_AXIS, 4)
     axis = S @ qe.reshape(4, 3)
@@ -48,7 +51,11 @@ def _brute_force(qe: np.ndarray, shape: int, params: np.ndarray, r_b: float
         d = wall[k:k + 512, None, :] - axis[None, :, :]
         ell[k:k + 512] = np.sqrt(np.min(np.einsum("ijk,ijk->ij", d, d), axis=1))
     minima = (ell < np.roll(ell, 1)) & (ell <= np.roll(ell, -1)) & (ell < r_b)
-    return [(float(psi[i]), float(r_b - ell[i])) for i in np.flatnonzero(minima)]
+    w = 8
+    prominent = minima & (np.roll(ell, w) > ell + 5 * DEPTH_TOL) \
+        & (np.roll(ell, -w) > ell + 5 * DEPTH_TOL)
+    return ([(float(psi[i]), float(r_b - ell[i])) for i in np.flatnonzero(prominent)],
+            [(float(psi[i]), float(r_b - ell[i])) for i in np.flatnonzero(minima)])
 
 
 def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in: float,
@@ -68,16 +75,19 @@ def _angle(a: float, b: float) -> float:
     return min(d, 2 * math.pi - d)
 
 
-def _check(found: list[tuple[float, float]], truth: list[tuple[float, float]]) -> None:
-    """Every true minimum deeper than the tolerance is found, and every found one is true."""
-    for psi, depth in truth:
+def _check(found: list[tuple[float, float]],
+           truth: tuple[list[tuple[float, float]], list[tuple[float, float]]]) -> None:
+    """Every clear true minimum deeper than the tolerance is found, and every found one is a
+    sampled minimum."""
+    clear, every = truth
+    for psi, depth in clear:
         if depth > 5 * DEPTH_TOL:
             near = [d for p, d in found if _angle(p, psi) < PSI_TOL]
-            assert near, (psi, depth, found, truth)
-            assert abs(near[0] - depth) < DEPTH_TOL + 1e-4 * depth, (psi, depth, found, truth)
+            assert near, (psi, depth, found, clear)
+            assert abs(near[0] - depth) < DEPTH_TOL + 1e-4 * depth, (psi, depth, found, clear)
     for psi, depth in found:
         if depth > 5 * DEPTH_TOL:
-            assert any(_angle(p, psi) < PSI_TOL for p, _ in truth), (psi, depth, found, truth)
+            assert any(_angle(p, psi) < PSI_TOL for p, _ in every), (psi, depth, found, clear)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
