@@ -182,8 +182,8 @@ def _penalty_energy(joints, asm: Assembly, q: np.ndarray) -> float:
     return total
 
 
-def _energy_drift(stiffness: float, detection: str) -> tuple[float, float, float]:
-    """Undamped, frictionless variant, rho_inf = 0.98, dt = 1e-4 s (CI 1 s, full 5 s): after
+def _energy_drift(stiffness: float, detection: str, t_end: float) -> tuple[float, float, float]:
+    """Undamped, frictionless variant, rho_inf = 0.98, dt = 1e-4 s, t_end: after
     the half-sine (t >= 0.2 s) the largest change of kinetic + strain + hinge springs + contact
     energy, the change of the contact energy alone and the swing of the kinetic energy."""
     model, wire, panels, joints, _ = ex2.build(damping=0.0, hinge_damping=0.0, wire_damping=0.0,
@@ -191,7 +191,6 @@ def _energy_drift(stiffness: float, detection: str) -> tuple[float, float, float
     for j in joints:
         j.detection = detection
     asm = Assembly(model)
-    t_end = 5.0 if FULL else 1.0
     res = fm.simulate(asm, t_end=t_end, dt=1e-4, output_interval=1e-2, initial_static=True,
                       static_options=ex2.STATIC, integrator=fm.GeneralizedAlpha(rho_inf=0.98))
     late = res.t >= 0.2 + 1e-9
@@ -208,15 +207,18 @@ def test_energy_balance_of_the_frictionless_undamped_variant(stiffness):  # noqa
     """No contact, hinge or wire damping, no friction: kinetic + wire strain + hinge springs +
     contact penalty energy stays constant to 1e-3 of the energy that moves between the stores
     (measured over 1 s: 7e-5 at k = 4e4 N/m, the default, 1.4e-6 at 2e4), while the contact
-    energy changes by 8e-3 and 5e-3 of it. With the paper's detection the soft contact gains
-    energy (24 % of the swing in 1 s measured; before the consistent detection the default
-    closed to 6e-4). The baseline with ideal rings conserves it to 1e-10 J."""
-    drift, contact, swing = _energy_drift(stiffness, "consistent")
+    energy changes by 8e-3 and 5e-3 of it (CI 1 s, FLEXMBS_FULL=1 5 s). With the paper's
+    detection the soft contact gains energy (24 % of the swing in 1 s measured; it then pushes
+    the wire through a wall at 1.22 s; before the consistent detection the default closed to
+    6e-4). The baseline with ideal rings conserves it to 1e-10 J."""
+    drift, contact, swing = _energy_drift(stiffness, "consistent", 5.0 if FULL else 1.0)
     assert swing > 1e-3                                   # the panels really swing (J)
     assert contact > 1e-3 * swing                         # and the contacts take part
     assert drift < 1e-3 * swing, (drift, swing)
     if stiffness == 2e4:
-        drift, _, swing = _energy_drift(stiffness, "paper")
+        # 1 s: the energy the paper's detection feeds in pushes the wire through an eyelet's
+        # wall at t = 1.22 s ("the beam axis left the bore")
+        drift, _, swing = _energy_drift(stiffness, "paper", 1.0)
         assert drift > 1e-2 * swing
 
 
