@@ -161,9 +161,10 @@ class BodyOrientationProbe(BodyPositionProbe):
 
 
 class EnergyProbe(Probe):
-    """Total, kinetic, strain or gravitational energy (``Assembly.energies``)."""
+    """Total, kinetic, strain, gravitational, spring or contact energy (``Assembly.energies``;
+    spring and contact are 0 in a model without springs or clearance joints)."""
 
-    QUANTITIES = ("total", "kinetic", "strain", "gravity")
+    QUANTITIES = ("total", "kinetic", "strain", "gravity", "spring", "contact")
 
     def __init__(self, name: str, quantity: str = "total") -> None:
         self.name = _check_name(name)
@@ -176,7 +177,7 @@ class EnergyProbe(Probe):
         return [self.name]
 
     def evaluate(self, asm: Any, state: Any) -> np.ndarray:
-        return np.array([asm.energies(state.q, state.v)[self.quantity]])
+        return np.array([asm.energies(state.q, state.v).get(self.quantity, 0.0)])
 
 
 class SlideCoordinateProbe(Probe):

@@ -334,3 +334,28 @@ def test_free_eyelet_keeps_its_energy_with_second_order_in_the_step():
     paper = [_free_eyelet_energy_error("paper", float(h))[0] for h in steps[-2:]]
     assert min(paper) > 1e-2
     assert paper[1] > 0.8 * paper[0]                     # no convergence with the step
+
+
+def test_the_contact_potential_is_reported_with_the_energies():
+    """``Assembly.energies`` holds the contact potential (part of the total) and the energy
+    probe reads it: Σ k δ²/2 over the points of the 55° eyelet, maxima +, the penetrating
+    minimum − (computed here from the joint's own output rows)."""
+    from types import SimpleNamespace
+
+    from flexmbs.io.probes import EnergyProbe
+
+    model, joint, body, _ = eyelet_on_wire(math.radians(55.0), 1.23e-3)
+    asm = Assembly(model)
+    q = asm.q_ref.copy()
+    v = np.zeros_like(q)
+    rows = joint.output(asm, q, v, np.zeros(asm.n_mult), 0.0)
+    assert sorted(r["normal_force"] > 0 for r in rows).count(False) == 1   # one minimum
+    expected = sum(math.copysign(0.5 * STIFFNESS * r["gap"] ** 2, r["normal_force"])
+                   for r in rows)
+    energies = asm.energies(q, v)
+    assert energies["contact"] == pytest.approx(expected, rel=1e-12)
+    assert energies["total"] == pytest.approx(energies["kinetic"] + energies["strain"]
+                                              + energies["gravity"] + expected, rel=1e-12)
+    state = SimpleNamespace(q=q, v=v, t=0.0)
+    assert EnergyProbe("e", "contact").evaluate(asm, state)[0] == pytest.approx(expected)
+    assert EnergyProbe("e", "spring").evaluate(asm, state)[0] == 0.0
