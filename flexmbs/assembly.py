@@ -559,6 +559,12 @@ class Assembly:
             np.zeros(3, np.int64),
             np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
                           if g.element_type.rebase is not None), BASE_RECORD)))
+        #: what the compiled kernel receives: the kinds this model lacks are None, so that
+        #: their code is not compiled for it (driver.OPTIONAL_KINDS)
+        self.kernel_system = self.system.without_absent(dict(
+            bodies=bool(self.model.bodies), norms=bool(norms), terms=bool(terms),
+            sliding=bool(self.joint_lists["sliding"]), clearance=bool(self.joint_lists["clearance"]),
+            springs=bool(self.model.springs), drivers=bool(drivers)))
         self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
         self._r = np.zeros(self.n_total)
@@ -663,7 +669,7 @@ class Assembly:
         """One evaluation through :func:`flexmbs.kernel.kernel` (``out``: the residual for
         ``OP_RESIDUAL``, the CSC data of the iteration matrix for ``OP_JACOBIAN``)."""
         r, data = (self._r, out) if op == OP_JACOBIAN else (out, self._data)
-        value, code = kernel(op, self.system, q, v, qdd, lam, fv.reshape(1, -1), mode,
+        value, code = kernel(op, self.kernel_system, q, v, qdd, lam, fv.reshape(1, -1), mode,
                              np.array(coef, dtype=float), r, data,
                              self._idle_run if run is None else run)
         return float(value), int(code)
