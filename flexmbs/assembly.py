@@ -37,7 +37,7 @@ from .contact.joint import clearance_pattern, pack_clearance
 from .elements import rigid_body as rb
 from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
-from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel
+from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
 from .loads import TimeFunction, moments_pattern, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
 from .solvers._compiled import idle_run
@@ -100,6 +100,7 @@ class Assembly:
         self.length_scale = self._length_scale()
         self.stiffness_scale = 0.0
         self._idle_run = idle_run()
+        self._kernel_ready = False
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -669,9 +670,12 @@ class Assembly:
         """One evaluation through :func:`flexmbs.kernel.kernel` (``out``: the residual for
         ``OP_RESIDUAL``, the CSC data of the iteration matrix for ``OP_JACOBIAN``)."""
         r, data = (self._r, out) if op == OP_JACOBIAN else (out, self._data)
-        value, code = kernel(op, self.kernel_system, q, v, qdd, lam, fv.reshape(1, -1), mode,
-                             np.array(coef, dtype=float), r, data,
-                             self._idle_run if run is None else run)
+        args = (op, self.kernel_system, q, v, qdd, lam, fv.reshape(1, -1), mode,
+                np.array(coef, dtype=float), r, data, self._idle_run if run is None else run)
+        if not self._kernel_ready:      # compiled, loaded, or compiled now with one line
+            prepare(args)
+            self._kernel_ready = True
+        value, code = kernel(*args)
         return float(value), int(code)
 
     def post_step(self, q: np.ndarray, v: np.ndarray, t: float, qdd: np.ndarray | None = None,
