@@ -35,6 +35,7 @@ from .constraints.linear import linear_pattern, pack_linear
 from .constraints.sliding import pack_sliding, sliding_pattern
 from .contact.joint import clearance_pattern, pack_clearance
 from .elements import rigid_body as rb
+from .elements.group import MAX_GROUPS
 from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
 from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
@@ -540,6 +541,9 @@ class Assembly:
                 mine = [et.pack(np.zeros((0, size), np.int64), et.section_properties([]),
                                 et.default_options, self.q_ref, np.zeros((0, size * size), np.int64))]
             parts += mine
+        if len(parts) > MAX_GROUPS:
+            raise ModelError(f"{len(parts)} groups of beams (element type and options): at most "
+                             f"{MAX_GROUPS}; give beams of one element type the same options")
         norms = [nl.constraint for nl in self.nonlinear
                  if isinstance(nl.constraint, EulerParameterNormalization)]
         terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]
