@@ -29,7 +29,10 @@ passes the system's arrays on, and the counting of every array of every part at 
 calls made it the largest single compile cost (docs/design-notes.md, "Cost of compilation").
 
 Callers that only evaluate pass :func:`~flexmbs.solvers._compiled.idle_run` as ``run`` and a
-one-row ``fv``, so that every call has the same argument types (one signature, one library).
+one-row ``fv``, so that every call for a model has the same argument types (one signature, one
+library per kind of model: the optional kinds of terms a model lacks are ``None`` in the system
+it receives, :data:`flexmbs.driver.OPTIONAL_KINDS`, and are not compiled for it).
+:func:`prepare` announces a compile and records its duration (the next one's estimate).
 """
 
 from __future__ import annotations

@@ -9,12 +9,15 @@ states, adding ``Q_int + M q̈`` into the residual and ``cK K + cC C + cM M`` in
 is stated once here (:func:`gather_states`, :func:`add_residual`, :func:`add_matrix`).
 
 The driver sums a tuple of parts of *different* types (several element types in one model) by
-:func:`groups_residual` and :func:`groups_jacobian`, ``for part in literal_unroll(parts):
-element_residual(part, ...)`` (a function of its own: numba's unrolling pass types its caller
-partially, which the step loop it would be inlined into does not survive): :func:`element_residual`
-and :func:`element_jacobian` are resolved at compile time to the kernels the part's element
-type registered (:class:`~flexmbs.elements.layout.ElementType` ``part_type``, ``residual``,
-``jacobian``), so an element is its module and its registration.
+:func:`groups_residual` and :func:`groups_jacobian`, which take the parts at the fixed positions
+``0 .. MAX_GROUPS - 1`` (``None`` past the last, compiled to nothing) and call the kernels the
+part's element type registered (:class:`~flexmbs.elements.layout.ElementType` ``part_type``,
+``residual``, ``jacobian``, ...), resolved when typed by numba intrinsics that call them in place,
+so an element is its module and its registration. (A ``literal_unroll`` loop over the parts
+calling ``@overload`` implementations did the same; numba compiled each of those into a library
+of its own, with the element's whole tree optimised and turned into machine code again: about
+30 s of a rod model's first run, benchmarks/README.md.) :func:`element_residual` and
+:func:`element_jacobian` stay for other compiled callers (benchmarks/rod.py).
 """
 
 from __future__ import annotations
