@@ -565,13 +565,11 @@ class Assembly:
             np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
                           if g.element_type.rebase is not None), BASE_RECORD)))
         #: what the compiled kernel receives: the kinds this model lacks are None, so that
-        #: their code is not compiled for it (driver.OPTIONAL_KINDS). Bodies, their
-        #: normalisations, joint terms, spring-dampers and drivers come and go together (one
-        #: kernel for any mix of them: fewer kinds of model to compile, docs/design-notes.md)
-        rigid = bool(self.model.bodies or norms or terms or self.model.springs or drivers)
+        #: their code is not compiled for it (driver.OPTIONAL_KINDS)
         self.kernel_system = self.system.without_absent(dict(
-            bodies=rigid, norms=rigid, terms=rigid, springs=rigid, drivers=rigid,
-            sliding=bool(self.joint_lists["sliding"]), clearance=bool(self.joint_lists["clearance"])))
+            bodies=bool(self.model.bodies), norms=bool(norms), terms=bool(terms),
+            sliding=bool(self.joint_lists["sliding"]), clearance=bool(self.joint_lists["clearance"]),
+            springs=bool(self.model.springs), drivers=bool(drivers)))
         self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
         self._r = np.zeros(self.n_total)

@@ -95,8 +95,7 @@ class SystemPart(NamedTuple):
 
 
 #: the kinds of terms compiled only for models that have them (docs/design-notes.md, "Compile
-#: time"); beams, loads and linear rows are in nearly every model. The assembler keeps or drops
-#: bodies, norms, terms, springs and drivers together (Assembly.kernel_system)
+#: time"); beams, loads and linear rows are in nearly every model
 OPTIONAL_KINDS = ("bodies", "norms", "terms", "sliding", "clearance", "springs", "drivers")
 
 

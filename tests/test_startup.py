@@ -58,7 +58,7 @@ def test_kernel_gets_none_for_the_kinds_a_model_lacks():
     model.rigid(beam.last_node, body)
     asm = Assembly(model)
     present = {k for k in OPTIONAL_KINDS if getattr(asm.kernel_system, k) is not None}
-    assert present == {"bodies", "norms", "terms", "springs", "drivers"}   # together
+    assert present == {"bodies", "norms", "terms"}
 
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba disabled")
