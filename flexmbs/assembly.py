@@ -35,9 +35,10 @@ from .constraints.linear import linear_pattern, pack_linear
 from .constraints.sliding import pack_sliding, sliding_pattern
 from .contact.joint import clearance_pattern, pack_clearance
 from .elements import rigid_body as rb
+from .elements.group import MAX_GROUPS
 from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
-from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel
+from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
 from .loads import TimeFunction, moments_pattern, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
 from .solvers._compiled import idle_run
@@ -100,6 +101,7 @@ class Assembly:
         self.length_scale = self._length_scale()
         self.stiffness_scale = 0.0
         self._idle_run = idle_run()
+        self._kernel_ready = False
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -539,6 +541,9 @@ class Assembly:
                 mine = [et.pack(np.zeros((0, size), np.int64), et.section_properties([]),
                                 et.default_options, self.q_ref, np.zeros((0, size * size), np.int64))]
             parts += mine
+        if len(parts) > MAX_GROUPS:
+            raise ModelError(f"{len(parts)} groups of beams (element type and options): at most "
+                             f"{MAX_GROUPS}; give beams of one element type the same options")
         norms = [nl.constraint for nl in self.nonlinear
                  if isinstance(nl.constraint, EulerParameterNormalization)]
         terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]
@@ -559,6 +564,12 @@ class Assembly:
             np.zeros(3, np.int64),
             np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
                           if g.element_type.rebase is not None), BASE_RECORD)))
+        #: what the compiled kernel receives: the kinds this model lacks are None, so that
+        #: their code is not compiled for it (driver.OPTIONAL_KINDS)
+        self.kernel_system = self.system.without_absent(dict(
+            bodies=bool(self.model.bodies), norms=bool(norms), terms=bool(terms),
+            sliding=bool(self.joint_lists["sliding"]), clearance=bool(self.joint_lists["clearance"]),
+            springs=bool(self.model.springs), drivers=bool(drivers)))
         self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
         self._r = np.zeros(self.n_total)
@@ -663,9 +674,12 @@ class Assembly:
         """One evaluation through :func:`flexmbs.kernel.kernel` (``out``: the residual for
         ``OP_RESIDUAL``, the CSC data of the iteration matrix for ``OP_JACOBIAN``)."""
         r, data = (self._r, out) if op == OP_JACOBIAN else (out, self._data)
-        value, code = kernel(op, self.system, q, v, qdd, lam, fv.reshape(1, -1), mode,
-                             np.array(coef, dtype=float), r, data,
-                             self._idle_run if run is None else run)
+        args = (op, self.kernel_system, q, v, qdd, lam, fv.reshape(1, -1), mode,
+                np.array(coef, dtype=float), r, data, self._idle_run if run is None else run)
+        if not self._kernel_ready:      # compiled, loaded, or compiled now with one line
+            prepare(args)
+            self._kernel_ready = True
+        value, code = kernel(*args)
         return float(value), int(code)
 
     def post_step(self, q: np.ndarray, v: np.ndarray, t: float, qdd: np.ndarray | None = None,

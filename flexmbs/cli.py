@@ -122,6 +122,15 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--exaggeration", type=float, metavar="F",
                       help="section view: factor on offsets and clearance (default: clearance "
                            "drawn as half the bore radius)")
+    comp = sub.add_parser(
+        "compile", parents=[overrides], help="compile the numba kernels ahead of a first run",
+        description="Compile (or load from the cache) the numba kernels for the named kinds of "
+                    "model (cable, rod: a clamped beam of these elements) or for the models of "
+                    "scenario files, so that the first run starts at once (docs/cli.md).")
+    comp.add_argument("targets", nargs="*", metavar="KIND_OR_SCENARIO",
+                      help="cable, rod, or a scenario file (.toml); default: cable")
+    comp.add_argument("--quiet", "-q", action="store_true", help="no output but errors")
+
     sweep = sub.add_parser(
         "sweep", parents=[overrides], help="run variants of a scenario on Dask (parameter study)",
         description="Run the Cartesian product of --grid lists (times the --zip lists taken side "
@@ -214,6 +223,8 @@ def _main(argv: Sequence[str] | None) -> int:
             return cmd_postprocess(args)
         if args.command == "sweep":
             return cmd_sweep(args)
+        if args.command == "compile":
+            return cmd_compile(args)
     except BrokenPipeError:   # e.g. `flexmbs info ... | head`: the reader left, not an error
         import os
 
@@ -444,6 +455,104 @@ def _resume_overrides(args: argparse.Namespace) -> list[str]:
     return first + [o for o in given if _is_end_time(o)]
 
 
+def _compile_notice(estimate: float | None, same_kind: bool = True) -> str:
+    """The one line printed while the kernels compile for a new kind of model."""
+    if estimate is None:
+        about = "a minute or two on a 2-core machine"
+    elif same_kind:
+        about = f"about {estimate:.0f} s, as its last compile here"
+    else:
+        about = f"the longest compile here so far took {estimate:.0f} s"
+    return (f"flexmbs: compiling the numba kernels for this kind of model (once; {about}; "
+            "cached for later runs)")
+
+
+def _announce_compiles() -> None:
+    """Print :func:`_compile_notice` on stderr whenever the kernel compiles in this process."""
+    from . import kernel
+
+    def announce(estimate: float | None, kind: str, same_kind: bool) -> None:
+        print(_compile_notice(estimate, same_kind), file=sys.stderr, flush=True)
+
+    kernel.announce_compile = announce
+
+
+def cmd_compile(args: argparse.Namespace) -> int:
+    """``flexmbs compile``: compile (or load) the kernels of the named kinds of model or
+    scenario files ahead of a run; one line per kind."""
+    from .io.scenario import load_scenario
+
+    targets = list(args.targets) or ["cable"]
+    restore = _terminate_like_ctrl_c()
+    if not args.quiet:
+        _announce_compiles()
+    try:
+        for target in targets:
+            start = time.perf_counter()
+            if target in _COMPILE_KINDS:
+                model = _COMPILE_KINDS[target]()
+                name = target
+            else:
+                if not target.endswith(".toml") and not Path(target).exists():
+                    _error(f"compile: {target!r} is neither a kind of model "
+                           f"({', '.join(_COMPILE_KINDS)}) nor a scenario file")
+                    return EXIT_BAD_INPUT
+                sc = load_scenario(target, _overrides(args))
+                model, name = sc.model, target
+            from .assembly import Assembly
+            from .kernel import model_kind
+
+            asm = Assembly(model)
+            _compile_python_paths(asm)
+            if not args.quiet:
+                print(f"flexmbs: {name}: kernels ready ({model_kind(asm.kernel_system)}, "
+                      f"{time.perf_counter() - start:.1f} s)", flush=True)
+    except KeyboardInterrupt:
+        _error("interrupted")
+        return EXIT_INTERRUPTED
+    except FlexmbsError as exc:
+        _error(_one_line(exc))
+        return EXIT_BAD_INPUT
+    except OSError as exc:
+        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
+        _error(f"{exc.strerror or exc}{where}")
+        return EXIT_BAD_INPUT
+    finally:
+        restore()
+    return EXIT_OK
+
+
+def _compile_python_paths(asm: Any) -> None:
+    """The compiled functions a run calls from Python besides the kernel (the banded
+    factorisation's set-up, the output's beam fields), by one small dynamic step."""
+    from .simulation import simulate
+    from .solvers.generalized_alpha import GeneralizedAlpha
+
+    with contextlib.suppress(FlexmbsError):   # a model that cannot step still has its kernel
+        simulate(asm, t_end=2e-6, dt=1e-6, integrator=GeneralizedAlpha(adaptive=False),
+                 output_interval=1e-6, record_energy=False)
+
+
+def _cantilever(element: str) -> Any:
+    """A clamped beam under gravity: the kernels of every model of this element's beams with
+    clamps, pins, prescribed motion and loads."""
+    import flexmbs as fm
+
+    model = fm.Model(gravity=(0.0, 0.0, -9.81))
+    beam = model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2),
+                          section=fm.CircularSection(5e-3),
+                          material=fm.Material(E=2.1e11, rho=7800.0), element=element)
+    model.clamp(beam.first_node)
+    return model
+
+
+#: kinds of model ``flexmbs compile`` knows by name (scenario files name any other)
+_COMPILE_KINDS: dict[str, Callable[[], Any]] = {
+    "cable": lambda: _cantilever("ancf_cable"),
+    "rod": lambda: _cantilever("ancf_rod14"),
+}
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """``flexmbs run``: load the scenario, resolve the output folder and call
     :func:`flexmbs.runs.run_scenario`, which claims the folder and runs the scenario
@@ -487,12 +596,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                 return EXIT_BAD_INPUT
             out = Path(args.out) if args.out is not None else Path("out") / sc.name
         if not quiet:
-            from .kernel import kernels_cached
-
-            if not kernels_cached():
-                print("flexmbs: first run here: compiling the numba kernels (once, about 2 "
-                      "minutes, 3-4 with rod elements; cached for later runs)", file=sys.stderr,
-                      flush=True)
+            _announce_compiles()
         outcome = run_scenario(sc, out, overrides=overrides, resume=args.resume is not None,
                                overwrite=bool(getattr(args, "overwrite", False)),
                                progress=progress)

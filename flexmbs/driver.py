@@ -18,7 +18,7 @@ the values of the model's time functions at the current time; ``error`` (int64, 
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -67,6 +67,11 @@ KIND_OF_ERROR = {ERR_LEFT_BORE: "clearance", ERR_END_OF_BEAM: "sliding"}
 
 
 class SystemPart(NamedTuple):
+    """The packed system. In the copy the kernel receives, the parts of the kinds of
+    :data:`OPTIONAL_KINDS` a model has none of are ``None`` (:meth:`without_absent`): their
+    kernels then start with ``if part is None: return ...``, which numba prunes by the argument's
+    type, so that nothing else of them is compiled for such a model."""
+
     n: int                           # coordinates
     m: int                           # multipliers
     beams: tuple                     # one part per element group (any element types)
@@ -81,6 +86,17 @@ class SystemPart(NamedTuple):
     drivers: DriverPart
     error: np.ndarray                # (3,) [code, joint, detail] of the last error
     bases: np.ndarray                # (nodes with a twist, 7) re-based nodes' records (§2.4)
+
+    def without_absent(self, present: dict[str, bool]) -> SystemPart:
+        """This system with ``None`` for every optional kind that ``present`` marks absent
+        (the same arrays otherwise: in-place updates are seen by both)."""
+        absent: dict[str, Any] = {k: None for k in OPTIONAL_KINDS if not present[k]}
+        return self._replace(**absent)
+
+
+#: the kinds of terms compiled only for models that have them (docs/design-notes.md, "Compile
+#: time"); beams, loads and linear rows are in nearly every model
+OPTIONAL_KINDS = ("bodies", "norms", "terms", "sliding", "clearance", "springs", "drivers")
 
 
 @njit(inline="always")

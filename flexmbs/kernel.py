@@ -29,17 +29,28 @@ passes the system's arrays on, and the counting of every array of every part at 
 calls made it the largest single compile cost (docs/design-notes.md, "Cost of compilation").
 
 Callers that only evaluate pass :func:`~flexmbs.solvers._compiled.idle_run` as ``run`` and a
-one-row ``fv``, so that every call has the same argument types (one signature, one library).
+one-row ``fv``, so that every call for a model has the same argument types (one signature, one
+library per kind of model: the optional kinds of terms a model lacks are ``None`` in the system
+it receives, :data:`flexmbs.driver.OPTIONAL_KINDS`, and are not compiled for it).
+:func:`prepare` announces a compile and records its duration (the next one's estimate).
 """
 
 from __future__ import annotations
+
+import contextlib
+import json
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 from ._jit import njit
 from .driver import jacobian, post_step, rebase_static, residual, set_bases
 from .solvers._compiled import alpha_run
 
 __all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE", "OP_SET_BASES",
-           "kernel", "kernels_cached"]
+           "kernel", "kernels_cached", "prepare", "model_kind", "announce_compile"]
 
 OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES = range(6)
 
@@ -63,9 +74,82 @@ def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: A
 
 
 def kernels_cached() -> bool:
-    """Whether numba's on-disk cache holds a compiled :func:`kernel` (else the first run
-    compiles it, a one-time cost of 2–4 minutes, README)."""
+    """Whether numba's on-disk cache holds a compiled :func:`kernel` for some model (each kind
+    of model, by its element types and optional kinds of terms, has its own, see
+    :func:`prepare`)."""
     try:
         return bool(kernel._cache._cache_file._load_index())
     except Exception:   # no numba, caching disabled, or numba internals changed  # noqa: BLE001
         return True
+
+
+#: called before :func:`kernel` compiles for a new kind of model, with the last compile's
+#: seconds here (of this kind if recorded, else the longest of any kind; None if none is
+#: recorded), the kind and whether the seconds are this kind's; the ``flexmbs`` command prints
+#: one line
+announce_compile: Callable[[float | None, str, bool], None] | None = None
+
+#: kinds of model whose kernel this process has made ready (see :func:`prepare`)
+_READY: set[Any] = set()
+
+_TIMES_FILE = "flexmbs-compile-times.json"
+
+
+def model_kind(system: Any) -> str:
+    """A name of the kernel's specialisation for a packed system: its element types and the
+    optional kinds of terms it holds, e.g. ``BeamPart+bodies+clearance``."""
+    from .driver import OPTIONAL_KINDS
+
+    kinds = [type(p).__name__ for p in system.beams] or ["no beams"]
+    kinds += [k for k in OPTIONAL_KINDS if getattr(system, k) is not None]
+    return "+".join(kinds)
+
+
+def prepare(args: tuple[Any, ...]) -> None:
+    """Make :func:`kernel` ready for the types of ``args`` (a call's arguments): nothing if it
+    is compiled in this process; loaded by the call if numba's cache holds it; else announced
+    (:data:`announce_compile`), compiled here and its duration recorded beside the cache (the
+    next compile's estimate). Never raises for numba's internals: the call compiles then."""
+    try:
+        sig = tuple(kernel.typeof_pyval(a) for a in args)
+    except Exception:   # no numba (FLEXMBS_DISABLE_JIT)  # noqa: BLE001
+        return
+    if sig in _READY or sig in kernel.overloads:
+        return
+    _READY.add(sig)
+    try:
+        cache = kernel._cache
+        key = cache._index_key(sig, kernel.targetctx.codegen())
+        if key in cache._cache_file._load_index():
+            return
+        folder = Path(cache._cache_path)
+    except Exception:   # caching disabled or numba internals changed  # noqa: BLE001
+        return
+    kind = model_kind(args[1])
+    times = _read_times(folder)
+    estimate = times.get(kind, max(times.values(), default=None))
+    if announce_compile is not None:
+        announce_compile(estimate, kind, kind in times)
+    start = time.perf_counter()
+    kernel.compile(sig)
+    times[kind] = round(time.perf_counter() - start, 1)
+    _write_times(folder, times)
+
+
+def _read_times(folder: Path) -> dict[str, float]:
+    try:
+        data = json.loads((folder / _TIMES_FILE).read_text())
+        return {str(k): float(v) for k, v in data.items()}
+    except (OSError, ValueError, AttributeError, TypeError):
+        return {}
+
+
+def _write_times(folder: Path, times: dict[str, float]) -> None:
+    path = folder / _TIMES_FILE
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(json.dumps(times, indent=1, sort_keys=True))
+        os.replace(tmp, path)
+    except OSError:   # a read-only installation: no estimate next time
+        with contextlib.suppress(OSError):
+            tmp.unlink()

@@ -313,6 +313,8 @@ def springs_residual(sp, q, v, mode, r):  # noqa: ANN001, ANN201
     """``r_q += f g`` for every spring-damper; returns the largest of its parts (elastic,
     preload, damping), the force scale of the convergence test (a preloaded spring in
     equilibrium has f = 0 but is not force-free)."""
+    if sp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0.0
     scale = 0.0
     for i in range(sp.idx.shape[0]):
         _value, f, _kt, _rate = _force(sp, i, q, v, mode)
@@ -374,6 +376,8 @@ def _second_derivative(sp, i, q):  # noqa: ANN001, ANN202
 def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
     """``cK K + cC C`` of every spring-damper into ``data`` (module docstring); returns the
     largest tangent stiffness k_t (the round-off floor of the convergence test)."""
+    if sp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0.0
     w = sp.g.size
     hv = np.empty(w)
     kscale = 0.0

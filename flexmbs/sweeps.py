@@ -265,6 +265,29 @@ def run_case(scenario: str, overrides: Sequence[str], folder: str) -> dict[str, 
     return row
 
 
+def _prepare_kernel(scenario: str, overrides: Sequence[str]) -> None:
+    """Compile the kernel of a case's model in this process (or load it from numba's cache),
+    so that the local workers all load it instead of compiling it side by side (each kind of
+    model has its own, see :func:`flexmbs.kernel.prepare`). A case that cannot be built is left
+    to its worker, which records why."""
+    from . import kernel
+    from .assembly import Assembly
+    from .io.scenario import load_scenario
+
+    def announce(estimate: float | None, kind: str, same_kind: bool) -> None:
+        about = "about a minute" if estimate is None else f"about {estimate:.0f} s"
+        print(f"flexmbs sweep: compiling the numba kernels for this model (once, {about})",
+              file=sys.stderr, flush=True)
+
+    previous, kernel.announce_compile = kernel.announce_compile, announce
+    try:
+        Assembly(load_scenario(scenario, overrides).model)
+    except Exception:   # noqa: BLE001 - the worker runs the case and records the error
+        pass
+    finally:
+        kernel.announce_compile = previous
+
+
 def _one_line(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.filename:
         return f"cannot write or read {exc.filename}: {exc.strerror or exc}"
@@ -460,6 +483,7 @@ def _run_cases(todo: Sequence[Case], path: Path, folder: Path, cases: Sequence[C
     from .kernel import kernels_cached
 
     close: Callable[[], None] = lambda: None  # noqa: E731
+    local = client is None and not scheduler
     if client is None:
         if scheduler:
             client, close = _remote_client(scheduler)
@@ -474,7 +498,9 @@ def _run_cases(todo: Sequence[Case], path: Path, folder: Path, cases: Sequence[C
 
         pending = list(todo)
         futures: dict[Any, Case] = {}
-        if not kernels_cached():            # compile once, then every worker loads the cache
+        if pending and local:               # compile once here, then every worker loads it
+            _prepare_kernel(str(path), pending[0].overrides)
+        elif not kernels_cached():          # remote workers: the first case compiles alone
             print("flexmbs sweep: compiling the numba kernels in the first case (once, about a "
                   "minute)", file=sys.stderr, flush=True)
             first = pending.pop(0)

@@ -243,6 +243,8 @@ def _driver(dr, d, q, fv, mode):  # noqa: ANN001, ANN202
 @njit
 def drivers_residual(dr, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every driver."""
+    if dr is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for d in range(dr.rows.size):
         row = dr.rows[d]
         if row < 0:
@@ -256,6 +258,8 @@ def drivers_residual(dr, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
 @njit
 def drivers_jacobian(dr, q, lam, fv, mode, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ and ``cK λ ∂²Φ/∂q²`` of every driver."""
+    if dr is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for d in range(dr.rows.size):
         row = dr.rows[d]
         if row < 0:

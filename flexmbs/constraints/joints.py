@@ -776,6 +776,8 @@ def pack_terms(constraints: list, dofs: DofMap) -> TermPart:
 @njit
 def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
     """``r_λ = pᵀp − 1``, ``r_p += 2p λ`` of every body."""
+    if nm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for i in range(nm.rows.size):
         row = nm.rows[i]
         for k in range(4):
@@ -787,6 +789,8 @@ def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
 
 @njit
 def norms_jacobian(nm, q, lam, cK, data):  # noqa: ANN001, ANN201
+    if nm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for i in range(nm.rows.size):
         lr = lam[nm.rows[i]]
         for k in range(4):
@@ -813,6 +817,8 @@ def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
 @njit
 def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every joint of the term tables."""
+    if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for c in range(tm.coord_ptr.size - 1):
         c0, nloc, e0, e1 = _term_constraint(tm, c, q)
         for i in range(e0, e1):
@@ -829,6 +835,8 @@ def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
 def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
     the directors (NODE_DIRECTOR) of joints holding them read the new bases."""
+    if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     table = tm.table
     for c in range(tm.coord_ptr.size - 1):
         c0 = tm.coord_ptr[c]
@@ -848,6 +856,8 @@ def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
 @njit
 def terms_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ and ``cK Σ λ_i ∂²Φ_i/∂q²`` of every joint of the term tables."""
+    if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for c in range(tm.coord_ptr.size - 1):
         c0, nloc, e0, e1 = _term_constraint(tm, c, q)
         w = tm.jptr[c]

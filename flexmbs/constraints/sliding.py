@@ -496,6 +496,8 @@ def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
 @njit
 def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ``, ``r_s −= Q_s`` of every sliding joint; returns max |Q_s|."""
+    if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0.0
     scale = 0.0
     for j in range(sl.s_dof.size):
         k, ed, sd, ne_j = _joint_values(sl, j, q)
@@ -523,6 +525,8 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the derivatives of Q_s: the exact derivative of
     |r′| (element coordinates and s); the friction part neglects the change of direction of the
     tangent in N = |λ_⊥|."""
+    if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for j in range(sl.s_dof.size):
         k, ed, sd, ne_j = _joint_values(sl, j, q)
         for i in range(ne_j):
@@ -554,6 +558,8 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
 def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
     """Current element of every slide coordinate after a converged step; ``ERR_END_OF_BEAM``
     (joint in ``error[1]``) when s left its beam."""
+    if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0
     for j in range(sl.s_dof.size):
         s = q[sl.s_dof[j]]
         if s < 0.0 or s > sl.total[j] or math.isnan(s):

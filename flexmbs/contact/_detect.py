@@ -449,6 +449,8 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
 def clearance_residual(cl, q, v, r, error):  # noqa: ANN001, ANN201
     """Contact forces of every (enabled) clearance joint subtracted from ``r_q``; returns
     ``(scale, error code)``."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0.0, 0
     scale = 0.0
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
@@ -470,6 +472,8 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
     the pattern holds (the shared node; the others, of order ξ² where the contact and the
     crossing straddle a node, and a crossing two or more elements away, are dropped: the
     tangent is exact whenever the section plane crosses the contact point's element)."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0
     ne = CENTERLINE_SIZE
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
@@ -512,6 +516,8 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
 def clearance_post_step_all(cl):  # noqa: ANN001, ANN201
     """After a converged step (following a residual at that state, whose detection it reuses):
     warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`)."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
             continue

@@ -9,12 +9,15 @@ states, adding ``Q_int + M q̈`` into the residual and ``cK K + cC C + cM M`` in
 is stated once here (:func:`gather_states`, :func:`add_residual`, :func:`add_matrix`).
 
 The driver sums a tuple of parts of *different* types (several element types in one model) by
-:func:`groups_residual` and :func:`groups_jacobian`, ``for part in literal_unroll(parts):
-element_residual(part, ...)`` (a function of its own: numba's unrolling pass types its caller
-partially, which the step loop it would be inlined into does not survive): :func:`element_residual`
-and :func:`element_jacobian` are resolved at compile time to the kernels the part's element
-type registered (:class:`~flexmbs.elements.layout.ElementType` ``part_type``, ``residual``,
-``jacobian``), so an element is its module and its registration.
+:func:`groups_residual` and :func:`groups_jacobian`, which take the parts at the fixed positions
+``0 .. MAX_GROUPS - 1`` (``None`` past the last, compiled to nothing) and call the kernels the
+part's element type registered (:class:`~flexmbs.elements.layout.ElementType` ``part_type``,
+``residual``, ``jacobian``, ...), resolved when typed by numba intrinsics that call them in place,
+so an element is its module and its registration. (A ``literal_unroll`` loop over the parts
+calling ``@overload`` implementations did the same; numba compiled each of those into a library
+of its own, with the element's whole tree optimised and turned into machine code again: about
+30 s of a rod model's first run, benchmarks/README.md.) :func:`element_residual` and
+:func:`element_jacobian` stay for other compiled callers (benchmarks/rod.py).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .._jit import HAVE_NUMBA, literal_unroll, njit
+from .._jit import HAVE_NUMBA, njit
 from ..terms import WITH_DAMPING, WITH_INERTIA
 from .layout import ELEMENT_TYPES, ElementType
 
@@ -199,53 +202,167 @@ if HAVE_NUMBA:
         return impl
 
 
+#: the most element groups (an element type with its options) a model may have: the group
+#: functions call the parts at fixed positions (below)
+MAX_GROUPS = 8
+
+
+def _nth_python(k: int) -> Any:
+    return lambda parts: parts[k] if k < len(parts) else None
+
+
+def _or_none(op: Any, absent: Any) -> Any:
+    """``op`` of a part, ``absent(*args)`` for ``None`` (a group position past the last)."""
+    return lambda part, *args: absent(*args) if part is None else op(part, *args)
+
+
+if HAVE_NUMBA:
+    from numba.core.imputils import impl_ret_borrowed
+    from numba.extending import intrinsic
+
+    def _nth_compiled(k: int) -> Any:
+        """``parts[k]``, or ``None`` past the end of the tuple, decided when typed."""
+        @intrinsic
+        def nth(typingctx, parts):  # noqa: ANN001, ANN202
+            if k < len(parts):
+                def codegen(context, builder, sig, args):  # noqa: ANN001, ANN202
+                    return impl_ret_borrowed(context, builder, sig.return_type,
+                                             builder.extract_value(args[0], k))
+                return parts.types[k](parts), codegen
+
+            def codegen_none(context, builder, sig, args):  # noqa: ANN001, ANN202
+                return context.get_constant_null(sig.return_type)
+            return types.none(parts), codegen_none
+        return nth
+
+    def _element_call(field: str, result: Any, passthrough: int | None) -> Any:
+        """A call of the kernel the part's element type registered under ``field``, resolved
+        when typed and lowered in place (no library of its own, unlike an overload's
+        implementation, which numba compiles, optimises and turns into machine code again
+        for every kernel it calls). For ``None`` or an unregistered kernel: ``0`` of type
+        ``result``, or the argument at ``passthrough``."""
+        @intrinsic
+        def call(typingctx, part, *args):  # noqa: ANN001, ANN202
+            args = args[0] if len(args) == 1 and isinstance(args[0], types.StarArgTuple) else args
+            kernel = None if isinstance(part, types.NoneType) else getattr(
+                _registered(part), field, None)
+            rtype = result if passthrough is None else args[passthrough]
+            sig = rtype(part, types.StarArgTuple(args))
+            if kernel is None:
+                def codegen_absent(context, builder, signature, cargs):  # noqa: ANN001, ANN202
+                    if passthrough is None:
+                        return context.get_constant(rtype, 0)
+                    return builder.extract_value(cargs[1], passthrough)
+                return sig, codegen_absent
+            fnty = typingctx.resolve_value_type(kernel)
+            ksig = typingctx.resolve_function_type(fnty, (part, *args), {})
+
+            def codegen(context, builder, signature, cargs):  # noqa: ANN001, ANN202
+                flat = [cargs[0]] + [builder.extract_value(cargs[1], i) for i in range(len(args))]
+                value = context.get_function(fnty, ksig)(builder, flat)
+                return context.cast(builder, value, ksig.return_type, rtype)
+            return sig, codegen
+        return call
+
+    _nth = [_nth_compiled(k) for k in range(MAX_GROUPS)]
+    _residual = _element_call("residual", types.float64, None)
+    _jacobian = _element_call("jacobian", types.float64, None)
+    _post_step = _element_call("post_step", types.int64, None)
+    _rebase = _element_call("rebase", types.int64, 5)
+    _set_bases = _element_call("set_bases", types.int64, 2)
+else:
+    _nth = [_nth_python(k) for k in range(MAX_GROUPS)]
+    _residual = _or_none(element_residual, lambda *a: 0.0)
+    _jacobian = _or_none(element_jacobian, lambda *a: 0.0)
+    _post_step = _or_none(element_post_step, lambda *a: 0)
+    _rebase = _or_none(element_rebase, lambda *a: a[5])
+    _set_bases = _or_none(element_set_bases, lambda *a: a[2])
+
+_n0, _n1, _n2, _n3, _n4, _n5, _n6, _n7 = _nth
+
+
+# The group functions below take the parts at the fixed positions 0..MAX_GROUPS-1 (an absent
+# position is None and compiles to nothing) instead of a literal_unroll loop, and call the
+# element kernels without a library of their own in between (docs/design-notes.md, "Compile
+# time"). They stay functions of their own: inlined, every position's access to the tuple of
+# parts would be one more copy of it for LLVM's SROA in the kernel (measured: the rod model's
+# kernel 10.9 -> 18.2 s of function passes).
+
+
 @njit
 def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r_q += Q_int + M q̈`` of every element group; the largest single force."""
-    scale = 0.0
-    for part in literal_unroll(parts):
-        scale = max(scale, element_residual(part, q, v, qdd, mode, r))
-    return scale
+    s = _residual(_n0(parts), q, v, qdd, mode, r)
+    s = max(s, _residual(_n1(parts), q, v, qdd, mode, r))
+    s = max(s, _residual(_n2(parts), q, v, qdd, mode, r))
+    s = max(s, _residual(_n3(parts), q, v, qdd, mode, r))
+    s = max(s, _residual(_n4(parts), q, v, qdd, mode, r))
+    s = max(s, _residual(_n5(parts), q, v, qdd, mode, r))
+    s = max(s, _residual(_n6(parts), q, v, qdd, mode, r))
+    return max(s, _residual(_n7(parts), q, v, qdd, mode, r))
 
 
 @njit
 def groups_jacobian(parts, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """The matrix blocks of every element group; the largest diagonal stiffness."""
-    kscale = 0.0
-    for part in literal_unroll(parts):
-        kscale = max(kscale, element_jacobian(part, q, v, qdd, mode, cM, cC, cK, data))
-    return kscale
+    s = _jacobian(_n0(parts), q, v, qdd, mode, cM, cC, cK, data)
+    s = max(s, _jacobian(_n1(parts), q, v, qdd, mode, cM, cC, cK, data))
+    s = max(s, _jacobian(_n2(parts), q, v, qdd, mode, cM, cC, cK, data))
+    s = max(s, _jacobian(_n3(parts), q, v, qdd, mode, cM, cC, cK, data))
+    s = max(s, _jacobian(_n4(parts), q, v, qdd, mode, cM, cC, cK, data))
+    s = max(s, _jacobian(_n5(parts), q, v, qdd, mode, cM, cC, cK, data))
+    s = max(s, _jacobian(_n6(parts), q, v, qdd, mode, cM, cC, cK, data))
+    return max(s, _jacobian(_n7(parts), q, v, qdd, mode, cM, cC, cK, data))
+
+
+@njit(inline="always")
+def _check(part, q, error, k, found):  # noqa: ANN001, ANN202
+    """The first error code of the groups' checks; ``error[1]`` = the part's position."""
+    if found != 0:
+        return found
+    code = _post_step(part, q, error)
+    if code != 0:
+        error[0] = code
+        error[1] = k
+    return code
 
 
 @njit
 def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
     """The element groups' checks after a converged step: the first error code (``error[1]`` =
     the part's position in ``parts``), or 0."""
-    k = 0
-    found = 0
-    for part in literal_unroll(parts):
-        if found == 0:
-            code = element_post_step(part, q, error)
-            if code != 0:
-                found = code
-                error[0] = code
-                error[1] = k
-        k += 1  # noqa: SIM113 - numba cannot enumerate a literal_unroll
-    return found
+    found = _check(_n0(parts), q, error, 0, 0)
+    found = _check(_n1(parts), q, error, 1, found)
+    found = _check(_n2(parts), q, error, 2, found)
+    found = _check(_n3(parts), q, error, 3, found)
+    found = _check(_n4(parts), q, error, 4, found)
+    found = _check(_n5(parts), q, error, 5, found)
+    found = _check(_n6(parts), q, error, 6, found)
+    return _check(_n7(parts), q, error, 7, found)
 
 
 @njit
 def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
     """Re-base the nodal frames of every element group that has charts (FORMULATION §2.4) after
     a converged step; returns the number of records written to ``log``."""
-    count = 0
-    for part in literal_unroll(parts):
-        count = element_rebase(part, q, v, qdd, acc, log, count)
-    return count
+    count = _rebase(_n0(parts), q, v, qdd, acc, log, 0)
+    count = _rebase(_n1(parts), q, v, qdd, acc, log, count)
+    count = _rebase(_n2(parts), q, v, qdd, acc, log, count)
+    count = _rebase(_n3(parts), q, v, qdd, acc, log, count)
+    count = _rebase(_n4(parts), q, v, qdd, acc, log, count)
+    count = _rebase(_n5(parts), q, v, qdd, acc, log, count)
+    count = _rebase(_n6(parts), q, v, qdd, acc, log, count)
+    return _rebase(_n7(parts), q, v, qdd, acc, log, count)
 
 
 @njit
 def groups_set_bases(parts, log, stop):  # noqa: ANN001, ANN201
     """Give every listed node (``log[:stop]``) its base, in whichever group holds it."""
-    for part in literal_unroll(parts):
-        element_set_bases(part, log, 0, stop)
+    _set_bases(_n0(parts), log, 0, stop)
+    _set_bases(_n1(parts), log, 0, stop)
+    _set_bases(_n2(parts), log, 0, stop)
+    _set_bases(_n3(parts), log, 0, stop)
+    _set_bases(_n4(parts), log, 0, stop)
+    _set_bases(_n5(parts), log, 0, stop)
+    _set_bases(_n6(parts), log, 0, stop)
+    _set_bases(_n7(parts), log, 0, stop)

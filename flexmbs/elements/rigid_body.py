@@ -635,6 +635,8 @@ def _gather_inertia(b, q, v, qdd):  # noqa: ANN001, ANN202
 def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
     """``r_q += M q̈ − Q_v`` (with inertia) ``− Q_ext`` of the body loads (FORMULATION I §5);
     returns the largest single force."""
+    if b is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0.0
     scale = 0.0
     nb = b.dofs.shape[0]
     if nb == 0:
@@ -674,6 +676,8 @@ def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
 def bodies_jacobian(b, q, v, qdd, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """``cM M + cC ∂r/∂q̇ + cK ∂r/∂q`` of :func:`bodies_residual` into the CSC ``data`` (without
     inertia, e.g. in statics, only ``cM M``: the optional mass-proportional stabiliser)."""
+    if b is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
     nb = b.dofs.shape[0]
     if nb == 0:
         return

@@ -98,7 +98,7 @@ class BorderedBandedLU:
             fill_row=np.ascontiguousarray(fill_row, dtype=np.int64),
             fill_col=np.ascontiguousarray(fill_col, dtype=np.int64),
             fill_ptr=np.concatenate([[0], np.cumsum([p.size for p in pos])]).astype(np.int64),
-            ab=np.zeros((2 * kl + ku + 1, na), order="F"), piv=np.zeros(na, np.int64),
+            ab=_band_storage(2 * kl + ku + 1, na), piv=np.zeros(na, np.int64),
             xt=np.zeros((nb, na)), a_ba=np.zeros((nb, na)), s=np.zeros((nb, nb)),
             piv_s=np.zeros(nb, np.int64), work_a=np.zeros(na), work_b=np.zeros(nb))
         self.nnz = rows.size
@@ -122,12 +122,20 @@ class BorderedBandedLU:
         return x
 
 
+def _band_storage(rows: int, cols: int) -> np.ndarray:
+    """Zeroed Fortran-order band storage of at least 2 x 2 (the part past ``rows x cols`` is
+    never read): a narrower array is C- as well as F-contiguous, which numba types as C, and
+    the compiled entry would be compiled a second time for it (a model with at most one band
+    coordinate or a diagonal band; ``idle_run``'s factor is typed F)."""
+    return np.zeros((max(rows, 2), max(cols, 2)), order="F")
+
+
 @njit
 def _band_lu(ab: np.ndarray, kl: int, ku: int, piv: np.ndarray) -> int:
     """In-place banded LU with partial pivoting (LAPACK dgbtf2, 0-based pivots); ``ab`` holds
-    A in rows kl..2kl+ku with kl zero rows on top for the fill-in. Returns 0 or 1 + the
-    column of the first zero or non-finite pivot."""
-    n = ab.shape[1]
+    A in rows kl..2kl+ku with kl zero rows on top for the fill-in (columns past ``piv.size``
+    are padding). Returns 0 or 1 + the column of the first zero or non-finite pivot."""
+    n = piv.size
     kv = kl + ku
     ju = 0
     for j in range(n):

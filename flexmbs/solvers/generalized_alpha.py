@@ -366,7 +366,7 @@ class _CompiledStepper:
             refresh_ratio=float(o.refresh_ratio), refresh_iterations=float(o.refresh_iterations),
             refresh_cost=float(o.refresh_cost), keep_acceleration=self.keep_acceleration,
             info=self.info)
-        value, _ = kernel(OP_STEPS, asm.system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
+        value, _ = kernel(OP_STEPS, asm.kernel_system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
                           self._coef, self.r, self.data, run)
         status = int(value)
         asm.stiffness_scale = float(self.info[cc.INFO_KSCALE])

@@ -162,6 +162,26 @@ def test_pure_dense_border(rng):
     _check(A, lu.solve(b), b)
 
 
+@pytest.mark.parametrize("n_band", [0, 1, 4])
+def test_band_storage_is_typed_like_the_idle_run(rng, n_band):
+    """A band of at most one coordinate, or a diagonal one, still gives F-typed band storage
+    (numba types an array that is C- and F-contiguous as C: a second compile of the entry)."""
+    from numba import typeof
+
+    from flexmbs.solvers._compiled import idle_run
+
+    n = n_band + 3
+    D = rng.standard_normal((n, n)) + 5 * np.eye(n)
+    D[:n_band, :n_band] = np.diag(np.diag(D)[:n_band])        # diagonal band block
+    A = sp.csc_matrix(D)
+    lu = BorderedBandedLU(A, np.arange(n_band, n))
+    assert lu.n_band == n_band and lu.kl == lu.ku == 0
+    assert typeof(lu.factor.ab) == typeof(idle_run().factor.ab)
+    assert lu.factorize(A.data)
+    b = rng.standard_normal(n)
+    _check(A, lu.solve(b), b)
+
+
 def test_singular_returns_false(rng):
     """Singular A_aa, singular Schur complement, non-finite data, singular dense matrix: False
     with the documented info code, never an exception; solve refuses a failed factor."""
