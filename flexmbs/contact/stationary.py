@@ -54,6 +54,20 @@ PAIR_JOINT_ITER = 8
 PAIR_MAX_STEP = 0.3
 
 
+@njit(inline="always")
+def _in_space(origin, ey, ez, y0, y1, c):  # noqa: ANN001, ANN202
+    """Component c of the section point (y0, y1) in space: ``o + y0 e_y + y1 e_z``."""
+    return origin[c] + y0 * ey[c] + y1 * ez[c]
+
+
+@njit(inline="always")
+def _line_distance2(w0, w1, eax, eay, s2):  # noqa: ANN001, ANN202
+    """Squared distance of the in-plane offset w from the crossing to the axis' tangent line:
+    ``ℓ² = wᵀ(I − sin²θ e_a e_aᵀ)w`` (the line model)."""
+    wa = w0 * eax + w1 * eay
+    return w0 * w0 + w1 * w1 - s2 * wa * wa
+
+
 @njit
 def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """``f = ½ dℓ²/dψ``, ``f′`` and ``ℓ²`` of the line model at ψ (section coordinates)."""
@@ -65,8 +79,7 @@ def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa:
     qa = Ypp[0] * eax + Ypp[1] * eay
     f = w0 * Yp[0] + w1 * Yp[1] - s2 * wa * pa
     df = Yp[0] * Yp[0] + Yp[1] * Yp[1] - s2 * pa * pa + w0 * Ypp[0] + w1 * Ypp[1] - s2 * wa * qa
-    ell2 = w0 * w0 + w1 * w1 - s2 * wa * wa
-    return f, df, ell2
+    return f, df, _line_distance2(w0, w1, eax, eay, s2)
 
 
 @njit
@@ -98,10 +111,7 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
             if count >= psi_out.size:
                 break
             psi = (alpha + phis[i]) % (2.0 * np.pi)
-            w0 = R * math.cos(psi) - cy
-            w1 = R * math.sin(psi) - cz
-            wa = w0 * eax + w1 * eay
-            ell2 = w0 * w0 + w1 * w1 - s2 * wa * wa
+            ell2 = _line_distance2(R * math.cos(psi) - cy, R * math.sin(psi) - cz, eax, eay, s2)
             psi_out[count] = psi
             kind_out[count] = signs[i]
             ell_out[count] = math.sqrt(max(ell2, 0.0))
@@ -142,9 +152,9 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
 def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """Wall point at ψ, its closest axis point and the reduced ``D′(ψ)``, ``D″(ψ)``."""
     section_boundary(shape, params, psi, Y, Yp, Ypp)
-    w0 = origin[0] + Y[0] * ey[0] + Y[1] * ez[0]
-    w1 = origin[1] + Y[0] * ey[1] + Y[1] * ez[1]
-    w2 = origin[2] + Y[0] * ey[2] + Y[1] * ez[2]
+    w0 = _in_space(origin, ey, ez, Y[0], Y[1], 0)
+    w1 = _in_space(origin, ey, ez, Y[0], Y[1], 1)
+    w2 = _in_space(origin, ey, ez, Y[0], Y[1], 2)
     p0 = Yp[0] * ey[0] + Yp[1] * ez[0]
     p1 = Yp[0] * ey[1] + Yp[1] * ez[1]
     p2 = Yp[0] * ey[2] + Yp[1] * ez[2]
@@ -182,9 +192,9 @@ def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, 
         x = s - e
         r, rx, rxx = element_point(qe[e], lengths[e], x)
         section_boundary(shape, params, psi, Y, Yp, Ypp)
-        u0 = r[0] - (origin[0] + Y[0] * ey[0] + Y[1] * ez[0])
-        u1 = r[1] - (origin[1] + Y[0] * ey[1] + Y[1] * ez[1])
-        u2 = r[2] - (origin[2] + Y[0] * ey[2] + Y[1] * ez[2])
+        u0 = r[0] - _in_space(origin, ey, ez, Y[0], Y[1], 0)
+        u1 = r[1] - _in_space(origin, ey, ez, Y[0], Y[1], 1)
+        u2 = r[2] - _in_space(origin, ey, ez, Y[0], Y[1], 2)
         p0 = Yp[0] * ey[0] + Yp[1] * ez[0]
         p1 = Yp[0] * ey[1] + Yp[1] * ez[1]
         p2 = Yp[0] * ey[2] + Yp[1] * ez[2]
@@ -238,15 +248,15 @@ def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, ele
     t = 0.0
     rr = 0.0
     for c in range(3):
-        t += (origin[c] + Y[0] * ey[c] + Y[1] * ez[c] - r[c]) * rx[c]
+        t += (_in_space(origin, ey, ez, Y[0], Y[1], c) - r[c]) * rx[c]
         rr += rx[c] * rx[c]
     ok, psi, e, x, ell, d2 = _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi0,
                                            elem0, xi0 + max(-0.5, min(0.5, t / rr)), Y, Yp, Ypp)
     if ok and d2 * kind0 > 0.0:
         section_boundary(shape, params, psi, Y, Yp, Ypp)
         return (psi % (2.0 * np.pi), kind0, e, x, ell, True,
-                origin[0] + Y[0] * ey[0] + Y[1] * ez[0], origin[1] + Y[0] * ey[1] + Y[1] * ez[1],
-                origin[2] + Y[0] * ey[2] + Y[1] * ez[2])
+                _in_space(origin, ey, ez, Y[0], Y[1], 0), _in_space(origin, ey, ez, Y[0], Y[1], 1),
+                _in_space(origin, ey, ez, Y[0], Y[1], 2))
     # the safeguarded path: the reduced D(ψ), descending or ascending
     psi = psi0
     e = elem0
@@ -272,9 +282,9 @@ def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, ele
             # PAIR_TOL; the wall point moves by step |Y_ψ| and the axis point and the
             # distance by O(step²): the caller's contact kernel projects the axis point again
             section_boundary(shape, params, psi, Y, Yp, Ypp)
-            w0 = origin[0] + Y[0] * ey[0] + Y[1] * ez[0]
-            w1 = origin[1] + Y[0] * ey[1] + Y[1] * ez[1]
-            w2 = origin[2] + Y[0] * ey[2] + Y[1] * ez[2]
+            w0 = _in_space(origin, ey, ez, Y[0], Y[1], 0)
+            w1 = _in_space(origin, ey, ez, Y[0], Y[1], 1)
+            w2 = _in_space(origin, ey, ez, Y[0], Y[1], 2)
             ok = True
             break
         e, x, d1, d2, ell, speed, w0, w1, w2 = _pair_state(qe, lengths, origin, ey, ez, shape,
