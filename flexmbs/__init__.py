@@ -28,7 +28,14 @@ from .errors import (
 if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LAZY
     from .constraints.sliding import SlidingJoint
     from .contact.joint import CircleHole, Hole, SlidingClearanceJoint, SuperellipseHole
-    from .contact.laws import Hertz, HuntCrossley, LankaraniNikravesh, LinearPenalty, RegularizedCoulomb
+    from .contact.laws import (
+        Friction,
+        Hertz,
+        HuntCrossley,
+        LankaraniNikravesh,
+        LinearPenalty,
+        RegularizedCoulomb,
+    )
     from .elements.ancf_cable import CableOptions
     from .geometry.curves import Centerline, arc, line, polyline
     from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
@@ -46,6 +53,7 @@ _LAZY = {
     "Hole": ".contact.joint",
     "SlidingClearanceJoint": ".contact.joint",
     "SuperellipseHole": ".contact.joint",
+    "Friction": ".contact.laws",
     "Hertz": ".contact.laws",
     "HuntCrossley": ".contact.laws",
     "LankaraniNikravesh": ".contact.laws",
@@ -108,7 +116,7 @@ def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (mes
 from ._version import __version__  # noqa: E402 - after the API imports, as before
 
 __all__ = [
-    "CircleHole", "Hole", "SlidingClearanceJoint", "SuperellipseHole", "Hertz", "HuntCrossley",
+    "CircleHole", "Hole", "SlidingClearanceJoint", "SuperellipseHole", "Friction", "Hertz", "HuntCrossley",
     "LankaraniNikravesh", "LinearPenalty", "RegularizedCoulomb",
     "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
     "ConvergenceError", "FlexmbsError", "Function", "GROUND", "GeneralizedAlpha", "GeometryError",

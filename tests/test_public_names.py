@@ -29,5 +29,7 @@ def test_both_joints_take_friction_as_a_law_or_a_coefficient():
     hole = fm.CircleHole(2e-3, 0.02, 3)
     c = fm.SlidingClearanceJoint(beam, body, hole=hole, friction=0.3, friction_velocity=2e-3)
     d = fm.SlidingClearanceJoint(beam, body, hole=hole, friction=law)
-    assert c.friction == d.friction == law
+    assert c.friction == d.friction == fm.Friction(mu=0.3, law="regularised", velocity=2e-3)
+    assert fm.SlidingClearanceJoint(beam, body, hole=hole, friction=0.3).friction \
+        == fm.Friction(mu=0.3, law="stick")
     assert fm.SlidingClearanceJoint(beam, body, hole=hole, friction=0.0).friction is None

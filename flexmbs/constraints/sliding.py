@@ -252,8 +252,10 @@ class SlidingJoint(Interaction):
             raise ModelError(f"SlidingJoint: variant must be 'cylindrical' or 'ring' (got {variant!r})")
         if friction is None:
             friction = 0.0
-        elif hasattr(friction, "mu"):    # a RegularizedCoulomb, as the clearance joint takes it
+        elif hasattr(friction, "eps_v"):    # a RegularizedCoulomb, as the clearance joint takes it
             friction, friction_velocity = friction.mu, friction.eps_v
+        elif hasattr(friction, "velocity"):  # a Friction (the stick law is not implemented here yet)
+            friction, friction_velocity = friction.mu, friction.velocity
         if friction < 0 or not friction_velocity > 0:
             raise ModelError("SlidingJoint: friction must be >= 0 and friction_velocity > 0")
         self.beam = beam

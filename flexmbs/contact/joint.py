@@ -37,7 +37,7 @@ from ._detect import (
     tracked_approach,
 )
 from .geometry import closest_point, section_state
-from .laws import ForceLaw, LinearPenalty, RegularizedCoulomb, as_friction, law_energy
+from .laws import ForceLaw, Friction, LinearPenalty, RegularizedCoulomb, as_friction, law_energy
 from .pair import N_LOCAL, contact_point
 from .sections import (
     CircleSection,
@@ -143,8 +143,8 @@ class SlidingClearanceJoint(Interaction):
 
     def __init__(self, beam: Beam, body: RigidBody, *, hole: Hole,
                  contact: ForceLaw | None = None,
-                 friction: RegularizedCoulomb | float | None = None,
-                 friction_velocity: float = 1e-3,
+                 friction: Friction | RegularizedCoulomb | float | None = None,
+                 friction_velocity: float | None = None,
                  hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
                  tangent: str = "exact", detection: str | None = None,
                  name: str | None = None) -> None:
@@ -471,7 +471,7 @@ class SlidingClearanceJoint(Interaction):
 
     def _friction_parameters(self) -> tuple[float, float]:
         f = self.friction
-        return (float(f.mu), float(f.eps_v)) if f is not None else (0.0, 1.0)
+        return (float(f.mu), float(f.velocity)) if f is not None else (0.0, 1.0)
 
     def _raise_left_bore(self, m: int) -> None:
         raise self.error(ERR_LEFT_BORE, -1 - m, np.zeros(0), 0.0)

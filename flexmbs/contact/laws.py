@@ -13,6 +13,13 @@ Every law is one special case of ``f = Kδⁿ(1 + χ δ̇/v₀) + c_d δ̇`` wit
 :meth:`parameters` gives ``[K, n, χ, c_d, v_min]`` and :func:`law_force` (numba) evaluates it,
 for the Python API and the compiled integrator alike. :func:`coulomb_force` is the numba kernel of
 :class:`RegularizedCoulomb`.
+
+Friction of a joint is a :class:`Friction` (scenario ``friction = { mu, mu_static, law, stiffness,
+damping, velocity }``): ``law = "stick"`` (default) holds each contact by a tangential spring from
+a sticking anchor and lets it slip by the Coulomb return mapping (:func:`coulomb_return_map`,
+docs/design-notes.md "Friction that sticks"); ``law = "regularised"`` is the rate law
+:func:`coulomb_force`. The kernels read it as the vector :meth:`Friction.parameters`
+(``[law code, μ, μ_s, k_t, c_t, ε_v]``).
 """
 
 from __future__ import annotations
@@ -35,12 +42,16 @@ __all__ = [
     "HuntCrossley",
     "LankaraniNikravesh",
     "RegularizedCoulomb",
+    "Friction",
+    "FRICTION_LAWS",
     "CONTACT_LAWS",
     "LAWS",
     "get_law",
     "law_force",
     "law_energy",
     "coulomb_force",
+    "coulomb_return_map",
+    "as_friction",
 ]
 
 
@@ -93,6 +104,30 @@ def coulomb_force(mu, eps_v, v_t, f_n, F, dF_dv, g):  # noqa: ANN001, ANN201
         F[i] = f_n * g[i]
         for j in range(3):
             dF_dv[i, j] = c * ((1.0 if i == j else 0.0) / s - v_t[i] * v_t[j] / s**3)
+
+
+@njit
+def coulomb_return_map(T, radius, F, dF_dT, t_hat):  # noqa: ANN001, ANN201
+    """Coulomb return mapping of a trial tangential force ``T`` (3,) onto the friction cone of
+    radius ``ρ = μ f_N`` (docs/design-notes.md "Friction that sticks"). Stick, ``|T| ≤ ρ``:
+    ``F = T``, ``∂F/∂T = I``, ``t̂ = 0``; slip: ``F = ρ T/|T|``, ``∂F/∂T = ρ/|T| (I − t̂t̂ᵀ)``,
+    ``t̂ = T/|T| = ∂F/∂ρ``. Writes ``F``, ``dF_dT`` (3,3), ``t_hat``; returns True when sticking."""
+    nT = math.sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2])
+    if nT <= radius:
+        for i in range(3):
+            F[i] = T[i]
+            t_hat[i] = 0.0
+            for j in range(3):
+                dF_dT[i, j] = 1.0 if i == j else 0.0
+        return True
+    c = radius / nT
+    for i in range(3):
+        t_hat[i] = T[i] / nT
+    for i in range(3):
+        F[i] = radius * t_hat[i]
+        for j in range(3):
+            dF_dT[i, j] = c * ((1.0 if i == j else 0.0) - t_hat[i] * t_hat[j])
+    return False
 
 
 @runtime_checkable
@@ -238,6 +273,77 @@ class RegularizedCoulomb:
         return F, dF_dv, g
 
 
+#: friction laws of :class:`Friction` (scenario ``friction = { law = ... }``)
+FRICTION_LAWS = ("stick", "regularised")
+#: law codes of :meth:`Friction.parameters` ``[code, μ, μ_s, k_t, c_t, ε_v]``
+FRICTION_NONE, FRICTION_REGULARISED, FRICTION_STICK = 0.0, 1.0, 2.0
+N_FRICTION = 6
+
+
+@dataclass(frozen=True, kw_only=True)
+class Friction:
+    """Coulomb friction of a joint's contacts (issue "friction that sticks").
+
+    ``law = "stick"`` (default): an elastic–plastic tangential law. Each contact is held by a
+    tangential spring (``stiffness`` k_t [N/m], optional ``damping`` c_t [N s/m]) from a
+    sticking anchor in the material coordinates of both parts; when the trial force leaves the
+    cone μ f_N the contact slips and the anchor is returned onto the cone. The cone's
+    coefficient is ``mu_static`` while the contact sticks and ``mu`` (kinetic) while it slips
+    (``mu_static ≥ mu``, default equal). ``stiffness=None`` lets the joint choose (the
+    clearance joint: the normal law's stiffness; the sliding joint: the axial stiffness EA/L of
+    one beam element). ``law = "regularised"``: ``F = −μ f_N v_t/√(|v_t|² + velocity²)``, which
+    cannot hold a contact still (it creeps at a speed ∝ ``velocity``).
+    """
+
+    mu: float
+    mu_static: float | None = None
+    law: str = "stick"
+    stiffness: float | None = None
+    damping: float = 0.0
+    velocity: float = 1e-3
+
+    def __post_init__(self) -> None:
+        _positive("Friction", "mu", self.mu, allow_zero=True)
+        if self.law not in FRICTION_LAWS:
+            raise ModelError(f"Friction: law must be one of {', '.join(map(repr, FRICTION_LAWS))} "
+                             f"(got {self.law!r})")
+        if self.mu_static is not None:
+            _positive("Friction", "mu_static", self.mu_static, allow_zero=True)
+            if float(self.mu_static) < float(self.mu):
+                raise ModelError(f"Friction: mu_static ({self.mu_static}) must be >= mu "
+                                 f"({self.mu}): the static coefficient is not below the kinetic one")
+        if self.stiffness is not None:
+            _positive("Friction", "stiffness", self.stiffness)
+        _positive("Friction", "damping", self.damping, allow_zero=True)
+        _positive("Friction", "velocity", self.velocity)
+        if self.law == "regularised":
+            if self.mu_static is not None and float(self.mu_static) != float(self.mu):
+                raise ModelError("Friction: law \"regularised\" has one coefficient; mu_static "
+                                 "needs law = \"stick\"")
+            if self.stiffness is not None or self.damping:
+                raise ModelError("Friction: stiffness and damping belong to law = \"stick\" "
+                                 "(law \"regularised\" takes velocity)")
+
+    @property
+    def static_coefficient(self) -> float:
+        return float(self.mu if self.mu_static is None else self.mu_static)
+
+    def parameters(self, default_stiffness: float) -> np.ndarray:
+        """``[law code, μ, μ_s, k_t, c_t, ε_v]`` (:data:`N_FRICTION`) for the kernels;
+        ``default_stiffness`` is the joint's k_t when ``stiffness`` is not given."""
+        code = FRICTION_STICK if self.law == "stick" else FRICTION_REGULARISED
+        if float(self.mu) == 0.0 and self.static_coefficient == 0.0:
+            code = FRICTION_NONE
+        k_t = float(self.stiffness) if self.stiffness is not None else float(default_stiffness)
+        return np.array([code, float(self.mu), self.static_coefficient, k_t, float(self.damping),
+                         float(self.velocity)], dtype=float)
+
+
+def no_friction() -> np.ndarray:
+    """The parameter vector of a frictionless joint (law code :data:`FRICTION_NONE`)."""
+    return np.array([FRICTION_NONE, 0.0, 0.0, 1.0, 0.0, 1.0], dtype=float)
+
+
 #: scenario name -> normal force law class (``contact = { law = ... }``), alphabetical
 CONTACT_LAWS: Registry[type] = Registry("contact law")
 CONTACT_LAWS.register("hertz", Hertz)
@@ -265,13 +371,23 @@ def get_law(name: str, **params: float) -> ForceLaw:
     return cls(**params)
 
 
-def as_friction(friction: RegularizedCoulomb | float | None,
-                friction_velocity: float = 1e-3) -> RegularizedCoulomb | None:
-    """Friction of a joint given as a :class:`RegularizedCoulomb` or as a coefficient (with its
-    regularisation velocity); ``None`` or 0: frictionless. Both joints take friction this way."""
-    if friction is None or isinstance(friction, RegularizedCoulomb):
-        return friction
+def as_friction(friction: Friction | RegularizedCoulomb | float | None,
+                friction_velocity: float | None = None) -> Friction | None:
+    """Friction of a joint given as a :class:`Friction`, a :class:`RegularizedCoulomb` or a
+    coefficient; a coefficient alone gets the stick law, with ``friction_velocity`` the
+    regularised law (the form of earlier versions). ``None`` or 0: frictionless. Both joints
+    take friction this way."""
+    if friction is None:
+        return None
+    if isinstance(friction, RegularizedCoulomb):
+        friction = Friction(mu=float(friction.mu), law="regularised", velocity=float(friction.eps_v))
+    if isinstance(friction, Friction):
+        return None if float(friction.mu) == 0.0 and friction.static_coefficient == 0.0 else friction
+    if isinstance(friction, bool) or not isinstance(friction, (int, float, np.floating)):
+        raise ModelError(f"friction must be a coefficient, a Friction or None (got {friction!r})")
     mu = float(friction)
     if mu == 0.0:
         return None
-    return RegularizedCoulomb(mu=mu, eps_v=float(friction_velocity))
+    if friction_velocity is not None:
+        return Friction(mu=mu, law="regularised", velocity=float(friction_velocity))
+    return Friction(mu=mu)

@@ -438,14 +438,15 @@ def test_loaded_scenario_runs_with_its_settings():
 def test_clearance_joint_keys_from_scenario():
     """contact law, friction and hole keys of a sliding_clearance joint reach the joint; a key
     of another law is rejected with the allowed list."""
-    from flexmbs.contact.laws import LinearPenalty, RegularizedCoulomb
+    from flexmbs.contact.laws import Friction, LinearPenalty
 
     sc = load_scenario(EXAMPLES / "curved_beam_sleeve.toml", [
         "joints.sleeve.contact.friction=0.1", "joints.sleeve.contact.friction_velocity=2e-3",
         "joints.sleeve.contact.stiffness=2e6", "joints.sleeve.hole.sections=5"])
     (joint,) = sc.model.interactions
-    assert isinstance(joint.friction, RegularizedCoulomb)
-    assert joint.friction.mu == 0.1 and joint.friction.eps_v == 2e-3
+    assert isinstance(joint.friction, Friction)     # the form of earlier versions: regularised
+    assert joint.friction.mu == 0.1 and joint.friction.law == "regularised"
+    assert joint.friction.velocity == 2e-3
     assert isinstance(joint.contact, LinearPenalty) and joint.contact.stiffness == 2e6
     assert len(joint.stations) == 5
     with pytest.raises(fm.ScenarioError, match=r"unknown key 'damping' in joints\[sleeve\]\.contact"):

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ...contact.laws import CONTACT_LAWS, ForceLaw, RegularizedCoulomb, get_law
+from ...contact.laws import CONTACT_LAWS, FRICTION_LAWS, ForceLaw, Friction, get_law
 from ...contact.sections import HOLE_SECTIONS, HoleSection, get_section
 from ...errors import ModelError, ScenarioError
 from ...registry import Registry
@@ -22,7 +22,8 @@ from ..tables import Table, at, one_line
 from .context import BuildContext, Builder
 from .loads import read_function
 
-__all__ = ["HOLE_KEYS", "JOINTS", "read_contact_law", "read_hole_section"]
+__all__ = ["FRICTION_KEYS", "HOLE_KEYS", "JOINTS", "read_contact_law", "read_friction",
+           "read_hole_section"]
 
 #: ``[[joints]] type = ...`` -> builder(table, ctx) -> joint
 JOINTS: Registry[Builder] = Registry("joint type")
@@ -30,6 +31,48 @@ JOINTS: Registry[Builder] = Registry("joint type")
 #: keys of ``hole = { ... }`` besides the section's own parameters
 HOLE_KEYS = ("shape", "length", "sections", "point")
 _CONTACT_KEYS = ("law", "friction", "friction_velocity")
+#: keys of ``friction = { ... }`` (the fields of :class:`~flexmbs.contact.laws.Friction`)
+FRICTION_KEYS = ("mu", "mu_static", "law", "stiffness", "damping", "velocity")
+
+
+def read_friction(t: Table, key: str = "friction") -> Friction | None:
+    """``friction`` of a joint (``t``: the table holding it): a coefficient (stick law; with a
+    ``friction_velocity`` beside it, the regularised law of earlier versions) or a table
+    ``{ mu, mu_static, law = "stick" | "regularised", stiffness, damping, velocity }``. None if
+    absent or zero."""
+    if not t.has(key):
+        return None
+    if not isinstance(t.raw[key], dict):
+        mu = t.number(key, ge=0.0)
+        if t.has("friction_velocity"):
+            velocity = t.number("friction_velocity", gt=0.0)
+            return Friction(mu=mu, law="regularised", velocity=velocity) if mu > 0 else None
+        return Friction(mu=mu) if mu > 0 else None
+    if t.has("friction_velocity"):
+        raise ScenarioError(f"{t.key('friction_velocity')}: with a friction table give the "
+                            f"regularisation velocity inside it: {t.key(key)} = {{ ..., "
+                            "law = \"regularised\", velocity = ... }")
+    f = t.table(key)
+    f.allow(FRICTION_KEYS)
+    law = f.choice("law", FRICTION_LAWS, "stick", what="friction law")
+    mu = f.number("mu", ge=0.0)
+    mu_s = f.number("mu_static", None, ge=0.0)
+    if mu_s is not None and mu_s < mu:
+        raise ScenarioError(f"{f.key('mu_static')}: expected a static coefficient >= mu ({mu:g}), "
+                            f"got {mu_s:g}")
+    for k in ("mu_static", "stiffness", "damping"):
+        if law == "regularised" and f.has(k):
+            raise ScenarioError(f"{f.key(k)}: belongs to law = \"stick\" (law \"regularised\" "
+                                "takes mu and velocity)")
+    if law == "stick" and f.has("velocity"):
+        raise ScenarioError(f"{f.key('velocity')}: belongs to law = \"regularised\" (law \"stick\" "
+                            "takes mu, mu_static, stiffness and damping)")
+    with at(f.path):
+        friction = Friction(mu=mu, mu_static=mu_s, law=law,
+                            stiffness=f.number("stiffness", None, gt=0.0),
+                            damping=f.number("damping", 0.0, ge=0.0),
+                            velocity=f.number("velocity", 1e-3, gt=0.0))
+    return friction if mu > 0 or (mu_s or 0.0) > 0 else None
 
 
 @JOINTS.register("sliding")
@@ -47,8 +90,7 @@ def _sliding(t: Table, ctx: BuildContext) -> Any:
         variant=t.choice("variant", ("cylindrical", "ring"), "cylindrical", what="variant"),
         s0=s0, hole_point=t.vector("hole_point", (0.0, 0.0, 0.0)),
         axis=t.vector("axis", (1.0, 0.0, 0.0)),
-        friction=t.number("friction", 0.0, ge=0.0),
-        friction_velocity=t.number("friction_velocity", 1e-3, gt=0.0),
+        friction=read_friction(t),
         axial_force=read_function(t, "axial_force", None))
     return ctx.model.add_joint(joint)
 
@@ -67,9 +109,7 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     hole = Hole(section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1))
     c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
     contact_law = read_contact_law(c)
-    mu = c.number("friction", 0.0, ge=0.0)
-    friction = (RegularizedCoulomb(mu=mu, eps_v=c.number("friction_velocity", 1e-3, gt=0.0))
-                if mu > 0 else None)
+    friction = read_friction(c)
     tangent = t.choice("tangent", TANGENTS, "exact", what="tangent")
     detection = (t.choice("detection", DETECTIONS, "consistent", what="detection")
                  if t.has("detection") else None)
