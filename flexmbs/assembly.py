@@ -558,7 +558,7 @@ class Assembly:
             pack_linear(self.lin_matrix, self.lin_rhs0, fn_rows, fn_idx, self),
             pack_norms(norms, self), pack_terms(terms, self),
             pack_sliding(self.joint_lists["sliding"], self, fns),
-            pack_clearance(self.joint_lists["clearance"], self, self.n_total),
+            pack_clearance(self.joint_lists["clearance"], self, self.n_total, self.q_ref),
             pack_springs(self.model.springs, self),
             pack_drivers(drivers, self, fns),
             np.zeros(3, np.int64),
@@ -705,18 +705,31 @@ class Assembly:
         for obj in python:
             obj.post_step(q, v, t)
 
-    def rebase_frames(self, q: np.ndarray) -> int:
-        """Re-base the nodal frames of a static solution ``q`` (changed in place) whose
-        tangents turned far from their bases (FORMULATION §2.4); the number of re-based nodes.
-        Raises :class:`FlexmbsError` if a node turned past the frames' limit."""
-        if self.system.bases.shape[0] == 0:
-            return 0
-        count, code = self._kernel(OP_REBASE, q, np.zeros_like(q), np.zeros(0),
-                                   np.zeros(self.n_mult), self.functions.values(0.0),
-                                   static_mode(1.0), self._r)
+    def static_increment_done(self, q: np.ndarray, t: float = 0.0) -> int:
+        """After a converged static increment at ``q``: the joints' state as after a step (slide
+        elements, contact tracking, friction anchors; ``q`` the next increment's start), then
+        the nodal frames re-based where tangents turned far (FORMULATION §2.4; ``q`` changed in
+        place). Returns the number of re-based nodes; raises :class:`FlexmbsError` if a node
+        turned past the frames' limit (nothing is changed then)."""
+        python = self.python_interactions()
+        fv, mode = self.functions.values(t), static_mode(1.0)
+        zeros = np.zeros_like(q)
+        lam = np.zeros(self.n_mult)
+        _, code = self._kernel(OP_RESIDUAL, q, zeros, np.zeros(0), lam, fv, mode, self._r)
+        if not code:
+            count, code = self._kernel(OP_REBASE, q, zeros, np.zeros(0), lam, fv, mode, self._r)
         if code:
-            raise self.error_exception(code, q, 0.0)
+            raise self.error_exception(code, q, t)
+        for obj in python:
+            obj.post_step(q, zeros, t)
         return int(count)
+
+    def begin(self, q: np.ndarray) -> None:
+        """``q`` is where the next step (or static increment) starts: the reference of the
+        history-dependent terms (the clearance contacts' sticking friction). The integrators
+        and :func:`~flexmbs.solvers.static.solve_static` call it at their start; each converged
+        step moves it on."""
+        self.system.clearance.q_start[:] = q
 
     def node_bases(self) -> np.ndarray:
         """Every twisting node's current base: records ``[twist coordinate, t̄ (3), D̄ (3)]``

@@ -150,7 +150,7 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     code = sliding_post_step(sy.sliding, q, sy.error)
     if code != 0:
         return code
-    clearance_post_step_all(sy.clearance)
+    clearance_post_step_all(sy.clearance, q)
     rebase(sy, q, v, qdd, acc)
     return 0
 
@@ -169,11 +169,17 @@ def rebase(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
 
 @njit(inline="always")
 def rebase_static(sy, q):  # noqa: ANN001, ANN201
-    """:func:`rebase` of a static solution ``q`` (no rates) after the elements' checks; returns
-    ``(re-based nodes, 0)`` or ``(0, error code)``."""
+    """After a converged static increment (following a residual at ``q``): the elements'
+    checks, the joints' state as after a step (:func:`post_step`: slide elements, contact
+    tracking and friction anchors, ``q`` the next increment's start), then :func:`rebase` of
+    ``q`` (no rates). Returns ``(re-based nodes, 0)`` or ``(0, error code)``."""
     code = groups_post_step(sy.beams, q, sy.error)
     if code != 0:
         return 0, code
+    code = sliding_post_step(sy.sliding, q, sy.error)
+    if code != 0:
+        return 0, code
+    clearance_post_step_all(sy.clearance, q)
     empty = q[:0]
     return rebase(sy, q, empty, empty, empty), 0
 

@@ -17,7 +17,8 @@ holds the step loop.
 - ``OP_POST_STEP``: interaction state after a converged step (after an ``OP_RESIDUAL`` at the
   same state) and re-basing of nodal frames, which changes ``q, v, qdd`` and ``run.a`` in place;
   returns ``(0, error code)``;
-- ``OP_REBASE``: only the re-basing of a static solution ``q``; returns ``(number of re-based
+- ``OP_REBASE``: after a converged static increment (after an ``OP_RESIDUAL`` at ``q``): the
+  joints' state as after a step, and the re-basing of ``q``; returns ``(number of re-based
   nodes, error code)``;
 - ``OP_SET_BASES``: the nodal bases of the records ``system.bases[:coef[0]]`` into every
   holder (a resumed run); returns ``(0, 0)``;

@@ -447,5 +447,8 @@ def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[Stat
         key = str(getattr(obj, "name", i))
         fn = getattr(obj, "set_state", None)
         if fn is not None and key in saved:
-            fn(saved[key])
+            try:
+                fn(saved[key])
+            except ModelError as exc:    # e.g. a changed friction law
+                raise ScenarioError(f"cannot resume: {exc}") from None
     return state, summary

@@ -20,7 +20,7 @@ from .._jit import FLAG, njit
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation
 from .geometry import closest_point_kernel, section_state
-from .pair import N_LOCAL, contact_force
+from .pair import N_GEO, N_HISTORY, N_LOCAL, contact_force
 from .sections import (
     SHAPE_CIRCLE,
     circle_stationary_points,
@@ -33,7 +33,9 @@ from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
-        "gap_rate", "phi")
+        "gap_rate", "phi", "dx", "dy", "dz", "stick")
+#: first column of the friction history after the step (``d_new`` (3), ``stick``; pair.N_GEO)
+ANCHOR_COL = 15
 N_COLS = len(COLS)
 #: two contact points of one section are the same contact from one step to the next if the
 #: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
@@ -177,31 +179,54 @@ def _angle_distance(a, b):  # noqa: ANN001, ANN202
 
 
 @njit
-def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN201
-    """Approach velocity stored for the contact of section k nearest to section angle ``psi``
-    (within :data:`MATCH_ANGLE`), 0 for a new contact."""
+def tracked_slot(active, psi_track, k, psi):  # noqa: ANN001, ANN201
+    """Slot of the tracked contact of section k nearest to section angle ``psi`` (within
+    :data:`MATCH_ANGLE`), −1 for a new contact."""
     best = MATCH_ANGLE
-    val = 0.0
+    slot = -1
     for s in range(active.shape[1]):
         if active[k, s]:
             d = _angle_distance(psi_track[k, s], psi)
             if d < best:
                 best = d
-                val = approach[k, s]
-    return val
+                slot = s
+    return slot
 
 
 @njit
-def clearance_update(rows, m, approach, active, psi_track):  # noqa: ANN001, ANN201
+def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN201
+    """Approach velocity stored for the contact of section k nearest to section angle ``psi``
+    (:func:`tracked_slot`), 0 for a new contact."""
+    slot = tracked_slot(active, psi_track, k, psi)
+    return approach[k, slot] if slot >= 0 else 0.0
+
+
+@njit
+def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, hist):  # noqa: ANN001, ANN201
+    """History of a contact (pair.N_HISTORY) from its tracked slot (−1: a new contact, no
+    anchor, counted as sticking) and the coordinates the step started from."""
+    for c in range(3):
+        hist[c] = anchor[k, slot, c] if slot >= 0 else 0.0
+    hist[3] = stuck[k, slot] if slot >= 0 else 1.0
+    for c in range(7):
+        hist[4 + c] = q_start[body_dofs[c]]
+    for c in range(CENTERLINE_SIZE):
+        hist[11 + c] = q_start[elem_dofs[c]]
+
+
+@njit
+def clearance_update(rows, m, approach, active, psi_track, anchor, stuck):  # noqa: ANN001, ANN201, C901
     """Contact state after a converged step from the candidate rows of the converged state
-    (with ``gap`` and ``gap_rate``): every penetrating point is matched to the nearest tracked
-    contact of its section (section angle, greedy by distance, within :data:`MATCH_ANGLE`) and
-    keeps its approach velocity; a new one stores ``−ġ_N`` (approach velocity at onset, used by
-    the dissipative laws); tracked contacts not found are released."""
+    (with ``gap``, ``gap_rate`` and the friction history): every penetrating point is matched
+    to the nearest tracked contact of its section (section angle, greedy by distance, within
+    :data:`MATCH_ANGLE`) and keeps its approach velocity; a new one stores ``−ġ_N`` (approach
+    velocity at onset, used by the dissipative laws); each takes its anchor and stick state
+    from its row; tracked contacts not found are released (their anchors cleared)."""
     P = active.shape[1]
     taken = np.zeros(P, dtype=np.bool_)
     new_app = np.zeros(P)
     new_psi = np.zeros(P)
+    new_anchor = np.zeros((P, 4))
     for k in range(active.shape[0]):
         idx = np.empty(m, dtype=np.int64)
         nc = 0
@@ -235,15 +260,23 @@ def clearance_update(rows, m, approach, active, psi_track):  # noqa: ANN001, ANN
             i = idx[c]
             new_psi[c] = rows[i, 11]
             new_app[c] = approach[k, slot_of[c]] if slot_of[c] >= 0 else -rows[i, 13]
+            for a in range(4):
+                new_anchor[c, a] = rows[i, ANCHOR_COL + a]
         for s in range(P):
             if s < min(nc, P):
                 approach[k, s] = new_app[s]
                 psi_track[k, s] = new_psi[s]
                 active[k, s] = True
+                for a in range(3):
+                    anchor[k, s, a] = new_anchor[s, a]
+                stuck[k, s] = new_anchor[s, 3]
             else:
                 approach[k, s] = 0.0
                 psi_track[k, s] = 0.0
                 active[k, s] = False
+                for a in range(3):
+                    anchor[k, s, a] = 0.0
+                stuck[k, s] = 0.0
 
 
 @njit
@@ -262,13 +295,15 @@ def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
 
 @njit
 def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
-                     elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, mu, eps_v,
-                     approach, active, psi_track, qe, rows, want_tangent, exact, r_q, K_out, C_out,
-                     elem_k, elem_i):
+                     elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, fric,
+                     approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
+                     exact, r_q, K_out, C_out, elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
-    each candidate row gets its ``gap`` and ``gap_rate``. With ``want_tangent`` the signed
+    each candidate row gets its ``gap``, ``gap_rate`` and friction history after the step
+    (``dx, dy, dz, stick``: the contact's :func:`~flexmbs.contact.laws.tangential_force` from
+    its tracked anchor, stick state and the step's start ``q_start``). With ``want_tangent`` the signed
     tangent blocks go to ``K_out`` (N_LOCAL × N_EXT: rows [r_H, p, e_P], columns [r_H, p, e_I,
     e_P] of :mod:`flexmbs.contact.tangent`) and ``C_out`` (N_LOCAL × N_LOCAL), the elements of
     the contact point and of the section crossing to ``elem_k`` and ``elem_i``: the exact
@@ -296,7 +331,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     Yp = np.empty(2)
     Ypp = np.empty(2)
     u_o = np.empty(3)
-    geo = np.empty(12)
+    geo = np.empty(N_GEO)
+    hist = np.empty(N_HISTORY)
     ve = np.empty(CENTERLINE_SIZE)
     u_Q = np.empty(3)
     count = 0
@@ -310,12 +346,16 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
                       + A[2, c] * (row[7] - qb[2]))
         for c in range(CENTERLINE_SIZE):
             ve[c] = v[elem_dofs[eP, c]]
-        v_app = tracked_approach(approach, active, psi_track, k, row[11])
+        slot = tracked_slot(active, psi_track, k, row[11])
+        v_app = approach[k, slot] if slot >= 0 else 0.0
+        contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP], hist)
         g, gdot, _, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law,
-                                        mu, eps_v, v_app, want_tangent and not exact, Qc, K, C,
+                                        fric, hist, v_app, want_tangent and not exact, Qc, K, C,
                                         geo)
         row[12] = g
         row[13] = gdot
+        for c in range(4):
+            row[ANCHOR_COL + c] = geo[12 + c]
         if g >= 0.0:
             continue
         for c in range(7):
@@ -331,8 +371,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
                 u_o[c] = hole_point[c] + (stations[k] if c == 0 else 0.0)
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
             contact_tangent(qb, vb, u_o, qe[eI], lengths[eI], xi_out[k], qe[eP], ve, lengths[eP],
-                            xiP, row[14], Y, Yp, Ypp, r_b, law, mu, eps_v, v_app, consistent, Qx,
-                            KX, C)
+                            xiP, row[14], Y, Yp, Ypp, r_b, law, fric, hist, v_app, consistent,
+                            Qx, KX, C)
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]
@@ -356,26 +396,6 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     return m, count, scale
 
 
-@njit
-def clearance_post_step(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,  # noqa: ANN001, ANN201, PLR0913
-                        xi_ws, r_b, shape, params, R_out, R_in, consistent, law, mu, eps_v, approach,
-                        active, psi_track, qe, rows, scratch):
-    """After a converged step: warm starts of the section crossings moved to the new state and
-    the contacts tracked (:func:`clearance_update`). Returns 0, or ``−1 − k`` (axis left the
-    bore). ``scratch`` receives the (discarded) residual."""
-    m, _, _ = clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws,
-                               xi_ws, elem_ws, xi_ws, r_b, shape, params, R_out, R_in, consistent,
-                               law, mu, eps_v, approach, active, psi_track, qe, rows, FLAG[0],
-                               FLAG[0],
-                               scratch,
-                               np.empty((0, N_LOCAL, N_EXT)), np.empty((0, N_LOCAL, N_LOCAL)),
-                               np.empty(0, np.int64), np.empty(0, np.int64))
-    if m < 0:
-        return m
-    clearance_update(rows, m, approach, active, psi_track)
-    return 0
-
-
 # ---------------------------------------------------------------------------------------------
 # the clearance-joint term of the assembler (flexmbs.terms): all clearance joints
 #: error code: the beam axis left the bore (joint in ``error[1]``, section in ``error[2]``)
@@ -397,8 +417,7 @@ class ClearancePart(NamedTuple):
     R_in: np.ndarray                 # (nj,) inscribed radius
     consistent: np.ndarray           # (nj,) detection: stationary pairs (§4b), else the paper's
     law: np.ndarray                  # (nj, 5)
-    mu: np.ndarray
-    eps_v: np.ndarray
+    fric: np.ndarray                 # (nj, N_FRICTION) friction law (laws.Friction.parameters)
     enabled: np.ndarray              # (nj,) evaluated here (else by the joint's Python path)
     exact: np.ndarray                # (nj,) exact tangent (else Gauss-Newton)
     elem_ws: np.ndarray              # (nj, max_ns) state: warm starts
@@ -406,6 +425,9 @@ class ClearancePart(NamedTuple):
     approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
     active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
     psi: np.ndarray                  # (nj, max_ns, P)
+    anchor: np.ndarray               # (nj, max_ns, P, 3) state: friction anchors (elastic
+    stuck: np.ndarray                # (nj, max_ns, P)      displacement, body frame; stuck)
+    q_start: np.ndarray              # (n,) state: the coordinates the step started from
     pos: np.ndarray                  # (nj, max_ne, N_LOCAL * N_LOCAL): (body, element) blocks
     cross: np.ndarray                # (nj, max_ne, 2, CENTERLINE_SIZE²): (element, element ∓ 1),
                                      # −1 outside the pattern
@@ -434,9 +456,9 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
         cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
-        cl.consistent[j], cl.law[j], cl.mu[j], cl.eps_v[j],
-        cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns], cl.qe, cl.rows[j], want_tangent,
-        cl.exact[j], r, K, C, elem, elem_i)
+        cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
+        cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
+        want_tangent, cl.exact[j], r, K, C, elem, elem_i)
     cl.n_candidates[j] = m
     if m < 0:
         error[0] = ERR_LEFT_BORE
@@ -513,11 +535,14 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
 
 
 @njit
-def clearance_post_step_all(cl):  # noqa: ANN001, ANN201
+def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
     """After a converged step (following a residual at that state, whose detection it reuses):
-    warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`)."""
+    warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`),
+    ``q`` the start of the next step."""
     if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
+    for i in range(cl.q_start.size):
+        cl.q_start[i] = q[i]
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
             continue
@@ -526,4 +551,4 @@ def clearance_post_step_all(cl):  # noqa: ANN001, ANN201
             cl.elem_ws[j, k] = cl.elem_out[j, k]
             cl.xi_ws[j, k] = cl.xi_out[j, k]
         clearance_update(cl.rows[j], cl.n_candidates[j], cl.approach[j, :ns], cl.active[j, :ns],
-                         cl.psi[j, :ns])
+                         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns])

@@ -28,17 +28,20 @@ from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
+    ANCHOR_COL,
     ERR_LEFT_BORE,
     MAX_CANDIDATES,
     N_COLS,
     ClearancePart,
     clearance_update,
+    contact_history,
     detect_section,
     tracked_approach,
+    tracked_slot,
 )
 from .geometry import closest_point, section_state
-from .laws import ForceLaw, Friction, LinearPenalty, RegularizedCoulomb, as_friction, law_energy
-from .pair import N_LOCAL, contact_point
+from .laws import N_FRICTION, ForceLaw, Friction, LinearPenalty, RegularizedCoulomb, as_friction, law_energy
+from .pair import N_HISTORY, N_LOCAL, contact_point, friction_vector
 from .sections import (
     CircleSection,
     Ellipse2D,
@@ -114,7 +117,10 @@ class SlidingClearanceJoint(Interaction):
 
     ``hole``: :class:`Hole` (axis = body x through ``hole_point``, body coordinates);
     ``contact``: a normal force law (default linear penalty); ``friction``: optional
-    :class:`RegularizedCoulomb`; ``beam_radius`` defaults to the beam's section radius.
+    :class:`~flexmbs.contact.laws.Friction` (or its coefficient: the stick law; with
+    ``friction_velocity``, the regularised law); the stick law's default tangential stiffness is
+    the normal law's stiffness at 1 % of the radial clearance (for the linear law: its
+    stiffness); ``beam_radius`` defaults to the beam's section radius.
     ``tangent`` (the contact's part of Newton's matrix; none changes the converged solution):
 
     - ``"exact"`` (default): the exact derivative of the contact forces, with the hole point
@@ -190,6 +196,10 @@ class SlidingClearanceJoint(Interaction):
         self._approach = np.zeros((ns, MAX_POINTS))
         self._psi = np.zeros((ns, MAX_POINTS))
         self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
+        # friction that sticks: elastic displacement from the anchor (hole frame), stuck
+        self._anchor = np.zeros((ns, MAX_POINTS, 3))
+        self._stuck = np.zeros((ns, MAX_POINTS))
+        self._q_start: np.ndarray | None = None   # the step's start (the packed part's array)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
         self._rows = np.zeros((MAX_CANDIDATES * ns, N_COLS))  # stationary points per section
@@ -284,6 +294,8 @@ class SlidingClearanceJoint(Interaction):
             return self._detect_contacts(q, v, want_tangent, update)
         key = (q.tobytes(), v.tobytes(), self._elem.tobytes(), self._xi.tobytes(),
                self._approach.tobytes(), self._psi.tobytes(), self._active.tobytes(),
+               self._anchor.tobytes(), self._stuck.tobytes(),
+               None if self._q_start is None else self._q_start.tobytes(),
                self.contact, self.friction)
         if self._contact_cache is not None and self._contact_cache[0] == key:
             return self._contact_cache[1]
@@ -304,7 +316,9 @@ class SlidingClearanceJoint(Interaction):
                 res = contact_point(qb, vb, u_Q, q[self._elem_dofs[eP]], v[self._elem_dofs[eP]],
                                     self._lengths[eP], xiP, self.beam_radius, self.contact,
                                     self.friction, self._approach_for(k, psi),
-                                    self.consistent and want_tangent)
+                                    self.consistent and want_tangent,
+                                    history=self._history(q, k, psi, eP),
+                                    friction_stiffness=self.friction_stiffness())
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b, psi))
             return out
@@ -340,7 +354,9 @@ class SlidingClearanceJoint(Interaction):
                 eP, xiP, *_ = closest_point(qe, self._lengths, Qg, e, xi)
                 res = contact_point(qb, vb, u_Q, qe[eP], v[self._elem_dofs[eP]],
                                     self._lengths[eP], xiP, r_b, self.contact, self.friction,
-                                    self._approach_for(k, psi), self.consistent and want_tangent)
+                                    self._approach_for(k, psi), self.consistent and want_tangent,
+                                    history=self._history(q, k, psi, eP),
+                                    friction_stiffness=self.friction_stiffness())
                 if res.gap >= 0.0:
                     continue
                 out.append((k, j, cand.kind, eP, res, a, b, psi))
@@ -372,7 +388,9 @@ class SlidingClearanceJoint(Interaction):
             ed = self._elem_dofs[eP]
             res = contact_point(qb, vb, u_Q, q[ed], v[ed], self._lengths[eP], row[4],
                                 self.beam_radius, self.contact, self.friction,
-                                self._approach_for(k, row[11]), self.consistent and want_tangent)
+                                self._approach_for(k, row[11]), self.consistent and want_tangent,
+                                history=self._history(q, k, row[11], eP),
+                                friction_stiffness=self.friction_stiffness())
             if res.gap < 0.0:
                 out.append((k, j, kind, eP, res, row[8], row[9], float(row[11])))
         return out
@@ -469,9 +487,31 @@ class SlidingClearanceJoint(Interaction):
         """The Python path's frozen-point geometric terms are on (``tangent="frozen_point"``)."""
         return self.tangent == "frozen_point"
 
-    def _friction_parameters(self) -> tuple[float, float]:
-        f = self.friction
-        return (float(f.mu), float(f.velocity)) if f is not None else (0.0, 1.0)
+    def friction_stiffness(self) -> float:
+        """Tangential stiffness of the stick law [N/m]: the friction's ``stiffness``, else the
+        normal law's stiffness ``∂f_N/∂δ`` at δ = 1 % of the radial clearance (its stiffness
+        for the linear law): the contact holds tangentially as stiffly as it does normally."""
+        if self.friction is not None and self.friction.stiffness is not None:
+            return float(self.friction.stiffness)
+        K, n = (float(x) for x in self.contact.parameters()[:2])
+        if n == 1.0:
+            return K
+        delta = 0.01 * (self.hole.section.inscribed_radius() - self.beam_radius)
+        return n * K * delta ** (n - 1.0)
+
+    def friction_parameters(self) -> np.ndarray:
+        """The friction law as the kernels read it (:meth:`Friction.parameters`)."""
+        return friction_vector(self.friction, self.friction_stiffness())
+
+    def _history(self, q: np.ndarray, k: int, psi: float, eP: int) -> np.ndarray:
+        """Friction history (pair.N_HISTORY) of the contact of section k at angle psi on
+        element eP: its tracked anchor and the step's start (or ``q`` before the model runs)."""
+        hist = np.empty(N_HISTORY)
+        start = self._q_start if self._q_start is not None else q
+        contact_history(self._anchor, self._stuck, tracked_slot(self._active, self._psi, int(k),
+                                                                float(psi)),
+                        int(k), start, self._body_dofs, self._elem_dofs[eP], hist)
+        return hist
 
     def _raise_left_bore(self, m: int) -> None:
         raise self.error(ERR_LEFT_BORE, -1 - m, np.zeros(0), 0.0)
@@ -506,7 +546,10 @@ class SlidingClearanceJoint(Interaction):
         rows = np.zeros((len(contacts), N_COLS))
         for i, (k, _j, _kind, _eP, res, _a, _b, psi) in enumerate(contacts):
             rows[i, [0, 11, 12, 13]] = k, psi, res.gap, res.gap_rate
-        clearance_update(rows, len(contacts), self._approach, self._active, self._psi)
+            rows[i, ANCHOR_COL:ANCHOR_COL + 3] = res.anchor
+            rows[i, ANCHOR_COL + 3] = res.stuck
+        clearance_update(rows, len(contacts), self._approach, self._active, self._psi,
+                         self._anchor, self._stuck)
 
     # ------------------------------------------------------------------ output
     def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
@@ -575,22 +618,40 @@ class SlidingClearanceJoint(Interaction):
         return F
 
     def get_state(self) -> dict[str, Any]:
-        """Warm starts and tracked contacts ``[section, slot, approach velocity, angle]``."""
+        """Warm starts, tracked contacts ``[section, slot, approach velocity, angle, anchor
+        (3), stuck]`` and the friction law they were computed with."""
         return {"elem": self._elem.tolist(), "xi": self._xi.tolist(),
-                "approach": [[int(k), int(s), float(self._approach[k, s]), float(self._psi[k, s])]
+                "friction": self.friction_parameters().tolist(),
+                "approach": [[int(k), int(s), float(self._approach[k, s]), float(self._psi[k, s]),
+                              *(float(x) for x in self._anchor[k, s]), float(self._stuck[k, s])]
                              for k, s in zip(*np.nonzero(self._active), strict=True)]}
 
     def set_state(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`get_state` (bit for bit); a changed friction law is refused."""
+        saved = state.get("friction")
+        now = self.friction_parameters()
+        if saved is not None and (len(saved) != N_FRICTION
+                                  or not np.array_equal(np.asarray(saved, float), now)):
+            raise ModelError(
+                f"joint '{self.name}': the checkpoint was written with friction {saved} "
+                f"([law, mu, mu_static, stiffness, damping, velocity]) and the model now has "
+                f"{now.tolist()}; a resumed run must keep the friction law (run without "
+                "--resume to start over)")
         self._elem[:] = state["elem"]
         self._xi[:] = state["xi"]
         self._approach[:] = 0.0
         self._psi[:] = 0.0
         self._active[:] = False
-        for k, s, val, *psi in state["approach"]:
-            if int(s) < self._approach.shape[1] and psi:   # (older checkpoints: no angle)
+        self._anchor[:] = 0.0
+        self._stuck[:] = 0.0
+        for k, s, val, *rest in state["approach"]:
+            if int(s) < self._approach.shape[1] and rest:   # (older checkpoints: no angle)
                 self._approach[int(k), int(s)] = float(val)
-                self._psi[int(k), int(s)] = float(psi[0])
+                self._psi[int(k), int(s)] = float(rest[0])
                 self._active[int(k), int(s)] = True
+                if len(rest) == 5:                          # (older checkpoints: no anchor)
+                    self._anchor[int(k), int(s)] = rest[1:4]
+                    self._stuck[int(k), int(s)] = float(rest[4])
 
     def __repr__(self) -> str:
         return (f"SlidingClearanceJoint({self.name!r}, beam={self.beam.name!r}, "
@@ -610,12 +671,13 @@ def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[
     return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
 
 
-def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int) -> ClearancePart:
-    """All clearance joints; their state arrays become views of the packed ones."""
+def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int,
+                   q_ref: np.ndarray) -> ClearancePart:
+    """All clearance joints; their state arrays become views of the packed ones. The steps
+    start from ``q_ref`` until :meth:`~flexmbs.assembly.Assembly.begin` says otherwise."""
     nj = len(joints)
     max_ne = max((len(j._lengths) for j in joints), default=0)
     max_ns = max((len(j.stations) for j in joints), default=0)
-    fr = [j._friction_parameters() for j in joints]
     pos = np.zeros((nj, max_ne, N_LOCAL * N_LOCAL), np.int64)
     ne2 = CENTERLINE_SIZE * CENTERLINE_SIZE
     cross = np.zeros((nj, max_ne, 2, ne2), np.int64)
@@ -645,7 +707,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         np.array([j.hole.section.inscribed_radius() for j in joints], float),
         np.array([j.detection == "consistent" for j in joints], dtype=np.bool_),
         c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),
-        np.array([m for m, _ in fr], float), np.array([e for _, e in fr], float),
+        c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
         np.array([j.compiled_form() for j in joints], dtype=np.bool_),
         np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),
         pad_stack([j._elem for j in joints], (), 0, np.int64),
@@ -653,6 +715,9 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         pad_stack([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
         pad_stack([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
         pad_stack([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
+        pad_stack([j._anchor for j in joints], (MAX_POINTS, 3), 0.0, float),
+        pad_stack([j._stuck for j in joints], (MAX_POINTS,), 0.0, float),
+        np.array(q_ref, dtype=float, copy=True),
         pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
         np.zeros(nj, i64), np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)),
         np.zeros((MAX_CANDIDATES * max_ns, N_LOCAL, N_EXT)),
@@ -667,4 +732,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         j._approach = part.approach[i, :ns]
         j._active = part.active[i, :ns]
         j._psi = part.psi[i, :ns]
+        j._anchor = part.anchor[i, :ns]
+        j._stuck = part.stuck[i, :ns]
+        j._q_start = part.q_start
     return part

@@ -51,6 +51,7 @@ __all__ = [
     "law_energy",
     "coulomb_force",
     "coulomb_return_map",
+    "tangential_force",
     "as_friction",
 ]
 
@@ -128,6 +129,42 @@ def coulomb_return_map(T, radius, F, dF_dT, t_hat):  # noqa: ANN001, ANN201
         for j in range(3):
             dF_dT[i, j] = c * ((1.0 if i == j else 0.0) - t_hat[i] * t_hat[j])
     return False
+
+
+@njit
+def tangential_force(fric, stuck, f_n, d, v_t, F, dF_dd, dF_dv, dF_dfn, d_new):  # noqa: ANN001, ANN201, PLR0913
+    """Friction force of one contact from the parameter vector ``fric`` (:meth:`Friction.parameters`)
+    with its derivatives (docs/design-notes.md "Friction that sticks").
+
+    ``d`` (3): trial elastic tangential displacement from the sticking anchor, ``v_t`` (3):
+    tangential slip velocity, both in the tangent plane; ``stuck``: the contact stuck at the end
+    of the last step (its cone then has μ_s, else μ). Stick law: trial ``T = −k_t d − c_t v_t``,
+    ``F`` = :func:`coulomb_return_map` of T on ``μ f_n``; ``d_new`` = the anchor's elastic
+    displacement after the step (``d`` in stick, ``−F/k_t`` in slip). Regularised law:
+    :func:`coulomb_force` of ``v_t`` (``dF_dd`` = 0, ``d_new`` = 0). Writes ``F``, ``dF_dd``,
+    ``dF_dv`` (3, 3), ``dF_dfn``, ``d_new`` (3); returns 1.0 when sticking, else 0.0."""
+    code = fric[0]
+    if code == FRICTION_REGULARISED:
+        coulomb_force(fric[1], fric[5], v_t, f_n, F, dF_dv, dF_dfn)
+        for i in range(3):
+            d_new[i] = 0.0
+            for j in range(3):
+                dF_dd[i, j] = 0.0
+        return 0.0
+    k_t, c_t = fric[3], fric[4]
+    mu = fric[2] if stuck > 0.5 else fric[1]
+    T = np.empty(3)
+    for i in range(3):
+        T[i] = -k_t * d[i] - c_t * v_t[i]
+    dF_dT = np.empty((3, 3))
+    sticking = coulomb_return_map(T, mu * f_n, F, dF_dT, dF_dfn)
+    for i in range(3):
+        dF_dfn[i] *= mu
+        d_new[i] = d[i] if sticking else -F[i] / k_t
+        for j in range(3):
+            dF_dd[i, j] = -k_t * dF_dT[i, j]
+            dF_dv[i, j] = -c_t * dF_dT[i, j]
+    return 1.0 if sticking else 0.0
 
 
 @runtime_checkable

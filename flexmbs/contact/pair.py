@@ -23,13 +23,23 @@ import numpy as np
 
 from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
-from ..elements.rigid_body import point_tensor_of
-from .laws import ForceLaw, RegularizedCoulomb, coulomb_force, law_force
+from ..elements.rigid_body import point_tensor_of, rotation
+from .laws import (
+    FRICTION_NONE,
+    FRICTION_STICK,
+    ForceLaw,
+    Friction,
+    RegularizedCoulomb,
+    law_force,
+    no_friction,
+    tangential_force,
+)
 
 #: local coordinates of a contact ``[r_H, p, e_k]``: the hole body's 7 and the element's centreline
 N_LOCAL = 7 + CENTERLINE_SIZE
 
-__all__ = ["ContactResult", "contact_point", "contact_geometry", "contact_force"]
+__all__ = ["ContactResult", "N_HISTORY", "contact_point", "contact_geometry", "contact_force",
+           "fresh_history", "stick_trial"]
 
 
 class ContactResult(NamedTuple):
@@ -47,6 +57,9 @@ class ContactResult(NamedTuple):
     C: np.ndarray              #: (N_LOCAL, N_LOCAL) −∂Q/∂q̇_c
     xi: float                  #: re-projected ξ_P (may lie outside [0, 1])
     gap_rate: float            #: ġ_N = n·(v_Q − v_P)
+    anchor: np.ndarray         #: (3,) stick law: elastic displacement from the anchor after the
+                               #: step (hole body coordinates)
+    stuck: float               #: 1.0 if the contact sticks, else 0.0
 
 
 @njit
@@ -161,15 +174,55 @@ def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want
     return xi, g, gdot, n, P, Q, B, W, H
 
 
+#: history of one contact at the start of the step (what its friction remembers):
+#: ``[d_A (3): elastic tangential displacement from the anchor, body coordinates; stuck;
+#: r_H, p at the step's start (7); e_P at the step's start (CENTERLINE_SIZE)]``
+N_HISTORY = 4 + 7 + CENTERLINE_SIZE
+#: ``geo`` of :func:`contact_force`: ``[n, P, Q, F_H, d_new (body coordinates), stuck]``
+N_GEO = 16
+
+
+def fresh_history(q_body: np.ndarray, q_elem: np.ndarray) -> np.ndarray:
+    """History of a contact without an anchor whose step starts at ``(q_body, q_elem)``."""
+    h = np.zeros(N_HISTORY)
+    h[3] = 1.0
+    h[4:11] = q_body
+    h[11:] = q_elem
+    return h
+
+
 @njit
-def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu, eps_v,  # noqa: ANN001, ANN201
+def stick_trial(A, hist, u_Q, Q, P, S, n, delta, d):  # noqa: ANN001, ANN201, PLR0913
+    """Trial elastic tangential displacement of a sticking contact (docs/design-notes.md
+    "Friction that sticks"): ``Δ = A d_A + (Q − P) − (Q_n − P_n)``, ``d = (I − nnᵀ)Δ``, with
+    the material points in contact now (hole point u_Q, beam point ξ_P: shape functions ``S``)
+    at the step's start ``Q_n = r_H,n + A_n u_Q``, ``P_n = S e_P,n`` (``hist``, :data:`N_HISTORY`)
+    and the anchor's displacement ``d_A`` carried in the hole's frame. Writes ``delta``, ``d``."""
+    An = rotation(hist[7:11])
+    for c in range(3):
+        acc = Q[c] - P[c] - hist[4 + c]
+        for j in range(3):
+            acc += A[c, j] * hist[j] - An[c, j] * u_Q[j]
+        for m in range(4):
+            acc += S[m] * hist[11 + 3 * m + c]
+        delta[c] = acc
+    dn = n[0] * delta[0] + n[1] * delta[1] + n[2] * delta[2]
+    for c in range(3):
+        d[c] = delta[c] - dn * n[c]
+
+
+@njit
+def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0913, PLR0915, C901
                   approach_velocity, want_tangent, Qc, K, C, geo):
     """Penalty force of one contact point and its Gauss–Newton tangent (FORMULATION II §4–§5).
 
-    ``law`` = :meth:`ForceLaw.parameters`; friction is regularised Coulomb when ``mu > 0``.
-    Writes ``Qc`` (N_LOCAL,) = ``Wᵀ F_H`` (external generalized force on [r_H, p, e_k]), with
-    ``want_tangent`` ``K = k_t BᵀB (+ k_t Wᵀ(∂F_t/∂f_N)Bᵀ)`` and ``C = c_t BᵀB (+ friction)``
-    (N_LOCAL, N_LOCAL), and ``geo`` (12,) = [n, P, Q, F_H]. Returns ``(g_N, ġ_N, f_N, ξ_P)``.
+    ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
+    and ``hist`` (:data:`N_HISTORY`) the contact's history, for
+    :func:`~flexmbs.contact.laws.tangential_force`. Writes ``Qc`` (N_LOCAL,) = ``Wᵀ F_H``
+    (external generalized force on [r_H, p, e_k]), with ``want_tangent`` ``K = k_t BᵀB`` plus
+    the friction terms at frozen n, u_Q, ξ_P and ``C = c_t BᵀB`` plus friction (N_LOCAL,
+    N_LOCAL), and ``geo`` (:data:`N_GEO`) = [n, P, Q, F_H, d_new (body coordinates), stuck].
+    Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
                                                             length, xi0, r_b)
@@ -177,7 +230,9 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
     F_H = np.empty(3)
     for c in range(3):
         F_H[c] = f * n[c]
-    friction = mu > 0.0 and f > 0.0
+    for c in range(12, N_GEO):
+        geo[c] = 0.0
+    friction = fric[0] != FRICTION_NONE and f > 0.0
     if friction:
         vrel = np.zeros(3)
         for c in range(3):
@@ -189,12 +244,25 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
             vrel[c] = acc
         vn = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
         vt = vrel - vn * n
+        d = np.zeros(3)
+        A = np.zeros((3, 3))
+        if fric[0] == FRICTION_STICK:
+            A = rotation(q_body[3:7])
+            S, _, _ = shape_xi(xi, length)
+            delta = np.empty(3)
+            stick_trial(A, hist, u_Q, Q, P, S, n, delta, d)
         Ft = np.empty(3)
+        dF_dd = np.empty((3, 3))
         dF_dv = np.empty((3, 3))
         dF_dfn = np.empty(3)
-        coulomb_force(mu, eps_v, vt, f, Ft, dF_dv, dF_dfn)
+        d_new = np.empty(3)
+        geo[15] = tangential_force(fric, hist[3], f, d, vt, Ft, dF_dd, dF_dv, dF_dfn, d_new)
         for c in range(3):
             F_H[c] += Ft[c]
+        if fric[0] == FRICTION_STICK:   # the anchor in the hole's frame: A⁻¹ = Aᵀ/|p|⁴
+            p4 = (q_body[3] ** 2 + q_body[4] ** 2 + q_body[5] ** 2 + q_body[6] ** 2) ** 2
+            for c in range(3):
+                geo[12 + c] = (A[0, c] * d_new[0] + A[1, c] * d_new[1] + A[2, c] * d_new[2]) / p4
     for j in range(N_LOCAL):
         Qc[j] = W[0, j] * F_H[0] + W[1, j] * F_H[1] + W[2, j] * F_H[2]
     for c in range(3):
@@ -209,66 +277,94 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, mu
                 K[i, j] = kt * bb
                 C[i, j] = ct * bb
         if friction:
-            # C += −Wᵀ (∂F_t/∂v_t) P_n W + c_t (Wᵀ ∂F_t/∂f_N) Bᵀ;  K += k_t (Wᵀ ∂F_t/∂f_N) Bᵀ
-            M = np.empty((3, 3))                      # (∂F_t/∂v_t) P_n
+            # at frozen n, u_Q, ξ_P: ∂d/∂q_c = ∂v_t/∂q̇_c = P_n W (P_n = I − nnᵀ), so
+            # K += −Wᵀ(∂F/∂d)P_n W + k_t (Wᵀ ∂F/∂f_N) Bᵀ, C += −Wᵀ(∂F/∂v_t)P_n W + c_t (Wᵀ ∂F/∂f_N) Bᵀ
+            Md = np.empty((3, 3))
+            Mv = np.empty((3, 3))
             for a in range(3):
-                dn = dF_dv[a, 0] * n[0] + dF_dv[a, 1] * n[1] + dF_dv[a, 2] * n[2]
+                dd = dF_dd[a, 0] * n[0] + dF_dd[a, 1] * n[1] + dF_dd[a, 2] * n[2]
+                dv = dF_dv[a, 0] * n[0] + dF_dv[a, 1] * n[1] + dF_dv[a, 2] * n[2]
                 for b in range(3):
-                    M[a, b] = dF_dv[a, b] - dn * n[b]
-            MW = np.zeros((3, N_LOCAL))
+                    Md[a, b] = dF_dd[a, b] - dd * n[b]
+                    Mv[a, b] = dF_dv[a, b] - dv * n[b]
+            MdW = np.zeros((3, N_LOCAL))
+            MvW = np.zeros((3, N_LOCAL))
             WtdF = np.zeros(N_LOCAL)
             for j in range(N_LOCAL):
                 for a in range(3):
-                    MW[a, j] = M[a, 0] * W[0, j] + M[a, 1] * W[1, j] + M[a, 2] * W[2, j]
+                    MdW[a, j] = Md[a, 0] * W[0, j] + Md[a, 1] * W[1, j] + Md[a, 2] * W[2, j]
+                    MvW[a, j] = Mv[a, 0] * W[0, j] + Mv[a, 1] * W[1, j] + Mv[a, 2] * W[2, j]
                 WtdF[j] = W[0, j] * dF_dfn[0] + W[1, j] * dF_dfn[1] + W[2, j] * dF_dfn[2]
             for i in range(N_LOCAL):
                 for j in range(N_LOCAL):
-                    C[i, j] += ct * WtdF[i] * B[j] - (W[0, i] * MW[0, j] + W[1, i] * MW[1, j]
-                                                      + W[2, i] * MW[2, j])
-                    K[i, j] += kt * WtdF[i] * B[j]
+                    C[i, j] += ct * WtdF[i] * B[j] - (W[0, i] * MvW[0, j] + W[1, i] * MvW[1, j]
+                                                      + W[2, i] * MvW[2, j])
+                    K[i, j] += kt * WtdF[i] * B[j] - (W[0, i] * MdW[0, j] + W[1, i] * MdW[1, j]
+                                                      + W[2, i] * MdW[2, j])
     return g, gdot, f, xi
 
 
 def _friction_force(q_c: np.ndarray, v_c: np.ndarray, u_Q: np.ndarray, length: float, xi: float,
-                    r_b: float, law: ForceLaw, friction: RegularizedCoulomb,
+                    r_b: float, law: np.ndarray, fric: np.ndarray, hist: np.ndarray,
                     approach_velocity: float) -> np.ndarray:
-    """Friction part ``Wᵀ F_t`` of the generalized force (for the finite-difference tangent)."""
-    _, g, gd, n, _, _, _, W, _ = contact_geometry(q_c[:7], v_c[:7], u_Q, q_c[7:], v_c[7:], length,
-                                                  xi, r_b, False)
-    f, _, _ = law.force(-g, -gd, approach_velocity)
-    vt = W @ v_c
-    vt -= n * (n @ vt)
-    Ft, _, _ = friction.force(vt, f)
-    return W.T @ Ft
+    """Friction part ``Wᵀ F_t`` of the generalized force (for the finite-difference tangent):
+    :func:`contact_force` with and without friction."""
+    out = []
+    for fr in (fric, no_friction()):
+        Qc = np.empty(N_LOCAL)
+        contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:].copy(), v_c[7:].copy(),
+                      float(length), float(xi), float(r_b), law, fr, hist, approach_velocity,
+                      False, Qc, np.empty((0, 0)), np.empty((0, 0)), np.empty(N_GEO))
+        out.append(Qc)
+    return out[0] - out[1]
+
+
+def friction_vector(friction: Friction | RegularizedCoulomb | None,
+                    default_stiffness: float) -> np.ndarray:
+    """:meth:`Friction.parameters` of a joint's friction (``None``: frictionless)."""
+    from .laws import as_friction
+
+    fr = as_friction(friction)
+    return no_friction() if fr is None else fr.parameters(default_stiffness)
 
 
 def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_elem: np.ndarray,
                   v_elem: np.ndarray, length: float, xi: float, r_b: float, law: ForceLaw,
-                  friction: RegularizedCoulomb | None = None, approach_velocity: float = 0.0,
-                  consistent: bool = False) -> ContactResult:
+                  friction: Friction | RegularizedCoulomb | None = None,
+                  approach_velocity: float = 0.0, consistent: bool = False, *,
+                  history: np.ndarray | None = None,
+                  friction_stiffness: float | None = None) -> ContactResult:
     """Gap, penalty force and tangent of one beam/hole contact point (FORMULATION II §4–§5).
 
     ``g_N = |Q − P| − r_b``, ``n = (Q − P)/|Q − P|``, ``f_N = law(−g_N, −ġ_N, approach_velocity)``,
     ``F_H = f_N n + F_t`` on the hole at Q and ``−F_H`` on the beam at P;
     ``Q_c = Wᵀ F_H`` (= ``f_N Bᵀ`` frictionless, virtual work ``δW = f_N δg_N``).
+    ``friction``: its law's ``F_t`` (:func:`~flexmbs.contact.laws.tangential_force`) with the
+    contact's ``history`` (:data:`N_HISTORY`; default: no anchor, the step starting here) and
+    the stick law's stiffness ``friction_stiffness`` when the law leaves it open (default: the
+    normal law's first parameter).
 
-    Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction/normal-force coupling
-    ``k_t Wᵀ(∂F_t/∂f_N)Bᵀ``); ``consistent=True`` adds the exact geometric and damping terms of
-    the normal force, ``−f_N ∂²g_N + c_t B (∂²g_N q̇)ᵀ`` (analytic, §5), and replaces the friction
-    stiffness by central finite differences of ``Wᵀ F_t`` over the N_LOCAL coordinates.
-    ``C = c_t BᵀB`` + the exact friction velocity derivative.
+    Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction terms at frozen n, u_Q, ξ_P);
+    ``consistent=True`` adds the exact geometric and damping terms of the normal force,
+    ``−f_N ∂²g_N + c_t B (∂²g_N q̇)ᵀ`` (analytic, §5), and replaces the friction stiffness by
+    central finite differences of ``Wᵀ F_t`` over the N_LOCAL coordinates.
+    ``C = c_t BᵀB`` + the friction velocity derivative.
     """
     q_body = np.ascontiguousarray(q_body, dtype=float)
     v_body = np.ascontiguousarray(v_body, dtype=float)
     u_Q = np.ascontiguousarray(u_Q, dtype=float)
     q_elem = np.ascontiguousarray(q_elem, dtype=float)
     v_elem = np.ascontiguousarray(v_elem, dtype=float)
-    mu, eps_v = (float(friction.mu), float(friction.eps_v)) if friction is not None else (0.0, 1.0)
+    law_p = law.parameters()
+    fric = friction_vector(friction, float(law_p[0] if friction_stiffness is None
+                                           else friction_stiffness))
+    hist = (fresh_history(q_body, q_elem) if history is None
+            else np.ascontiguousarray(history, dtype=float))
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
-    geo = np.empty(12)
+    geo = np.empty(N_GEO)
     g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
-                                     float(r_b), law.parameters(), mu, eps_v,
-                                     float(approach_velocity), True, Qc, K, C, geo)
+                                     float(r_b), law_p, fric, hist, float(approach_velocity), True,
+                                     Qc, K, C, geo)
     n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
     if consistent:
         # exact geometric and damping terms of the normal force (§5), and the friction
@@ -278,9 +374,18 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
         _, kt, ct = law.force(-g, -gdot, approach_velocity)
         v_c = np.concatenate([v_body, v_elem])
         K += ct * np.outer(B, H @ v_c) - f * H
-        if friction is not None and f > 0.0:
-            dF_dfn = (F_H - f * n) / f                    # = F_t / f_N
-            K -= kt * np.outer(W.T @ dF_dfn, B)          # drop the Gauss-Newton friction part
+        if fric[0] != 0.0 and f > 0.0:
+            # the friction stiffness by central differences in place of its Gauss-Newton part
+            Qf = np.empty(N_LOCAL)
+            Kf, Cf = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
+            Kn, Cn = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
+            contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
+                          float(r_b), law_p, fric, hist, float(approach_velocity), True, Qf, Kf,
+                          Cf, np.empty(N_GEO))
+            contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
+                          float(r_b), law_p, no_friction(), hist, float(approach_velocity), True,
+                          Qf, Kn, Cn, np.empty(N_GEO))
+            K -= Kf - Kn
             q_c = np.concatenate([q_body, q_elem])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
             for j in range(N_LOCAL):
@@ -288,11 +393,11 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                 qm = q_c.copy()
                 qp[j] += hstep
                 qm[j] -= hstep
-                dQ = (_friction_force(qp, v_c, u_Q, length, xi_p, r_b, law, friction,
+                dQ = (_friction_force(qp, v_c, u_Q, length, xi_p, r_b, law_p, fric, hist,
                                       approach_velocity)
-                      - _friction_force(qm, v_c, u_Q, length, xi_p, r_b, law, friction,
+                      - _friction_force(qm, v_c, u_Q, length, xi_p, r_b, law_p, fric, hist,
                                         approach_velocity)) / (2.0 * hstep)
                 K[:, j] -= dQ
     return ContactResult(gap=float(g), normal=n, P=P, Q=Q, f_n=float(f), force_on_hole=F_H,
                          Q_body=Qc[:7], Q_elem=Qc[7:], K=K, C=C, xi=float(xi_p),
-                         gap_rate=float(gdot))
+                         gap_rate=float(gdot), anchor=geo[12:15].copy(), stuck=float(geo[15]))

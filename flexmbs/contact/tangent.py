@@ -29,8 +29,8 @@ import numpy as np
 from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_tensor_of, rotation
-from .laws import coulomb_force, law_force
-from .pair import N_LOCAL, contact_map
+from .laws import FRICTION_NONE, FRICTION_STICK, law_force, tangential_force
+from .pair import N_LOCAL, contact_map, stick_trial
 
 __all__ = ["N_EXT", "I_OFF", "P_OFF", "contact_tangent"]
 
@@ -251,8 +251,8 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
 
 
 @njit
-def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law, mu,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                    eps_v, approach_velocity, consistent, Qc, K, C):
+def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law, fric,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+                    hist, approach_velocity, consistent, Qc, K, C):
     """Force and exact tangent of one detected contact.
 
     ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin; ``qI``
@@ -261,8 +261,10 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
     section at the contact's ψ and its first and second ψ-derivatives (section coordinates, from
     the hole shape's boundary kernel, e.g. :func:`flexmbs.contact.sections.circle_boundary`);
-    ``law``, ``mu``, ``eps_v``, ``approach_velocity`` as in
-    :func:`flexmbs.contact.pair.contact_force`; ``consistent``: the contact is a stationary pair
+    ``law``, ``fric``, ``hist``, ``approach_velocity`` as in
+    :func:`flexmbs.contact.pair.contact_force` (the stick law's trial displacement
+    :func:`~flexmbs.contact.pair.stick_trial` differentiated here too); ``consistent``: the
+    contact is a stationary pair
     of FORMULATION II §4b (:mod:`flexmbs.contact.stationary`; ``qI``, ``xiI``, ``phi`` unused,
     the e_I columns zero), else the paper's 2-D common normal. Writes ``Qc`` (N_LOCAL) on ``[r_H, p, e_P]``,
     ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P] and ``C`` (N_LOCAL, N_LOCAL) =
@@ -414,17 +416,43 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
             DF[c, j] = Df[j] * nc[c] + f * Dnc[c, j]
         for j in range(N_LOCAL):
             dFv[c, j] = -ct * Bn[j] * nc[c]
-    if mu > 0.0 and f > 0.0:
+    if fric[0] != FRICTION_NONE and f > 0.0:
         vn = gdot
         vt = vrel - vn * nc
         Dvt = np.empty((3, NX))
         for c in range(3):
             for j in range(NX):
                 Dvt[c, j] = Dvrel[c, j] - Dnc[c, j] * vn - nc[c] * Dgdot[j]
+        d = np.zeros(3)
+        Dd = np.zeros((3, NX))
+        if fric[0] == FRICTION_STICK:
+            # Δ = A d_A + (Q − P) − (Q_n − P_n), d = (I − nnᵀ)Δ (pair.stick_trial) and DΔ:
+            # D(A d_A) = 2T(d_A)p, D(Q − P) = Du, DQ_n = A_n Du_Q, DP_n = r′_n(ξ_P) Dξ_P
+            delta = np.empty(3)
+            stick_trial(A, hist, uQ, Q, P, SP, nc, delta, d)
+            An = rotation(hist[7:11])
+            _, rxn, _ = element_point(hist[11:], LP, xiP)
+            Bd = _t_times(Te, hist[0:3], p)
+            Ddelta = np.empty((3, NX))
+            for c in range(3):
+                for j in range(NX):
+                    Ddelta[c, j] = (Du[c, j] + rxn[c] * DxiP[j]
+                                    - An[c, 0] * DuQ[0, j] - An[c, 1] * DuQ[1, j]
+                                    - An[c, 2] * DuQ[2, j])
+                for i in range(4):
+                    Ddelta[c, 3 + i] += Bd[c, i]
+            ndel = nc[0] * delta[0] + nc[1] * delta[1] + nc[2] * delta[2]
+            Dndel = np.empty(NX)
+            _d_dot(nc, Dnc, delta, Ddelta, Dndel)
+            for c in range(3):
+                for j in range(NX):
+                    Dd[c, j] = Ddelta[c, j] - Dnc[c, j] * ndel - nc[c] * Dndel[j]
         Ft = np.empty(3)
+        dF_dd = np.empty((3, 3))
         dF_dv = np.empty((3, 3))
         dF_dfn = np.empty(3)
-        coulomb_force(mu, eps_v, vt, f, Ft, dF_dv, dF_dfn)
+        d_new = np.empty(3)
+        tangential_force(fric, hist[3], f, d, vt, Ft, dF_dd, dF_dv, dF_dfn, d_new)
         # ∂v_t/∂q̇_c = (I − n nᵀ) W
         PW = np.empty((3, N_LOCAL))
         for c in range(3):
@@ -435,7 +463,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
             for j in range(NX):
                 acc = dF_dfn[c] * Df[j]
                 for e in range(3):
-                    acc += dF_dv[c, e] * Dvt[e, j]
+                    acc += dF_dv[c, e] * Dvt[e, j] + dF_dd[c, e] * Dd[e, j]
                 DF[c, j] += acc
             for j in range(N_LOCAL):
                 acc = dF_dfn[c] * (-ct * Bn[j])

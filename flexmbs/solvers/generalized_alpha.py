@@ -412,6 +412,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         state = consistent_initial_state(asm, q0, v0, 0.0)
     if not t_end > state.t:
         raise ModelError(f"t_end ({t_end}) must be greater than the start time ({state.t})")
+    asm.begin(state.q)
     out_dt = output_interval if output_interval is not None else dt
     if not out_dt > 0:
         raise ModelError(f"output_interval must be > 0 (got {output_interval})")

@@ -96,6 +96,7 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
         raise ModelError(f"load_steps must be >= 1 (got {o.load_steps})")
     q = (asm.q_ref if q0 is None else q0).copy()
     lam = np.zeros(asm.n_mult)
+    asm.begin(q)
     prob = _StaticStep(asm, q, lam, t)
     prob.stabilizer = o.stabilizer
     newton = Newton(o.newton, asm.length_scale)
@@ -116,7 +117,7 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
                     f"{o.min_increment:g}): {exc}") from None
             continue
         try:
-            asm.rebase_frames(q)       # new nodal charts where tangents turned far (§2.4)
+            asm.static_increment_done(q, t)   # joints' state, new nodal charts (§2.4)
         except FlexmbsError as exc:    # a node turned past the frames' limit: smaller increment
             prob.restore(saved)
             inc *= 0.5

@@ -11,7 +11,8 @@ import math
 import numpy as np
 import pytest
 
-from flexmbs.contact.pair import N_LOCAL
+from flexmbs.contact.laws import FRICTION_NONE, FRICTION_REGULARISED, FRICTION_STICK
+from flexmbs.contact.pair import N_HISTORY, N_LOCAL
 from flexmbs.contact.sections import circle_boundary
 from flexmbs.contact.tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 from flexmbs.elements.ancf_cable import CENTERLINE_SIZE, shape_xi
@@ -28,8 +29,9 @@ def _point(qe: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return S @ E, dS @ E, ddS @ E
 
 
-def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray, mu: float,
-               start: tuple[float, float, float], same: bool) -> tuple[np.ndarray, tuple]:
+def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray, fric: np.ndarray,
+               hist: np.ndarray, start: tuple[float, float, float], same: bool
+               ) -> tuple[np.ndarray, tuple]:
     """Q_c of one contact at coordinates ``x = [body, e_I, e_P]`` (numpy, Newton solves)."""
     qb, qI = x[:7], x[I_OFF:I_OFF + CENTERLINE_SIZE]
     qP = qI if same else x[P_OFF:]
@@ -66,7 +68,7 @@ def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray,
     circle_boundary(R_BORE, psi, Y, Yp, Ypp)
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
     g, _, f = contact_tangent(qb, vel[:7], u_o, qI, L_ELEM, xi, qP, vel[7:], L_ELEM, xp, phi, Y, Yp,
-                              Ypp, R_BEAM, law, mu, 1e-3, 0.3, False, Qc, K, C)
+                              Ypp, R_BEAM, law, fric, hist, 0.3, False, Qc, K, C)
     return Qc, (K, C, xi, phi, xp, g, f)
 
 
@@ -100,19 +102,26 @@ CASES = [  # tilt, bore offset, same element, friction, law [K, n, chi, c_d, v_m
 ]
 
 
-@pytest.mark.parametrize(("tilt", "offset", "same", "mu", "law"), CASES)
-def test_exact_tangent_equals_central_differences(tilt: float, offset: float, same: bool,
-                                                  mu: float, law: list) -> None:
-    x, vel = _configuration(tilt, offset, same, seed=3)
-    law_a = np.array(law, float)
-    u_o = np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0])
-    # the deepest stationary point (scan of starting angles)
-    found = []
-    for phi0 in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False):
-        _, info = _reference(x, vel, u_o, law_a, mu, (0.5, phi0, 0.5), same)
-        found.append(info)
-    info = min(found, key=lambda i: i[5])
-    assert info[5] < 0.0, "the configuration must be in contact"
+def _regularised(mu: float) -> np.ndarray:
+    return np.array([FRICTION_REGULARISED if mu > 0 else FRICTION_NONE, mu, mu, 1.0, 0.0, 1e-3])
+
+
+def _history(x: np.ndarray, same: bool, seed: int) -> np.ndarray:
+    """A step that started near ``x`` (the body and e_P a little elsewhere, an anchor
+    displacement in the hole frame): the stick law's history (pair.N_HISTORY)."""
+    rng = np.random.default_rng(seed)
+    qP = x[I_OFF:P_OFF] if same else x[P_OFF:]
+    hist = np.empty(N_HISTORY)
+    hist[0:3] = rng.normal(scale=5e-5, size=3)
+    hist[3] = 1.0
+    hist[4:11] = x[:7] + rng.normal(scale=1e-4, size=7)
+    hist[11:] = qP + rng.normal(scale=1e-4, size=CENTERLINE_SIZE)
+    return hist
+
+
+def _check_tangent(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law_a: np.ndarray,
+                   fric: np.ndarray, hist: np.ndarray, same: bool, info: tuple) -> None:
+    """K and C of the contact at ``info`` against central differences of :func:`_reference`."""
     K, C, xi, phi, xp = info[:5]
     start = (xi, phi, xp)
     Kfd = np.zeros_like(K)
@@ -123,8 +132,8 @@ def test_exact_tangent_equals_central_differences(tilt: float, offset: float, sa
         xp_, xm_ = x.copy(), x.copy()
         xp_[j] += h
         xm_[j] -= h
-        Kfd[:, j] = -(_reference(xp_, vel, u_o, law_a, mu, start, same)[0]
-                      - _reference(xm_, vel, u_o, law_a, mu, start, same)[0]) / (2 * h)
+        Kfd[:, j] = -(_reference(xp_, vel, u_o, law_a, fric, hist, start, same)[0]
+                      - _reference(xm_, vel, u_o, law_a, fric, hist, start, same)[0]) / (2 * h)
     if same:   # e_I and e_P are one element: their columns add
         K = K.copy()
         K[:, I_OFF:P_OFF] += K[:, P_OFF:]
@@ -136,6 +145,65 @@ def test_exact_tangent_equals_central_differences(tilt: float, offset: float, sa
         vp, vm = vel.copy(), vel.copy()
         vp[j] += h
         vm[j] -= h
-        Cfd[:, j] = -(_reference(x, vp, u_o, law_a, mu, start, same)[0]
-                      - _reference(x, vm, u_o, law_a, mu, start, same)[0]) / (2 * h)
+        Cfd[:, j] = -(_reference(x, vp, u_o, law_a, fric, hist, start, same)[0]
+                      - _reference(x, vm, u_o, law_a, fric, hist, start, same)[0]) / (2 * h)
     assert np.abs(C - Cfd).max() <= 1e-6 * max(np.abs(Cfd).max(), 1e-12) + 1e-12
+
+
+def _deepest(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law_a: np.ndarray,
+             fric: np.ndarray, hist: np.ndarray, same: bool) -> tuple:
+    """The deepest stationary point (scan of starting angles)."""
+    found = [_reference(x, vel, u_o, law_a, fric, hist, (0.5, phi0, 0.5), same)[1]
+             for phi0 in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)]
+    info = min(found, key=lambda i: i[5])
+    assert info[5] < 0.0, "the configuration must be in contact"
+    return info
+
+
+@pytest.mark.parametrize(("tilt", "offset", "same", "mu", "law"), CASES)
+def test_exact_tangent_equals_central_differences(tilt: float, offset: float, same: bool,
+                                                  mu: float, law: list) -> None:
+    x, vel = _configuration(tilt, offset, same, seed=3)
+    law_a = np.array(law, float)
+    u_o = np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0])
+    fric = _regularised(mu)
+    hist = _history(x, same, seed=4)
+    _check_tangent(x, vel, u_o, law_a, fric, hist, same,
+                   _deepest(x, vel, u_o, law_a, fric, hist, same))
+
+
+#: |trial force| / cone radius of the stick-law cases: stick, slip, either side of the transition
+RATIOS = [0.5, 3.0, 0.99, 1.01]
+
+
+@pytest.mark.parametrize("ratio", RATIOS, ids=["stick", "slip", "below_cone", "above_cone"])
+@pytest.mark.parametrize(("tilt", "offset", "same", "law"),
+                         [(0.3, 1e-3, True, [1e6, 1.5, 0.0, 20.0, 1e-3]),
+                          (0.6, 1.6e-3, False, [1e6, 1.0, 0.0, 20.0, 1e-3]),
+                          (1.1, 2.2e-3, True, [1e9, 1.5, 0.8, 0.0, 1e-3])],
+                         ids=["one_element", "two_elements", "two_point_regime"])
+def test_stick_law_tangent_equals_central_differences(ratio: float, tilt: float, offset: float,
+                                                      same: bool, law: list) -> None:
+    """The stick law's exact tangent (trial displacement from the step's start, anchor in the
+    hole frame, return mapping) in stick, in slip and on either side of the cone: the
+    tangential stiffness is set so that |T| = ratio · μ f_N at the contact (damping 0.3 % of
+    it, so the C block has a friction part too)."""
+    x, vel = _configuration(tilt, offset, same, seed=3)
+    law_a = np.array(law, float)
+    u_o = np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0])
+    hist = _history(x, same, seed=4)
+    vel *= 1e-3          # slow: the damping part of the trial force stays small
+    mu = 0.3
+    probe = np.array([FRICTION_STICK, mu, mu, 1.0, 0.0, 1e-3])
+    info = _deepest(x, vel, u_o, law_a, probe, hist, same)
+    Qc, _ = _reference(x, vel, u_o, law_a, probe, hist, info[2:5], same)
+    # with k_t = 1 and no damping the friction force is −d (inside any cone of these forces)
+    Qn, _ = _reference(x, vel, u_o, law_a, _regularised(0.0), hist, info[2:5], same)
+    d_norm = np.linalg.norm((Qc - Qn)[:3])      # body translation rows: W = [I, ...] → F_t
+    k_t = ratio * mu * info[6] / d_norm
+    fric = np.array([FRICTION_STICK, mu, mu, k_t, 0.0, 1e-3])
+    _check_tangent(x, vel, u_o, law_a, fric, hist, same,
+                   _deepest(x, vel, u_o, law_a, fric, hist, same))
+    fric[4] = 1e-3 * k_t
+    _check_tangent(x, vel, u_o, law_a, fric, hist, same,
+                   _deepest(x, vel, u_o, law_a, fric, hist, same))

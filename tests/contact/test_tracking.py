@@ -25,19 +25,24 @@ def _rows(*contacts: tuple[int, float, float, float]) -> np.ndarray:
     return rows
 
 
+def _anchors(sections: int) -> tuple[np.ndarray, np.ndarray]:
+    """Friction anchors and stick flags of ``sections`` sections (unused by these tests)."""
+    return np.zeros((sections, P, 3)), np.zeros((sections, P))
+
+
 def test_update_keeps_identity_by_angle_not_by_order():
     approach = np.zeros((2, P))
     active = np.zeros((2, P), dtype=bool)
     psi = np.zeros((2, P))
     # onset: section 0 at psi 1.0 (approaching at 0.3 m/s), section 1 at psi -2.0
     rows = _rows((0, 1.0, -1e-6, -0.3), (1, -2.0, -1e-6, -0.1))
-    clearance_update(rows, 2, approach, active, psi)
+    clearance_update(rows, 2, approach, active, psi, *_anchors(2))
     assert tracked_approach(approach, active, psi, 0, 1.0) == pytest.approx(0.3)
     assert tracked_approach(approach, active, psi, 1, -2.0) == pytest.approx(0.1)
     # next step: a second point appears in section 0 and is listed first; the old one moved
     # by 0.05 rad and now separates (gap rate > 0): it keeps its onset value
     rows = _rows((0, -1.5, -2e-7, -0.7), (0, 1.05, -5e-7, 0.2), (1, -2.0, 3e-7, 0.1))
-    clearance_update(rows, 3, approach, active, psi)
+    clearance_update(rows, 3, approach, active, psi, *_anchors(2))
     assert tracked_approach(approach, active, psi, 0, 1.05) == pytest.approx(0.3)
     assert tracked_approach(approach, active, psi, 0, -1.5) == pytest.approx(0.7)
     # section 1 opened (gap > 0): released; a later contact there is a new one
@@ -48,8 +53,8 @@ def test_update_keeps_identity_by_angle_not_by_order():
     # across the angle wrap-around (pi -> -pi) the identity holds
     approach[:] = 0.0
     active[:] = False
-    clearance_update(_rows((0, math.pi - 0.01, -1e-6, -0.4)), 1, approach, active, psi)
-    clearance_update(_rows((0, -math.pi + 0.01, -1e-6, 0.5)), 1, approach, active, psi)
+    clearance_update(_rows((0, math.pi - 0.01, -1e-6, -0.4)), 1, approach, active, psi, *_anchors(2))
+    clearance_update(_rows((0, -math.pi + 0.01, -1e-6, 0.5)), 1, approach, active, psi, *_anchors(2))
     assert tracked_approach(approach, active, psi, 0, -math.pi + 0.01) == pytest.approx(0.4)
 
 
