@@ -696,14 +696,15 @@ class Assembly:
         lam = np.zeros(self.n_mult)
         fv, mode = self.functions.values(t), dynamic_mode()
         _, code = self._kernel(OP_RESIDUAL, q, v, np.zeros_like(q), lam, fv, mode, self._r)
-        if not code:
-            run = self._idle_run._replace(a=acc if acc is not None else np.zeros(0))
-            _, code = self._kernel(OP_POST_STEP, q, v, qdd if qdd is not None else np.zeros(0),
-                                   lam, fv, mode, self._r, run=run)
         if code:
             raise self.error_exception(code, q, t)
-        for obj in python:
+        for obj in python:     # before the kernel's update moves the step's start on
             obj.post_step(q, v, t)
+        run = self._idle_run._replace(a=acc if acc is not None else np.zeros(0))
+        _, code = self._kernel(OP_POST_STEP, q, v, qdd if qdd is not None else np.zeros(0),
+                               lam, fv, mode, self._r, run=run)
+        if code:
+            raise self.error_exception(code, q, t)
 
     def static_increment_done(self, q: np.ndarray, t: float = 0.0) -> int:
         """After a converged static increment at ``q``: the joints' state as after a step (slide
@@ -716,12 +717,13 @@ class Assembly:
         zeros = np.zeros_like(q)
         lam = np.zeros(self.n_mult)
         _, code = self._kernel(OP_RESIDUAL, q, zeros, np.zeros(0), lam, fv, mode, self._r)
-        if not code:
-            count, code = self._kernel(OP_REBASE, q, zeros, np.zeros(0), lam, fv, mode, self._r)
         if code:
             raise self.error_exception(code, q, t)
-        for obj in python:
+        for obj in python:     # before the kernel's update moves the increment's start on
             obj.post_step(q, zeros, t)
+        count, code = self._kernel(OP_REBASE, q, zeros, np.zeros(0), lam, fv, mode, self._r)
+        if code:
+            raise self.error_exception(code, q, t)
         return int(count)
 
     def begin(self, q: np.ndarray) -> None:
