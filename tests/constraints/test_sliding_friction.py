@@ -70,7 +70,8 @@ def slide(res, joint) -> np.ndarray:
 def test_body_sticks_below_the_friction_angle_and_the_regularised_law_creeps():
     """tan α = 0.203 < μ = 0.3 on the stiff clamped beam, 11 s at dt = 10 ms: after the first
     second the stick law holds s within 1e-9 m. The regularised law (ε_v = 1e-3 m/s) on the same
-    model creeps at its steady speed ε_v artanh(tan α/μ) = 0.82 mm/s (closed form, 2 %)."""
+    model creeps at its steady speed ε_v artanh(tan α/μ) = 0.8212 mm/s (closed form, 1e-3;
+    measured: drift 2e-16 m stuck, creep 4e-6 off the closed form)."""
     alpha, mu = 0.2, 0.3
     for friction in (fm.Friction(mu=mu), fm.Friction(mu=mu, law="regularised", velocity=1e-3)):
         model, joint = slope(alpha, friction)
@@ -83,7 +84,7 @@ def test_body_sticks_below_the_friction_angle_and_the_regularised_law_creeps():
             assert joint.stuck
         else:
             creep = np.polyfit(res.t[late], s[late], 1)[0]
-            assert creep == pytest.approx(1e-3 * math.atanh(math.tan(alpha) / mu), rel=2e-2)
+            assert creep == pytest.approx(1e-3 * math.atanh(math.tan(alpha) / mu), rel=1e-3)
             assert drift > 5e-3
 
 
@@ -220,8 +221,8 @@ def test_friction_dissipation_per_step_is_never_negative(stick_slip):
     """On the rigid track (|r′| = 1, c_t = 0) the friction force after step n is the spring's,
     F_n = −k_t (s_n − s_A,n). Per step, the work the body does on the contact minus the change
     of the tangential spring energy, D_n = −F_{n+1} Δs − (F²_{n+1} − F²_n)/(2 k_t), is the
-    dissipation: ≥ 0 up to round-off at every step; over the run it is, within 2 %, μ_k m g
-    times the distance slipped (the spring energy is negligible)."""
+    dissipation: ≥ 0 up to round-off at every step; over the run it is, within 1e-4, μ_k m g
+    times the distance slipped (the spring energy is negligible; measured 1e-7)."""
     t, u, sdot, anchor, stuck, s, joint = stick_slip
     k_t = joint.friction_parameters()[3]
     assert k_t == pytest.approx(1e9 / 0.5)
@@ -230,7 +231,7 @@ def test_friction_dissipation_per_step_is_never_negative(stick_slip):
     work_scale = np.abs(F[1:] * np.diff(s)).max()
     assert D.min() >= -1e-12 * work_scale
     slipped = np.abs(np.diff(s))[stuck[1:] == 0.0].sum()
-    assert D.sum() == pytest.approx(MU_K * M * G * slipped, rel=2e-2)
+    assert D.sum() == pytest.approx(MU_K * M * G * slipped, rel=1e-4)
     assert np.any(stuck == 0.0) and np.any(stuck == 1.0)
 
 
