@@ -683,17 +683,19 @@ class Assembly:
         return float(value), int(code)
 
     def post_step(self, q: np.ndarray, v: np.ndarray, t: float, qdd: np.ndarray | None = None,
-                  acc: np.ndarray | None = None) -> None:
+                  acc: np.ndarray | None = None, lam: np.ndarray | None = None) -> None:
         """Interaction state after a converged step (may raise :class:`SimulationStopped`),
         then the nodal frames re-based where needed (FORMULATION §2.4), which changes the
-        twist entries of ``q, v`` and of ``qdd, acc`` (when given) in place."""
+        twist entries of ``q, v`` and of ``qdd, acc`` (when given) in place. ``lam``: the
+        step's multipliers (the sliding joint's friction cone needs its normal reaction;
+        default zero)."""
         python = self.python_interactions()
         for name, arr in (("q", q), ("v", v), ("qdd", qdd), ("acc", acc)):
             if arr is not None and not (isinstance(arr, np.ndarray) and arr.dtype == float
                                         and arr.flags.c_contiguous and arr.shape == (self.n_coords,)):
                 raise TypeError(f"post_step: {name} must be a contiguous float array of "
                                 f"{self.n_coords} coordinates (it is changed in place)")
-        lam = np.zeros(self.n_mult)
+        lam = np.zeros(self.n_mult) if lam is None else np.ascontiguousarray(lam, dtype=float)
         fv, mode = self.functions.values(t), dynamic_mode()
         _, code = self._kernel(OP_RESIDUAL, q, v, np.zeros_like(q), lam, fv, mode, self._r)
         if code:

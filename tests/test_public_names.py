@@ -25,7 +25,9 @@ def test_both_joints_take_friction_as_a_law_or_a_coefficient():
     law = fm.RegularizedCoulomb(mu=0.3, eps_v=2e-3)
     a = fm.SlidingJoint(beam, body, friction=law)
     b = fm.SlidingJoint(beam, body, friction=0.3, friction_velocity=2e-3)
-    assert (a.friction, a.friction_velocity) == (b.friction, b.friction_velocity) == (0.3, 2e-3)
+    assert a.friction == b.friction == fm.Friction(mu=0.3, law="regularised", velocity=2e-3)
+    assert fm.SlidingJoint(beam, body, friction=0.3).friction == fm.Friction(mu=0.3, law="stick")
+    assert fm.SlidingJoint(beam, body, friction=0.0).friction is None
     hole = fm.CircleHole(2e-3, 0.02, 3)
     c = fm.SlidingClearanceJoint(beam, body, hole=hole, friction=0.3, friction_velocity=2e-3)
     d = fm.SlidingClearanceJoint(beam, body, hole=hole, friction=law)

@@ -7,11 +7,13 @@ of the contact point is an extra unknown without inertia (FORMULATION Part II §
     Phi = [ r_H + A u_C - r(s) ]                                       (ring: 3)
     Phi_s^T lam = Q_s                                                  (row of s)
 
-``Q_s = |r'| (f_ax(t) - mu N tanh(s_dot/eps_v))`` adds a prescribed axial force on the body
-along the beam tangent and regularised Coulomb friction on the normal reaction N = |lam_pos,⊥|.
-``s`` is the reference arc length from the beam's first node; within a step the current
-element's cubic is evaluated (also slightly beyond its ends), and the element index is updated
-after each converged step.
+``Q_s = |r'| (f_ax(t) + F)`` adds a prescribed axial force on the body along the beam tangent
+and Coulomb friction F on the normal reaction N = |lam_pos,⊥| (:func:`sliding_axial_force`):
+the stick law (an elastic–plastic tangential spring from a sticking anchor, Coulomb return
+mapping) or the regularised law ``F = −μ N tanh(ṡ/ε_v)``. ``s`` is the reference arc length
+from the beam's first node; within a step the current element's cubic is evaluated (also
+slightly beyond its ends), and the element index and the friction anchor are updated after
+each converged step.
 """
 
 from __future__ import annotations
@@ -22,6 +24,16 @@ from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 import numpy as np
 
 from .._jit import njit
+from ..contact.laws import (
+    FRICTION_NONE,
+    FRICTION_STICK,
+    N_FRICTION,
+    Friction,
+    RegularizedCoulomb,
+    as_friction,
+    coulomb_return_map,
+    no_friction,
+)
 from ..elements import ancf_cable as cable
 from ..elements.ancf_cable import CENTERLINE_SIZE, hermite_basis, shape_xi
 from ..elements.centerline import closest_point
@@ -169,9 +181,21 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
 
 
 @njit
-def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, mu, eps_v, f_axial):  # noqa: ANN001, ANN201
-    """Generalized force on s, ``Q_s = |r′|(f_ax − μ N tanh(ṡ/ε_v))``, N = |λ_pos,⊥| (FORMULATION
-    II §7). Returns ``(Q_s, ∂Q_s/∂λ_pos (3,), ∂Q_s/∂ṡ, |r′|, t (3,), r″ (3,), dS (4,))``."""
+def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, fr, anchor, stuck, f_axial):  # noqa: ANN001, ANN201
+    """Generalized force on s, ``Q_s = |r′|(f_ax + F)`` (FORMULATION II §7), and its exact
+    derivatives. ``fr`` = :meth:`~flexmbs.contact.laws.Friction.parameters` ``[law, μ, μ_s, k_t,
+    c_t, ε_v]``; N = |λ_⊥|, ``λ_⊥ = λ_pos − (λ_pos·t)t``.
+
+    Stick law (docs/design-notes.md "Friction that sticks: the sliding joint"): trial force
+    ``T = −k_t|r′|(s − s_A) − c_t|r′|ṡ`` from the anchor ``s_A`` (the beam's material
+    coordinate where the body sticks), returned onto the cone ``ρ = μ_eff N`` (μ_eff = μ_s if
+    ``stuck`` else μ) by :func:`~flexmbs.contact.laws.coulomb_return_map`. Regularised law:
+    ``F = −μ N tanh(ṡ/ε_v)``. With ``dN = n̂·dλ − (λ·t)/|r′| n̂·dr′`` (n̂ = λ_⊥/N: the turn of t
+    included) and ``dr′ = Σ S′_m de_m + r″ ds``, ``d|r′| = t·dr′``.
+
+    Returns ``(Q_s, ∂Q_s/∂e (CENTERLINE_SIZE,), ∂Q_s/∂s, ∂Q_s/∂λ_pos (3,), ∂Q_s/∂ṡ, F,
+    sticking, anchor after the step)``; the anchor moves onto the cone when slipping,
+    ``s_A = s + F/(k_t|r′|)``."""
     _, dS, ddS = _shape_x((s - start) / L, L)
     r1 = np.zeros(3)
     r2 = np.zeros(3)
@@ -181,19 +205,55 @@ def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, mu, eps_v, f_axial
             r2[c] += ddS[m] * q_elem[3 * m + c]
     nr = math.sqrt(r1[0] * r1[0] + r1[1] * r1[1] + r1[2] * r1[2])
     t = r1 / nr
-    Qs = nr * f_axial
+    code = fr[0]
+    F = 0.0
+    dQ_dnr = f_axial                 # ∂Q_s/∂|r′|
+    g = np.zeros(3)                  # ∂Q_s/∂r′ through the direction of t in N
+    dQ_ds = 0.0                      # ∂Q_s/∂s besides r′(s)
     dQ_dlam = np.zeros(3)
     dQ_dsd = 0.0
-    if mu > 0.0:
+    sticking = True
+    new_anchor = anchor
+    if code != FRICTION_NONE:
         lt = lam_pos[0] * t[0] + lam_pos[1] * t[1] + lam_pos[2] * t[2]
         lperp = lam_pos - lt * t
         N = math.sqrt(lperp[0] * lperp[0] + lperp[1] * lperp[1] + lperp[2] * lperp[2])
-        th = math.tanh(s_rate / eps_v)
-        Qs -= nr * mu * N * th
-        if N > 0.0:
-            dQ_dlam = -nr * mu * th * (lperp / N)
-        dQ_dsd = -nr * mu * N * (1.0 - th * th) / eps_v
-    return Qs, dQ_dlam, dQ_dsd, nr, t, r2, dS
+        n_hat = lperp / N if N > 0.0 else np.zeros(3)
+        if code == FRICTION_STICK:
+            mu_eff = fr[2] if stuck else fr[1]
+            k_t, c_t = fr[3], fr[4]
+            T = -k_t * nr * (s - anchor) - c_t * nr * s_rate
+            Tv = np.zeros(3)
+            Tv[0] = T
+            Fv = np.empty(3)
+            dF_dT = np.empty((3, 3))
+            t_hat = np.empty(3)
+            sticking = coulomb_return_map(Tv, mu_eff * N, Fv, dF_dT, t_hat)
+            F = Fv[0]
+            a = dF_dT[0, 0]          # ∂F/∂T: 1 sticking, 0 slipping (scalar case)
+            dF_dN = t_hat[0] * mu_eff
+            dQ_dnr += F + a * T
+            dQ_ds = -a * k_t * nr * nr
+            dQ_dsd = -a * c_t * nr * nr
+            if not sticking:
+                new_anchor = s + F / (k_t * nr)
+        else:
+            th = math.tanh(s_rate / fr[5])
+            F = -fr[1] * N * th
+            dF_dN = -fr[1] * th
+            dQ_dnr += F
+            dQ_dsd = -nr * fr[1] * N * (1.0 - th * th) / fr[5]
+            sticking = False
+        dQ_dlam = nr * dF_dN * n_hat
+        g = -dF_dN * lt * n_hat
+    Qs = nr * (f_axial + F)
+    h = dQ_dnr * t + g               # ∂Q_s/∂r′
+    dQ_de = np.empty(CENTERLINE_SIZE)
+    for m in range(4):
+        for c in range(3):
+            dQ_de[3 * m + c] = dS[m] * h[c]
+    dQ_ds += h[0] * r2[0] + h[1] * r2[1] + h[2] * r2[2]
+    return Qs, dQ_de, dQ_ds, dQ_dlam, dQ_dsd, F, sticking, new_anchor
 
 
 class _SlidingConstraint(Constraint):
@@ -229,16 +289,31 @@ class _SlidingConstraint(Constraint):
         return H
 
 
+class SlideFriction(NamedTuple):
+    """Friction of a sliding joint at a state (:meth:`SlidingJoint.friction_force`)."""
+
+    force: float          #: F [N] on the body along the beam tangent t = r′/|r′|
+    sticking: bool        #: inside the cone (stick law)
+    anchor: float         #: the anchor s_A after a step ending at this state
+
+
 class SlidingJoint(Interaction):
     """Rigid body sliding along a beam without clearance (the paper's baseline joint).
 
     ``hole_point``: hole centre in body coordinates; ``axis``: hole axis in body coordinates
     (default body x). ``variant="cylindrical"`` keeps the axis along the beam tangent (3 + 2
     equations); ``"ring"`` only the position (3), for a short ring or grommet. ``s0``: initial
-    arc length (default: projection of the hole centre onto the beam). ``friction`` (a
-    :class:`~flexmbs.contact.laws.RegularizedCoulomb`, or its Coulomb coefficient regularised
-    with ``friction_velocity``, as for the clearance joint) and ``axial_force`` (N on the body
-    along the tangent, number or time function) are optional.
+    arc length (default: projection of the hole centre onto the beam). ``axial_force`` (N on
+    the body along the tangent, number or time function) is optional.
+
+    ``friction`` (:func:`~flexmbs.contact.laws.as_friction`): a
+    :class:`~flexmbs.contact.laws.Friction`, a :class:`~flexmbs.contact.laws.RegularizedCoulomb`
+    or a Coulomb coefficient (the stick law; with ``friction_velocity``, the regularised law).
+    The stick law holds the body by a tangential spring k_t from an anchor in the beam's
+    material coordinate (the initial s) and lets it slip on the cone of the normal reaction
+    (:func:`sliding_axial_force`); its default stiffness (``stiffness=None``) is the axial
+    stiffness of one beam element, ``k_t = EA/L_e`` (L_e the mean element length), stiff enough
+    that the elastic stick displacement μN/k_t is the beam's own strain under that force.
     """
 
     term_kind = "sliding"
@@ -246,18 +321,11 @@ class SlidingJoint(Interaction):
     def __init__(self, beam: Beam, body: RigidBody, *, name: str | None = None,
                  hole_point=(0.0, 0.0, 0.0), axis=(1.0, 0.0, 0.0),
                  variant: Literal["cylindrical", "ring"] = "cylindrical", s0: float | None = None,
-                 friction: Any = 0.0, friction_velocity: float = 1e-3,
+                 friction: Friction | RegularizedCoulomb | float | None = None,
+                 friction_velocity: float | None = None,
                  axial_force: TimeFunction | float | None = None) -> None:
         if variant not in ("cylindrical", "ring"):
             raise ModelError(f"SlidingJoint: variant must be 'cylindrical' or 'ring' (got {variant!r})")
-        if friction is None:
-            friction = 0.0
-        elif hasattr(friction, "eps_v"):    # a RegularizedCoulomb, as the clearance joint takes it
-            friction, friction_velocity = friction.mu, friction.eps_v
-        elif hasattr(friction, "velocity"):  # a Friction (the stick law is not implemented here yet)
-            friction, friction_velocity = friction.mu, friction.velocity
-        if friction < 0 or not friction_velocity > 0:
-            raise ModelError("SlidingJoint: friction must be >= 0 and friction_velocity > 0")
         self.beam = beam
         self.body = body
         self.name = name or f"sliding_{body.name}"
@@ -277,11 +345,34 @@ class SlidingJoint(Interaction):
         self._T_z = point_tensor(self._z_body)
         self._T_all = np.ascontiguousarray(np.stack([self._T_u, self._T_y, self._T_z]))
         self.s0 = s0
-        self.friction = float(friction)
-        self.friction_velocity = float(friction_velocity)
+        self.friction = as_friction(friction, friction_velocity)
         self.axial_force = None if axial_force is None else as_time_function(axial_force)
-        self._element = np.zeros(1, np.int64)   # current element (state; updated in place,
-        self._constraint = _SlidingConstraint(self)   # also by the compiled integrator)
+        # state, updated in place (also by the compiled integrator): current element, friction
+        # anchor s_A and whether the body stuck at the end of the last step
+        self._element = np.zeros(1, np.int64)
+        self._anchor = np.zeros(1)
+        self._stuck = np.ones(1, np.int64)
+        self._constraint = _SlidingConstraint(self)
+
+    @property
+    def friction(self) -> Friction | None:
+        """The friction law (None: frictionless); set through
+        :func:`~flexmbs.contact.laws.as_friction`."""
+        return self._friction
+
+    @friction.setter
+    def friction(self, value: Friction | RegularizedCoulomb | float | None) -> None:
+        self._friction = as_friction(value)
+
+    def default_stiffness(self) -> float:
+        """k_t of the stick law when not given: the axial stiffness of one element, EA/L_e."""
+        return float(self.beam.stiffness.axial_stiffness) * self.beam.n_elem / self.beam.length
+
+    def friction_parameters(self) -> np.ndarray:
+        """``[law code, μ, μ_s, k_t, c_t, ε_v]`` of the kernels
+        (:meth:`~flexmbs.contact.laws.Friction.parameters`)."""
+        f = self.friction
+        return no_friction() if f is None else f.parameters(self.default_stiffness())
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: ModelParts) -> None:
@@ -318,6 +409,8 @@ class SlidingJoint(Interaction):
         else:
             s = self._project(q0, self._hole_centre(q0))
         self.element = self._locate(s)
+        self.anchor = s
+        self.stuck = True
         return np.array([s])
 
     def _locate(self, s: float) -> int:
@@ -364,15 +457,73 @@ class SlidingJoint(Interaction):
     def element(self, k: int) -> None:
         self._element[0] = k
 
+    @property
+    def anchor(self) -> float:
+        """Friction anchor s_A: the beam's material coordinate (reference arc length) where
+        the body sticks (stick law; updated after each step)."""
+        return float(self._anchor[0])
+
+    @anchor.setter
+    def anchor(self, s: float) -> None:
+        self._anchor[0] = s
+
+    @property
+    def stuck(self) -> bool:
+        """Whether the body stuck at the end of the last step (its cone then has μ_s)."""
+        return bool(self._stuck[0])
+
+    @stuck.setter
+    def stuck(self, value: bool) -> None:
+        self._stuck[0] = 1 if value else 0
+
+    def friction_force(self, dofs: DofMap, q: np.ndarray, v: np.ndarray,
+                       lam: np.ndarray) -> SlideFriction:
+        """Friction at state ``(q, v, lam)`` from the current anchor (:func:`sliding_axial_force`)."""
+        k = self.element
+        rows = dofs.multiplier_rows(self._constraint)[:3]
+        lp = np.where(rows >= 0, lam[np.maximum(rows, 0)], 0.0)
+        out = sliding_axial_force(
+            np.ascontiguousarray(q[self._elem_dofs[k]], dtype=float), float(self._lengths[k]),
+            float(self._starts[k]), float(q[self._s_dof]), float(v[self._s_dof]),
+            np.ascontiguousarray(lp, dtype=float), self.friction_parameters(), self.anchor,
+            int(self.stuck), 0.0)
+        return SlideFriction(float(out[5]), bool(out[6]), float(out[7]))
+
     def get_state(self) -> dict[str, Any]:
-        return {"element": int(self.element)}
+        return {"element": int(self.element), "anchor": self.anchor, "stuck": self.stuck,
+                "friction": [float(x) for x in self.friction_parameters()]}
 
     def set_state(self, state: dict[str, Any]) -> None:
+        saved = state.get("friction")
+        if saved is not None:
+            now = self.friction_parameters()
+            if np.asarray(saved, float).shape != now.shape or np.any(np.asarray(saved, float) != now):
+                raise ModelError(
+                    f"joint '{self.name}': the checkpoint was written with friction "
+                    f"{_describe_friction(saved)} and the model now has {_describe_friction(now)}; "
+                    "a resumed run must keep the friction law (run without --resume to start over)")
         self.element = int(state["element"])
+        if "anchor" in state:
+            self.anchor = float(state["anchor"])
+            self.stuck = bool(state["stuck"])
 
     def __repr__(self) -> str:
         return (f"SlidingJoint({self.name!r}, beam={self.beam.name!r}, body={self.body.name!r}, "
-                f"variant={self.variant!r}, friction={self.friction})")
+                f"variant={self.variant!r}, friction={self.friction!r})")
+
+
+def _describe_friction(p: Any) -> str:
+    """A friction parameter vector in words (checkpoint messages)."""
+    v = [float(x) for x in p]
+    if len(v) != N_FRICTION:
+        return f"parameters {v}"
+    if v[0] == FRICTION_NONE:
+        return "none"
+    g = [f"{x:g}" if float(f"{x:g}") == x else repr(x) for x in v]
+    if v[0] == FRICTION_STICK:
+        return (f"{{law = \"stick\", mu = {g[1]}, mu_static = {g[2]}, stiffness = {g[3]}, "
+                f"damping = {g[4]}}}")
+    return f"{{law = \"regularised\", mu = {g[1]}, velocity = {g[5]}}}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -392,10 +543,13 @@ class SlidingPart(NamedTuple):
     T: np.ndarray                    # (nj, 3, 3, 4, 4) point tensors of u_C, y, z
     n_eq: np.ndarray                 # (nj,) 3 ring, 5 cylindrical
     rows: np.ndarray                 # (nj, 5) multipliers, −1 dropped
-    mu: np.ndarray
-    eps_v: np.ndarray
+    friction: np.ndarray             # (nj, N_FRICTION) Friction.parameters
     fn: np.ndarray                   # (nj,) axial-force time function, −1 none
     element: np.ndarray              # (nj,) state: current element
+    anchor: np.ndarray               # (nj,) state: friction anchor s_A
+    stuck: np.ndarray                # (nj,) state: stuck at the end of the last step (0/1)
+    trial_anchor: np.ndarray         # (nj,) the last residual's anchor and stick flag, which
+    trial_stuck: np.ndarray          # (nj,) sliding_post_step takes over
     pos_jac: np.ndarray              # (nj, max_ne, 5, N_SLIDE) per element; −1 for dropped rows
     pos_jacT: np.ndarray
     pos_hess: np.ndarray             # (nj, max_ne, N_SLIDE * N_SLIDE)
@@ -444,7 +598,7 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
             ph[i, k] = dofs.positions(cc, cc)
             pse[i, k] = dofs.positions(sd, j._elem_dofs[k])
         pss[i] = dofs.positions(sd, sd)[0]
-        if (j.friction > 0.0 or j.axial_force is not None) and np.all(r[:3] >= 0):
+        if (j.friction is not None or j.axial_force is not None) and np.all(r[:3] >= 0):
             psl[i] = dofs.positions(sd, n + r[:3])
     i64, c = np.int64, np.ascontiguousarray
     part = SlidingPart(
@@ -456,13 +610,16 @@ def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTa
         np.array([j._total for j in joints], float), np.array([j._s_dof for j in joints], i64),
         c(np.array([j._T_all for j in joints], float).reshape(nj, 3, 3, 4, 4)),
         np.array([j._constraint.n_equations for j in joints], i64), rows,
-        np.array([j.friction for j in joints], float),
-        np.array([j.friction_velocity for j in joints], float),
+        c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
         np.array([-1 if j.axial_force is None else functions(j.axial_force) for j in joints], i64),
-        np.array([j.element for j in joints], i64), pj, pt, ph, pse, pss, psl,
+        np.array([j.element for j in joints], i64), np.array([j.anchor for j in joints], float),
+        np.array([j.stuck for j in joints], i64), np.array([j.anchor for j in joints], float),
+        np.array([j.stuck for j in joints], i64), pj, pt, ph, pse, pss, psl,
         np.zeros(N_SLIDE), np.zeros(5), np.zeros((5, N_SLIDE)), np.zeros((N_SLIDE, N_SLIDE)), np.zeros(5))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j._element = part.element[i:i + 1]
+        j._anchor = part.anchor[i:i + 1]
+        j._stuck = part.stuck[i:i + 1]
     return part
 
 
@@ -492,12 +649,13 @@ def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
             lp[a] = lam[sl.rows[j, a]]
     f_ax = fv[sl.fn[j]] if sl.fn[j] >= 0 else 0.0
     return sliding_axial_force(sl.ql[7:S_INDEX], sl.lengths[j, k], sl.starts[j, k], q[sd], v[sd], lp,
-                               sl.mu[j], sl.eps_v[j], f_ax)
+                               sl.friction[j], sl.anchor[j], sl.stuck[j], f_ax)
 
 
 @njit
 def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
-    """``r_λ = Φ``, ``r_q += Φ_qᵀλ``, ``r_s −= Q_s`` of every sliding joint; returns max |Q_s|."""
+    """``r_λ = Φ``, ``r_q += Φ_qᵀλ``, ``r_s −= Q_s`` of every sliding joint; keeps the stick
+    law's anchor and stick flag of this state for :func:`sliding_post_step`; returns max |Q_s|."""
     if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0.0
     scale = 0.0
@@ -514,9 +672,11 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
             for a in range(CENTERLINE_SIZE):
                 r[ed[a]] += sl.jac[i, 7 + a] * lr
             r[sd] += sl.jac[i, S_INDEX] * lr
-        if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
-            Qs, _, _, _, _, _, _ = _joint_force(sl, j, k, sd, q, v, lam, fv)
+        if sl.friction[j, 0] != FRICTION_NONE or sl.fn[j] >= 0:
+            Qs, _, _, _, _, _, sticking, anchor = _joint_force(sl, j, k, sd, q, v, lam, fv)
             r[sd] -= Qs
+            sl.trial_anchor[j] = anchor
+            sl.trial_stuck[j] = 1 if sticking else 0
             if abs(Qs) > scale:
                 scale = abs(Qs)
     return scale
@@ -524,9 +684,8 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
 
 @njit
 def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
-    """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the derivatives of Q_s: the exact derivative of
-    |r′| (element coordinates and s); the friction part neglects the change of direction of the
-    tangent in N = |λ_⊥|."""
+    """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the exact derivatives of −Q_s in the element
+    coordinates, s, ṡ and λ_pos (:func:`sliding_axial_force`)."""
     if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
     for j in range(sl.s_dof.size):
@@ -543,14 +702,11 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
         for a in range(N_SLIDE):
             for c in range(N_SLIDE):
                 data[sl.pos_hess[j, k, N_SLIDE * a + c]] += cK * sl.H[a, c]
-        if sl.mu[j] > 0.0 or sl.fn[j] >= 0:
-            Qs, dQ_dlam, dQ_dsd, nr, tvec, r2, dS = _joint_force(sl, j, k, sd, q, v, lam, fv)
-            Ft = Qs / nr
-            for m in range(4):
-                for c in range(3):
-                    data[sl.pos_s_elem[j, k, 3 * m + c]] -= cK * Ft * dS[m] * tvec[c]
-            data[sl.pos_ss[j]] += -cK * Ft * (tvec[0] * r2[0] + tvec[1] * r2[1]
-                                              + tvec[2] * r2[2]) - cC * dQ_dsd
+        if sl.friction[j, 0] != FRICTION_NONE or sl.fn[j] >= 0:
+            _, dQ_de, dQ_ds, dQ_dlam, dQ_dsd, _, _, _ = _joint_force(sl, j, k, sd, q, v, lam, fv)
+            for a in range(CENTERLINE_SIZE):
+                data[sl.pos_s_elem[j, k, a]] -= cK * dQ_de[a]
+            data[sl.pos_ss[j]] -= cK * dQ_ds + cC * dQ_dsd
             if sl.rows[j, 0] >= 0 and sl.rows[j, 1] >= 0 and sl.rows[j, 2] >= 0:
                 for a in range(3):
                     data[sl.pos_s_lam[j, a]] -= dQ_dlam[a]
@@ -558,8 +714,10 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
 
 @njit
 def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
-    """Current element of every slide coordinate after a converged step; ``ERR_END_OF_BEAM``
-    (joint in ``error[1]``) when s left its beam."""
+    """After a converged step (and a :func:`sliding_residual` at its state): the current
+    element of every slide coordinate, and the stick law's anchor and stick flag of that
+    residual; ``ERR_END_OF_BEAM`` (joint in ``error[1]``, nothing changed) when s left its
+    beam."""
     if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0
     for j in range(sl.s_dof.size):
@@ -568,7 +726,12 @@ def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
             error[0] = ERR_END_OF_BEAM
             error[1] = j
             return ERR_END_OF_BEAM
+    for j in range(sl.s_dof.size):
+        s = q[sl.s_dof[j]]
         ne_j = sl.n_elem[j]
         k = np.searchsorted(sl.starts[j, :ne_j], s, side="right") - 1
         sl.element[j] = min(max(k, 0), ne_j - 1)
+        if sl.friction[j, 0] == FRICTION_STICK:
+            sl.anchor[j] = sl.trial_anchor[j]
+            sl.stuck[j] = sl.trial_stuck[j]
     return 0

@@ -151,7 +151,8 @@ class _AlphaStep:
 
 
 def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: float) -> State:
-    """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0).
+    """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0); forces
+    that depend on lam (friction on a sliding joint's reaction) by Newton iterations from it.
 
     With prescribed motion or drivers moving at t0 (``Phi_t != 0``), v0 is first made
     consistent, ``Phi_q v = -Phi_t``, by the smallest change in the kinetic-energy norm:
@@ -203,8 +204,23 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
             f"initial accelerations are not finite (first at {where}): the mass/constraint "
             "matrix is singular or the forces overflow; every coordinate needs mass or a "
             "constraint, and forces must stay finite")
+    for _ in range(MULTIPLIER_ITERATIONS):
+        # forces that depend on the multipliers (the sliding joint's friction on its normal
+        # reaction) were evaluated at λ = 0 above: Newton on [q''; λ] with the same matrix
+        scale = asm.evaluate(q0, v0, x[:n], x[n:], t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
+        if not np.abs(r_q).max() > 1e-10 * max(scale, 1e-300):
+            break
+        A = asm.matrix.tocsc()
+        dx = spla.splu(A).solve(np.concatenate([r_q, A[n:, :n] @ x[:n] - rhs[n:]]))
+        if not np.all(np.isfinite(dx)):
+            break
+        x = x - dx
     qdd = x[:n].copy()
     return State(t0, q0.copy(), v0.copy(), qdd, qdd.copy(), x[n:].copy())
+
+
+#: Newton iterations of :func:`consistent_initial_state` for multiplier-dependent forces
+MULTIPLIER_ITERATIONS = 10
 
 
 Observer = Callable[[State], None]
@@ -263,7 +279,7 @@ class _PythonStepper:
         """Interaction state after the converged step (may stop the run), nodal frames
         re-based."""
         st = self.state
-        self.step.asm.post_step(st.q, st.v, st.t, st.qdd, st.a)
+        self.step.asm.post_step(st.q, st.v, st.t, st.qdd, st.a, lam=st.lam)
 
     def totals(self) -> tuple[int, int, int]:
         t = self.newton.total

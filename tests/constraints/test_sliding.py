@@ -11,8 +11,8 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 
 
-def _inclined(alpha: float, *, friction: float = 0.0, variant: str = "cylindrical",
-              axial_force=None, n_elem: int = 8):
+def _inclined(alpha: float, *, friction: float = 0.0, friction_velocity: float | None = None,
+              variant: str = "cylindrical", axial_force=None, n_elem: int = 8):
     L = 2.0
     d = np.array([np.cos(alpha), 0.0, -np.sin(alpha)])
     model = fm.Model(gravity=(0, 0, -9.81))
@@ -23,6 +23,7 @@ def _inclined(alpha: float, *, friction: float = 0.0, variant: str = "cylindrica
     model.clamp(beam.last_node)
     body = model.add_rigid_body(mass=0.5, inertia=(1e-3, 2e-3, 2e-3), pose=beam.frame_at(0.2))
     joint = model.add_joint(fm.SlidingJoint(beam, body, variant=variant, friction=friction,
+                                            friction_velocity=friction_velocity,
                                             axial_force=axial_force))
     return model, beam, body, joint
 
@@ -83,7 +84,7 @@ def test_friction_follows_regularised_coulomb():
     g (sin alpha - mu cos alpha) once it moves; the regularisation adds a velocity lag of order
     eps_v, so compare the acceleration from a quadratic fit over 0.2-0.6 s (1e-3 relative)."""
     alpha, mu = 0.4, 0.2
-    model, beam, body, joint = _inclined(alpha, friction=mu)
+    model, beam, body, joint = _inclined(alpha, friction=mu, friction_velocity=1e-3)
     res = fm.simulate(model, t_end=0.6, dt=1e-3, output_interval=0.01, record_energy=False)
     s = res.q[:, res.assembly.extra_dofs(joint)[0]]
     sel = res.t >= 0.2
