@@ -708,16 +708,18 @@ class Assembly:
         if code:
             raise self.error_exception(code, q, t)
 
-    def static_increment_done(self, q: np.ndarray, t: float = 0.0) -> int:
-        """After a converged static increment at ``q``: the joints' state as after a step (slide
-        elements, contact tracking, friction anchors; ``q`` the next increment's start), then
-        the nodal frames re-based where tangents turned far (FORMULATION §2.4; ``q`` changed in
-        place). Returns the number of re-based nodes; raises :class:`FlexmbsError` if a node
-        turned past the frames' limit (nothing is changed then)."""
+    def static_increment_done(self, q: np.ndarray, lam: np.ndarray, t: float = 0.0,
+                              load_factor: float = 1.0) -> int:
+        """After a converged static increment at ``(q, lam)`` (the multipliers: the sliding
+        joint's friction cone needs its normal reaction): the joints' state as after a step
+        (slide elements, contact tracking, friction anchors; ``q`` the next increment's start),
+        then the nodal frames re-based where tangents turned far (FORMULATION §2.4; ``q``
+        changed in place). Returns the number of re-based nodes; raises
+        :class:`FlexmbsError` if a node turned past the frames' limit."""
         python = self.python_interactions()
-        fv, mode = self.functions.values(t), static_mode(1.0)
+        fv, mode = self.functions.values(t), static_mode(load_factor, damping=False)
         zeros = np.zeros_like(q)
-        lam = np.zeros(self.n_mult)
+        lam = np.ascontiguousarray(lam, dtype=float)
         _, code = self._kernel(OP_RESIDUAL, q, zeros, np.zeros(0), lam, fv, mode, self._r)
         if code:
             raise self.error_exception(code, q, t)

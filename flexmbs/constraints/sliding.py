@@ -31,6 +31,7 @@ from ..contact.laws import (
     Friction,
     RegularizedCoulomb,
     as_friction,
+    check_resumed_friction,
     coulomb_return_map,
     no_friction,
 )
@@ -494,14 +495,7 @@ class SlidingJoint(Interaction):
                 "friction": [float(x) for x in self.friction_parameters()]}
 
     def set_state(self, state: dict[str, Any]) -> None:
-        saved = state.get("friction")
-        if saved is not None:
-            now = self.friction_parameters()
-            if np.asarray(saved, float).shape != now.shape or np.any(np.asarray(saved, float) != now):
-                raise ModelError(
-                    f"joint '{self.name}': the checkpoint was written with friction "
-                    f"{_describe_friction(saved)} and the model now has {_describe_friction(now)}; "
-                    "a resumed run must keep the friction law (run without --resume to start over)")
+        check_resumed_friction(self.name, state.get("friction"), self.friction_parameters())
         self.element = int(state["element"])
         if "anchor" in state:
             self.anchor = float(state["anchor"])
@@ -510,20 +504,6 @@ class SlidingJoint(Interaction):
     def __repr__(self) -> str:
         return (f"SlidingJoint({self.name!r}, beam={self.beam.name!r}, body={self.body.name!r}, "
                 f"variant={self.variant!r}, friction={self.friction!r})")
-
-
-def _describe_friction(p: Any) -> str:
-    """A friction parameter vector in words (checkpoint messages)."""
-    v = [float(x) for x in p]
-    if len(v) != N_FRICTION:
-        return f"parameters {v}"
-    if v[0] == FRICTION_NONE:
-        return "none"
-    g = [f"{x:g}" if float(f"{x:g}") == x else repr(x) for x in v]
-    if v[0] == FRICTION_STICK:
-        return (f"{{law = \"stick\", mu = {g[1]}, mu_static = {g[2]}, stiffness = {g[3]}, "
-                f"damping = {g[4]}}}")
-    return f"{{law = \"regularised\", mu = {g[1]}, velocity = {g[5]}}}"
 
 
 # ---------------------------------------------------------------------------------------------

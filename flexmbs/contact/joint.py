@@ -40,7 +40,16 @@ from ._detect import (
     tracked_slot,
 )
 from .geometry import closest_point, section_state
-from .laws import N_FRICTION, ForceLaw, Friction, LinearPenalty, RegularizedCoulomb, as_friction, law_energy
+from .laws import (
+    N_FRICTION,
+    ForceLaw,
+    Friction,
+    LinearPenalty,
+    RegularizedCoulomb,
+    as_friction,
+    check_resumed_friction,
+    law_energy,
+)
 from .pair import N_HISTORY, N_LOCAL, contact_point, friction_vector
 from .sections import (
     CircleSection,
@@ -628,15 +637,7 @@ class SlidingClearanceJoint(Interaction):
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore :meth:`get_state` (bit for bit); a changed friction law is refused."""
-        saved = state.get("friction")
-        now = self.friction_parameters()
-        if saved is not None and (len(saved) != N_FRICTION
-                                  or not np.array_equal(np.asarray(saved, float), now)):
-            raise ModelError(
-                f"joint '{self.name}': the checkpoint was written with friction {saved} "
-                f"([law, mu, mu_static, stiffness, damping, velocity]) and the model now has "
-                f"{now.tolist()}; a resumed run must keep the friction law (run without "
-                "--resume to start over)")
+        check_resumed_friction(self.name, state.get("friction"), self.friction_parameters())
         self._elem[:] = state["elem"]
         self._xi[:] = state["xi"]
         self._approach[:] = 0.0

@@ -53,6 +53,8 @@ __all__ = [
     "coulomb_return_map",
     "tangential_force",
     "as_friction",
+    "check_resumed_friction",
+    "describe_friction",
 ]
 
 
@@ -379,6 +381,33 @@ class Friction:
 def no_friction() -> np.ndarray:
     """The parameter vector of a frictionless joint (law code :data:`FRICTION_NONE`)."""
     return np.array([FRICTION_NONE, 0.0, 0.0, 1.0, 0.0, 1.0], dtype=float)
+
+
+def describe_friction(p: object) -> str:
+    """A friction parameter vector (:meth:`Friction.parameters`) in words, as a scenario table."""
+    v = [float(x) for x in np.asarray(p, dtype=float).ravel()]
+    if len(v) != N_FRICTION:
+        return f"parameters {v}"
+    if v[0] == FRICTION_NONE:
+        return "none"
+    g = [f"{x:g}" if float(f"{x:g}") == x else repr(x) for x in v]
+    if v[0] == FRICTION_STICK:
+        return (f"{{law = \"stick\", mu = {g[1]}, mu_static = {g[2]}, stiffness = {g[3]}, "
+                f"damping = {g[4]}}}")
+    return f"{{law = \"regularised\", mu = {g[1]}, velocity = {g[5]}}}"
+
+
+def check_resumed_friction(joint: str, saved: object, now: np.ndarray) -> None:
+    """A checkpoint's friction parameters (``None``: an older checkpoint, accepted) must be the
+    model's: the anchors were computed with them. Raises :class:`ModelError` naming both."""
+    if saved is None:
+        return
+    old = np.asarray(saved, dtype=float)
+    if old.shape != now.shape or np.any(old != now):
+        raise ModelError(f"joint '{joint}': the checkpoint was written with friction "
+                         f"{describe_friction(old)} and the model now has "
+                         f"{describe_friction(now)}; a resumed run must keep the friction law "
+                         "(run without --resume to start over)")
 
 
 #: scenario name -> normal force law class (``contact = { law = ... }``), alphabetical

@@ -117,7 +117,7 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
                     f"{o.min_increment:g}): {exc}") from None
             continue
         try:
-            asm.static_increment_done(q, t)   # joints' state, new nodal charts (§2.4)
+            asm.static_increment_done(q, lam, t, trial)   # joints' state, nodal charts (§2.4)
         except FlexmbsError as exc:    # a node turned past the frames' limit: smaller increment
             prob.restore(saved)
             inc *= 0.5

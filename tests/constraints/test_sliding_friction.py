@@ -354,8 +354,8 @@ def test_resume_with_the_anchor_in_flight_is_bit_identical(tmp_path):
     state = joint.get_state()
     assert state["friction"][0] == FRICTION_STICK
     model, joint = oscillator(mu_k=0.25)
-    with pytest.raises(fm.ModelError, match=r"joint 'block': the checkpoint was written with "
-                       r"friction \{law = \"stick\", mu = 0.3.*now has \{law = \"stick\", "
+    with pytest.raises(fm.ScenarioError, match=r"cannot resume: joint 'block': the checkpoint was "
+                       r"written with friction \{law = \"stick\", mu = 0.3.*now has \{law = \"stick\", "
                        r"mu = 0.25.*run without --resume"):
         fm.simulate(model, t_end=0.8, out=tmp_path / "part", resume=True, **kw)
 
