@@ -563,13 +563,18 @@ class SlidingClearanceJoint(Interaction):
     # ------------------------------------------------------------------ output
     def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
                t: float) -> list[dict[str, Any]]:
+        """One row per contact point (contacts.csv, the VTU contact points): the columns of
+        contacts.csv, ``position`` and ``normal``, the friction force on the hole
+        ``tangential_force`` (3,) and ``stick`` (1.0 while the stick law holds the contact)."""
         rows = []
         for k, j, kind, _eP, res, a, b, _psi in self._contacts(q, v, False, False):
             rows.append({
                 "t": t, "joint": self.name, "section": k, "point": j, "gap": res.gap,
                 "normal_force": float(kind) * res.f_n, "qx": res.Q[0], "qy": res.Q[1],
                 "qz": res.Q[2], "px": res.P[0], "py": res.P[1], "pz": res.P[2], "a": a, "b": b,
-                "position": res.Q, "normal": res.normal})
+                "position": res.Q, "normal": res.normal,
+                "tangential_force": float(kind) * (res.force_on_hole - res.f_n * res.normal),
+                "stick": res.stuck})
         return rows
 
     def section_records(self, q: np.ndarray, v: np.ndarray, t: float) -> list[dict[str, Any]]:

@@ -145,6 +145,11 @@ def test_static_solution_holds_below_the_friction_angle_and_none_exists_above():
     expected = -M_SLEEVE * G * math.sin(math.radians(alpha)) / k_total
     assert len(contacts) >= 2
     assert moved == pytest.approx(expected, rel=0.15)
+    # the contacts stick and their friction forces carry the weight's pull along the slope
+    slope = np.array([math.cos(math.radians(alpha)), 0.0, math.sin(math.radians(alpha))])
+    assert all(c["stick"] == 1.0 for c in contacts)
+    pull = sum(float(c["tangential_force"] @ slope) for c in contacts)
+    assert pull == pytest.approx(M_SLEEVE * G * math.sin(math.radians(alpha)), rel=1e-6)
     model, joint = _incline(35.0, fm.Friction(mu=0.3))
     with pytest.raises(fm.ConvergenceError):
         fm.solve_static(Assembly(model), fm.StaticOptions(load_steps=4, stabilizer=100.0,
