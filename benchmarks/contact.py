@@ -41,7 +41,8 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs import driver as cm
     from flexmbs._jit import njit
     from flexmbs.assembly import Assembly
-    from flexmbs.contact._detect import clearance_forces
+    from flexmbs._jit import FLAG
+    from flexmbs.contact._detect import _joint_forces
     from flexmbs.io.scenario import load_scenario
     from flexmbs.solvers._bordered import (
         BorderedBandedLU,
@@ -62,16 +63,9 @@ def main(argv: list[str] | None = None) -> int:
     @njit(refcount=False)
     def loop_clearance(m, q, v, r, n):  # noqa: ANN001, ANN202
         cl = m.clearance
-        ne, ns = cl.n_elem[0], cl.n_sec[0]
-        for _ in range(n):
-            clearance_forces(q, v, cl.body[0], cl.elem_dofs[0, :ne], cl.lengths[0, :ne],
-                             cl.hole_point[0], cl.stations[0, :ns], cl.elem_ws[0, :ns],
-                             cl.xi_ws[0, :ns], cl.elem_out[0, :ns], cl.xi_out[0, :ns], cl.r_b[0],
-                             cl.shape[0], cl.params[0], cl.R_out[0], cl.R_in[0],
-                             cl.consistent[0], cl.law[0],
-                             cl.mu[0], cl.eps_v[0], cl.approach[0, :ns], cl.active[0, :ns],
-                             cl.psi[0, :ns], cl.qe, cl.rows[0], False, False, r, cl.K, cl.C,
-                             cl.kelem, cl.kelem_i)
+        for _ in range(n):     # the clearance residual of joint 0, as the driver calls it
+            _joint_forces(cl, 0, q, v, FLAG[0], r, cl.no_K, cl.no_C, cl.no_elem, cl.no_elem,
+                          m.error)
 
     @njit(refcount=False)
     def loop_jacobian(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN202
