@@ -39,9 +39,8 @@ def _best(fn, args, n: int = 300) -> float:  # noqa: ANN001
 def main(argv: list[str] | None = None) -> int:
     import flexmbs as fm
     from flexmbs import driver as cm
-    from flexmbs._jit import njit
+    from flexmbs._jit import FLAG, njit
     from flexmbs.assembly import Assembly
-    from flexmbs._jit import FLAG
     from flexmbs.contact._detect import _joint_forces
     from flexmbs.io.scenario import load_scenario
     from flexmbs.solvers._bordered import (
