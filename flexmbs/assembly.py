@@ -32,8 +32,6 @@ from .constraints.joints import (
     pack_terms,
 )
 from .constraints.linear import linear_pattern, pack_linear
-from .constraints.sliding import pack_sliding, sliding_pattern
-from .contact.joint import clearance_pattern, pack_clearance
 from .elements import rigid_body as rb
 from .elements.group import MAX_GROUPS
 from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
@@ -81,7 +79,6 @@ class _NonlinearRows:
 
 
 #: the term kinds of interactions: (pattern, packer) of the owning module
-_INTERACTION_KINDS = ("sliding", "clearance")
 
 
 class Assembly:
@@ -494,10 +491,9 @@ class Assembly:
             if id(nl.constraint) in self._interaction_constraints:
                 continue
             blocks += joint_pattern(nl.coords, self.multiplier_rows(nl.constraint), n)
-        for obj in self._interactions_of("sliding"):
-            blocks += sliding_pattern(obj, self)
-        for obj in self._interactions_of("clearance"):
-            blocks += clearance_pattern(obj, self)
+        for kind in driver.INTERACTION_KINDS:
+            for obj in self._interactions_of(kind.name):
+                blocks += kind.pattern(obj, self)
         blocks += springs_pattern(self.model.springs, self)
         blocks += moments_pattern(self.node_moments)
         keys = [np.arange(N, dtype=np.int64) * (N + 1)]   # the full diagonal
@@ -548,28 +544,28 @@ class Assembly:
                  if isinstance(nl.constraint, EulerParameterNormalization)]
         terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]
         drivers = [nl.constraint for nl in self.nonlinear if isinstance(nl.constraint, JointDriver)]
-        self.joint_lists = {k: self._interactions_of(k) for k in _INTERACTION_KINDS}
+        self.joint_lists = {k.name: self._interactions_of(k.name) for k in driver.INTERACTION_KINDS}
         fn_rows = [row for row, _ in self.lin_functions]
         fn_idx = [fns(fn) for _, fn in self.lin_functions]
+        bodies = rb.pack_bodies(self.model.bodies, self.body_loads, self, fns)
+        loads = pack_loads(self.f_const, self.f_timed, self.node_moments, fns, self)
+        linear = pack_linear(self.lin_matrix, self.lin_rhs0, fn_rows, fn_idx, self)
+        norms_part, terms_part = pack_norms(norms, self), pack_terms(terms, self)
+        kinds = {k.name: k.pack(self.joint_lists[k.name], self) for k in driver.INTERACTION_KINDS}
         self.system = driver.SystemPart(
-            self.n_coords, self.n_mult, tuple(parts),
-            rb.pack_bodies(self.model.bodies, self.body_loads, self, fns),
-            pack_loads(self.f_const, self.f_timed, self.node_moments, fns, self),
-            pack_linear(self.lin_matrix, self.lin_rhs0, fn_rows, fn_idx, self),
-            pack_norms(norms, self), pack_terms(terms, self),
-            pack_sliding(self.joint_lists["sliding"], self, fns),
-            pack_clearance(self.joint_lists["clearance"], self, self.n_total, self.q_ref),
-            pack_springs(self.model.springs, self),
-            pack_drivers(drivers, self, fns),
-            np.zeros(3, np.int64),
-            np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
-                          if g.element_type.rebase is not None), BASE_RECORD)))
+            n=self.n_coords, m=self.n_mult, beams=tuple(parts), bodies=bodies, loads=loads,
+            linear=linear, norms=norms_part, terms=terms_part, **kinds,
+            springs=pack_springs(self.model.springs, self),
+            drivers=pack_drivers(drivers, self, fns),
+            error=np.zeros(3, np.int64),
+            bases=np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
+                                if g.element_type.rebase is not None), BASE_RECORD)))
         #: what the compiled kernel receives: the kinds this model lacks are None, so that
         #: their code is not compiled for it (driver.OPTIONAL_KINDS)
         self.kernel_system = self.system.without_absent(dict(
             bodies=bool(self.model.bodies), norms=bool(norms), terms=bool(terms),
-            sliding=bool(self.joint_lists["sliding"]), clearance=bool(self.joint_lists["clearance"]),
-            springs=bool(self.model.springs), drivers=bool(drivers)))
+            springs=bool(self.model.springs), drivers=bool(drivers),
+            **{k: bool(objs) for k, objs in self.joint_lists.items()}))
         self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
         self._r = np.zeros(self.n_total)
@@ -589,15 +585,26 @@ class Assembly:
         return self.q_ref.copy(), self.v_init.copy()
 
     def python_interactions(self) -> list[Any]:
-        """Interactions evaluated by their Python path now (no compiled form); the clearance
-        joints among them are switched off in the packed system."""
-        enabled = self.system.clearance.enabled
+        """Interactions evaluated by their Python path now: those of no compiled kind, and
+        those of a switchable kind without a compiled form at the moment
+        (:meth:`Interaction.compiled_form`). A query: :meth:`_switch_compiled_forms` acts on
+        it."""
         out = list(self._python_terms)
-        for i, obj in enumerate(self.joint_lists["clearance"]):
-            enabled[i] = obj.compiled_form()
-            if not enabled[i]:
-                out.append(obj)
+        for kind in driver.INTERACTION_KINDS:
+            if kind.enable is not None:
+                out += [obj for obj in self.joint_lists[kind.name] if not obj.compiled_form()]
         return out
+
+    def _switch_compiled_forms(self) -> list[Any]:
+        """Switch every interaction of a switchable kind on or off in the packed system as it
+        has a compiled form now (a test may freeze a joint's detection between two calls);
+        returns :meth:`python_interactions`. Every evaluation starts with it."""
+        for kind in driver.INTERACTION_KINDS:
+            if kind.enable is not None:
+                part = getattr(self.system, kind.name)
+                for i, obj in enumerate(self.joint_lists[kind.name]):
+                    kind.enable(part, i, obj.compiled_form())
+        return self.python_interactions()
 
     def compiled_reason(self) -> str:
         """Why the compiled Newton loop cannot run this model now ("" if it can)."""
@@ -645,7 +652,7 @@ class Assembly:
             mode[0] = load_factor
             mode[2] = 1.0 if with_damping else 0.0
             acc = qdd
-        python = self.python_interactions()
+        python = self._switch_compiled_forms()
         fv = self.functions.values(t)
         q = np.ascontiguousarray(q, dtype=float)
         v = np.ascontiguousarray(v, dtype=float)
@@ -689,7 +696,7 @@ class Assembly:
         twist entries of ``q, v`` and of ``qdd, acc`` (when given) in place. ``lam``: the
         step's multipliers (the sliding joint's friction cone needs its normal reaction;
         default zero)."""
-        python = self.python_interactions()
+        python = self._switch_compiled_forms()
         for name, arr in (("q", q), ("v", v), ("qdd", qdd), ("acc", acc)):
             if arr is not None and not (isinstance(arr, np.ndarray) and arr.dtype == float
                                         and arr.flags.c_contiguous and arr.shape == (self.n_coords,)):
@@ -716,7 +723,7 @@ class Assembly:
         then the nodal frames re-based where tangents turned far (FORMULATION §2.4; ``q``
         changed in place). Returns the number of re-based nodes; raises
         :class:`FlexmbsError` if a node turned past the frames' limit."""
-        python = self.python_interactions()
+        python = self._switch_compiled_forms()
         fv, mode = self.functions.values(t), static_mode(load_factor, damping=False)
         zeros = np.zeros_like(q)
         lam = np.ascontiguousarray(lam, dtype=float)
@@ -734,8 +741,10 @@ class Assembly:
         """``q`` is where the next step (or static increment) starts: the reference of the
         history-dependent terms (the clearance contacts' sticking friction). The integrators
         and :func:`~flexmbs.solvers.static.solve_static` call it at their start; each converged
-        step moves it on."""
+        step moves it on. The interactions' compiled forms are switched as they are now (the
+        compiled integrator then runs without asking again)."""
         self.system.clearance.q_start[:] = q
+        self._switch_compiled_forms()
 
     def node_bases(self) -> np.ndarray:
         """Every twisting node's current base: records ``[twist coordinate, t̄ (3), D̄ (3)]``
@@ -809,7 +818,7 @@ class Assembly:
         data = np.zeros_like(self._data)
         q = np.ascontiguousarray(q, dtype=float)
         zeros = np.zeros(n)
-        self.python_interactions()
+        self._switch_compiled_forms()
         self._kernel(OP_JACOBIAN, q, zeros, zeros, np.zeros(self.n_mult),
                      self.functions.values(t), dynamic_mode(), data, (cM, 0.0, 0.0))
         return sp.csc_matrix((data, self.matrix.indices, self.matrix.indptr), shape=self.matrix.shape)
@@ -824,7 +833,7 @@ class Assembly:
         n = self.n_coords
         q = np.ascontiguousarray(q, dtype=float)
         zeros = np.zeros(n)
-        self.python_interactions()
+        self._switch_compiled_forms()
         r = np.zeros(self.n_total)
         self._kernel(OP_RESIDUAL, q, zeros, zeros, np.zeros(self.n_mult),
                      self.functions.values(t), dynamic_mode(), r)

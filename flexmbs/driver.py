@@ -36,6 +36,7 @@ from .constraints.joints import (
 from .constraints.linear import LinearPart, linear_jacobian, linear_residual
 from .constraints.sliding import (
     ERR_END_OF_BEAM,
+    SLIDING,
     SlidingPart,
     sliding_jacobian,
     sliding_post_step,
@@ -48,6 +49,7 @@ from .contact._detect import (
     clearance_post_step_all,
     clearance_residual,
 )
+from .contact.joint import CLEARANCE
 from .elements.group import (
     groups_jacobian,
     groups_post_step,
@@ -60,10 +62,15 @@ from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
 from .springs import SpringPart, springs_jacobian, springs_residual
 
 __all__ = ["SystemPart", "residual", "jacobian", "post_step", "rebase", "rebase_static", "set_bases",
-           "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "KIND_OF_ERROR"]
+           "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS", "KIND_OF_ERROR"]
+
+#: the compiled interaction kinds, each a field of :class:`SystemPart` whose kernels the
+#: functions below call (docs/extending.md: a new kind is its module, one entry here, a field
+#: and its calls)
+INTERACTION_KINDS = (SLIDING, CLEARANCE)
 
 #: term kind whose joint list ``error[1]`` indexes, per error code
-KIND_OF_ERROR = {ERR_LEFT_BORE: "clearance", ERR_END_OF_BEAM: "sliding"}
+KIND_OF_ERROR = {code: kind.name for kind in INTERACTION_KINDS for code in kind.errors}
 
 
 class SystemPart(NamedTuple):

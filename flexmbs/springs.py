@@ -45,7 +45,7 @@ import numpy as np
 from ._jit import njit
 from .constraints.base import Attachment
 from .constraints.joints import TermTable, concatenate_tables, relative_angle_table, term_hessian, term_values
-from .elements.rigid_body import point_tensor_of, rotation
+from .elements.rigid_body import point_jacobian_of, point_tensor_of
 from .errors import ModelError
 from .terms import WITH_DAMPING
 
@@ -225,6 +225,7 @@ def _kinematics(sp, i, q):  # noqa: ANN001, ANN202
     D = sp.D
     D[:, :] = 0.0
     p = np.empty(4)
+    B = np.empty((3, 4))
     for e in range(2):
         sign = -1.0 if e == 0 else 1.0
         base = e * END
@@ -239,17 +240,12 @@ def _kinematics(sp, i, q):  # noqa: ANN001, ANN202
         else:
             for c in range(4):
                 p[c] = q[sp.idx[i, base + 3 + c]]
-            A = rotation(p)
+            point_jacobian_of(sp.T[i, e], p, B, sp.x[e])      # B = 2T(s)p, x = A s
             for c in range(3):
-                sp.x[e, c] = q[sp.idx[i, base + c]]
-                for j in range(3):
-                    sp.x[e, c] += A[c, j] * sp.point[i, e, j]
+                sp.x[e, c] += q[sp.idx[i, base + c]]
                 D[c, base + c] = sign
-                for j in range(4):       # B = 2 T(s) p
-                    b = 0.0
-                    for m in range(4):
-                        b += sp.T[i, e, c, j, m] * p[m]
-                    D[c, base + 3 + j] = sign * 2.0 * b
+                for j in range(4):
+                    D[c, base + 3 + j] = sign * B[c, j]
     dx = sp.x[1, 0] - sp.x[0, 0]
     dy = sp.x[1, 1] - sp.x[0, 1]
     dz = sp.x[1, 2] - sp.x[0, 2]

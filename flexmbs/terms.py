@@ -75,6 +75,16 @@ class DofMap(Protocol):
         """As :meth:`positions`, with −1 for the entries outside the pattern (no error)."""
 
 
+class PackContext(DofMap, Protocol):
+    """What a term kind's ``pack`` sees besides the numbering (implemented by the assembler):
+    the model's time functions (a kernel reads their values from ``fv``), the size of the
+    unknowns and the coordinates the model starts from."""
+
+    functions: FunctionTable
+    n_total: int
+    q_ref: np.ndarray
+
+
 class FunctionTable:
     """Time functions of a model numbered in first-use order; kernels read their values at the
     current time from a vector ``fv`` (``fv[k] = functions[k](t)``)."""

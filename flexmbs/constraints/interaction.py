@@ -13,6 +13,8 @@ no compiled form at the moment (:meth:`compiled_form` false) is evaluated throug
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
@@ -21,7 +23,30 @@ from ..errors import FlexmbsError, ModelError
 from .base import Constraint
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..terms import DofMap
+    from ..terms import DofMap, PackContext
+
+
+@dataclass(frozen=True, kw_only=True)
+class InteractionKind:
+    """The record of one compiled interaction kind, declared by the module that owns its
+    physics and listed once in :data:`flexmbs.driver.INTERACTION_KINDS` (docs/extending.md):
+    the assembler reserves its pattern and packs its part from it, the driver calls its
+    kernels (numba needs those calls spelt out), and an error code of the driver listed in
+    ``errors`` is turned into the exception of the interaction ``error[1]`` of this kind
+    (:meth:`Interaction.error`).
+
+    ``name``: the interactions' ``term_kind`` and the field of
+    :class:`~flexmbs.driver.SystemPart` holding the part; ``pattern(obj, dofs)``: the blocks
+    ``(rows, cols)`` one interaction writes; ``pack(objs, ctx)``: the part of all of them
+    (:class:`~flexmbs.terms.PackContext`); ``enable(part, i, on)``: switches the compiled
+    evaluation of interaction i (for kinds whose members can fall back to their Python path,
+    :meth:`Interaction.compiled_form`)."""
+
+    name: str
+    pattern: Callable[[Any, DofMap], list[tuple[np.ndarray, np.ndarray]]]
+    pack: Callable[[list[Any], PackContext], Any]
+    errors: tuple[int, ...] = ()
+    enable: Callable[[Any, int, bool], None] | None = None
 
 
 class ModelParts(Protocol):

@@ -27,7 +27,7 @@ import numpy as np
 from .._jit import FLAG, njit
 from ..elements.ancf_rod import TWIST as NODE_TWIST
 from ..elements.ancf_rod import node_director
-from ..elements.rigid_body import point_tensor, rotation_matrix
+from ..elements.rigid_body import point_jacobian_of, point_tensor, rotation_matrix
 from ..errors import ModelError
 from .base import Attachment, Constraint
 
@@ -239,14 +239,11 @@ def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarra
             for k in range(3):
                 for j in range(jp):
                     G[s, k, j] = 1.0 if j == k else 0.0
-                acc = q[o + k] if kind == BODY_POINT else 0.0
-                for a in range(4):
-                    ta = 0.0
-                    for b in range(4):
-                        ta += table.vec_T[v, k, a, b] * q[o + 3 + b]
-                    G[s, k, jp + a] = 2.0 * ta
-                    acc += ta * q[o + 3 + a]
-                val[s, k] = acc
+            # 2T(c)p into G's p columns, A c into val (no scratch arrays)
+            point_jacobian_of(table.vec_T[v], q[o + 3:o + 7], G[s, :, jp:jp + 4], val[s])
+            if kind == BODY_POINT:
+                for k in range(3):
+                    val[s, k] += q[o + k]
 
 
 @njit

@@ -38,16 +38,16 @@ from ..contact.laws import (
 from ..elements import ancf_cable as cable
 from ..elements.ancf_cable import CENTERLINE_SIZE, hermite_basis, shape_xi
 from ..elements.centerline import closest_point
-from ..elements.rigid_body import point_tensor, rotation_matrix
+from ..elements.rigid_body import point_jacobian_of, point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
 from ..terms import pad_stack
 from .base import Constraint
-from .interaction import Interaction, ModelParts
+from .interaction import Interaction, InteractionKind, ModelParts
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
-    from ..terms import DofMap, FunctionTable
+    from ..terms import DofMap, PackContext
 
 
 #: local coordinates of the joint ``[r_H (3), p (4), e_k (centreline), s]`` and the index of s
@@ -74,18 +74,10 @@ def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
     for i in range(n_eq):
         for j in range(N_SLIDE):
             jac[i, j] = 0.0
-    Tp = np.empty((3, 3, 4))        # T_k(w) p for w = u, y, z
+    Bw = np.empty((3, 3, 4))        # ∂(A w)/∂p = 2T(w)p and A w for w = u, y, z
     Aw = np.empty((3, 3))
     for w in range(3):
-        for k in range(3):
-            acc = 0.0
-            for a in range(4):
-                ta = 0.0
-                for b in range(4):
-                    ta += T[w, k, a, b] * p[b]
-                Tp[w, k, a] = ta
-                acc += ta * p[a]
-            Aw[w, k] = acc
+        point_jacobian_of(T[w], p, Bw[w], Aw[w])
     r = np.zeros(3)
     r1 = np.zeros(3)
     r2 = np.zeros(3)
@@ -99,7 +91,7 @@ def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
         phi[c] = ql[c] + Aw[0, c] - r[c]
         jac[c, c] = 1.0
         for a in range(4):
-            jac[c, 3 + a] = 2.0 * Tp[0, c, a]
+            jac[c, 3 + a] = Bw[0, c, a]
         for m in range(4):
             jac[c, 7 + 3 * m + c] = -S[m]
         jac[c, S_INDEX] = -r1[c]
@@ -108,8 +100,8 @@ def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
             w = 1 + i
             phi[3 + i] = Aw[w, 0] * r1[0] + Aw[w, 1] * r1[1] + Aw[w, 2] * r1[2]
             for a in range(4):
-                jac[3 + i, 3 + a] = 2.0 * (r1[0] * Tp[w, 0, a] + r1[1] * Tp[w, 1, a]
-                                           + r1[2] * Tp[w, 2, a])
+                jac[3 + i, 3 + a] = (r1[0] * Bw[w, 0, a] + r1[1] * Bw[w, 1, a]
+                                     + r1[2] * Bw[w, 2, a])
             for m in range(4):
                 for c in range(3):
                     jac[3 + i, 7 + 3 * m + c] = dS[m] * Aw[w, c]
@@ -153,15 +145,9 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
             if mu == 0.0:
                 continue
             Tw = T[1 + i]
-            Bw = np.zeros((3, 4))        # ∂(A w)/∂p = 2 T(w) p
-            aw = np.zeros(3)
-            for k in range(3):
-                for a in range(4):
-                    acc = 0.0
-                    for b in range(4):
-                        acc += Tw[k, a, b] * p[b]
-                    Bw[k, a] = 2.0 * acc
-                    aw[k] += acc * p[a]
+            Bw = np.empty((3, 4))        # ∂(A w)/∂p = 2 T(w) p and A w
+            aw = np.empty(3)
+            point_jacobian_of(Tw, p, Bw, aw)
             for a in range(4):
                 for b in range(4):
                     H[3 + a, 3 + b] += mu * 2.0 * (r1[0] * Tw[0, a, b] + r1[1] * Tw[1, a, b]
@@ -553,7 +539,9 @@ def sliding_pattern(joint: SlidingJoint, dofs: DofMap) -> list[tuple[np.ndarray,
     return [(own, cols), (cols, own), (mult, cols), (cols, mult)]
 
 
-def pack_sliding(joints: list[SlidingJoint], dofs: DofMap, functions: FunctionTable) -> SlidingPart:
+def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
+    """All sliding joints; their state arrays become views of the packed ones."""
+    dofs, functions = ctx, ctx.functions
     nj = len(joints)
     n = dofs.n_coords
     rows = np.full((nj, 5), -1, np.int64)
@@ -715,3 +703,8 @@ def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
             sl.anchor[j] = sl.trial_anchor[j]
             sl.stuck[j] = sl.trial_stuck[j]
     return 0
+
+
+#: the sliding joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`)
+SLIDING = InteractionKind(name="sliding", pattern=sliding_pattern, pack=pack_sliding,
+                          errors=(ERR_END_OF_BEAM,))

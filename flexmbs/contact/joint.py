@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..budget import MAX_SECTIONS, require_memory
-from ..constraints.interaction import Interaction, MatrixSink, ModelParts
+from ..constraints.interaction import Interaction, InteractionKind, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
@@ -62,7 +62,7 @@ from .tangent import N_EXT
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
-    from ..terms import DofMap
+    from ..terms import DofMap, PackContext
 
 
 @dataclass(frozen=True)
@@ -677,10 +677,10 @@ def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[
     return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
 
 
-def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: int,
-                   q_ref: np.ndarray) -> ClearancePart:
+def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> ClearancePart:
     """All clearance joints; their state arrays become views of the packed ones. The steps
-    start from ``q_ref`` until :meth:`~flexmbs.assembly.Assembly.begin` says otherwise."""
+    start from ``ctx.q_ref`` until :meth:`~flexmbs.assembly.Assembly.begin` says otherwise."""
+    dofs, n_total, q_ref = ctx, ctx.n_total, ctx.q_ref
     nj = len(joints)
     max_ne = max((len(j._lengths) for j in joints), default=0)
     max_ns = max((len(j.stations) for j in joints), default=0)
@@ -742,3 +742,13 @@ def pack_clearance(joints: list[SlidingClearanceJoint], dofs: DofMap, n_total: i
         j._stuck = part.stuck[i, :ns]
         j._q_start = part.q_start
     return part
+
+
+def _enable_clearance(part: ClearancePart, i: int, on: bool) -> None:
+    part.enabled[i] = on
+
+
+#: the clearance joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`);
+#: a joint without a compiled form at the moment is switched off here and evaluated in Python
+CLEARANCE = InteractionKind(name="clearance", pattern=clearance_pattern, pack=pack_clearance,
+                            errors=(ERR_LEFT_BORE,), enable=_enable_clearance)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
-from ..elements.rigid_body import point_tensor_of, rotation
+from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
 from .laws import (
     FRICTION_NONE,
     FRICTION_STICK,
@@ -82,15 +82,11 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     rx, rxx, ell)``; see :func:`contact_geometry`."""
     p = q_body[3:7]
     T = point_tensor_of(u_Q)
-    Bp = np.zeros((3, 4))
-    Q = q_body[0:3].copy()
+    Bp = np.empty((3, 4))
+    Q = np.empty(3)
+    point_jacobian_of(T, p, Bp, Q)            # 2T(u_Q)p and A u_Q
     for k in range(3):
-        for i in range(4):
-            acc = 0.0
-            for j in range(4):
-                acc += T[k, i, j] * p[j]
-            Bp[k, i] = 2.0 * acc
-            Q[k] += acc * p[i]                # pᵀT_k p = (A u)_k
+        Q[k] += q_body[k]
     # closest-point projection on this element (extrapolating the cubic)
     xi = xi0
     for _ in range(30):

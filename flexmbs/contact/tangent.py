@@ -28,7 +28,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
-from ..elements.rigid_body import point_tensor_of, rotation
+from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
 from .laws import FRICTION_NONE, FRICTION_STICK, law_force, tangential_force
 from .pair import N_LOCAL, contact_map, stick_trial
 
@@ -53,17 +53,11 @@ def _body_basis():  # noqa: ANN202
 
 
 @njit
-def _t_times(Te, u, x):  # noqa: ANN001, ANN202
-    """``2 T(u) x`` (3, 4) = ∂(A(p)u)/∂p at p = x (with x = p) or the velocity term (x = ṗ)."""
-    out = np.zeros((3, 4))
-    for k in range(3):
-        for i in range(4):
-            acc = 0.0
-            for j in range(3):
-                if u[j] != 0.0:
-                    for m in range(4):
-                        acc += u[j] * Te[j, k, i, m] * x[m]
-            out[k, i] = 2.0 * acc
+def _t_times(u, x):  # noqa: ANN001, ANN202
+    """``2 T(u) x`` (3, 4) = ∂(A(p)u)/∂p at p = x (with x = p) or the velocity term (x = ṗ)
+    (:func:`~flexmbs.elements.rigid_body.point_jacobian_of`)."""
+    out = np.empty((3, 4))
+    point_jacobian_of(point_tensor_of(u), x, out, np.empty(3))
     return out
 
 
@@ -285,7 +279,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     for j in range(3):
         unit[:] = 0.0
         unit[j] = 1.0
-        Bj = _t_times(Te, unit, p)
+        Bj = _t_times(unit, p)
         for c in range(3):
             for i in range(4):
                 if j == 0:
@@ -297,7 +291,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     # section origin o = r_H + A u_o
     o = np.empty(3)
     Do = np.zeros((3, NX))
-    Bo = _t_times(Te, u_o, p)
+    Bo = _t_times(u_o, p)
     for c in range(3):
         o[c] = qb[c] + A[c, 0] * u_o[0] + A[c, 1] * u_o[1] + A[c, 2] * u_o[2]
         Do[c, c] = 1.0
@@ -323,7 +317,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
                 dw = DQd[c, j] - (1.0 if j == c else 0.0)
                 acc += Dcol[c, j] * w[c] + col[c] * dw
             DuQ[jj, j] = acc
-    Bp = _t_times(Te, uQ, p)            # W_p = 2T(u_Q)p
+    Bp = _t_times(uQ, p)            # W_p = 2T(u_Q)p
     Q = np.empty(3)
     DQ = np.zeros((3, NX))
     for c in range(3):
@@ -370,7 +364,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
         for c in range(3):
             Dnc[c, j] = (Du[c, j] - nc[c] * Dg[j]) / ell
     # ---- relative velocity v_Q − v_P = W q̇_c and its q-derivative
-    Bv = _t_times(Te, uQ, vb[3:7])      # ∂(2T(u_Q)p ṗ)/∂p = 2T(u_Q)ṗ
+    Bv = _t_times(uQ, vb[3:7])      # ∂(2T(u_Q)p ṗ)/∂p = 2T(u_Q)ṗ
     vrel = np.empty(3)
     for c in range(3):
         acc = vb[c] - vPt[c]
@@ -382,7 +376,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     for jj in range(3):
         unit[:] = 0.0
         unit[jj] = 1.0
-        Bj = _t_times(Te, unit, p)
+        Bj = _t_times(unit, p)
         for c in range(3):
             s = 0.0
             for i in range(4):
@@ -432,7 +426,7 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
             stick_trial(A, hist, uQ, Q, P, SP, nc, delta, d)
             An = rotation(hist[7:11])
             _, rxn, _ = element_point(hist[11:], LP, xiP)
-            Bd = _t_times(Te, hist[0:3], p)
+            Bd = _t_times(hist[0:3], p)
             Ddelta = np.empty((3, NX))
             for c in range(3):
                 for j in range(NX):

@@ -204,9 +204,36 @@ def point_tensor_contract(s: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.einsum("...k,...kij->...ij", np.asarray(w, dtype=float), point_tensor(s))
 
 
+@njit
+def point_jacobian_of(T, p, B, Au):  # noqa: ANN001, ANN201
+    """Haug's ``B(p, u) = ∂(A(p)u)/∂p = 2T(u)p`` (3, 4) into ``B`` and ``A(p)u = pᵀT(u)p``
+    (3,) into ``Au``, from the point tensor ``T = T(u)`` of :func:`point_tensor_of`; with a rate
+    ``ṗ`` in place of p, ``B`` is ``2T(u)ṗ = ∂(B(p, u)ṗ)/∂p``. The one compiled statement of
+    the rotated point's Euler-parameter derivative (the sliding joint, the contact pair and the
+    exact contact tangent call it)."""
+    for k in range(3):
+        acc = 0.0
+        for a in range(4):
+            ta = 0.0
+            for b in range(4):
+                ta += T[k, a, b] * p[b]
+            B[k, a] = 2.0 * ta
+            acc += ta * p[a]
+        Au[k] = acc
+
+
 def point_jacobian(p: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Haug's ``B(p, s) = ∂(A(p)s)/∂p = 2 T(s) p`` (...,3,4); equals ``−2A s̃ G + 2(As)pᵀ``."""
-    return 2.0 * np.einsum("...kij,...j->...ki", point_tensor(s), np.asarray(p, dtype=float))
+    """Haug's ``B(p, s) = ∂(A(p)s)/∂p = 2 T(s) p`` (...,3,4), batched
+    (:func:`point_jacobian_of`); equals ``−2A s̃ G + 2(As)pᵀ``."""
+    p, s = np.asarray(p, dtype=float), np.asarray(s, dtype=float)
+    batch = np.broadcast_shapes(p.shape[:-1], s.shape[:-1])
+    pf = np.ascontiguousarray(np.broadcast_to(p, batch + (4,)).reshape(-1, 4))
+    T = point_tensor(np.ascontiguousarray(np.broadcast_to(s, batch + (3,)).reshape(-1, 3)))
+    out = np.empty((pf.shape[0], 3, 4))
+    Au = np.empty(3)
+    for i in range(pf.shape[0]):
+        point_jacobian_of(T[i], pf[i], out[i], Au)
+    return out.reshape(batch + (3, 4))
 
 
 def quaternion_from_matrix(A: np.ndarray) -> np.ndarray:
