@@ -743,7 +743,9 @@ class Assembly:
         and :func:`~flexmbs.solvers.static.solve_static` call it at their start; each converged
         step moves it on. The interactions' compiled forms are switched as they are now (the
         compiled integrator then runs without asking again)."""
-        self.system.clearance.q_start[:] = q
+        for kind in driver.INTERACTION_KINDS:
+            if kind.begin is not None:
+                kind.begin(getattr(self.system, kind.name), q)
         self._switch_compiled_forms()
 
     def node_bases(self) -> np.ndarray:
@@ -903,7 +905,9 @@ class Assembly:
         if self.model.springs:
             out["spring"] = spring_energy(self.system.springs, np.ascontiguousarray(q, float))
             out["total"] += out["spring"]
-        if self.joint_lists["clearance"]:
-            out["contact"] = sum(j.contact_energy(q, v) for j in self.joint_lists["clearance"])
-            out["total"] += out["contact"]
+        for kind in driver.INTERACTION_KINDS:
+            if kind.energy is not None and self.joint_lists[kind.name]:
+                label, energy = kind.energy
+                out[label] = sum(energy(obj, q, v) for obj in self.joint_lists[kind.name])
+                out["total"] += out[label]
         return out

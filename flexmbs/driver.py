@@ -62,7 +62,8 @@ from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
 from .springs import SpringPart, springs_jacobian, springs_residual
 
 __all__ = ["SystemPart", "residual", "jacobian", "post_step", "rebase", "rebase_static", "set_bases",
-           "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS", "KIND_OF_ERROR"]
+           "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS", "KIND_OF_ERROR", "STOPS_RUN",
+           "stops_run"]
 
 #: the compiled interaction kinds, each a field of :class:`SystemPart` whose kernels the
 #: functions below call (docs/extending.md: a new kind is its module, one entry here, a field
@@ -71,6 +72,18 @@ INTERACTION_KINDS = (SLIDING, CLEARANCE)
 
 #: term kind whose joint list ``error[1]`` indexes, per error code
 KIND_OF_ERROR = {code: kind.name for kind in INTERACTION_KINDS for code in kind.errors}
+
+#: ``STOPS_RUN[code]``: after this post-step error the step stands and the run stops (the
+#: kinds' ``stops``; a constant array, which numba freezes into the compiled loop)
+STOPS_RUN = np.zeros(max(KIND_OF_ERROR, default=0) + 1, dtype=np.bool_)
+for _kind in INTERACTION_KINDS:
+    STOPS_RUN[list(_kind.stops)] = True
+
+
+@njit(inline="always")
+def stops_run(code):  # noqa: ANN001, ANN201
+    """Whether a post-step error ``code`` stops the run with the step standing (:data:`STOPS_RUN`)."""
+    return 0 <= code < STOPS_RUN.size and STOPS_RUN[code]
 
 
 class SystemPart(NamedTuple):
@@ -103,7 +116,8 @@ class SystemPart(NamedTuple):
 
 #: the kinds of terms compiled only for models that have them (docs/design-notes.md, "Compile
 #: time"); beams, loads and linear rows are in nearly every model
-OPTIONAL_KINDS = ("bodies", "norms", "terms", "sliding", "clearance", "springs", "drivers")
+OPTIONAL_KINDS = ("bodies", "norms", "terms", *(kind.name for kind in INTERACTION_KINDS), "springs",
+                  "drivers")
 
 
 @njit(inline="always")

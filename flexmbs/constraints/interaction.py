@@ -35,6 +35,15 @@ class InteractionKind:
     ``errors`` is turned into the exception of the interaction ``error[1]`` of this kind
     (:meth:`Interaction.error`).
 
+    ``stops``: the codes of ``errors`` after which the converged step stands and the run stops
+    (:class:`~flexmbs.errors.SimulationStopped`, e.g. a slide reaching the beam's end) instead
+    of the step failing and being cut.
+
+    ``begin(part, q)``: ``q`` is where the next step starts (a kind whose forces depend on the
+    step's start: the clearance joint's sticking friction); ``energy``: the name of a stored
+    energy of the kind's interactions in :meth:`~flexmbs.assembly.Assembly.energies` and the
+    function ``energy(obj, q, v)`` giving one interaction's share.
+
     ``name``: the interactions' ``term_kind`` and the field of
     :class:`~flexmbs.driver.SystemPart` holding the part; ``pattern(obj, dofs)``: the blocks
     ``(rows, cols)`` one interaction writes; ``pack(objs, ctx)``: the part of all of them
@@ -46,7 +55,10 @@ class InteractionKind:
     pattern: Callable[[Any, DofMap], list[tuple[np.ndarray, np.ndarray]]]
     pack: Callable[[list[Any], PackContext], Any]
     errors: tuple[int, ...] = ()
+    stops: tuple[int, ...] = ()
     enable: Callable[[Any, int, bool], None] | None = None
+    begin: Callable[[Any, np.ndarray], None] | None = None
+    energy: tuple[str, Callable[[Any, np.ndarray, np.ndarray], float]] | None = None
 
 
 class ModelParts(Protocol):

@@ -707,4 +707,4 @@ def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
 
 #: the sliding joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`)
 SLIDING = InteractionKind(name="sliding", pattern=sliding_pattern, pack=pack_sliding,
-                          errors=(ERR_END_OF_BEAM,))
+                          errors=(ERR_END_OF_BEAM,), stops=(ERR_END_OF_BEAM,))

@@ -748,7 +748,14 @@ def _enable_clearance(part: ClearancePart, i: int, on: bool) -> None:
     part.enabled[i] = on
 
 
+def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
+    part.q_start[:] = q
+
+
 #: the clearance joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`);
-#: a joint without a compiled form at the moment is switched off here and evaluated in Python
-CLEARANCE = InteractionKind(name="clearance", pattern=clearance_pattern, pack=pack_clearance,
-                            errors=(ERR_LEFT_BORE,), enable=_enable_clearance)
+#: a joint without a compiled form at the moment is switched off here and evaluated in Python;
+#: its contact potential is the energy "contact"
+CLEARANCE = InteractionKind(
+    name="clearance", pattern=clearance_pattern, pack=pack_clearance, errors=(ERR_LEFT_BORE,),
+    enable=_enable_clearance, begin=_begin_clearance,
+    energy=("contact", SlidingClearanceJoint.contact_energy))

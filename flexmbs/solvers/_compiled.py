@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
-from ..driver import ERR_END_OF_BEAM, jacobian, post_step, residual
+from ..driver import jacobian, post_step, residual, stops_run
 from ._bordered import BorderedFactor, bordered_factorize, bordered_solve
 from .newton import renew_jacobian
 
@@ -245,7 +245,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
             info[INFO_DONE] += 1.0
             continue
         info[INFO_CODE] = code
-        if code == ERR_END_OF_BEAM:   # the step stands, the run stops
+        if stops_run(code):   # the step stands, the run stops (driver.STOPS_RUN)
             info[INFO_DONE] += 1.0
             return STATUS_STOPPED
         _restore(backup, q, v, qdd, a, lam)
