@@ -1,0 +1,50 @@
+"""Hole sections, one module a shape (issue "a house easy to change"): :mod:`.circle`,
+:mod:`.superellipse`; what they share in :mod:`.base`. A shape module holds its compiled
+boundary kernel ``Y, Y′, Y″`` and inside test, its kind code and its :class:`HoleSection`
+class (registered in :data:`HOLE_SECTIONS`; the numpy view is derived from the kernel). The two
+dispatchers below are the only place that lists the compiled shapes: numba needs the calls
+spelt out.
+"""
+
+from __future__ import annotations
+
+from ..._jit import njit
+from .base import HOLE_SECTIONS, Candidate, Ellipse2D, HoleSection
+from .circle import (
+    SHAPE_CIRCLE,
+    CircleSection,
+    circle_boundary,
+    circle_contains,
+    circle_stationary_points,
+)
+from .superellipse import (
+    SHAPE_SUPERELLIPSE,
+    SuperellipseSection,
+    superellipse_boundary,
+    superellipse_contains,
+    superellipse_section_boundary,
+)
+
+__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_SUPERELLIPSE", "Candidate", "CircleSection",
+           "Ellipse2D", "HoleSection", "SuperellipseSection", "circle_boundary",
+           "circle_stationary_points", "section_boundary", "section_contains",
+           "superellipse_boundary"]
+
+
+@njit
+def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+    """``Y(ψ), Y′, Y″`` of a compiled hole section (``kind``, ``params`` of
+    :meth:`HoleSection.compiled_shape`): the detectors and the contact tangent read the wall
+    through it."""
+    if kind == SHAPE_CIRCLE:
+        circle_boundary(params[0], psi, Y, Yp, Ypp)
+    else:
+        superellipse_section_boundary(params, psi, Y, Yp, Ypp)
+
+
+@njit
+def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
+    """Whether the point (y, z) lies inside the compiled hole section (on the wall counts)."""
+    if kind == SHAPE_CIRCLE:
+        return circle_contains(params, y, z)
+    return superellipse_contains(params, y, z)

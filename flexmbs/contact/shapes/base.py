@@ -1,0 +1,205 @@
+"""What every hole section shares (FORMULATION II §2–§3, §6): the beam's section ellipse
+:class:`Ellipse2D`, a detected :class:`Candidate`, the :class:`HoleSection` base with the generic
+common-normal detector of §6 in numpy, and the registry :data:`HOLE_SECTIONS` of scenario shape
+names. The shapes themselves are one module each in this package."""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...errors import ModelError
+from ...registry import Registry
+
+__all__ = ["Candidate", "Ellipse2D", "HOLE_SECTIONS", "HoleSection"]
+
+
+@dataclass(frozen=True)
+class Ellipse2D:
+    """Beam section ellipse ``X(φ) = c + a cos φ e_a + b sin φ e_b`` (FORMULATION II §2–§3)."""
+
+    center: np.ndarray   #: (2,) centre c (beam centreline crossing) in section coordinates
+    e_a: np.ndarray      #: (2,) unit major axis
+    a: float             #: major semi-axis (a ≥ b)
+    b: float             #: minor semi-axis (b > 0)
+
+    def __post_init__(self) -> None:
+        c = np.asarray(self.center, dtype=float).reshape(2)
+        ea = np.asarray(self.e_a, dtype=float).reshape(2)
+        nrm = math.hypot(ea[0], ea[1])
+        if not nrm > 0.0:
+            raise ModelError("Ellipse2D: e_a must be a nonzero vector")
+        if not (self.b > 0.0 and self.a >= self.b * (1.0 - 1e-12)):
+            raise ModelError(f"Ellipse2D: need a >= b > 0 (got a={self.a}, b={self.b})")
+        object.__setattr__(self, "center", c)
+        object.__setattr__(self, "e_a", ea / nrm)
+        object.__setattr__(self, "a", float(self.a))
+        object.__setattr__(self, "b", float(self.b))
+
+    @property
+    def e_b(self) -> np.ndarray:
+        """Minor axis ``rot90(e_a)``."""
+        return np.array([-self.e_a[1], self.e_a[0]])
+
+    def point(self, phi: np.ndarray | float) -> np.ndarray:
+        """``X(φ)`` (..., 2)."""
+        phi = np.asarray(phi, dtype=float)
+        return (self.center + (self.a * np.cos(phi))[..., None] * self.e_a
+                + (self.b * np.sin(phi))[..., None] * self.e_b)
+
+    def angle_of(self, X: np.ndarray) -> float:
+        """Ellipse angle φ of a point X on the ellipse."""
+        d = np.asarray(X, dtype=float) - self.center
+        return math.atan2(float(d @ self.e_b) / self.b, float(d @ self.e_a) / self.a)
+
+    def support(self, N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Support point and map (FORMULATION II §6): ``X(N) = c + ΣN/√(NᵀΣN)`` and
+        ``J_E = (Σ − ΣNNᵀΣ/NᵀΣN)/√(NᵀΣN)`` for unit normals ``N (..., 2)``."""
+        N = np.asarray(N, dtype=float)
+        ea, eb = self.e_a, self.e_b
+        Sig = self.a**2 * np.outer(ea, ea) + self.b**2 * np.outer(eb, eb)
+        SN = N @ Sig
+        q = np.einsum("...i,...i->...", N, SN)
+        sq = np.sqrt(q)
+        X = self.center + SN / sq[..., None]
+        J = (Sig - SN[..., :, None] * SN[..., None, :] / q[..., None, None]) / sq[..., None, None]
+        return X, J
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One stationary point of the section penetration (FORMULATION II §3/§6)."""
+
+    phi: float           #: ellipse angle of X
+    X: np.ndarray        #: (2,) beam-ellipse point
+    Q: np.ndarray        #: (2,) hole boundary point (hole point of FORMULATION II §4)
+    normal: np.ndarray   #: (2,) outward hole normal at Q (from the bore into the hole material)
+    depth: float         #: penetration along the normal, > 0 = penetrating
+    kind: int            #: +1 local max of penetration (contact point), −1 local min
+    psi: float = field(default=math.nan)  #: boundary parameter of Q (generic detector only)
+
+
+# ---------------------------------------------------------------------------------------------
+class HoleSection(ABC):
+    """Convex C¹ hole cross-section (DESIGN.md "Pluggable parts", FORMULATION II §6)."""
+
+    #: number of samples of F(ψ) in the generic detector (≥ 64, FORMULATION II §6)
+    samples: int = 128
+
+    def boundary(self, psi: np.ndarray | float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(Y, N, T, speed, curvature)`` at parameter ψ ∈ [0, 2π): point, outward unit normal,
+        CCW unit tangent, ``|Y_ψ|``, curvature κ ≥ 0 (shapes ``(..., 2)`` / ``(...)``).
+
+        A section with a compiled boundary (:meth:`compiled_shape`) derives them from its kernel's
+        ``Y, Y′, Y″`` (:func:`flexmbs.contact.shapes.section_boundary`): ``T = Y′/|Y′|``, ``N`` =
+        T turned clockwise, ``κ = (Y′ × Y″)/|Y′|³``; a section defined in Python overrides it."""
+        shape = self.compiled_shape()
+        if shape is None:
+            raise NotImplementedError(f"{type(self).__name__}: a hole section without a compiled "
+                                      "boundary must define boundary(psi)")
+        from . import section_boundary
+
+        kind, params = shape
+        psi_a = np.asarray(psi, dtype=float)
+        flat = psi_a.reshape(-1)
+        Y, Yp, Ypp = np.empty((flat.size, 2)), np.empty((flat.size, 2)), np.empty((flat.size, 2))
+        for i in range(flat.size):
+            section_boundary(kind, params, float(flat[i]), Y[i], Yp[i], Ypp[i])
+        speed = np.hypot(Yp[:, 0], Yp[:, 1])
+        T = Yp / speed[:, None]
+        N = np.stack([T[:, 1], -T[:, 0]], axis=-1)
+        kappa = (Yp[:, 0] * Ypp[:, 1] - Yp[:, 1] * Ypp[:, 0]) / speed**3
+        shp = psi_a.shape
+        return (Y.reshape(shp + (2,)), N.reshape(shp + (2,)), T.reshape(shp + (2,)),
+                speed.reshape(shp), kappa.reshape(shp))
+
+    @abstractmethod
+    def bounding_radius(self) -> float:
+        """Radius of the smallest centred circle containing the section (broad phase)."""
+
+    @abstractmethod
+    def inscribed_radius(self) -> float:
+        """Radius of the largest centred circle inside the section (broad phase)."""
+
+    def compiled_shape(self) -> tuple[int, np.ndarray] | None:
+        """``(kind, params)`` of the compiled boundary kernel
+        (:func:`flexmbs.contact.shapes.section_boundary`), or None: the joint then runs this
+        section's Python detector."""
+        return None
+
+    def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
+        """All stationary points of the penetration with ``depth > −margin`` (FORMULATION II §6).
+
+        Generic detector: common-normal residual ``F(ψ) = T·(X(N(ψ)) − Y(ψ))`` sampled at
+        ``self.samples`` points, sign changes bracketed, safeguarded Newton with
+        ``F' = |Y_ψ|[κ(TᵀJ_E T − d) − 1]``; ``F' < 0`` is a maximum of ``d = N·(X − Y)``.
+        """
+        c = ellipse.center
+        if math.hypot(c[0], c[1]) + ellipse.a < self.inscribed_radius() - margin:
+            return []  # broad phase: the ellipse is strictly inside the inscribed circle
+        m = max(int(self.samples), 64)
+        psi = np.linspace(0.0, 2.0 * np.pi, m, endpoint=False)
+        F, _, _ = self._residual(ellipse, psi)
+        out: list[Candidate] = []
+        for i in range(m):
+            j = (i + 1) % m
+            if F[i] == 0.0 or F[i] * F[j] < 0.0:
+                lo = psi[i]
+                hi = psi[i] + 2.0 * np.pi / m
+                root = self._bracketed_root(ellipse, lo, hi, F[i])
+                if root is not None:
+                    cand = self._candidate(ellipse, root)
+                    if cand.depth > -margin:
+                        out.append(cand)
+        return out
+
+    # --- generic helpers -------------------------------------------------------------------
+    def _residual(self, ellipse: Ellipse2D, psi: np.ndarray | float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``F(ψ)``, ``F'(ψ)`` and ``d(ψ)`` (FORMULATION II §6)."""
+        Y, N, T, speed, kappa = self.boundary(psi)
+        X, J = ellipse.support(N)
+        F = np.einsum("...i,...i->...", T, X - Y)
+        d = np.einsum("...i,...i->...", N, X - Y)
+        rho = np.einsum("...i,...ij,...j->...", T, J, T)
+        dF = speed * (kappa * (rho - d) - 1.0)
+        return F, dF, d
+
+    def _bracketed_root(self, ellipse: Ellipse2D, lo: float, hi: float, flo: float
+                        ) -> float | None:
+        s = 0.5 * (lo + hi)
+        tol = 1e-13 * max(1.0, self.bounding_radius())
+        for _ in range(60):
+            F, dF, _ = self._residual(ellipse, s)
+            f = float(F)
+            df = float(dF)
+            if abs(f) <= tol:
+                return s
+            if (f < 0.0) == (flo < 0.0):
+                lo, flo = s, f
+            else:
+                hi = s
+            s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
+            if not (lo < s_new < hi):
+                s_new = 0.5 * (lo + hi)
+            if hi - lo < 1e-15:
+                return s_new
+            s = s_new
+        return s
+
+    def _candidate(self, ellipse: Ellipse2D, psi: float) -> Candidate:
+        Y, N, T, speed, kappa = self.boundary(psi)
+        X, J = ellipse.support(N)
+        d = float(N @ (X - Y))
+        dF = float(speed * (kappa * (T @ J @ T - d) - 1.0))
+        return Candidate(phi=ellipse.angle_of(X) % (2.0 * np.pi), X=X, Q=np.asarray(Y, dtype=float),
+                         normal=np.asarray(N, dtype=float), depth=d,
+                         kind=1 if dF < 0.0 else -1, psi=float(psi % (2.0 * np.pi)))
+
+
+#: scenario name -> hole section class (``hole = { shape = "circle", radius = ... }``)
+HOLE_SECTIONS: Registry[type[HoleSection]] = Registry("hole section")
