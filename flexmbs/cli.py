@@ -1,4 +1,5 @@
-"""Command line: ``flexmbs run | info | render | plot | sweep`` (DESIGN.md, "CLI").
+"""Command line: ``flexmbs run | info | render | plot | sweep | compile | paraview`` (DESIGN.md,
+"CLI"; ``paraview`` is :mod:`flexmbs.commands.paraview`).
 
 ``main(argv)`` returns the exit status, so tests call it directly::
 
@@ -152,6 +153,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--workers", type=int, metavar="N",
                        help="LocalCluster worker processes (default: one per core)")
     sweep.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+    from .commands import paraview as paraview_command
+
+    paraview_command.add_parser(sub)
     return parser
 
 
@@ -228,6 +232,10 @@ def _main(argv: Sequence[str] | None) -> int:
             return cmd_sweep(args)
         if args.command == "compile":
             return cmd_compile(args)
+        if args.command == "paraview":
+            from .commands import paraview as paraview_command
+
+            return paraview_command.run(args)
     except BrokenPipeError:   # e.g. `flexmbs info ... | head`: the reader left, not an error
         import os
 
