@@ -16,9 +16,9 @@
   A group is present in every frame when the model has such parts (``contacts`` when it has a
   joint that reports contacts, ``hole_sections`` when it has clearance joints), also when it
   is empty at that time (no active contact: a piece with no points), so the block tree is the
-  same for the whole series; a model without springs has no ``springs`` block. Every piece
-  also carries the cell data ``block_id`` (and ``beam_id``/``body_id``/``spring_id``) of the
-  merged form and the field data ``time``/``TimeValue``.
+  same for the whole series; a model without springs has no ``springs`` block. The names
+  replace the merged form's ``block_id``/``beam_id``/``body_id`` (not written: every array
+  costs time in every frame); every piece carries the field data ``time``.
 - ``"merged"`` (:meth:`FrameBuilder.__call__`): one :class:`~flexmbs.io.vtu.VTUMesh` per state
   holding every block in a single grid (one ``.vtu`` per frame; meshio reads a frame as one
   mesh). Blocks are told apart by integer cell data (no strings, so every reader handles
@@ -88,6 +88,8 @@ BLOCK_NAMES = {BLOCK_BEAM: "beam", BLOCK_BODY: "rigid_body", BLOCK_CONTACT: "con
                BLOCK_SPRING: "spring"}
 #: the forms of an output frame (scenario key ``simulation.output_frames``, ``--output-frames``)
 OUTPUT_FRAMES = ("multiblock", "merged")
+#: cell data of the merged grid that the multiblock's names replace
+_MERGED_IDS = ("block_id", "beam_id", "body_id")
 #: points on each bore outline of the ``hole_sections`` block
 OUTLINE_SAMPLES = 48
 
@@ -189,8 +191,7 @@ class FrameBuilder:
         """Beam ``b`` as one VTK_POLY_LINE (closed beams end on their first point)."""
         x, point_data = self._beam_point_data(b, q, v)
         return VTUMesh(x, [(VTK_POLY_LINE, [self._polyline[b.index]])], point_data=point_data,
-                       cell_data={"block_id": np.array([BLOCK_BEAM], np.int32),
-                                  "beam_id": np.array([b.index], np.int32)})
+                       cell_data={})
 
     def body_mesh(self, i: int, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         bi, d, pts, tri, ref = self.bodies[i]
@@ -318,7 +319,9 @@ class FrameBuilder:
             blocks.append(("hole_sections", self.outline_mesh(q)))
         frame = MultiBlock(blocks)
         for _, mesh in frame.leaves():
-            mesh.field_data = {"time": t, "TimeValue": t}
+            mesh.field_data = {"time": t}
+            for k in _MERGED_IDS:
+                mesh.cell_data.pop(k, None)
         return frame
 
     def __call__(self, state: State, *, contacts: Sequence[dict] | None = None) -> VTUMesh:

@@ -214,7 +214,13 @@ def _store(path: Path, text: str, atomic: bool) -> Path:
     if atomic:
         _atomic_write_text(path, text)
     else:
-        path.write_text(text, encoding="utf-8")
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        try:
+            data = memoryview(text.encode("utf-8"))
+            while data:
+                data = data[os.write(fd, data):]
+        finally:
+            os.close(fd)
     return path
 
 
@@ -248,6 +254,10 @@ def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
 #: VTK PolyData's cell sections, in the order it numbers cells, and the cell types they hold
 _POLY_SECTIONS = (("Verts", (VTK_VERTEX, 2)), ("Lines", (VTK_LINE, VTK_POLY_LINE)),
                   ("Polys", (VTK_TRIANGLE, VTK_QUAD, 7)))
+#: section of each VTK cell type (-1: not a PolyData cell)
+_SECTION_OF_TYPE = np.full(256, -1, np.int64)
+for _k, (_, _kinds) in enumerate(_POLY_SECTIONS):
+    _SECTION_OF_TYPE[list(_kinds)] = _k
 
 
 def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary",
@@ -260,10 +270,8 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     conn, offs, types = mesh.flat_cells()
     n, m = pts.shape[0], types.size
     _checked_arrays(mesh, n, m)
-    section = np.full(m, -1, np.int64)
-    for k, (_, kinds) in enumerate(_POLY_SECTIONS):
-        section[np.isin(types, kinds)] = k
-    if (section < 0).any():
+    section = _SECTION_OF_TYPE[types]
+    if m and section.min() < 0:
         bad = sorted(set(types[section < 0].tolist()))
         raise ValueError(f"PolyData holds vertices, lines and polygons only (cell types {bad})")
     starts = np.concatenate([[0], offs[:-1]]) if m else np.zeros(0, np.int64)
@@ -271,7 +279,7 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     cell_data = mesh.cell_data
     if m and (np.diff(section) < 0).any():
         cell_data = {k: np.asarray(v)[order] for k, v in mesh.cell_data.items()}
-    counts = [int((section == k).sum()) for k in range(len(_POLY_SECTIONS))]
+    counts = np.bincount(section, minlength=len(_POLY_SECTIONS)).tolist()
     out = ['<?xml version="1.0"?>\n',
            '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
            'header_type="UInt64">\n<PolyData>\n']
@@ -280,9 +288,9 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
                f'NumberOfLines="{counts[1]}" NumberOfStrips="0" NumberOfPolys="{counts[2]}">\n')
     out.extend(_attributes_xml(mesh.point_data, cell_data, pts, binary))
     for k, (tag, _) in enumerate(_POLY_SECTIONS):
-        ids = order[section[order] == k]
-        if not ids.size:
+        if not counts[k]:
             continue
+        ids = order[section[order] == k]
         sizes = offs[ids] - starts[ids]
         ends = np.cumsum(sizes)
         sel = conn[np.repeat(starts[ids] - (ends - sizes), sizes) + np.arange(int(ends[-1]))]
