@@ -41,10 +41,10 @@ Point data: ``displacement``, ``velocity`` (beams, bodies; zero on contact point
 ``arc_length`` (reference arc length from the first node), ``axial_strain``, ``curvature``
 (the curvature vector K = r'×r''/(|r'|² μ) of the cable), ``curvature_magnitude`` (beams),
 ``gap``, ``normal_force``, ``normal``, ``tangential_force`` (the friction force on the hole,
-3-vector), ``stick`` (1 while friction sticks, else 0), ``joint_id`` (index in
-``summary.json["vtu_blocks"]["joint_id"]``), ``section``, ``point_index`` (contacts.csv's
-``section``, ``point``)
-(contact points). Arrays that do not apply to a block hold NaN there (-1 for integers).
+3-vector), ``stick`` (1 while friction sticks, else 0) (contact points; the multiblock's
+``contacts`` also ``joint_id``, index in ``summary.json["vtu_blocks"]["joint_id"]``, and
+``section``, ``point_index``: contacts.csv's ``section``, ``point``).
+Arrays that do not apply to a block hold NaN there (-1 for integers).
 Spring cells carry ``spring_force`` (N, or N m for a rotational spring; tension
 positive, damping included) and ``spring_extension`` (length − rest length, or angle − rest
 angle, rad). Field data: ``time`` and ``TimeValue`` (the name ParaView/VTK recognise).
@@ -88,6 +88,8 @@ BLOCK_NAMES = {BLOCK_BEAM: "beam", BLOCK_BODY: "rigid_body", BLOCK_CONTACT: "con
                BLOCK_SPRING: "spring"}
 #: the forms of an output frame (scenario key ``simulation.output_frames``, ``--output-frames``)
 OUTPUT_FRAMES = ("multiblock", "merged")
+#: contact arrays of the multiblock only (the merged grid would pad them over every point)
+_MULTIBLOCK_ONLY = ("joint_id", "section", "point_index")
 #: cell data of the merged grid that the multiblock's names replace
 _MERGED_IDS = ("block_id", "beam_id", "body_id")
 #: points on each bore outline of the ``hole_sections`` block
@@ -330,7 +332,10 @@ class FrameBuilder:
         parts = [self.beam_mesh(b, q, v) for b in self.beams]
         parts += [self.body_mesh(i, q, v) for i in range(len(self.bodies))]
         if contacts:
-            parts.append(self.contact_mesh(contacts))
+            part = self.contact_mesh(contacts)
+            for k in _MULTIBLOCK_ONLY:      # padded over every point of the grid: left out
+                part.point_data.pop(k)
+            parts.append(part)
         if self.asm.model.springs:
             parts.append(self.spring_mesh(q, v))
         mesh = VTUMesh.merge(parts)
