@@ -1,4 +1,5 @@
-"""Command line: ``flexmbs run | info | render | plot | sweep`` (DESIGN.md, "CLI").
+"""Command line: ``flexmbs run | info | render | plot | sweep | compile | paraview`` (DESIGN.md,
+"CLI"; ``paraview`` is :mod:`flexmbs.commands.paraview`).
 
 ``main(argv)`` returns the exit status, so tests call it directly::
 
@@ -76,6 +77,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "appending to its files")
     run.add_argument("--overwrite", action="store_true",
                      help="replace the output of another scenario in the output folder")
+    run.add_argument("--output-frames", choices=("multiblock", "merged"),
+                     help="frames as VTK multiblocks of named blocks (.vtm, default) or one "
+                          "merged grid each (.vtu) (= --set simulation.output_frames=...)")
 
     info = sub.add_parser("info", parents=[overrides], help="print the model of a scenario",
                           description="Print the model: coordinates, beams, bodies, constraints, "
@@ -149,6 +153,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--workers", type=int, metavar="N",
                        help="LocalCluster worker processes (default: one per core)")
     sweep.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+    from .commands import paraview as paraview_command
+
+    paraview_command.add_parser(sub)
     return parser
 
 
@@ -225,6 +232,10 @@ def _main(argv: Sequence[str] | None) -> int:
             return cmd_sweep(args)
         if args.command == "compile":
             return cmd_compile(args)
+        if args.command == "paraview":
+            from .commands import paraview as paraview_command
+
+            return paraview_command.run(args)
     except BrokenPipeError:   # e.g. `flexmbs info ... | head`: the reader left, not an error
         import os
 
@@ -299,6 +310,8 @@ def _overrides(args: argparse.Namespace) -> list[str]:
         sets.append(f"simulation.t_end={args.t_end!r}")
     if getattr(args, "dt", None) is not None:
         sets.append(f"simulation.dt={args.dt!r}")
+    if getattr(args, "output_frames", None) is not None:
+        sets.append(f"simulation.output_frames={args.output_frames}")
     return sets
 
 
@@ -422,6 +435,10 @@ def _is_end_time(assignment: str) -> bool:
     return assignment.replace(" ", "").startswith("simulation.t_end=")
 
 
+def _is_output_form(assignment: str) -> bool:
+    return assignment.replace(" ", "").startswith("simulation.output_frames=")
+
+
 def _resume_overrides(args: argparse.Namespace) -> list[str]:
     """The overrides of a resumed run: the first run's (from ``summary.json``, without its end
     time) unless the same are given again; a different model is refused with one line naming
@@ -446,10 +463,12 @@ def _resume_overrides(args: argparse.Namespace) -> list[str]:
         raise ScenarioError(f"{where}: {args.scenario} has changed since that run started; a "
                             "resumed run must be the same model (only the end time may change)")
     first = [o for o in meta.get("overrides") or [] if not _is_end_time(o)]
-    now = [o for o in given if not _is_end_time(o)]
-    if now and now != first:
-        extra = [o for o in now if o not in first] or [o for o in first if o not in now] or now
-        raise ScenarioError(f"{where}: that run used --set {' '.join(first) or '(none)'}; this "
+    # the form of the frames is not the model's: a resume continues the series in its form
+    model = [o for o in first if not _is_output_form(o)]
+    now = [o for o in given if not _is_end_time(o) and not _is_output_form(o)]
+    if now and now != model:
+        extra = [o for o in now if o not in model] or [o for o in model if o not in now] or now
+        raise ScenarioError(f"{where}: that run used --set {' '.join(model) or '(none)'}; this "
                             f"one differs ({extra[0]}); a resumed run must be the same model "
                             "(only the end time may change)")
     return first + [o for o in given if _is_end_time(o)]

@@ -64,7 +64,8 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
         if sim.integrator == "static":
             st = solve_static(sc.model, sc.static_options(), t=sim.t_end,
                               redundant_constraints=sim.redundant_constraints, out=folder,
-                              probes=sc.probes, name=sc.name, metadata=metadata)
+                              probes=sc.probes, name=sc.name, metadata=metadata,
+                              output_frames=sim.output_frames)
             return RunOutcome(sc.name, folder, "completed", sim.t_end, 0, st.newton_iterations, 0)
         # where a progress bar starts; simulate() reports a missing or unreadable checkpoint
         start = (checkpoint_time(folder) if resume else None) or 0.0
@@ -74,6 +75,6 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
                        static_options=sc.static_options(),
                        redundant_constraints=sim.redundant_constraints, record_energy=False,
                        progress=callback, out=folder, probes=sc.probes, name=sc.name,
-                       resume=resume, metadata=metadata)
+                       resume=resume, metadata=metadata, output_frames=sim.output_frames)
         return RunOutcome(sc.name, folder, res.status, sim.t_end, res.stats.steps,
                           res.stats.newton_iterations, res.stats.rejected_steps)

@@ -110,14 +110,15 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
                  t: float = 0.0, redundant_constraints: str = "error",
                  out: str | os.PathLike | None = None, probes: Sequence[Probe] = (),
                  name: str | None = None, metadata: dict | None = None,
-                 write_vtu: bool = True) -> StaticResult:
+                 write_vtu: bool = True, output_frames: str = "multiblock") -> StaticResult:
     """Static equilibrium of ``model`` under its loads at time ``t`` (load stepping with
     ``options``).
 
     With ``out`` the equilibrium is written as the output folder of DESIGN.md ("Output folder")
     with one frame at ``t`` (zero velocity): ``<name>.pvd`` + ``vtu/``, ``probes.csv`` with
     ``probes``, ``contacts.csv``, ``checkpoint.npz`` and ``summary.json`` (``name`` defaults to
-    the model name; ``metadata`` is stored in the summary). A solve that does not converge
+    the model name; ``metadata`` is stored in the summary; ``output_frames``: ``"multiblock"``
+    or ``"merged"``, see :mod:`flexmbs.io.frames`). A solve that does not converge
     leaves the folder with ``status: "failed: ..."`` and raises :class:`ConvergenceError`.
     """
     asm = model if isinstance(model, Assembly) else Assembly(
@@ -127,7 +128,7 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
     run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
     t0 = time.perf_counter()
     with OutputWriter(out, run_name, asm, probes=probes, metadata=metadata,
-                      write_vtu=write_vtu) as writer:
+                      write_vtu=write_vtu, output_frames=output_frames) as writer:
         try:
             st = _solve_static(asm, options, t=t)
         except ConvergenceError as exc:
@@ -197,7 +198,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
              redundant_constraints: str = "error", out: str | os.PathLike | None = None,
              probes: Sequence[Probe] = (), name: str | None = None,
              static_options: StaticOptions | None = None, resume: bool = False,
-             metadata: dict | None = None, write_vtu: bool = True) -> Result:
+             metadata: dict | None = None, write_vtu: bool = True,
+             output_frames: str = "multiblock") -> Result:
     """Implicit dynamic simulation from the model's initial state (or its static equilibrium,
     ``initial_static=True``, solved with ``static_options``) to ``t_end`` with step ``dt``;
     results every ``output_interval``.
@@ -205,7 +207,9 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     With ``out`` the output folder of DESIGN.md ("Output folder") is written as the run goes
     (``<name>.pvd`` + ``vtu/``, ``probes.csv`` with ``probes``, ``contacts.csv``,
     ``checkpoint.npz``, ``summary.json``; ``name`` defaults to the model name) and stays valid
-    if the run fails (``status: "failed: ..."``) or is interrupted (``"interrupted"``).
+    if the run fails (``status: "failed: ..."``) or is interrupted (``"interrupted"``);
+    ``output_frames``: ``"multiblock"`` (a ``.vtm`` of named blocks per frame) or ``"merged"``
+    (one ``.vtu`` grid per frame), see :mod:`flexmbs.io.frames`.
     ``resume=True`` continues the stopped run in ``out`` from its ``checkpoint.npz`` to
     ``t_end``, appending to its files (see :func:`resume_point`); the returned history then
     starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``.
@@ -250,7 +254,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         if resume_t is not None:
             meta["resumed_from"] = resume_t
         writer = OutputWriter(out, run_name, asm, probes=probes, metadata=meta,
-                              write_vtu=write_vtu, resume_at=resume_t)
+                              write_vtu=write_vtu, resume_at=resume_t,
+                              output_frames=output_frames)
     if not resume:
         # after the folder exists: a failure here (an initial static solve that does not
         # converge, a singular mass matrix) still leaves summary.json saying why

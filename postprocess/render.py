@@ -1,6 +1,8 @@
 """Off-screen rendering of an output folder with pyvista: PNG frames and movies.
 
-Beams (cells with ``block_id == 0``, VTK_LINE segments) are joined into polylines and drawn as
+Frames are read in either form flexmbs writes: a multiblock ``.vtm`` (groups ``beams``,
+``bodies``, ``contacts``, ``springs``) or a merged ``.vtu`` (told apart by ``block_id``).
+Beams (cells with ``block_id == 0``, VTK_LINE segments, or poly lines) are joined into polylines and drawn as
 tubes of their section radius, coloured by a beam point field with a scalar bar; rigid bodies
 (``block_id == 1``) are translucent surfaces in their pose; contact points (``block_id == 2``)
 are spheres with arrows of the force on the beam, ``-normal_force * normal``, scaled so that the
@@ -45,8 +47,34 @@ def configure_offscreen() -> None:
         os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
 
 
+#: the group of a multiblock frame that holds each block_id of the merged frame
+_GROUPS = {0: "beams", 1: "bodies", 2: "contacts", 3: "springs"}
+
+
+def _leaves(mb: Any) -> list[Any]:
+    out: list[Any] = []
+    for b in mb:
+        if b is None:
+            continue
+        out.extend(_leaves(b) if hasattr(b, "n_blocks") else [b])
+    return out
+
+
 def _block(grid: Any, block: int) -> Any:
-    """The cells of one block as PolyData (None when absent)."""
+    """The cells of one block as PolyData (None when absent or empty)."""
+    if hasattr(grid, "n_blocks"):        # a multiblock frame: the named group
+        import pyvista as pv
+
+        group = _GROUPS[block]
+        if group not in grid.keys():   # noqa: SIM118 - block names, not data sets
+            return None
+        node = grid[group]
+        parts = [p for p in (_leaves(node) if hasattr(node, "n_blocks") else [node])
+                 if p is not None and p.n_points]
+        if not parts:
+            return None
+        one = parts[0] if len(parts) == 1 else pv.merge(parts)
+        return one if isinstance(one, pv.PolyData) else one.extract_surface(algorithm=None)
     ids = np.flatnonzero(np.asarray(grid.cell_data.get("block_id", np.zeros(grid.n_cells))) == block)
     if not ids.size:
         return None
@@ -54,7 +82,8 @@ def _block(grid: Any, block: int) -> Any:
 
 
 def _bounds_union(grids: Sequence[Any]) -> np.ndarray:
-    b = np.array([g.bounds for g in grids if g.n_points])
+    parts = [p for g in grids for p in (_leaves(g) if hasattr(g, "n_blocks") else [g])]
+    b = np.array([g.bounds for g in parts if g.n_points])
     return np.array([b[:, 0].min(), b[:, 1].max(), b[:, 2].min(), b[:, 3].max(),
                      b[:, 4].min(), b[:, 5].max()])
 
@@ -179,7 +208,8 @@ def _read_frame(pv: Any, path: Path) -> Any:
         grid = pv.read(str(path))
     except Exception as exc:   # noqa: BLE001 - VTK raises assorted errors on damaged files
         raise ValueError(f"frame {path} cannot be read ({exc})") from None
-    if getattr(grid, "n_blocks", None) == 0 or getattr(grid, "n_points", 1) == 0:
+    if getattr(grid, "n_blocks", None) == 0 or getattr(grid, "n_points", 1) == 0 or (
+            hasattr(grid, "n_blocks") and not any(p.n_points for p in _leaves(grid))):
         raise ValueError(f"frame {path} holds no data (damaged or cut off); flexmbs run "
                          "--resume rewrites the series from its checkpoint")
     return grid

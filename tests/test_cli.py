@@ -139,10 +139,13 @@ def test_divergence_exit_3_keeps_valid_output(tmp_path, capsys):
     assert 0.0 < t_f < 0.1 and s["steps"] == round(t_f / 1e-3)
     frames = read_pvd(out / "flexible_pendulum.pvd")
     assert [t for t, _ in frames] == pytest.approx(np.arange(0.0, t_f + 1e-9, 0.01))
-    meshio = pytest.importorskip("meshio")
-    for _, f in frames:
-        m = meshio.read(out / f)
-        assert "displacement" in m.point_data
+    vtk = pytest.importorskip("vtk")
+    for _, f in frames:                 # multiblock frames: the beam piece has its fields
+        reader = vtk.vtkXMLMultiBlockDataReader()
+        reader.SetFileName(str(out / f))
+        reader.Update()
+        beam = reader.GetOutput().GetBlock(0).GetBlock(0)
+        assert beam.GetNumberOfPoints() > 0 and beam.GetPointData().HasArray("displacement")
     assert len((out / "probes.csv").read_text().splitlines()) == len(frames) + 1
 
 

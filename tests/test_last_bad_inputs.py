@@ -213,7 +213,7 @@ def test_render_refuses_bad_fps_a_damaged_index_and_an_empty_frame(tmp_path, cap
              "--resume")
     empty = tmp_path / "empty"
     shutil.copytree(out, empty)
-    frames = sorted((empty / "vtu").glob("*.vtu"))
+    frames = sorted((empty / "vtu").glob("*.vtm"))
     frames[1].write_bytes(b"")
     _refused(["render", str(empty), "--quiet"], capsys, frames[1].name, "is empty")
     assert not (empty / "frames").exists()

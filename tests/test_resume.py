@@ -16,7 +16,7 @@ import pytest
 
 from flexmbs.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from flexmbs.io.checkpoint import load_checkpoint
-from flexmbs.io.vtu import read_pvd
+from flexmbs.io.vtu import frame_files, read_pvd
 
 ROOT = Path(__file__).resolve().parents[1]
 CANTILEVER = str(ROOT / "examples" / "cantilever.toml")
@@ -27,6 +27,16 @@ T1, T2 = "0.03", "0.06"
 
 def run(*args: str) -> int:
     return main(["run", *args, "--quiet"])
+
+
+def assert_same_frame(a: Path, b: Path) -> None:
+    """Frame ``b`` equals ``a`` byte for byte, and so do the pieces of a ``.vtm``."""
+    assert b.read_bytes() == a.read_bytes(), b.name
+    if a.suffix == ".vtm":
+        pieces = frame_files(a)
+        assert pieces
+        for p in pieces:
+            assert (b.parent / p.name).read_bytes() == p.read_bytes(), p.name
 
 
 def stopped_and_resumed(tmp_path: Path, extra: list[str]) -> tuple[Path, Path]:
@@ -44,7 +54,7 @@ def test_resume_bit_identical_with_full_newton(tmp_path):
         assert (part / f).read_bytes() == (full / f).read_bytes()
     assert read_pvd(part / "cantilever.pvd") == read_pvd(full / "cantilever.pvd")
     for _, f in read_pvd(full / "cantilever.pvd"):
-        assert (part / f).read_bytes() == (full / f).read_bytes()
+        assert_same_frame(full / f, part / f)
     sa, _ = load_checkpoint(full / "checkpoint.npz")
     sb, _ = load_checkpoint(part / "checkpoint.npz")
     assert sa.t == sb.t == 0.06
@@ -65,7 +75,7 @@ def test_resume_default_modified_newton_is_bit_identical(tmp_path):
     for f in ("probes.csv", "contacts.csv"):
         assert (part / f).read_bytes() == (full / f).read_bytes()
     for _, f in read_pvd(full / "cantilever.pvd"):
-        assert (part / f).read_bytes() == (full / f).read_bytes()
+        assert_same_frame(full / f, part / f)
     sa, _ = load_checkpoint(full / "checkpoint.npz")
     sb, _ = load_checkpoint(part / "checkpoint.npz")
     for k in ("q", "v", "qdd", "a", "lam"):
@@ -85,7 +95,7 @@ def test_resume_of_the_clearance_example_is_bit_identical(tmp_path):
     frames = read_pvd(full / "curved_beam_sleeve.pvd")
     assert read_pvd(part / "curved_beam_sleeve.pvd") == frames
     for _, f in frames:
-        assert (part / f).read_bytes() == (full / f).read_bytes()
+        assert_same_frame(full / f, part / f)
 
 
 def test_resume_drops_outputs_after_checkpoint(tmp_path):
@@ -138,15 +148,30 @@ def test_resume_keeps_frames_the_index_had_not_listed_yet(tmp_path):
     entries = read_pvd(pvd)
     assert len(entries) == 4
     text = pvd.read_text().splitlines()
-    pvd.write_text("\n".join(line for line in text if "_000002.vtu" not in line
-                             and "_000003.vtu" not in line) + "\n")   # the lagging index
+    pvd.write_text("\n".join(line for line in text if "_000002.vtm" not in line
+                             and "_000003.vtm" not in line) + "\n")   # the lagging index
     assert len(read_pvd(pvd)) == 2
     assert run(CANTILEVER, "--t-end", T2, "--resume", str(part), *FULL_NEWTON) == EXIT_OK
     entries = read_pvd(pvd)
     t = np.loadtxt(part / "probes.csv", delimiter=",", skiprows=1)[:, 0]
     np.testing.assert_allclose([e[0] for e in entries], t, rtol=0, atol=1e-15)
-    assert [Path(f).name for _, f in entries] == [f"cantilever_{k:06d}.vtu" for k in range(7)]
+    assert [Path(f).name for _, f in entries] == [f"cantilever_{k:06d}.vtm" for k in range(7)]
     assert all((part / f).is_file() for _, f in entries)
+    assert all(p.is_file() for _, f in entries for p in frame_files(part / f) or [None])
+
+
+def test_a_resumed_series_keeps_its_form(tmp_path):
+    """A series of merged .vtu frames (an earlier flexmbs, or --output-frames merged) is
+    continued in .vtu by a resume, whatever the default: one .pvd never mixes .vtu and .vtm."""
+    part = tmp_path / "part"
+    assert run(CANTILEVER, "--t-end", T1, "--out", str(part), "--output-frames", "merged",
+               *FULL_NEWTON) == EXIT_OK
+    assert run(CANTILEVER, "--t-end", T2, "--resume", str(part), *FULL_NEWTON) == EXIT_OK
+    names = [Path(f).name for _, f in read_pvd(part / "cantilever.pvd")]
+    assert names == [f"cantilever_{k:06d}.vtu" for k in range(7)]
+    assert not list((part / "vtu").glob("*.vt[mp]"))
+    summary = json.loads((part / "summary.json").read_text())
+    assert summary["files"]["frames"] == "merged" and summary["vtm_blocks"] is None
 
 
 @pytest.mark.parametrize("change", ["set", "dt", "edited"])

@@ -602,6 +602,15 @@ class SlidingClearanceJoint(Interaction):
                          "contacts": counts.get(k, 0)})
         return rows
 
+    def section_outlines(self, q: np.ndarray, samples: int = 48) -> np.ndarray:
+        """The bore outline of every hole section at ``q`` (output: the ``hole_sections`` block):
+        ``(n_sections, samples, 3)`` global points ``c + zeta_k n + Y_y(psi) e_y + Y_z(psi) e_z``
+        of the section boundary ``Y(psi)`` at ``psi = 2 pi j / samples`` in each section plane."""
+        _, centre, n, ey, ez = self._frames(q[self._body_dofs])
+        Y = self.hole.section.boundary(np.linspace(0.0, 2.0 * np.pi, int(samples), endpoint=False))[0]
+        ring = Y[:, :1] * ey + Y[:, 1:] * ez
+        return centre + np.asarray(self.stations)[:, None, None] * n + ring[None]
+
     def slide_coordinate(self, q: np.ndarray) -> float:
         """Arc length (from the beam's first node) of the projection of the hole centre onto
         the beam centreline."""

@@ -1,7 +1,28 @@
-"""Output frames of a model: one :class:`~flexmbs.io.vtu.VTUMesh` per state, holding every
-block of the model in a single grid (one ``.vtu`` per frame; meshio reads a frame as one mesh and
-ParaView shows everything after opening the ``.pvd``). Blocks are told apart by integer cell data
-(no strings, so every reader handles them):
+"""Output frames of a model, in two forms (``output_frames``, docs/cli.md "Output folder"):
+
+- ``"multiblock"`` (default, :meth:`FrameBuilder.multiblock`): a
+  :class:`~flexmbs.io.vtu.MultiBlock` (one ``.vtm`` per frame, a ``.vtp`` PolyData piece per
+  block) with named blocks, so that ParaView's block selector and *Extract Block* show the
+  model's parts::
+
+      beams/<beam name>      one poly line per beam (point data below, ``radius`` included)
+      bodies/<body name>     body surface (triangles)
+      contacts               contact points (vertices): gap, normal_force, normal,
+                             tangential_force, stick, joint_id, section, point_index
+      springs                spring-dampers (lines; rotational ones a vertex)
+      hole_sections          bore outlines of the clearance joints' sections (closed poly
+                             lines; cell data joint_id, section)
+
+  A group is present in every frame when the model has such parts (``contacts`` when it has a
+  joint that reports contacts, ``hole_sections`` when it has clearance joints), also when it
+  is empty at that time (no active contact: a piece with no points), so the block tree is the
+  same for the whole series; a model without springs has no ``springs`` block. The names
+  replace the merged form's ``block_id``/``beam_id``/``body_id`` (not written: every array
+  costs time in every frame); every piece carries the field data ``time``.
+- ``"merged"`` (:meth:`FrameBuilder.__call__`): one :class:`~flexmbs.io.vtu.VTUMesh` per state
+  holding every block in a single grid (one ``.vtu`` per frame; meshio reads a frame as one
+  mesh). Blocks are told apart by integer cell data (no strings, so every reader handles
+  them):
 
 ==============  =========================================================================
 cell data       meaning
@@ -19,15 +40,20 @@ The names behind ``beam_id``/``body_id``/``spring_id`` are listed in ``summary.j
 Point data: ``displacement``, ``velocity`` (beams, bodies; zero on contact points),
 ``arc_length`` (reference arc length from the first node), ``axial_strain``, ``curvature``
 (the curvature vector K = r'×r''/(|r'|² μ) of the cable), ``curvature_magnitude`` (beams),
-``gap``, ``normal_force``, ``normal`` (contact points). Arrays that do not apply to a block
-hold NaN there. Spring cells carry ``spring_force`` (N, or N m for a rotational spring; tension
+``gap``, ``normal_force``, ``normal``, ``tangential_force`` (the friction force on the hole,
+3-vector), ``stick`` (1 while friction sticks, else 0) (contact points; the multiblock's
+``contacts`` also ``joint_id``, index in ``summary.json["vtu_blocks"]["joint_id"]``, and
+``section``, ``point_index``: contacts.csv's ``section``, ``point``).
+Arrays that do not apply to a block hold NaN there (-1 for integers).
+Spring cells carry ``spring_force`` (N, or N m for a rotational spring; tension
 positive, damping included) and ``spring_extension`` (length − rest length, or angle − rest
 angle, rad). Field data: ``time`` and ``TimeValue`` (the name ParaView/VTK recognise).
 
-Beams are finely sampled polylines stored as VTK_LINE segments (meshio cannot read
-VTK_POLY_LINE): ``samples_per_element`` points per element at ξ = k/n, positions exact on the
-cubic Hermite centreline. In ParaView use *Extract Surface* then *Tube* to draw them as rods
-(pyvista: ``extract_surface().strip().tube(radius=...)``). Body surfaces come from
+Beams are finely sampled polylines: ``samples_per_element`` points per element at ξ = k/n,
+positions exact on the cubic Hermite centreline; in the merged grid stored as VTK_LINE segments
+(meshio cannot read VTK_POLY_LINE; in ParaView *Extract Surface* then *Tube*), in the multiblock
+as one VTK_POLY_LINE per beam in a PolyData piece (ParaView's *Tube* applies directly; "Vary
+Radius: By Absolute Scalar" on ``radius`` draws the true section). Body surfaces come from
 :mod:`flexmbs.io.surfaces`.
 """
 
@@ -45,14 +71,14 @@ from ..errors import ModelError
 from ..springs import ANGLE, spring_forces, spring_points
 from ..terms import dynamic_mode
 from .surfaces import body_surface
-from .vtu import VTK_LINE, VTK_TRIANGLE, VTK_VERTEX, VTUMesh
+from .vtu import VTK_LINE, VTK_POLY_LINE, VTK_TRIANGLE, VTK_VERTEX, MultiBlock, VTUMesh
 
 if TYPE_CHECKING:
     from ..assembly import Assembly
     from ..solvers.generalized_alpha import State
 
-__all__ = ["BLOCK_BEAM", "BLOCK_BODY", "BLOCK_CONTACT", "BLOCK_NAMES", "BLOCK_SPRING", "FrameBuilder",
-           "build_frame", "contact_location"]
+__all__ = ["BLOCK_BEAM", "BLOCK_BODY", "BLOCK_CONTACT", "BLOCK_NAMES", "BLOCK_SPRING",
+           "OUTPUT_FRAMES", "FrameBuilder", "build_frame", "contact_location"]
 
 BLOCK_BEAM = 0
 BLOCK_BODY = 1
@@ -60,6 +86,14 @@ BLOCK_CONTACT = 2
 BLOCK_SPRING = 3
 BLOCK_NAMES = {BLOCK_BEAM: "beam", BLOCK_BODY: "rigid_body", BLOCK_CONTACT: "contact",
                BLOCK_SPRING: "spring"}
+#: the forms of an output frame (scenario key ``simulation.output_frames``, ``--output-frames``)
+OUTPUT_FRAMES = ("multiblock", "merged")
+#: contact arrays of the multiblock only (the merged grid would pad them over every point)
+_MULTIBLOCK_ONLY = ("joint_id", "section", "point_index")
+#: cell data of the merged grid that the multiblock's names replace
+_MERGED_IDS = ("block_id", "beam_id", "body_id")
+#: points on each bore outline of the ``hole_sections`` block
+OUTLINE_SAMPLES = 48
 
 
 @dataclass
@@ -117,6 +151,13 @@ class FrameBuilder:
                 {"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
                  "beam_id": np.full(nseg, b.index, np.int32),
                  "body_id": np.full(nseg, -1, np.int32)}))
+        self._polyline = [np.append(np.arange(b.S.shape[0]), [0] if model.beams[b.index].closed
+                                    else []).astype(np.int64) for b in self.beams]
+        #: interactions that report contact points / bore outlines (blocks of the multiblock)
+        self._contact_sources = [j for j in model.interactions if hasattr(j, "output")]
+        self._outline_sources = [(i, j) for i, j in enumerate(model.interactions)
+                                 if hasattr(j, "section_outlines")]
+        self._joint_ids = {str(getattr(j, "name", i)): i for i, j in enumerate(model.interactions)}
         self.bodies = []
         for bi, body in enumerate(model.bodies):
             pts, tri = body_surface(body)
@@ -125,10 +166,11 @@ class FrameBuilder:
             ref = q0[:3] + pts @ rb.rotation_matrix(q0[3:]).T
             self.bodies.append((bi, d, pts, tri, ref))
 
-    def beam_mesh(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray) -> VTUMesh:
+    def _beam_point_data(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray
+                         ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         x = cable.interpolate(b.S, b.dofs, q)
         vel = cable.interpolate(b.S, b.dofs, v)
-        (etype, rest, options), elem_dofs, radius, cells = self._beam_const[b.index]
+        (etype, rest, options), elem_dofs, radius, _ = self._beam_const[b.index]
         point_data = {"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc}
         fields = etype.output_fields(q[elem_dofs], rest, options, b.xi)
         for name in self._field_names[b.group]:
@@ -137,9 +179,21 @@ class FrameBuilder:
             point_data[name] = values.reshape((n_elem * m, *values.shape[2:]))[b.flat]
         if "curvature" in point_data:
             point_data["curvature_magnitude"] = np.linalg.norm(point_data["curvature"], axis=1)
-        # section radius (for tubes: ParaView Tube "vary radius by scalar")
+        # section radius (for tubes: ParaView Tube "vary radius by absolute scalar")
         point_data["radius"] = radius
-        return VTUMesh(x, [(VTK_LINE, b.segments)], point_data=point_data, cell_data=cells)
+        return x, point_data
+
+    def beam_mesh(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray) -> VTUMesh:
+        """Beam ``b`` as VTK_LINE segments (the merged grid)."""
+        x, point_data = self._beam_point_data(b, q, v)
+        return VTUMesh(x, [(VTK_LINE, b.segments)], point_data=point_data,
+                       cell_data=self._beam_const[b.index][3])
+
+    def beam_polyline(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray) -> VTUMesh:
+        """Beam ``b`` as one VTK_POLY_LINE (closed beams end on their first point)."""
+        x, point_data = self._beam_point_data(b, q, v)
+        return VTUMesh(x, [(VTK_POLY_LINE, [self._polyline[b.index]])], point_data=point_data,
+                       cell_data={})
 
     def body_mesh(self, i: int, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         bi, d, pts, tri, ref = self.bodies[i]
@@ -155,20 +209,54 @@ class FrameBuilder:
                        "beam_id": np.full(nt, -1, np.int32),
                        "body_id": np.full(nt, bi, np.int32)})
 
-    @staticmethod
-    def contact_mesh(contacts: Sequence[dict]) -> VTUMesh:
+    def contact_mesh(self, contacts: Sequence[dict]) -> VTUMesh:
+        """Contact points as vertices (rows of :meth:`output` of the joints; missing values
+        NaN, or -1 for the integer arrays)."""
         n = len(contacts)
+        nan3 = (np.nan,) * 3
+
+        def vec(key: str) -> np.ndarray:
+            return np.array([np.asarray(c.get(key, nan3), float) for c in contacts],
+                            float).reshape(n, 3)
+
+        def num(key: str) -> np.ndarray:
+            return np.array([float(c[key]) if c.get(key) is not None else np.nan
+                             for c in contacts], float).reshape(n)
+
+        def ids(key: str) -> np.ndarray:    # an integer index (``point`` may be a position)
+            return np.array([int(c[key]) if c.get(key) is not None and np.ndim(c[key]) == 0
+                             else -1 for c in contacts], np.int32).reshape(n)
+
         pts = np.array([contact_location(c) for c in contacts], float).reshape(n, 3)
-        normal = np.array([np.asarray(c.get("normal", (np.nan,) * 3), float) for c in contacts],
-                          float).reshape(n, 3)
+        joint = np.array([self._joint_ids.get(str(c.get("joint")), -1) for c in contacts],
+                         np.int32).reshape(n)
         return VTUMesh(
             pts, [(VTK_VERTEX, np.arange(n, dtype=np.int64)[:, None])],
-            point_data={"gap": np.array([float(c["gap"]) for c in contacts]),
-                        "normal_force": np.array([float(c["normal_force"]) for c in contacts]),
-                        "normal": normal},
+            point_data={"gap": num("gap"), "normal_force": num("normal_force"),
+                        "normal": vec("normal"), "tangential_force": vec("tangential_force"),
+                        "stick": num("stick"), "joint_id": joint, "section": ids("section"),
+                        "point_index": ids("point")},
             cell_data={"block_id": np.full(n, BLOCK_CONTACT, np.int32),
                        "beam_id": np.full(n, -1, np.int32),
                        "body_id": np.full(n, -1, np.int32)})
+
+    def outline_mesh(self, q: np.ndarray) -> VTUMesh:
+        """The bore outlines of the clearance joints' sections: one closed poly line each,
+        cell data ``joint_id``, ``section``."""
+        pts, lines, joint, section = [], [], [], []
+        start = 0
+        for ji, j in self._outline_sources:
+            rings = j.section_outlines(q, OUTLINE_SAMPLES)
+            for k, ring in enumerate(rings):
+                m = ring.shape[0]
+                pts.append(ring)
+                lines.append(np.append(np.arange(start, start + m), start).astype(np.int64))
+                joint.append(ji)
+                section.append(k)
+                start += m
+        return VTUMesh(np.vstack(pts) if pts else np.zeros((0, 3)), [(VTK_POLY_LINE, lines)],
+                       cell_data={"joint_id": np.array(joint, np.int32),
+                                  "section": np.array(section, np.int32)})
 
     def spring_mesh(self, q: np.ndarray, v: np.ndarray) -> VTUMesh:
         """Translational springs as lines between their ends, rotational ones as a vertex at
@@ -192,13 +280,62 @@ class FrameBuilder:
                        "spring_id": order.astype(np.int32), "spring_force": fo[order, 1],
                        "spring_extension": fo[order, 0] - sp.l0[order]})
 
+    def block_tree(self) -> list[dict]:
+        """The pieces of :meth:`multiblock` frames (``summary.json["vtm_blocks"]``): their path
+        in the ``.vtm`` (``beams/rail``), kind and, for beams, the section radius (None for a
+        beam given by stiffnesses). A ``contacts`` block that only a caller's records create
+        (no joint of the model reports contacts) is not listed."""
+        model = self.asm.model
+        out: list[dict] = [{"path": f"beams/{b.name}", "kind": "beam", "name": b.name,
+                            "radius": None if b.radius is None else float(b.radius)}
+                           for b in model.beams]
+        out += [{"path": f"bodies/{b.name}", "kind": "body", "name": b.name} for b in model.bodies]
+        if self._contact_sources:
+            out.append({"path": "contacts", "kind": "contacts"})
+        if model.springs:
+            out.append({"path": "springs", "kind": "springs"})
+        if self._outline_sources:
+            out.append({"path": "hole_sections", "kind": "hole_sections"})
+        return out
+
+    def multiblock(self, state: State, *, contacts: Sequence[dict] | None = None) -> MultiBlock:
+        """One output frame as named blocks (module docstring)."""
+        q = np.asarray(state.q)
+        v = np.asarray(state.v)
+        model = self.asm.model
+        t = np.array([float(state.t)])
+        blocks: list[tuple[str, VTUMesh | MultiBlock]] = []
+        if self.beams:
+            blocks.append(("beams", MultiBlock([(model.beams[b.index].name,
+                                                 self.beam_polyline(b, q, v))
+                                                for b in self.beams])))
+        if self.bodies:
+            blocks.append(("bodies", MultiBlock([(model.bodies[self.bodies[i][0]].name,
+                                                  self.body_mesh(i, q, v))
+                                                 for i in range(len(self.bodies))])))
+        if self._contact_sources or contacts:
+            blocks.append(("contacts", self.contact_mesh(list(contacts or []))))
+        if model.springs:
+            blocks.append(("springs", self.spring_mesh(q, v)))
+        if self._outline_sources:
+            blocks.append(("hole_sections", self.outline_mesh(q)))
+        frame = MultiBlock(blocks)
+        for _, mesh in frame.leaves():
+            mesh.field_data = {"time": t}
+            for k in _MERGED_IDS:
+                mesh.cell_data.pop(k, None)
+        return frame
+
     def __call__(self, state: State, *, contacts: Sequence[dict] | None = None) -> VTUMesh:
         q = np.asarray(state.q)
         v = np.asarray(state.v)
         parts = [self.beam_mesh(b, q, v) for b in self.beams]
         parts += [self.body_mesh(i, q, v) for i in range(len(self.bodies))]
         if contacts:
-            parts.append(self.contact_mesh(contacts))
+            part = self.contact_mesh(contacts)
+            for k in _MULTIBLOCK_ONLY:      # padded over every point of the grid: left out
+                part.point_data.pop(k)
+            parts.append(part)
         if self.asm.model.springs:
             parts.append(self.spring_mesh(q, v))
         mesh = VTUMesh.merge(parts)

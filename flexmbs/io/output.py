@@ -6,7 +6,9 @@
 
 Files (every one valid after every output, so a run that stops early leaves readable results):
 
-- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtu`` (:mod:`flexmbs.io.vtu`, frames by :mod:`flexmbs.io.frames`);
+- ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtm`` with its pieces ``vtu/<name>_NNNNNN_<block>.vtp``
+  (``output_frames="multiblock"``, the default), or ``vtu/<name>_NNNNNN.vtu`` (``"merged"``)
+  (:mod:`flexmbs.io.vtu`, frames by :mod:`flexmbs.io.frames`);
 - ``probes.csv``: ``t,<probe columns>``, one row per output, flushed after each row;
 - ``contacts.csv``: ``t,joint,section,point,gap,normal_force,qx,qy,qz,px,py,pz,a,b``, one row
   per active contact (header written even if there is none; missing keys are empty fields);
@@ -18,7 +20,9 @@ Files (every one valid after every output, so a run that stops early leaves read
   ``failed: <reason>`` or ``interrupted``).
 
 ``OutputWriter(..., resume_at=t)`` continues the folder of a stopped run (``flexmbs run
---resume``): rows and frames at times ``<= t`` are kept, later ones removed, new ones appended.
+--resume``): rows and frames at times ``<= t`` are kept, later ones removed, new ones appended;
+the frames continue in the form the series has (``.vtm`` or ``.vtu``), whatever
+``output_frames`` says, so that one ``.pvd`` never mixes the two.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import FlexmbsError, ModelError
 from .checkpoint import save_checkpoint
-from .frames import BLOCK_NAMES, FrameBuilder
+from .frames import BLOCK_NAMES, OUTPUT_FRAMES, FrameBuilder
 from .probes import Probe, probe_columns
 from .vtu import VTUSeries
 
@@ -119,7 +123,9 @@ class OutputWriter:
     settings, ...) is stored under ``summary.json["metadata"]``. ``write_vtu=False`` skips the
     VTU series, ``checkpoints=False`` the checkpoint (written at most every
     ``checkpoint_interval`` s of wall time, and for the last output at the end). Each
-    :meth:`write` is one output time.
+    :meth:`write` is one output time. ``output_frames``: ``"multiblock"`` (a ``.vtm`` of named
+    blocks per frame) or ``"merged"`` (one ``.vtu`` grid per frame), see
+    :mod:`flexmbs.io.frames`.
     ``resume_at=t`` appends to the folder of an earlier run whose outputs up to ``t`` are kept
     (the CSV headers must match; the initial energy is taken from its ``summary.json``).
     """
@@ -128,7 +134,11 @@ class OutputWriter:
                  probes: Sequence[Probe] = (), write_vtu: bool = True, checkpoints: bool = True,
                  metadata: dict | None = None, samples_per_element: int = 8,
                  vtu_encoding: str = "binary", resume_at: float | None = None,
-                 checkpoint_interval: float = 10.0) -> None:
+                 checkpoint_interval: float = 10.0, output_frames: str = "multiblock") -> None:
+        if output_frames not in OUTPUT_FRAMES:
+            raise ModelError(f"output_frames must be one of {', '.join(OUTPUT_FRAMES)} "
+                             f"(got {output_frames!r})")
+        self.output_frames = output_frames
         self.directory = Path(directory)
         self.name = str(name)
         self.asm = asm
@@ -165,6 +175,9 @@ class OutputWriter:
                 self.frames = FrameBuilder(asm, samples_per_element=samples_per_element)
                 self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding,
                                         resume_at=self.resume_at)
+                if self.series.entries:     # a resumed series keeps its form
+                    last = self.series.entries[-1][1]
+                    self.output_frames = "multiblock" if last.endswith(".vtm") else "merged"
             self._probe_file, kept = self._open_csv("probes.csv", ["t", *self.probe_columns])
             self._contact_file, _ = self._open_csv("contacts.csv", list(CONTACT_COLUMNS))
             self._section_file: TextIO | None = None   # opened at the first section row
@@ -234,8 +247,9 @@ class OutputWriter:
         t = float(state.t)
         contacts = list(contacts or [])
         if self.series is not None and self.frames is not None:
-            frame = self.frames(state, contacts=contacts)
-            with _naming(self.series.vtu_dir / f"{self.series.name}_{self.series.step:06d}.vtu"):
+            frame = (self.frames.multiblock(state, contacts=contacts)
+                     if self.output_frames == "multiblock" else self.frames(state, contacts=contacts))
+            with _naming(self.series.next_path(frame)):
                 self.series.write(t, frame)
         if probe_values is None:
             probe_values = np.concatenate(
@@ -303,12 +317,17 @@ class OutputWriter:
             "energy_balance": energy,
             "stats": st,
             "files": {"pvd": self.pvd_path.name if self.series else None,
+                      "frames": self.output_frames if self.series else None,
                       "probes": "probes.csv", "contacts": "contacts.csv",
                       "checkpoint": self.checkpoint_path.name if self.checkpoints else None},
             "vtu_blocks": {"block_id": {str(k): v for k, v in BLOCK_NAMES.items()},
                            "beam_id": [b.name for b in model.beams],
                            "body_id": [b.name for b in model.bodies],
-                           "spring_id": [s.name for s in model.springs]},
+                           "spring_id": [s.name for s in model.springs],
+                           "joint_id": [str(getattr(j, "name", i))
+                                        for i, j in enumerate(model.interactions)]},
+            "vtm_blocks": (self.frames.block_tree() if self.frames is not None
+                           and self.output_frames == "multiblock" else None),
             "hole_sections": {j.name: j.hole_record() for j in model.interactions
                               if hasattr(j, "hole_record")},
             "metadata": self.metadata,

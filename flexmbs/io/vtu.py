@@ -1,10 +1,13 @@
-"""The VTU/PVD file format (DESIGN.md, "Output folder"): one grid per file, a time series.
+"""The VTK XML files of the output (DESIGN.md, "Output folder"): frames and their time series.
 
-:class:`VTUMesh` holds one unstructured grid (points, cell blocks, point/cell/field data);
-:func:`write_vtu` writes it as a VTK XML UnstructuredGrid without vtk or pyvista (inline base64
-binary or exact ASCII); :class:`VTUSeries` writes one ``.vtu`` per frame and the ``.pvd``
-collection listing them; :func:`read_pvd` reads that index back. What a frame of a model contains
-is :mod:`flexmbs.io.frames`; body surfaces are :mod:`flexmbs.io.surfaces`.
+:class:`VTUMesh` holds one grid (points, cell blocks, point/cell/field data); :func:`write_vtu`
+writes it as a VTK XML UnstructuredGrid, :func:`write_vtp` as PolyData, both without vtk or
+pyvista (inline base64 binary or exact ASCII). :class:`MultiBlock` is a tree of named grids;
+:func:`write_vtm` writes it as a VTK XML multiblock ``.vtm`` with one ``.vtp`` per leaf beside
+it (ParaView's block selector shows the names). :class:`VTUSeries` writes one frame per output
+(a ``.vtu``, or a ``.vtm`` and its pieces) and the ``.pvd`` collection listing them;
+:func:`read_pvd` reads that index back. What a frame of a model contains is
+:mod:`flexmbs.io.frames`; body surfaces are :mod:`flexmbs.io.surfaces`.
 
 Writing is crash-safe: every ``.vtu`` goes to a temporary file renamed into place, and the
 ``.pvd`` index is rewritten atomically after every frame, so a run that stops early leaves a
@@ -25,7 +28,8 @@ from types import TracebackType
 import numpy as np
 
 __all__ = ["VTK_LAGRANGE_CURVE", "VTK_LINE", "VTK_POLY_LINE", "VTK_QUAD", "VTK_TRIANGLE",
-           "VTK_VERTEX", "VTUMesh", "VTUSeries", "read_pvd", "write_vtu"]
+           "VTK_VERTEX", "MultiBlock", "VTUMesh", "VTUSeries", "frame_files", "read_pvd",
+           "write_vtm", "write_vtp", "write_vtu"]
 
 VTK_VERTEX = 1
 VTK_LINE = 3
@@ -169,6 +173,57 @@ def _atomic_write_text(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
+def _checked_arrays(mesh: VTUMesh, n: int, m: int) -> None:
+    for k, v in mesh.point_data.items():
+        if np.asarray(v).shape[0] != n:
+            raise ValueError(f"point data '{k}' has {np.asarray(v).shape[0]} rows, mesh has {n} points")
+    for k, v in mesh.cell_data.items():
+        if np.asarray(v).shape[0] != m:
+            raise ValueError(f"cell data '{k}' has {np.asarray(v).shape[0]} rows, mesh has {m} cells")
+
+
+def _field_xml(mesh: VTUMesh, binary: bool) -> list[str]:
+    if not mesh.field_data:
+        return []
+    out = ["<FieldData>\n"]
+    out.extend(_data_array(k, np.atleast_1d(np.asarray(v)), binary, tuples=True)
+               for k, v in mesh.field_data.items())
+    out.append("</FieldData>\n")
+    return out
+
+
+def _attributes_xml(point_data: dict[str, np.ndarray], cell_data: dict[str, np.ndarray],
+                    pts: np.ndarray, binary: bool) -> list[str]:
+    out = ["<PointData>\n"]
+    out.extend(_data_array(k, np.asarray(v), binary) for k, v in point_data.items())
+    out.append("</PointData>\n<CellData>\n")
+    out.extend(_data_array(k, np.asarray(v), binary) for k, v in cell_data.items())
+    out.append("</CellData>\n<Points>\n")
+    out.append(_data_array("Points", pts, binary))
+    out.append("</Points>\n")
+    return out
+
+
+def _encoding(encoding: str) -> bool:
+    if encoding not in ("binary", "ascii"):
+        raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
+    return encoding == "binary"
+
+
+def _store(path: Path, text: str, atomic: bool) -> Path:
+    if atomic:
+        _atomic_write_text(path, text)
+    else:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        try:
+            data = memoryview(text.encode("utf-8"))
+            while data:
+                data = data[os.write(fd, data):]
+        finally:
+            os.close(fd)
+    return path
+
+
 def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary",
               atomic: bool = True) -> Path:
     """Write ``mesh`` as a VTK XML UnstructuredGrid (``atomic``: temp file + rename; a series
@@ -177,57 +232,164 @@ def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
 
     ``encoding="binary"`` (inline base64, exact bits) or ``"ascii"`` (shortest round-trip
     decimal, also exact)."""
-    if encoding not in ("binary", "ascii"):
-        raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
-    binary = encoding == "binary"
-    path = Path(path)
+    binary = _encoding(encoding)
     pts = np.asarray(mesh.points, np.float64).reshape(-1, 3)
     conn, offs, types = mesh.flat_cells()
     n, m = pts.shape[0], types.size
-    for k, v in mesh.point_data.items():
-        if np.asarray(v).shape[0] != n:
-            raise ValueError(f"point data '{k}' has {np.asarray(v).shape[0]} rows, mesh has {n} points")
-    for k, v in mesh.cell_data.items():
-        if np.asarray(v).shape[0] != m:
-            raise ValueError(f"cell data '{k}' has {np.asarray(v).shape[0]} rows, mesh has {m} cells")
+    _checked_arrays(mesh, n, m)
     out = ['<?xml version="1.0"?>\n',
            '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
            'header_type="UInt64">\n<UnstructuredGrid>\n']
-    if mesh.field_data:
-        out.append("<FieldData>\n")
-        for k, v in mesh.field_data.items():
-            out.append(_data_array(k, np.atleast_1d(np.asarray(v)), binary, tuples=True))
-        out.append("</FieldData>\n")
+    out.extend(_field_xml(mesh, binary))
     out.append(f'<Piece NumberOfPoints="{n}" NumberOfCells="{m}">\n')
-    out.append("<PointData>\n")
-    out.extend(_data_array(k, np.asarray(v), binary) for k, v in mesh.point_data.items())
-    out.append("</PointData>\n<CellData>\n")
-    out.extend(_data_array(k, np.asarray(v), binary) for k, v in mesh.cell_data.items())
-    out.append("</CellData>\n<Points>\n")
-    out.append(_data_array("Points", pts, binary))
-    out.append("</Points>\n<Cells>\n")
+    out.extend(_attributes_xml(mesh.point_data, mesh.cell_data, pts, binary))
+    out.append("<Cells>\n")
     out.append(_data_array("connectivity", conn, binary))
     out.append(_data_array("offsets", offs, binary))
     out.append(_data_array("types", types, binary))
     out.append("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
-    if atomic:
-        _atomic_write_text(path, "".join(out))
-    else:
-        path.write_text("".join(out), encoding="utf-8")
-    return path
+    return _store(Path(path), "".join(out), atomic)
+
+
+#: VTK PolyData's cell sections, in the order it numbers cells, and the cell types they hold
+_POLY_SECTIONS = (("Verts", (VTK_VERTEX, 2)), ("Lines", (VTK_LINE, VTK_POLY_LINE)),
+                  ("Polys", (VTK_TRIANGLE, VTK_QUAD, 7)))
+#: section of each VTK cell type (-1: not a PolyData cell)
+_SECTION_OF_TYPE = np.full(256, -1, np.int64)
+for _k, (_, _kinds) in enumerate(_POLY_SECTIONS):
+    _SECTION_OF_TYPE[list(_kinds)] = _k
+
+
+def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary",
+              atomic: bool = True) -> Path:
+    """Write ``mesh`` as a VTK XML PolyData file: vertices, lines/poly lines and polygons
+    (triangles, quads) only. PolyData numbers its cells verts, then lines, then polys: cell data
+    is reordered so (a stable sort by section). Arguments as :func:`write_vtu`."""
+    binary = _encoding(encoding)
+    pts = np.asarray(mesh.points, np.float64).reshape(-1, 3)
+    conn, offs, types = mesh.flat_cells()
+    n, m = pts.shape[0], types.size
+    _checked_arrays(mesh, n, m)
+    section = _SECTION_OF_TYPE[types]
+    if m and section.min() < 0:
+        bad = sorted(set(types[section < 0].tolist()))
+        raise ValueError(f"PolyData holds vertices, lines and polygons only (cell types {bad})")
+    starts = np.concatenate([[0], offs[:-1]]) if m else np.zeros(0, np.int64)
+    order = np.argsort(section, kind="stable")
+    cell_data = mesh.cell_data
+    if m and (np.diff(section) < 0).any():
+        cell_data = {k: np.asarray(v)[order] for k, v in mesh.cell_data.items()}
+    counts = np.bincount(section, minlength=len(_POLY_SECTIONS)).tolist()
+    out = ['<?xml version="1.0"?>\n',
+           '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
+           'header_type="UInt64">\n<PolyData>\n']
+    out.extend(_field_xml(mesh, binary))
+    out.append(f'<Piece NumberOfPoints="{n}" NumberOfVerts="{counts[0]}" '
+               f'NumberOfLines="{counts[1]}" NumberOfStrips="0" NumberOfPolys="{counts[2]}">\n')
+    out.extend(_attributes_xml(mesh.point_data, cell_data, pts, binary))
+    for k, (tag, _) in enumerate(_POLY_SECTIONS):
+        if not counts[k]:
+            continue
+        ids = order[section[order] == k]
+        sizes = offs[ids] - starts[ids]
+        ends = np.cumsum(sizes)
+        sel = conn[np.repeat(starts[ids] - (ends - sizes), sizes) + np.arange(int(ends[-1]))]
+        out.append(f"<{tag}>\n")
+        out.append(_data_array("connectivity", sel.astype(np.int64), binary))
+        out.append(_data_array("offsets", ends.astype(np.int64), binary))
+        out.append(f"</{tag}>\n")
+    out.append("</Piece>\n</PolyData>\n</VTKFile>\n")
+    return _store(Path(path), "".join(out), atomic)
+
+
+@dataclass
+class MultiBlock:
+    """A tree of named grids (a VTK multiblock data set): ``blocks`` is a list of
+    ``(name, VTUMesh | MultiBlock)``; names are what ParaView's block selector shows."""
+
+    blocks: list[tuple[str, VTUMesh | MultiBlock]] = field(default_factory=list)
+
+    def leaves(self, prefix: str = "") -> list[tuple[str, VTUMesh]]:
+        """``(path, grid)`` of every grid, depth first; paths join the names with ``/``."""
+        out: list[tuple[str, VTUMesh]] = []
+        for name, b in self.blocks:
+            path = f"{prefix}{name}"
+            out.extend(b.leaves(path + "/") if isinstance(b, MultiBlock) else [(path, b)])
+        return out
+
+
+_SLUG = re.compile(r"[^A-Za-z0-9]+")
+
+
+def _piece_names(frame: MultiBlock, stem: str) -> list[str]:
+    """File names of the leaves of ``frame``: ``<stem>_<top block>[_<index>...].vtp`` (the top
+    block's name reduced to letters and digits, then the leaf's indices below it)."""
+    names: list[str] = []
+
+    def walk(b: MultiBlock, slug: str) -> None:
+        for i, (name, child) in enumerate(b.blocks):
+            part = f"{slug}_{i}" if slug else (_SLUG.sub("_", name).strip("_") or f"block{i}")
+            if isinstance(child, MultiBlock):
+                walk(child, part)
+            else:
+                names.append(f"{stem}_{part}.vtp")
+
+    walk(frame, "")
+    if len(set(names)) != len(names):    # top-level names that reduce to the same slug
+        names = [f"{stem}_{i}.vtp" for i in range(len(names))]
+    return names
+
+
+def write_vtm(path: str | os.PathLike, frame: MultiBlock, *, encoding: str = "binary",
+              atomic: bool = True) -> list[Path]:
+    """Write ``frame`` as ``path`` (``.vtm``, VTK XML multiblock) and one PolyData ``.vtp`` per
+    leaf beside it (:func:`write_vtp`; named ``<stem>_<top block>[_<index>].vtp``). The pieces
+    are written first, the ``.vtm`` last, so a complete ``.vtm`` lists complete pieces. Returns
+    the paths, the ``.vtm`` last."""
+    from xml.sax.saxutils import quoteattr
+
+    path = Path(path)
+    files = iter(_piece_names(frame, path.stem))
+    written: list[Path] = []
+
+    def block_xml(b: MultiBlock, depth: int) -> list[str]:
+        out: list[str] = []
+        pad = "  " * depth
+        for i, (name, child) in enumerate(b.blocks):
+            if isinstance(child, MultiBlock):
+                out.append(f"{pad}<Block index=\"{i}\" name={quoteattr(name)}>\n")
+                out.extend(block_xml(child, depth + 1))
+                out.append(f"{pad}</Block>\n")
+            else:
+                fname = next(files)
+                written.append(write_vtp(path.parent / fname, child, encoding=encoding,
+                                         atomic=atomic))
+                out.append(f"{pad}<DataSet index=\"{i}\" name={quoteattr(name)} "
+                           f"file={quoteattr(fname)}/>\n")
+        return out
+
+    body = block_xml(frame, 1)
+    text = ('<?xml version="1.0"?>\n<VTKFile type="vtkMultiBlockDataSet" version="1.0" '
+            'byte_order="LittleEndian" header_type="UInt64">\n<vtkMultiBlockDataSet>\n'
+            + "".join(body) + "</vtkMultiBlockDataSet>\n</VTKFile>\n")
+    written.append(_store(path, text, atomic))
+    return written
 
 
 class VTUSeries:
-    """A time series of ``.vtu`` files indexed by a ``.pvd`` collection (context manager)::
+    """A time series of frames indexed by a ``.pvd`` collection (context manager)::
 
         with VTUSeries(out_dir / "run.pvd") as series:
             series.write(t, mesh)      # vtu/run_000000.vtu, then run.pvd rewritten
+            series.write(t, blocks)    # a MultiBlock: vtu/run_000001.vtm + run_000001_*.vtp
 
-    The ``.pvd`` is valid after construction (empty collection) and after every write: it is
-    rewritten (atomically) after each of the first frames, then at most every
-    ``pvd_interval`` seconds of wall time, and with every frame on :meth:`close` (a long series
-    would otherwise rewrite an ever longer index per frame). Stale frames
-    ``<name>_NNNNNN.vtu`` of an earlier run in the same folder are removed on creation.
+    A frame is a :class:`VTUMesh` (one ``.vtu``) or a :class:`MultiBlock` (a ``.vtm`` and its
+    ``.vtp`` pieces, :func:`write_vtm`). The ``.pvd`` is valid after construction (empty
+    collection) and after every write: it is rewritten (atomically) after each of the first
+    frames, then at most every ``pvd_interval`` seconds of wall time, and with every frame on
+    :meth:`close` (a long series would otherwise rewrite an ever longer index per frame). Stale
+    frames ``<name>_NNNNNN.vtu|.vtm`` (and pieces ``<name>_NNNNNN_*.vtp``) of an earlier run in
+    the same folder are removed on creation.
 
     ``resume_at=t`` continues an existing series instead (a resumed run): the frames of the
     ``.pvd`` at times ``<= t`` are kept, later ones (and their files) are removed, and new
@@ -252,10 +414,11 @@ class VTUSeries:
         if resume_at is not None:
             self.entries = [(t, f) for t, f in read_pvd(self.pvd_path) if t <= resume_at]
             self._recover_unlisted(resume_at)
-        keep = {Path(f).name for _, f in self.entries}
-        stale = re.compile(rf"{re.escape(self.name)}_\d{{6,}}\.vtu")
+        keep = {Path(f).stem for _, f in self.entries}
+        stale = re.compile(rf"({re.escape(self.name)}_\d{{6,}})(\.vtu|\.vtm|_[A-Za-z0-9_]+\.vtp)")
         for f in self.vtu_dir.iterdir():
-            if stale.fullmatch(f.name) and f.name not in keep:
+            m = stale.fullmatch(f.name)
+            if m and m.group(1) not in keep:
                 f.unlink()
         self.closed = False
         self.pvd_interval = float(pvd_interval)
@@ -271,8 +434,12 @@ class VTUSeries:
         last = self.entries[-1][0] if self.entries else -np.inf
         k = len(self.entries)
         while True:
-            fname = f"{self.name}_{k:06d}.vtu"
-            t = frame_time(self.vtu_dir / fname)
+            t = None
+            for ext in (".vtm", ".vtu"):
+                fname = f"{self.name}_{k:06d}{ext}"
+                if (self.vtu_dir / fname).is_file():
+                    t = frame_time(self.vtu_dir / fname)
+                    break
             if t is None or not last < t <= resume_at:
                 return
             self.entries.append((t, f"{self.vtu_subdir}/{fname}"))
@@ -284,13 +451,21 @@ class VTUSeries:
         """Number of frames written so far (= index of the next frame)."""
         return len(self.entries)
 
-    def write(self, t: float, mesh: VTUMesh) -> Path:
-        """Write one frame at time ``t``; returns the path of its ``.vtu``."""
+    def next_path(self, frame: VTUMesh | MultiBlock) -> Path:
+        """The file the next :meth:`write` of ``frame`` creates (``.vtm`` or ``.vtu``)."""
+        ext = ".vtm" if isinstance(frame, MultiBlock) else ".vtu"
+        return self.vtu_dir / f"{self.name}_{self.step:06d}{ext}"
+
+    def write(self, t: float, frame: VTUMesh | MultiBlock) -> Path:
+        """Write one frame at time ``t``; returns the path of its ``.vtu`` or ``.vtm``."""
         if self.closed:
             raise ValueError(f"VTUSeries {self.pvd_path} is closed")
-        fname = f"{self.name}_{self.step:06d}.vtu"
-        path = write_vtu(self.vtu_dir / fname, mesh, encoding=self.encoding, atomic=False)
-        self.entries.append((float(t), f"{self.vtu_subdir}/{fname}"))
+        path = self.next_path(frame)
+        if isinstance(frame, MultiBlock):
+            write_vtm(path, frame, encoding=self.encoding, atomic=False)
+        else:
+            write_vtu(path, frame, encoding=self.encoding, atomic=False)
+        self.entries.append((float(t), f"{self.vtu_subdir}/{path.name}"))
         self._pvd_stale = True
         if (len(self.entries) <= self.EAGER_FRAMES
                 or time.perf_counter() - self._pvd_written >= self.pvd_interval):
@@ -324,11 +499,29 @@ class VTUSeries:
 _PVD_DATASET = re.compile(r'<DataSet\b[^>]*\btimestep="([^"]*)"[^>]*\bfile="([^"]*)"')
 
 
-def frame_time(path: str | os.PathLike) -> float | None:
-    """The ``time`` field data of a frame written by :func:`write_vtu`, or None when the file is
-    missing, incomplete or has none."""
+def frame_files(path: str | os.PathLike) -> list[Path] | None:
+    """The pieces a ``.vtm`` frame lists (paths beside it), or None when it is missing or
+    incomplete."""
     import xml.etree.ElementTree as ET
 
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return None
+    return [path.parent / str(ds.get("file")) for ds in root.iter("DataSet") if ds.get("file")]
+
+
+def frame_time(path: str | os.PathLike) -> float | None:
+    """The ``time`` field data of a frame written by :func:`write_vtu` (of the first piece of a
+    ``.vtm`` whose pieces all exist), or None when the file is missing, incomplete or has none."""
+    import xml.etree.ElementTree as ET
+
+    if str(path).endswith(".vtm"):
+        pieces = frame_files(path)
+        if not pieces or not all(p.is_file() for p in pieces):
+            return None
+        path = pieces[0]
     try:
         root = ET.parse(path).getroot()
     except (OSError, ET.ParseError):

@@ -137,7 +137,7 @@ def test_a_full_disk_names_the_file_sets_the_status_and_leaves_no_temporaries(tm
 
     from flexmbs.io import vtu
 
-    real = vtu.write_vtu
+    real = vtu.write_vtp        # each piece of a multiblock frame
     calls = []
 
     def full_disk(path, mesh, **kw):
@@ -146,15 +146,15 @@ def test_a_full_disk_names_the_file_sets_the_status_and_leaves_no_temporaries(tm
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return real(path, mesh, **kw)
 
-    monkeypatch.setattr(vtu, "write_vtu", full_disk)
+    monkeypatch.setattr(vtu, "write_vtp", full_disk)
     out = tmp_path / "o"
     code = main(["run", CANTILEVER, "--t-end", "0.05", "--quiet", "--out", str(out)])
     assert code == 3
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "cantilever_000002.vtu" in err[0] and "No space left" in err[0]
+    assert len(err) == 1 and "cantilever_000002.vtm" in err[0] and "No space left" in err[0]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"].startswith("failed: cannot write or read")
-    assert "cantilever_000002.vtu" in summary["status"]
+    assert "cantilever_000002.vtm" in summary["status"]
     assert not list(out.glob(".*.tmp")) and not list(out.glob("*.tmp"))
     assert not (out / LOCK_NAME).exists()
 

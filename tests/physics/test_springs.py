@@ -342,7 +342,8 @@ def test_springs_in_the_vtu_output(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(SCENARIO.replace("rho_inf = 0.9", "rho_inf = 0.9\nintegrator = \"static\""))
     out = tmp_path / "o"
-    assert main(["run", str(path), "--out", str(out), "-q"]) == 0
+    # the merged frame (meshio); the multiblock's springs block: tests/io/test_multiblock.py
+    assert main(["run", str(path), "--out", str(out), "-q", "--output-frames", "merged"]) == 0
     vtus = sorted((out / "vtu").glob("*.vtu"))
     mesh = meshio.read(vtus[-1])
     cd = {k: np.concatenate(v) for k, v in mesh.cell_data.items()}

@@ -9,6 +9,7 @@ import numpy as np
 
 from ...solvers.newton import NewtonOptions
 from ...solvers.static import StaticOptions
+from ..frames import OUTPUT_FRAMES
 from ..tables import MISSING, Table
 
 __all__ = ["INTEGRATORS", "PREDICTORS", "SimulationSettings", "read_simulation"]
@@ -31,6 +32,7 @@ class SimulationSettings:
     rho_inf: float = 0.8
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     output_interval: float | None = None       #: None: every step
+    output_frames: str = "multiblock"          #: "multiblock" (.vtm per frame) | "merged" (.vtu)
     initial_static: bool = False               #: start from the static equilibrium at t = 0
     adaptive: bool = True                      #: halve the step on Newton failure
     min_step: float | None = None              #: None: dt / 1024
@@ -51,7 +53,7 @@ class SimulationSettings:
 
 def read_simulation(t: Table) -> SimulationSettings:
     """Validate the ``[simulation]`` table."""
-    t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval",
+    t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval", "output_frames",
              "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
              "static_stabilizer", "predictor", "compiled",
              "newton"))
@@ -84,6 +86,7 @@ def read_simulation(t: Table) -> SimulationSettings:
     return SimulationSettings(
         t_end=t_end, dt=dt, integrator=integrator, rho_inf=rho_inf, gravity=(gx, gy, gz),
         output_interval=out, initial_static=t.boolean("initial_static", False),
+        output_frames=t.choice("output_frames", OUTPUT_FRAMES, "multiblock", what="output form"),
         adaptive=t.boolean("adaptive", True), min_step=min_step,
         redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
         load_steps=t.integer("load_steps", 1, ge=1),

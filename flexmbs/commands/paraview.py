@@ -1,0 +1,406 @@
+"""``flexmbs paraview DIR [--screenshot PNG]``: a ready-made ParaView view of a run (issue 35).
+
+Writes ``DIR/<name>_view.py``, a ParaView Python script (``paraview --script=...``, ``pvpython``
+or ``pvbatch``) that opens the run's multiblock series (``<name>.pvd``) and draws the beams as
+tubes of their true section radius (the point data ``radius``, times ``--tube-scale``), the
+bodies as translucent surfaces, the contact points with arrows along the contact normal scaled
+by the normal force, springs and bore outlines as lines, coloured by a beam field, with the
+camera on the whole model. ``--screenshot PNG`` runs the script with ``pvbatch`` (one frame,
+off-screen) when ParaView is installed; without ``pvbatch`` on PATH it says so in one line and
+exits 2 (the script is written all the same). See docs/postprocess.md, "ParaView".
+
+The command reads the output folder only (``summary.json``, ``contacts.csv``, the ``.pvd`` and
+the first frame's beam piece for the field names); it needs neither VTK nor ParaView.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..io.vtu import frame_files, read_pvd
+
+__all__ = ["CAMERAS", "ViewOptions", "add_parser", "run", "screenshot", "view_script",
+           "write_view_script"]
+
+#: view direction (from the model's centre towards the camera) and view-up, as ``flexmbs render``
+CAMERAS = {"iso": ((1.0, -1.0, 1.0), (0.0, 0.0, 1.0)), "xy": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+           "xz": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)), "yz": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0))}
+#: beam point data that is not a field to colour by
+_NOT_FIELDS = ("radius",)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ViewOptions:
+    """How the view draws the run: the beam field to colour by (vectors by magnitude), the
+    camera (:data:`CAMERAS`), a factor on the tube radius, the screenshot size in pixels."""
+
+    color_by: str = "curvature_magnitude"
+    camera: str = "iso"
+    tube_scale: float = 1.0
+    size: tuple[int, int] = (1280, 720)
+
+
+@dataclass(frozen=True)
+class _Series:
+    name: str
+    pvd: Path
+    blocks: list[dict]
+    fields: dict[str, int]          #: beam point field -> number of components
+    force_max: float                #: largest |normal force| of contacts.csv (0: none)
+
+
+def _read_series(run_dir: Path) -> _Series:
+    if not run_dir.is_dir():
+        raise FileNotFoundError(f"output folder not found: {run_dir}")
+    try:
+        summary = json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        raise FileNotFoundError(f"{run_dir}: no readable summary.json; not a flexmbs output "
+                                "folder") from None
+    pvd_name = (summary.get("files") or {}).get("pvd")
+    if not pvd_name:
+        raise FileNotFoundError(f"{run_dir}: the run wrote no frames (no .pvd)")
+    pvd = run_dir / pvd_name
+    frames = read_pvd(pvd)
+    if not frames:
+        raise FileNotFoundError(f"{pvd}: no frames in the series")
+    blocks = summary.get("vtm_blocks")
+    if not frames[0][1].endswith(".vtm") or not blocks:
+        raise ValueError(f"{run_dir} holds merged frames (.vtu); the ParaView view reads the "
+                         "multiblock frames: rerun with --output-frames multiblock (the default)")
+    pieces = frame_files(run_dir / frames[0][1])
+    if not pieces:
+        raise FileNotFoundError(f"{run_dir / frames[0][1]}: missing or damaged")
+    fields: dict[str, int] = {}
+    beams = [i for i, b in enumerate(blocks) if b.get("kind") == "beam"]
+    if beams:
+        root = ET.parse(pieces[beams[0]]).getroot()
+        for pd in root.iter("PointData"):
+            for arr in pd.iter("DataArray"):
+                if arr.get("Name") not in _NOT_FIELDS:
+                    fields[str(arr.get("Name"))] = int(arr.get("NumberOfComponents", "1"))
+    force_max = 0.0
+    contacts = run_dir / "contacts.csv"
+    if contacts.is_file():
+        with open(contacts, newline="", encoding="utf-8") as f:
+            forces = [row.get("normal_force") or "0" for row in csv.DictReader(f)]
+        try:
+            force_max = max((abs(float(x)) for x in forces), default=0.0)
+        except ValueError:
+            raise ValueError(f"{contacts}: a normal_force is not a number") from None
+    name = str(summary.get("scenario") or pvd.stem)
+    return _Series(name, pvd, list(blocks), fields, force_max if math.isfinite(force_max) else 0.0)
+
+
+def view_script(run_dir: str | os.PathLike[str], options: ViewOptions = ViewOptions()) -> str:
+    """The text of the ParaView script for the run in ``run_dir`` (see the module docstring);
+    an unknown ``color_by`` or camera is a :class:`ValueError` listing the known ones."""
+    from .. import __version__
+
+    run_dir = Path(run_dir)
+    series = _read_series(run_dir)
+    if series.fields and options.color_by not in series.fields:
+        raise ValueError(f"unknown beam field '{options.color_by}' (known: "
+                         f"{', '.join(series.fields)})")
+    if options.camera not in CAMERAS:
+        raise ValueError(f"unknown camera '{options.camera}' (known: {', '.join(CAMERAS)})")
+    if not (math.isfinite(options.tube_scale) and options.tube_scale > 0):
+        raise ValueError(f"--tube-scale must be a number > 0 (got {options.tube_scale})")
+    w, h = (int(x) for x in options.size)
+    if w < 16 or h < 16:
+        raise ValueError(f"--size too small: {w}x{h}")
+    kinds = {b.get("kind") for b in series.blocks}
+    radii = [b.get("radius") for b in series.blocks if b.get("kind") == "beam"]
+    direction, up = CAMERAS[options.camera]
+    consts = {
+        "NAME": series.name,
+        "PVD": str(series.pvd.resolve()),
+        "PVD_FILE": series.pvd.name,
+        "COLOR_BY": options.color_by if series.fields else None,
+        "COLOR_IS_VECTOR": series.fields.get(options.color_by, 1) > 1,
+        "TUBE_SCALE": float(options.tube_scale),
+        # beams given by stiffnesses have no radius: then every beam is drawn with one radius,
+        # 0.4 % of the model's size (as flexmbs render does)
+        "TRUE_RADIUS": bool(radii) and all(r is not None for r in radii),
+        "HAS": {k: k in kinds for k in ("beam", "body", "contacts", "springs", "hole_sections")},
+        "FORCE_MAX": series.force_max,
+        "CAMERA_DIRECTION": direction,
+        "CAMERA_UP": up,
+        "IMAGE_SIZE": [w, h],
+    }
+    header = "\n".join(f"{k} = {v!r}" for k, v in consts.items())
+    return (_TEMPLATE.replace("@VERSION@", __version__).replace("@NAME@", series.name)
+            .replace("@FILE@", f"{series.name}_view.py").replace("@CONSTANTS@", header))
+
+
+def write_view_script(run_dir: str | os.PathLike[str], options: ViewOptions = ViewOptions()
+                      ) -> Path:
+    """Write ``run_dir/<name>_view.py`` (:func:`view_script`); returns its path."""
+    run_dir = Path(run_dir)
+    text = view_script(run_dir, options)
+    name = _read_series(run_dir).name
+    path = run_dir / f"{name}_view.py"
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+    return path
+
+
+def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,
+               time: float | None = None, pvbatch: str | None = None,
+               timeout: float | None = 600.0) -> Path:
+    """Render one frame of the view ``script`` (at ``time``, default the last output) to
+    ``png`` with ParaView's ``pvbatch`` (off-screen). Raises :class:`FileNotFoundError` when
+    ``pvbatch`` is not on PATH and :class:`RuntimeError` (with pvbatch's last line) when it
+    fails."""
+    exe = pvbatch or shutil.which("pvbatch")
+    if exe is None:
+        raise FileNotFoundError("pvbatch")
+    png = Path(png).resolve()
+    png.parent.mkdir(parents=True, exist_ok=True)
+    cmd = [exe, str(Path(script).resolve()), "--screenshot", str(png)]
+    if time is not None:
+        cmd += ["--time", repr(float(time))]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
+    if proc.returncode != 0 or not png.is_file():
+        lines = (proc.stderr or proc.stdout or "").strip().splitlines()
+        raise RuntimeError(f"pvbatch failed (exit {proc.returncode})"
+                           + (f": {lines[-1]}" if lines else ""))
+    return png
+
+
+# ================================================================================ CLI
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """The ``paraview`` subcommand on the subparsers ``sub`` of the ``flexmbs`` parser."""
+    p = sub.add_parser(
+        "paraview", help="write a ParaView view script for an output folder",
+        description="Write DIR/<name>_view.py, a ParaView Python script that opens the run's "
+                    "multiblock series with beams as tubes of their radius, bodies, contact "
+                    "forces and the camera on the model (docs/postprocess.md, ParaView).")
+    p.add_argument("directory", metavar="DIR", help="output folder of a run")
+    p.add_argument("--color-by", default="curvature_magnitude", metavar="FIELD",
+                   help="beam point field: curvature_magnitude (default), axial_strain, "
+                        "displacement, velocity, curvature, arc_length, ...")
+    p.add_argument("--camera", default="iso", choices=tuple(CAMERAS),
+                   help="view direction (default iso)")
+    p.add_argument("--tube-scale", type=float, default=1.0, metavar="F",
+                   help="draw beams F times thicker than their radius (default 1)")
+    p.add_argument("--screenshot", metavar="PNG",
+                   help="also render one frame to PNG with pvbatch (needs ParaView)")
+    p.add_argument("--time", type=float, metavar="T",
+                   help="screenshot: the output at time T (default: the last)")
+    p.add_argument("--size", default="1280x720", metavar="WxH", help="screenshot size in pixels")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """``flexmbs paraview``: write the script, then the screenshot if asked. Exit status 0; 2 on
+    a bad folder or option, or when ``--screenshot`` needs ParaView and ``pvbatch`` is not on
+    PATH (the script is written); 3 when pvbatch fails."""
+    try:
+        w, h = (int(x) for x in str(args.size).lower().split("x"))
+    except ValueError:
+        print(f"flexmbs: error: --size: expected WxH, e.g. 1280x720 (got {args.size})",
+              file=sys.stderr)
+        return 2
+    options = ViewOptions(color_by=args.color_by, camera=args.camera,
+                          tube_scale=args.tube_scale, size=(w, h))
+    try:
+        path = write_view_script(args.directory, options)
+    except (FileNotFoundError, ValueError) as exc:
+        print(f"flexmbs: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"flexmbs: error: cannot write {exc.filename or args.directory}: {exc.strerror}",
+              file=sys.stderr)
+        return 2
+    print(f"wrote {path}; open it with: paraview --script={path}")
+    if not args.screenshot:
+        return 0
+    if shutil.which("pvbatch") is None:
+        print("flexmbs: error: --screenshot needs ParaView's pvbatch, which is not on PATH "
+              "(ParaView is not installed here); the script is written, no screenshot",
+              file=sys.stderr)
+        return 2
+    try:
+        png = screenshot(path, args.screenshot, time=args.time)
+    except (RuntimeError, subprocess.TimeoutExpired) as exc:
+        print(f"flexmbs: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 3
+    print(f"wrote {png}")
+    return 0
+
+
+# ================================================================================ the script
+#: The generated script. Only paraview.simple API present in ParaView 5.11, checked against
+#: ParaView's Python documentation (paraview.org/paraview-docs, the paraview.simple pages of
+#: PVDReader, ExtractBlock: ``Selectors`` = ``/Root/<block>`` paths of the data assembly, since
+#: 5.10; Tube: ``Scalars``, ``VaryRadius`` 'By Absolute Scalar', ``Capping``; Glyph:
+#: ``GlyphType``, ``OrientationArray``, ``ScaleArray``, ``ScaleFactor``, ``GlyphMode``
+#: 'All Points') and against ParaView 5.10/5.11 trace scripts (ColorBy, GetDisplayProperties,
+#: RescaleTransferFunctionToDataRange, SetScalarBarVisibility, GetAnimationScene,
+#: UpdateAnimationUsingDataTimeSteps, SaveScreenshot with ImageResolution). The Tube's number of
+#: sides was renamed (NumberofSides -> NumberOfSides) between versions: the script sets
+#: whichever the proxy has. It has not been run under ParaView here (no ParaView installed);
+#: tests/commands/test_paraview.py runs it under pvpython when that is on PATH.
+_TEMPLATE = '''"""ParaView view of the flexmbs run '@NAME@'
+(written by `flexmbs paraview`, flexmbs @VERSION@).
+
+    paraview --script=@FILE@
+        the GUI, with the pipeline built
+    pvpython @FILE@
+        builds the view and renders it
+    pvbatch @FILE@ --screenshot view.png [--time T]
+        one frame (default: the last output) to a PNG, off-screen
+
+Beams are tubes of their section radius (point data `radius`, times TUBE_SCALE), coloured by
+COLOR_BY; bodies translucent surfaces; contact points with arrows along the contact normal,
+their length proportional to the normal force (the largest of the run: 8 % of the model's
+size); springs and the bore outlines of the hole sections as lines. The blocks of the series
+are selected by name (Extract Block, /Root/beams, /Root/bodies, /Root/contacts, ...).
+Edit the constants below to change the view.
+"""
+import os
+import sys
+
+from paraview.simple import (Calculator, ColorBy, ExtractBlock, GetActiveViewOrCreate,
+                             GetAnimationScene, GetColorTransferFunction, Glyph, PVDReader,
+                             Render, SaveScreenshot, SetActiveSource, Show, Tube)
+
+@CONSTANTS@
+
+# the series beside this script if the folder was moved since the script was written
+try:
+    _here = os.path.dirname(os.path.abspath(__file__))
+    if os.path.isfile(os.path.join(_here, PVD_FILE)):
+        PVD = os.path.join(_here, PVD_FILE)
+except NameError:       # paraview --script runs it without __file__
+    pass
+
+
+def _set_first(proxy, names, value):
+    """Set the first of ``names`` the proxy has (property names differ between versions)."""
+    for name in names:
+        try:
+            setattr(proxy, name, value)
+            return
+        except AttributeError:
+            continue
+
+
+def _option(argv, flag):
+    return argv[argv.index(flag) + 1] if flag in argv and argv.index(flag) + 1 < len(argv) else None
+
+
+def build_view():
+    """The pipeline and the view; returns (view, reader, the output times)."""
+    view = GetActiveViewOrCreate("RenderView")
+    reader = PVDReader(registrationName=NAME, FileName=PVD)
+    reader.UpdatePipelineInformation()
+    times = list(reader.TimestepValues) if reader.TimestepValues else [0.0]
+    scene = GetAnimationScene()
+    scene.UpdateAnimationUsingDataTimeSteps()
+    reader.UpdatePipeline(times[-1])
+    b = reader.GetDataInformation().GetBounds()
+    centre = [0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5])]
+    size = max(((b[1] - b[0]) ** 2 + (b[3] - b[2]) ** 2 + (b[5] - b[4]) ** 2) ** 0.5, 1e-9)
+
+    if HAS["beam"]:
+        beams = ExtractBlock(registrationName="beams", Input=reader, Selectors=["/Root/beams"])
+        if TRUE_RADIUS:
+            source, scalar = beams, "radius"
+            if TUBE_SCALE != 1.0:
+                source = Calculator(registrationName="tube_radius", Input=beams)
+                source.ResultArrayName = "tube_radius"
+                source.Function = "radius*%r" % TUBE_SCALE
+                scalar = "tube_radius"
+            tube = Tube(registrationName="beam tubes", Input=source)
+            tube.Scalars = ["POINTS", scalar]
+            tube.VaryRadius = "By Absolute Scalar"
+        else:
+            tube = Tube(registrationName="beam tubes", Input=beams)
+            tube.VaryRadius = "Off"
+            tube.Radius = 0.004 * size * TUBE_SCALE
+        tube.Capping = 1
+        _set_first(tube, ("NumberOfSides", "NumberofSides"), 24)
+        shown = Show(tube, view)
+        if COLOR_BY:
+            ColorBy(shown, ("POINTS", COLOR_BY, "Magnitude") if COLOR_IS_VECTOR
+                    else ("POINTS", COLOR_BY))
+            shown.RescaleTransferFunctionToDataRange(True, False)
+            shown.SetScalarBarVisibility(view, True)
+            GetColorTransferFunction(COLOR_BY).ApplyPreset("Viridis (matplotlib)", True)
+    if HAS["body"]:
+        bodies = ExtractBlock(registrationName="bodies", Input=reader, Selectors=["/Root/bodies"])
+        shown = Show(bodies, view)
+        ColorBy(shown, None)
+        shown.DiffuseColor = [1.0, 0.6, 0.1]
+        shown.Opacity = 0.35
+    if HAS["contacts"]:
+        contacts = ExtractBlock(registrationName="contacts", Input=reader,
+                                Selectors=["/Root/contacts"])
+        points = Show(contacts, view)
+        points.SetRepresentationType("Points")
+        points.PointSize = 8.0
+        points.RenderPointsAsSpheres = 1
+        ColorBy(points, None)
+        points.DiffuseColor = [0.8, 0.0, 0.0]
+        arrows = Glyph(registrationName="contact forces", Input=contacts, GlyphType="Arrow")
+        arrows.OrientationArray = ["POINTS", "normal"]
+        arrows.ScaleArray = ["POINTS", "normal_force"]
+        arrows.ScaleFactor = 0.08 * size / (FORCE_MAX if FORCE_MAX > 0 else 1.0)
+        arrows.GlyphMode = "All Points"
+        shown = Show(arrows, view)
+        ColorBy(shown, ("POINTS", "normal_force"))
+        shown.RescaleTransferFunctionToDataRange(True, False)
+        shown.SetScalarBarVisibility(view, True)
+    if HAS["springs"]:
+        springs = ExtractBlock(registrationName="springs", Input=reader, Selectors=["/Root/springs"])
+        shown = Show(springs, view)
+        ColorBy(shown, None)
+        shown.DiffuseColor = [0.0, 0.45, 0.0]
+        shown.LineWidth = 3.0
+    if HAS["hole_sections"]:
+        holes = ExtractBlock(registrationName="hole sections", Input=reader,
+                             Selectors=["/Root/hole_sections"])
+        shown = Show(holes, view)
+        ColorBy(shown, None)
+        shown.DiffuseColor = [0.2, 0.2, 0.2]
+
+    view.OrientationAxesVisibility = 1
+    view.CameraFocalPoint = centre
+    view.CameraPosition = [c + 2.0 * size * d / sum(x * x for x in CAMERA_DIRECTION) ** 0.5
+                           for c, d in zip(centre, CAMERA_DIRECTION)]
+    view.CameraViewUp = list(CAMERA_UP)
+    view.ResetCamera()
+    SetActiveSource(reader)
+    return view, reader, times
+
+
+def main(argv):
+    view, reader, times = build_view()
+    scene = GetAnimationScene()
+    when = _option(argv, "--time")
+    t = times[-1] if when is None else min(times, key=lambda x: abs(x - float(when)))
+    scene.AnimationTime = t
+    png = _option(argv, "--screenshot")
+    if png:
+        SaveScreenshot(png, view, ImageResolution=IMAGE_SIZE)
+        print("wrote %s (t = %g s)" % (png, t))
+    else:
+        Render(view)
+
+
+main(list(getattr(sys, "argv", None) or []))
+'''
