@@ -56,7 +56,7 @@ __all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE"
 OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES = range(6)
 
 
-@njit(refcount=False)
+@njit(refcount=False, nogil=True)
 def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: ANN001, ANN201
     """See the module docstring."""
     if op == OP_RESIDUAL:

@@ -174,7 +174,7 @@ class OutputWriter:
             if write_vtu:
                 self.frames = FrameBuilder(asm, samples_per_element=samples_per_element)
                 self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding,
-                                        resume_at=self.resume_at)
+                                        resume_at=self.resume_at, background=True)
                 if self.series.entries:     # a resumed series keeps its form
                     last = self.series.entries[-1][1]
                     self.output_frames = "multiblock" if last.endswith(".vtm") else "merged"
@@ -224,6 +224,8 @@ class OutputWriter:
     def _write_checkpoint(self) -> None:
         """The checkpoint of the last output, if not written yet."""
         if self._pending_checkpoint is not None:
+            if self.series is not None:   # the frames of the checkpointed outputs are on disk
+                self.series.flush()
             state, extra = self._pending_checkpoint
             save_checkpoint(self.checkpoint_path, state, extra=extra)
             self._pending_checkpoint = None

@@ -20,7 +20,8 @@ import base64
 import os
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
@@ -210,6 +211,10 @@ def _encoding(encoding: str) -> bool:
     return encoding == "binary"
 
 
+#: ``store(path, text) -> path``: where a rendered file goes (see :func:`write_vtu`)
+Store = Callable[[Path, str], Path]
+
+
 def _store(path: Path, text: str, atomic: bool) -> Path:
     if atomic:
         _atomic_write_text(path, text)
@@ -225,13 +230,14 @@ def _store(path: Path, text: str, atomic: bool) -> Path:
 
 
 def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary",
-              atomic: bool = True) -> Path:
+              atomic: bool = True, store: Store | None = None) -> Path:
     """Write ``mesh`` as a VTK XML UnstructuredGrid (``atomic``: temp file + rename; a series
     writes each frame to a new file that its ``.pvd`` lists only once complete, so it skips
     the rename).
 
     ``encoding="binary"`` (inline base64, exact bits) or ``"ascii"`` (shortest round-trip
-    decimal, also exact)."""
+    decimal, also exact). ``store(path, text)``, if given, takes the file's text instead of
+    writing it (a series writing in the background renders here and stores there)."""
     binary = _encoding(encoding)
     pts = np.asarray(mesh.points, np.float64).reshape(-1, 3)
     conn, offs, types = mesh.flat_cells()
@@ -248,6 +254,8 @@ def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     out.append(_data_array("offsets", offs, binary))
     out.append(_data_array("types", types, binary))
     out.append("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
+    if store is not None:
+        return store(Path(path), "".join(out))
     return _store(Path(path), "".join(out), atomic)
 
 
@@ -261,7 +269,7 @@ for _k, (_, _kinds) in enumerate(_POLY_SECTIONS):
 
 
 def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary",
-              atomic: bool = True) -> Path:
+              atomic: bool = True, store: Store | None = None) -> Path:
     """Write ``mesh`` as a VTK XML PolyData file: vertices, lines/poly lines and polygons
     (triangles, quads) only. PolyData numbers its cells verts, then lines, then polys: cell data
     is reordered so (a stable sort by section). Arguments as :func:`write_vtu`."""
@@ -299,6 +307,8 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
         out.append(_data_array("offsets", ends.astype(np.int64), binary))
         out.append(f"</{tag}>\n")
     out.append("</Piece>\n</PolyData>\n</VTKFile>\n")
+    if store is not None:
+        return store(Path(path), "".join(out))
     return _store(Path(path), "".join(out), atomic)
 
 
@@ -341,7 +351,7 @@ def _piece_names(frame: MultiBlock, stem: str) -> list[str]:
 
 
 def write_vtm(path: str | os.PathLike, frame: MultiBlock, *, encoding: str = "binary",
-              atomic: bool = True) -> list[Path]:
+              atomic: bool = True, store: Store | None = None) -> list[Path]:
     """Write ``frame`` as ``path`` (``.vtm``, VTK XML multiblock) and one PolyData ``.vtp`` per
     leaf beside it (:func:`write_vtp`; named ``<stem>_<top block>[_<index>].vtp``). The pieces
     are written first, the ``.vtm`` last, so a complete ``.vtm`` lists complete pieces. Returns
@@ -363,7 +373,7 @@ def write_vtm(path: str | os.PathLike, frame: MultiBlock, *, encoding: str = "bi
             else:
                 fname = next(files)
                 written.append(write_vtp(path.parent / fname, child, encoding=encoding,
-                                         atomic=atomic))
+                                         atomic=atomic, store=store))
                 out.append(f"{pad}<DataSet index=\"{i}\" name={quoteattr(name)} "
                            f"file={quoteattr(fname)}/>\n")
         return out
@@ -372,7 +382,7 @@ def write_vtm(path: str | os.PathLike, frame: MultiBlock, *, encoding: str = "bi
     text = ('<?xml version="1.0"?>\n<VTKFile type="vtkMultiBlockDataSet" version="1.0" '
             'byte_order="LittleEndian" header_type="UInt64">\n<vtkMultiBlockDataSet>\n'
             + "".join(body) + "</vtkMultiBlockDataSet>\n</VTKFile>\n")
-    written.append(_store(path, text, atomic))
+    written.append(store(path, text) if store is not None else _store(path, text, atomic))
     return written
 
 
@@ -391,6 +401,11 @@ class VTUSeries:
     frames ``<name>_NNNNNN.vtu|.vtm`` (and pieces ``<name>_NNNNNN_*.vtp``) of an earlier run in
     the same folder are removed on creation.
 
+    ``background=True`` writes each frame's files in a worker thread while the caller goes
+    on (at most one frame in flight; :meth:`flush` waits for it): the compiled integrator
+    releases the GIL, so on a second core the writing costs the run nothing (an output folder's
+    series is written so).
+
     ``resume_at=t`` continues an existing series instead (a resumed run): the frames of the
     ``.pvd`` at times ``<= t`` are kept, later ones (and their files) are removed, and new
     frames are appended after them.
@@ -401,7 +416,7 @@ class VTUSeries:
 
     def __init__(self, pvd_path: str | os.PathLike, *, vtu_subdir: str = "vtu",
                  encoding: str = "binary", resume_at: float | None = None,
-                 pvd_interval: float = 1.0) -> None:
+                 pvd_interval: float = 1.0, background: bool = False) -> None:
         if encoding not in ("binary", "ascii"):
             raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
         self.pvd_path = Path(pvd_path)
@@ -424,6 +439,13 @@ class VTUSeries:
         self.pvd_interval = float(pvd_interval)
         self._pvd_written = time.perf_counter()
         self._pvd_stale = False
+        self._next = len(self.entries)
+        # background writing: one worker thread, at most one frame in flight (the compiled
+        # integrator releases the GIL, so the frame is written while the next steps run)
+        self._worker = (ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexmbs-frames")
+                        if background else None)
+        self._pending: Future[None] | None = None
+        self._failed: BaseException | None = None
         self._write_pvd()
 
     def _recover_unlisted(self, resume_at: float) -> None:
@@ -448,8 +470,8 @@ class VTUSeries:
 
     @property
     def step(self) -> int:
-        """Number of frames written so far (= index of the next frame)."""
-        return len(self.entries)
+        """Number of frames written or being written (= index of the next frame)."""
+        return self._next
 
     def next_path(self, frame: VTUMesh | MultiBlock) -> Path:
         """The file the next :meth:`write` of ``frame`` creates (``.vtm`` or ``.vtu``)."""
@@ -457,20 +479,58 @@ class VTUSeries:
         return self.vtu_dir / f"{self.name}_{self.step:06d}{ext}"
 
     def write(self, t: float, frame: VTUMesh | MultiBlock) -> Path:
-        """Write one frame at time ``t``; returns the path of its ``.vtu`` or ``.vtm``."""
+        """Write one frame at time ``t``; returns the path of its ``.vtu`` or ``.vtm``. The files
+        are rendered here; with ``background`` the worker thread stores them, and an error of
+        an earlier frame's write is raised here, at :meth:`flush` or at :meth:`close`."""
         if self.closed:
             raise ValueError(f"VTUSeries {self.pvd_path} is closed")
         path = self.next_path(frame)
-        if isinstance(frame, MultiBlock):
-            write_vtm(path, frame, encoding=self.encoding, atomic=False)
+        self._next += 1
+        files: list[tuple[Path, str]] = []
+
+        def collect(p: Path, text: str) -> Path:
+            files.append((p, text))
+            return p
+
+        if isinstance(frame, MultiBlock):   # rendered here (the caller holds the GIL anyway)
+            write_vtm(path, frame, encoding=self.encoding, store=collect)
         else:
-            write_vtu(path, frame, encoding=self.encoding, atomic=False)
-        self.entries.append((float(t), f"{self.vtu_subdir}/{path.name}"))
+            write_vtu(path, frame, encoding=self.encoding, store=collect)
+        if self._worker is None:
+            self._store_frame(float(t), path, files)
+            return path
+        self.flush()            # at most one frame in flight; it had a whole output interval
+        self._pending = self._worker.submit(self._store_frame, float(t), path, files)
+        return path
+
+    def _store_frame(self, t: float, path: Path, files: list[tuple[Path, str]]) -> None:
+        """The files of one frame (pieces first, the frame file last), then (when due) the
+        index that lists them. File creation and writing release the GIL."""
+        current = path
+        try:
+            for current, text in files:
+                _store(current, text, atomic=False)
+        except OSError as exc:    # name the file (a full disk gives no file name)
+            if exc.filename is None:
+                raise OSError(exc.errno, exc.strerror or str(exc), str(current)) from exc
+            raise
+        self.entries.append((t, f"{self.vtu_subdir}/{path.name}"))
         self._pvd_stale = True
         if (len(self.entries) <= self.EAGER_FRAMES
                 or time.perf_counter() - self._pvd_written >= self.pvd_interval):
             self._write_pvd()
-        return path
+
+    def flush(self) -> None:
+        """Wait for the frame being written in the background; raises its error, if any (and
+        every later call raises it again: the series is broken)."""
+        if self._pending is not None:
+            pending, self._pending = self._pending, None
+            try:
+                pending.result()
+            except BaseException as exc:   # noqa: BLE001 - re-raised below, kept for later calls
+                self._failed = exc
+        if self._failed is not None:
+            raise self._failed
 
     def _write_pvd(self) -> None:
         lines = ['<?xml version="1.0"?>\n',
@@ -484,9 +544,17 @@ class VTUSeries:
         self._pvd_stale = False
 
     def close(self) -> None:
-        if not self.closed and self._pvd_stale:
-            self._write_pvd()
+        """Finish the frame in flight and list every written frame in the index."""
+        if self.closed:
+            return
         self.closed = True
+        try:
+            self.flush()
+        finally:
+            if self._worker is not None:
+                self._worker.shutdown(wait=True)
+            if self._pvd_stale:
+                self._write_pvd()
 
     def __enter__(self) -> VTUSeries:
         return self
