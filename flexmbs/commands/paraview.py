@@ -157,6 +157,17 @@ def write_view_script(run_dir: str | os.PathLike[str], options: ViewOptions = Vi
     return path
 
 
+def headless(cmd: list[str]) -> list[str]:
+    """``cmd`` (a ParaView program) run under ``xvfb-run -a`` when there is no display and
+    xvfb-run is installed: ParaView builds whose rendering needs X (Debian's 5.11: pvbatch
+    aborts with "bad X server connection" even with --force-offscreen-rendering) then render
+    on a virtual screen; builds with EGL or OSMesa do not need it, and with a display nothing
+    changes."""
+    if os.environ.get("DISPLAY") or shutil.which("xvfb-run") is None:
+        return cmd
+    return ["xvfb-run", "-a", *cmd]
+
+
 def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,
                time: float | None = None, pvbatch: str | None = None,
                timeout: float | None = 600.0) -> Path:
@@ -172,6 +183,7 @@ def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,
     cmd = [exe, str(Path(script).resolve()), "--screenshot", str(png)]
     if time is not None:
         cmd += ["--time", repr(float(time))]
+    cmd = headless(cmd)
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
     if proc.returncode != 0 or not png.is_file():
         lines = (proc.stderr or proc.stdout or "").strip().splitlines()
@@ -252,8 +264,8 @@ def run(args: argparse.Namespace) -> int:
 #: RescaleTransferFunctionToDataRange, SetScalarBarVisibility, GetAnimationScene,
 #: UpdateAnimationUsingDataTimeSteps, SaveScreenshot with ImageResolution). The Tube's number of
 #: sides was renamed (NumberofSides -> NumberOfSides) between versions: the script sets
-#: whichever the proxy has. It has not been run under ParaView here (no ParaView installed);
-#: tests/commands/test_paraview.py runs it under pvpython when that is on PATH.
+#: whichever the proxy has. Run under Debian's ParaView 5.11 (pvpython, pvbatch under
+#: xvfb-run): tests/commands/test_paraview.py does so when ParaView is on PATH.
 _TEMPLATE = '''"""ParaView view of the flexmbs run '@NAME@'
 (written by `flexmbs paraview`, flexmbs @VERSION@).
 
@@ -275,8 +287,8 @@ import os
 import sys
 
 from paraview.simple import (Calculator, ColorBy, ExtractBlock, GetActiveViewOrCreate,
-                             GetAnimationScene, GetColorTransferFunction, Glyph, PVDReader,
-                             Render, SaveScreenshot, SetActiveSource, Show, Tube)
+                             GetAnimationScene, GetColorTransferFunction, GetScalarBar, Glyph,
+                             PVDReader, Render, SaveScreenshot, SetActiveSource, Show, Tube)
 
 @CONSTANTS@
 
@@ -297,6 +309,20 @@ def _set_first(proxy, names, value):
             return
         except AttributeError:
             continue
+
+
+#: the coloured displays: their colour ranges are set to the data of the time shown
+_COLOURED = []
+
+
+def _place_bar(lut, view, corner):
+    """The colour legend of ``lut`` in a corner of its own, a third of the height, small text
+    (ParaView stacks every legend at the same place by default)."""
+    bar = GetScalarBar(lut, view)
+    bar.WindowLocation = corner
+    bar.ScalarBarLength = 0.33
+    bar.TitleFontSize = 12
+    bar.LabelFontSize = 10
 
 
 def _option(argv, flag):
@@ -338,13 +364,14 @@ def build_view():
         if COLOR_BY:
             ColorBy(shown, ("POINTS", COLOR_BY, "Magnitude") if COLOR_IS_VECTOR
                     else ("POINTS", COLOR_BY))
-            shown.RescaleTransferFunctionToDataRange(True, False)
             shown.SetScalarBarVisibility(view, True)
             GetColorTransferFunction(COLOR_BY).ApplyPreset("Viridis (matplotlib)", True)
+            _COLOURED.append(shown)
+            _place_bar(GetColorTransferFunction(COLOR_BY), view, "Upper Right Corner")
     if HAS["body"]:
         bodies = ExtractBlock(registrationName="bodies", Input=reader, Selectors=["/Root/bodies"])
         shown = Show(bodies, view)
-        ColorBy(shown, None)
+        shown.ColorArrayName = ["POINTS", ""]   # solid colour
         shown.DiffuseColor = [1.0, 0.6, 0.1]
         shown.Opacity = 0.35
     if HAS["contacts"]:
@@ -354,7 +381,7 @@ def build_view():
         points.SetRepresentationType("Points")
         points.PointSize = 8.0
         points.RenderPointsAsSpheres = 1
-        ColorBy(points, None)
+        points.ColorArrayName = ["POINTS", ""]
         points.DiffuseColor = [0.8, 0.0, 0.0]
         arrows = Glyph(registrationName="contact forces", Input=contacts, GlyphType="Arrow")
         arrows.OrientationArray = ["POINTS", "normal"]
@@ -363,19 +390,20 @@ def build_view():
         arrows.GlyphMode = "All Points"
         shown = Show(arrows, view)
         ColorBy(shown, ("POINTS", "normal_force"))
-        shown.RescaleTransferFunctionToDataRange(True, False)
         shown.SetScalarBarVisibility(view, True)
+        _COLOURED.append(shown)
+        _place_bar(GetColorTransferFunction("normal_force"), view, "Upper Left Corner")
     if HAS["springs"]:
         springs = ExtractBlock(registrationName="springs", Input=reader, Selectors=["/Root/springs"])
         shown = Show(springs, view)
-        ColorBy(shown, None)
+        shown.ColorArrayName = ["POINTS", ""]   # solid colour
         shown.DiffuseColor = [0.0, 0.45, 0.0]
         shown.LineWidth = 3.0
     if HAS["hole_sections"]:
         holes = ExtractBlock(registrationName="hole sections", Input=reader,
                              Selectors=["/Root/hole_sections"])
         shown = Show(holes, view)
-        ColorBy(shown, None)
+        shown.ColorArrayName = ["POINTS", ""]   # solid colour
         shown.DiffuseColor = [0.2, 0.2, 0.2]
 
     view.OrientationAxesVisibility = 1
@@ -394,6 +422,8 @@ def main(argv):
     when = _option(argv, "--time")
     t = times[-1] if when is None else min(times, key=lambda x: abs(x - float(when)))
     scene.AnimationTime = t
+    for shown in _COLOURED:      # colour ranges of the frame shown (not of the first one)
+        shown.RescaleTransferFunctionToDataRange(False, True)
     png = _option(argv, "--screenshot")
     if png:
         SaveScreenshot(png, view, ImageResolution=IMAGE_SIZE)

@@ -24,6 +24,7 @@ from pathlib import Path
 import pytest
 
 from flexmbs.cli import main
+from flexmbs.commands.paraview import headless
 from flexmbs.io.vtu import read_pvd
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,7 +44,9 @@ _PROPS = {
              "registrationName"},
     "Glyph": {"Input", "GlyphType", "OrientationArray", "ScaleArray", "ScaleFactor", "GlyphMode",
               "registrationName"},
-    "Display": {"DiffuseColor", "Opacity", "PointSize", "RenderPointsAsSpheres", "LineWidth"},
+    "Display": {"DiffuseColor", "Opacity", "PointSize", "RenderPointsAsSpheres", "LineWidth",
+                "ColorArrayName"},
+    "ScalarBar": {"WindowLocation", "ScalarBarLength", "TitleFontSize", "LabelFontSize"},
     "View": {"CameraPosition", "CameraFocalPoint", "CameraViewUp", "OrientationAxesVisibility"},
     "Scene": {"AnimationTime"},
 }
@@ -131,6 +134,12 @@ def ColorBy(display, spec):
 def GetColorTransferFunction(name):
     CALLS.append(["lut", name])
     return Proxy("Display")
+
+
+def GetScalarBar(lut, view):
+    assert view is _VIEW
+    CALLS.append(["scalarbar"])
+    return Proxy("ScalarBar")
 
 
 def Render(view=None):
@@ -315,7 +324,8 @@ def test_under_pvpython(sleeve_run, tmp_path):
     """The real thing: the script under pvpython, and a screenshot through pvbatch."""
     script = sleeve_run / "curved_beam_sleeve_view.py"
     assert main(["paraview", str(sleeve_run)]) == 0
-    proc = subprocess.run(["pvpython", str(script), "--screenshot", str(tmp_path / "a.png")],
+    proc = subprocess.run(headless(["pvpython", str(script), "--screenshot",
+                                    str(tmp_path / "a.png")]),
                           capture_output=True, text=True, timeout=600, check=False)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "a.png").stat().st_size > 1000
