@@ -311,6 +311,15 @@ def _set_first(proxy, names, value):
             continue
 
 
+def _solid_block(reader, view, name, selector, colour):
+    """Show the block ``selector`` of the series in one colour; returns its display."""
+    part = ExtractBlock(registrationName=name, Input=reader, Selectors=[selector])
+    shown = Show(part, view)
+    shown.ColorArrayName = ["POINTS", ""]   # a solid colour (not ColorBy(.., None): 5.11)
+    shown.DiffuseColor = colour
+    return shown
+
+
 #: the coloured displays: their colour ranges are set to the data of the time shown
 _COLOURED = []
 
@@ -369,10 +378,7 @@ def build_view():
             _COLOURED.append(shown)
             _place_bar(GetColorTransferFunction(COLOR_BY), view, "Upper Right Corner")
     if HAS["body"]:
-        bodies = ExtractBlock(registrationName="bodies", Input=reader, Selectors=["/Root/bodies"])
-        shown = Show(bodies, view)
-        shown.ColorArrayName = ["POINTS", ""]   # solid colour
-        shown.DiffuseColor = [1.0, 0.6, 0.1]
+        shown = _solid_block(reader, view, "bodies", "/Root/bodies", [1.0, 0.6, 0.1])
         shown.Opacity = 0.35
     if HAS["contacts"]:
         contacts = ExtractBlock(registrationName="contacts", Input=reader,
@@ -394,17 +400,10 @@ def build_view():
         _COLOURED.append(shown)
         _place_bar(GetColorTransferFunction("normal_force"), view, "Upper Left Corner")
     if HAS["springs"]:
-        springs = ExtractBlock(registrationName="springs", Input=reader, Selectors=["/Root/springs"])
-        shown = Show(springs, view)
-        shown.ColorArrayName = ["POINTS", ""]   # solid colour
-        shown.DiffuseColor = [0.0, 0.45, 0.0]
+        shown = _solid_block(reader, view, "springs", "/Root/springs", [0.0, 0.45, 0.0])
         shown.LineWidth = 3.0
     if HAS["hole_sections"]:
-        holes = ExtractBlock(registrationName="hole sections", Input=reader,
-                             Selectors=["/Root/hole_sections"])
-        shown = Show(holes, view)
-        shown.ColorArrayName = ["POINTS", ""]   # solid colour
-        shown.DiffuseColor = [0.2, 0.2, 0.2]
+        _solid_block(reader, view, "hole sections", "/Root/hole_sections", [0.2, 0.2, 0.2])
 
     view.OrientationAxesVisibility = 1
     view.CameraFocalPoint = centre
