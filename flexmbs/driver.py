@@ -59,7 +59,7 @@ from .elements.group import (
 )
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
-from .springs import SpringPart, springs_jacobian, springs_residual
+from .springs import SpringPart, springs_jacobian, springs_post_step, springs_residual
 
 __all__ = ["SystemPart", "residual", "jacobian", "post_step", "rebase", "rebase_static", "set_bases",
            "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS", "KIND_OF_ERROR", "STOPS_RUN",
@@ -172,6 +172,7 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     if code != 0:
         return code
     clearance_post_step_all(sy.clearance, q)
+    springs_post_step(sy.springs, q)
     rebase(sy, q, v, qdd, acc)
     return 0
 
@@ -201,6 +202,7 @@ def rebase_static(sy, q):  # noqa: ANN001, ANN201
     if code != 0:
         return 0, code
     clearance_post_step_all(sy.clearance, q)
+    springs_post_step(sy.springs, q)
     empty = q[:0]
     return rebase(sy, q, empty, empty, empty), 0
 

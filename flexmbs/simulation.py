@@ -292,6 +292,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                          energy=energy,
                          checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm),
                                            "node_bases": asm.node_bases(),
+                                           "spring_angles": asm.system.springs.theta_ref.copy(),
                                            **{f"solver_{k}": v for k, v in solver_now.items()}})
         if observer is not None:
             observer(s)
@@ -447,6 +448,10 @@ def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[Stat
             asm.set_node_bases(np.asarray(bases, dtype=float))
         except ValueError as exc:
             raise ScenarioError(f"cannot resume: {ckpt}: {exc}") from None
+    angles = extra.get("spring_angles")     # the rotational springs' turns (older: none)
+    theta_ref = asm.system.springs.theta_ref
+    if angles is not None and np.shape(angles) == theta_ref.shape:
+        theta_ref[:] = np.asarray(angles, dtype=float)
     saved = extra.get("interactions") or {}
     for i, obj in enumerate(asm.model.interactions):
         key = str(getattr(obj, "name", i))

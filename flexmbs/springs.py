@@ -24,7 +24,9 @@ where the last term is ``+-2 C(s, n)`` on the Euler-parameter block of a body en
 Rotational. About the x axis of a joint's frames, θ is the rotation of a's frame relative to
 b's, from ``c = cos θ`` and ``s = sin θ`` of :func:`~flexmbs.constraints.joints.relative_angle_table`
 (their gradients and exact Hessians are the joint tables'): ``θ = atan2(s, c)``, taken in
-``(θ_0 - π, θ_0 + π]`` around the rest angle θ_0, with ``ρ² = c² + s²``
+``(θ_r - π, θ_r + π]`` around the spring's last converged angle θ_r (state, checkpointed; the
+rest angle θ_0 before the first step), so that θ counts whole turns (a spring wound several
+turns keeps its torque, issue "nothing lost, part two"), with ``ρ² = c² + s²``
 
     g = (c s_q - s c_q) / ρ²
     H = (c H_s - s H_c) / ρ² + (s_q c_q^T - c_q s_q^T) / ρ² - 2 g (c c_q + s s_q)^T / ρ²
@@ -53,7 +55,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .terms import DofMap
 
 __all__ = ["SpringDamper", "SpringPart", "pack_springs", "spring_energy", "spring_forces", "spring_points",
-           "springs_jacobian", "springs_pattern", "springs_residual"]
+           "springs_jacobian", "springs_pattern", "springs_post_step", "springs_residual"]
 
 END = 7                  #: coordinates reserved per end (a body's r, p)
 GROUND_END, NODE_END, BODY_END = 0, 1, 2
@@ -135,6 +137,7 @@ class SpringPart(NamedTuple):
     cs: np.ndarray           # work (2,): c, s
     dcs: np.ndarray          # work (2, 2*END)
     lam2: np.ndarray         # work (2,)
+    theta_ref: np.ndarray    # (n,) state: the rotational springs' last converged angle (turns)
 
 
 def _end_coords(obj: Any, dofs: DofMap) -> tuple[int, np.ndarray]:
@@ -186,7 +189,8 @@ def pack_springs(springs: Sequence[SpringDamper], dofs: DofMap) -> SpringPart:
                       np.array([s.rest_length for s in springs], float),
                       np.array([s.preload for s in springs], float), tab, tab_n, pos, table,
                       eq_ptr, np.zeros((3, w)), np.zeros(w), np.zeros((w, w)), np.zeros((2, 3)),
-                      np.zeros(w), np.zeros(2), np.zeros((2, w)), np.zeros(2))
+                      np.zeros(w), np.zeros(2), np.zeros((2, w)), np.zeros(2),
+                      np.array([s.rest_length for s in springs], float))
 
 
 def _attachment(obj: Any, frame: np.ndarray | None) -> Attachment:
@@ -270,9 +274,10 @@ def _angle(sp, i, q):  # noqa: ANN001, ANN202
     rho2 = c * c + s * s
     for a in range(w):
         sp.g[a] = (c * sp.dcs[1, a] - s * sp.dcs[0, a]) / rho2
-    d = math.atan2(s, c) - sp.l0[i]
+    ref = sp.theta_ref[i]        # the branch of the last converged angle: turns count
+    d = math.atan2(s, c) - ref
     d -= 2.0 * math.pi * math.floor(d / (2.0 * math.pi) + 0.5)
-    return sp.l0[i] + d
+    return ref + d
 
 
 @njit
@@ -398,6 +403,17 @@ def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
                     + cC * c * sp.g[a] * sp.g[b]
                 data[sp.pos[i, a * w + b]] += val
     return kscale
+
+
+@njit
+def springs_post_step(sp, q):  # noqa: ANN001, ANN201
+    """After a converged step: every rotational spring's angle becomes the centre of its next
+    branch (``theta_ref``), so that θ follows the joint through whole turns."""
+    if sp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
+    for i in range(sp.idx.shape[0]):
+        if sp.measure[i] == ANGLE:
+            sp.theta_ref[i] = _angle(sp, i, q)
 
 
 def spring_forces(sp: SpringPart, q: np.ndarray, v: np.ndarray, mode: np.ndarray) -> np.ndarray:
