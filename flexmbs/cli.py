@@ -282,19 +282,24 @@ def cmd_postprocess(args: argparse.Namespace) -> int:
                                        tube_scale=args.tube_scale, radius=args.radius,
                                        framerate=args.fps, progress=not args.quiet)
         else:
-            files = postprocess.plot(args.directory, compare=args.compare,
-                                     formats=tuple(args.format or ("png", "svg")))
-            if args.section:
+            joints: list[str] = []
+            if args.section:     # checked before any figure is written
                 run = postprocess.read_run(args.directory)
-                joints = [args.joint] if args.joint else sorted({r["joint"] for r in run.sections})
-                if not joints:
+                known = sorted({r["joint"] for r in run.sections})
+                if not known:
                     raise FileNotFoundError(f"{args.directory}: no sections.csv (only clearance "
                                             "joints write it); nothing for --section")
-                for joint in joints:
-                    files.append(postprocess.section_view(
-                        args.directory, joint=joint, section=args.section_index, time=args.time,
-                        radius=args.radius, exaggeration=args.exaggeration))
-                    files.append(postprocess.contact_angles_view(args.directory, joint=joint))
+                if args.joint and args.joint not in known:
+                    raise ValueError(f"--joint {args.joint}: no such clearance joint in "
+                                     f"{args.directory} (known: {', '.join(known)})")
+                joints = [args.joint] if args.joint else known
+            files = postprocess.plot(args.directory, compare=args.compare,
+                                     formats=tuple(args.format or ("png", "svg")))
+            for joint in joints:
+                files.append(postprocess.section_view(
+                    args.directory, joint=joint, section=args.section_index, time=args.time,
+                    radius=args.radius, exaggeration=args.exaggeration))
+                files.append(postprocess.contact_angles_view(args.directory, joint=joint))
     except (FileNotFoundError, ValueError) as exc:
         print(f"flexmbs: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

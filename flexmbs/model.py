@@ -221,8 +221,14 @@ class Beam:
         t = t / np.linalg.norm(t)
         if up is None:
             up = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        z = np.asarray(up, float) - np.dot(up, t) * t
-        if np.linalg.norm(z) < 1e-9:
+        up = np.asarray(up, float)
+        if not np.all(np.isfinite(up)):
+            raise ModelError(f"frame_at: 'up' must be finite (got {up.tolist()})")
+        if not np.any(up):
+            raise ModelError("frame_at: 'up' is zero ([0, 0, 0]); give a direction across the "
+                             "beam, e.g. [0, 0, 1]")
+        z = up - np.dot(up, t) * t
+        if np.linalg.norm(z) < 1e-9 * np.linalg.norm(up):
             raise ModelError("frame_at: 'up' is parallel to the beam tangent")
         z /= np.linalg.norm(z)
         y = np.cross(z, t)

@@ -17,8 +17,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .assembly import Assembly
 from .budget import check_run
 from .io.folder import claim
+from .io.output import check_output
 from .io.scenario import Scenario
 from .simulation import checkpoint_time, simulate, solve_static
 
@@ -57,12 +59,16 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
     metadata = {"scenario_file": os.path.abspath(sc.path), "overrides": list(overrides),
                 "scenario_sha1": scenario_digest(sc.path),
                 "integrator_name": sim.integrator, "initial_static": sim.initial_static}
-    if sim.integrator != "static":       # before the folder is claimed (and cleared)
+    # everything that can be checked from the scenario, before the folder is claimed (created,
+    # cleared): the run's size, the model's equations, the output's names, probes and shapes
+    if sim.integrator != "static":
         check_run(sc.model, t_end=sim.t_end, dt=sim.dt, output_interval=sim.output_interval,
                   out=folder, prefix="simulation.")
+    asm = Assembly(sc.model, redundant_constraints=sim.redundant_constraints)
+    check_output(folder, sc.name, asm, probes=sc.probes, output_frames=sim.output_frames)
     with claim(folder, scenario=sc.name, overwrite=overwrite, resume=resume):
         if sim.integrator == "static":
-            st = solve_static(sc.model, sc.static_options(), t=sim.t_end,
+            st = solve_static(asm, sc.static_options(), t=sim.t_end,
                               redundant_constraints=sim.redundant_constraints, out=folder,
                               probes=sc.probes, name=sc.name, metadata=metadata,
                               output_frames=sim.output_frames)
@@ -70,7 +76,7 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
         # where a progress bar starts; simulate() reports a missing or unreadable checkpoint
         start = (checkpoint_time(folder) if resume else None) or 0.0
         callback = progress(start, sim.t_end, sc.name) if progress is not None else None
-        res = simulate(sc.model, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
+        res = simulate(asm, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
                        output_interval=sim.output_interval, initial_static=sim.initial_static,
                        static_options=sc.static_options(),
                        redundant_constraints=sim.redundant_constraints, record_energy=False,

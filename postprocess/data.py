@@ -11,12 +11,41 @@ from pathlib import Path
 import numpy as np
 
 
+def _damaged(path: Path, what: str) -> ValueError:
+    return ValueError(f"{path} is damaged or not written by flexmbs ({what})")
+
+
 def _read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
+    """Header and rows of a CSV file of the folder ([] and [] when missing); a file that is not
+    UTF-8 CSV is a one-line ValueError naming it."""
     if not path.is_file():
         return [], []
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = list(csv.reader(f))
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except UnicodeDecodeError as exc:
+        raise _damaged(path, f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} at "
+                             f"position {exc.start}") from None
+    except csv.Error as exc:
+        raise _damaged(path, f"not CSV: {exc}") from None
     return (rows[0], rows[1:]) if rows else ([], [])
+
+
+def _column(path: Path, header: list[str], rows: list[list[str]], i: int) -> np.ndarray:
+    """Column ``i`` of a numeric CSV file as floats; a row that is not numbers names the file."""
+    try:
+        return np.array([float(r[i]) for r in rows if r])
+    except (ValueError, IndexError):
+        line = next(k for k, r in enumerate(rows, start=2) if r and not _numbers(r, i))
+        raise _damaged(path, f"line {line}: column {header[i]!r} is not a number") from None
+
+
+def _numbers(row: list[str], i: int) -> bool:
+    try:
+        float(row[i])
+    except (ValueError, IndexError):
+        return False
+    return True
 
 
 @dataclass
@@ -58,7 +87,15 @@ def read_run(directory: str | Path) -> Run:
     pvds = sorted(d.glob("*.pvd"))
     summary = {}
     if (d / "summary.json").is_file():
-        summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
+        try:
+            summary = json.loads((d / "summary.json").read_text(encoding="utf-8"))
+        except UnicodeDecodeError as exc:
+            raise _damaged(d / "summary.json", f"not UTF-8 text: byte "
+                           f"0x{exc.object[exc.start]:02x} at position {exc.start}") from None
+        except ValueError as exc:
+            raise _damaged(d / "summary.json", f"not JSON: {exc}") from None
+        if not isinstance(summary, dict):
+            raise _damaged(d / "summary.json", "not a JSON object")
     name = summary.get("scenario") or (pvds[0].stem if pvds else d.name)
     frames: list[tuple[float, Path]] = []
     if pvds:
@@ -70,7 +107,7 @@ def read_run(directory: str | Path) -> Run:
         for ds in root.iter("DataSet"):
             frames.append((float(ds.get("timestep", "0")), (d / ds.get("file", "")).resolve()))
     header, rows = _read_csv(d / "probes.csv")
-    probes = {h: np.array([float(r[i]) for r in rows if r]) for i, h in enumerate(header)}
+    probes = {h: _column(d / "probes.csv", header, rows, i) for i, h in enumerate(header)}
     ch, crow = _read_csv(d / "contacts.csv")
     contacts = [dict(zip(ch, r, strict=False)) for r in crow if r]
     sh, srow = _read_csv(d / "sections.csv")

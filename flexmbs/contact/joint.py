@@ -58,6 +58,7 @@ from .sections import (
     SuperellipseSection,
     section_contains,
 )
+from .shapes.superellipse_limits import check_exponent
 from .tangent import N_EXT
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -86,6 +87,8 @@ class Hole:
                              "elements can, and each costs time in every Newton iteration; use "
                              "fewer sections (9-21 is typical)")
         require_memory(n_sections=int(n), what=f"hole sections = {n}", fix="use fewer sections")
+        if isinstance(self.section, SuperellipseSection):   # what the detector can resolve
+            check_exponent(self.section.a, self.section.b, self.section.exponent)
 
     def stations(self) -> np.ndarray:
         """Axial positions zeta_k of the sections, from -length/2 to +length/2."""

@@ -9,6 +9,11 @@ another scenario's results unless the user says so.
   ``overwrite`` another scenario's output folder is cleared and taken; a folder that is not an
   output folder is never cleared (it may be the user's working directory).
 - ``resume`` keeps the folder as it is (the resume logic checks it).
+
+A folder is flexmbs output only if its ``summary.json`` says so (issue "nothing lost, part
+two"): :func:`output_summary`. Files with a run's names (``probes.csv``, ``summary.json``,
+``vtu/``, ...) in a folder whose summary does not say so are the user's: the folder is refused
+in one line naming them, with ``--overwrite`` too.
 """
 
 from __future__ import annotations
@@ -22,9 +27,18 @@ from pathlib import Path
 
 from ..errors import ScenarioError
 
-__all__ = ["LOCK_NAME", "claim", "lock_folder", "output_files"]
+__all__ = ["LOCK_NAME", "OUTPUT_FORMAT", "OUTPUT_FORMAT_VERSION", "claim", "lock_folder",
+           "output_files", "output_summary",
+           "refuse_user_files"]
 
 LOCK_NAME = ".flexmbs.lock"
+#: the mark of a flexmbs output folder: ``summary.json["format"]`` and ``["format_version"]``
+OUTPUT_FORMAT = "flexmbs-output"
+OUTPUT_FORMAT_VERSION = 1
+#: what every summary.json written before the mark holds (flexmbs 0.x, since its first output
+#: folder): a text ``scenario``, ``flexmbs_version`` and ``status``, ``dofs`` with
+#: ``coordinates`` and ``multipliers``, and ``files``
+_LEGACY_KEYS = ("scenario", "flexmbs_version", "status", "dofs", "files")
 
 #: what a run writes at the top of its folder (everything else of an output folder is below
 #: ``vtu/`` and ``figures/``)
@@ -73,11 +87,54 @@ def _lock(folder: Path) -> Path:
     raise ScenarioError(f"{folder}: cannot lock the folder ({LOCK_NAME} keeps reappearing)")
 
 
-def _previous_scenario(folder: Path) -> str | None:
+def output_summary(folder: str | os.PathLike[str]) -> dict | None:
+    """``folder``'s ``summary.json`` if it marks flexmbs output, else None (no summary, not
+    JSON, or not flexmbs's). Marked: ``format == "flexmbs-output"`` with an integer
+    ``format_version`` and a text ``scenario``. A summary of flexmbs before the mark counts when
+    it has no ``format`` key and all of ``_LEGACY_KEYS`` with their types (``{"mine": true}`` or
+    another program's summary do not)."""
     try:
-        return str(json.loads((folder / "summary.json").read_text(encoding="utf-8"))["scenario"])
-    except (OSError, ValueError, KeyError, TypeError):
+        summary = json.loads((Path(folder) / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):      # missing, unreadable, not UTF-8, not JSON
         return None
+    if not isinstance(summary, dict) or not isinstance(summary.get("scenario"), str):
+        return None
+    if "format" in summary:
+        version = summary.get("format_version")
+        ok = (summary["format"] == OUTPUT_FORMAT and isinstance(version, int)
+              and not isinstance(version, bool))
+        return summary if ok else None
+    dofs = summary.get("dofs")
+    legacy = (all(k in summary for k in _LEGACY_KEYS)
+              and isinstance(summary["flexmbs_version"], str)
+              and isinstance(summary["status"], str) and isinstance(summary["files"], dict)
+              and isinstance(dofs, dict) and "coordinates" in dofs and "multipliers" in dofs)
+    return summary if legacy else None
+
+
+def refuse_user_files(folder: str | os.PathLike[str], *, label: str = "--out ") -> None:
+    """Raise :class:`ScenarioError` (one line naming them) if ``folder`` holds files or folders
+    with a run's names (:func:`output_files`) but is not flexmbs output (:func:`output_summary`):
+    they are the user's, and nothing may write over them, ``--overwrite`` included."""
+    path = Path(folder)
+    if not path.is_dir():
+        return
+    ours = output_files(path)
+    if not ours or output_summary(path) is not None:
+        return
+    names = [p.name + ("/" if p.is_dir() else "") for p in ours]
+    listed = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    why = ("its summary.json is not a flexmbs summary" if (path / "summary.json").exists()
+           else "it has no flexmbs summary.json")
+    raise ScenarioError(
+        f"{label}{path}: {listed} {'is' if len(names) == 1 else 'are'} not flexmbs output "
+        f"({why}); flexmbs does not write over them, not even with --overwrite; choose another "
+        "folder")
+
+
+def _previous_scenario(folder: Path) -> str | None:
+    summary = output_summary(folder)
+    return None if summary is None else str(summary["scenario"])
 
 
 @contextlib.contextmanager
@@ -107,7 +164,8 @@ def claim(folder: str | os.PathLike[str], *, scenario: str, overwrite: bool = Fa
         ours = output_files(path)
         previous = _previous_scenario(path)
         foreign = [p for p in entries if p not in ours]
-        if entries and previous is None and not ours:
+        refuse_user_files(path)
+        if entries and previous is None:
             raise ScenarioError(
                 f"--out {path}: the folder is not empty and holds no flexmbs output; choose a new "
                 "or empty folder")

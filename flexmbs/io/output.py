@@ -17,7 +17,9 @@ Files (every one valid after every output, so a run that stops early leaves read
   ``checkpoint_interval`` seconds of wall time (a checkpoint costs a few milliseconds; the
   outputs after it are dropped by ``--resume``);
 - ``summary.json``: written at start (``status: "running"``) and at the end (``completed``,
-  ``failed: <reason>`` or ``interrupted``).
+  ``failed: <reason>`` or ``interrupted``); ``format: "flexmbs-output"`` and ``format_version``
+  mark the folder as flexmbs output (:func:`flexmbs.io.folder.output_summary`): files with
+  these names in a folder without the mark are the user's and are not written over.
 
 ``OutputWriter(..., resume_at=t)`` continues the folder of a stopped run (``flexmbs run
 --resume``): rows and frames at times ``<= t`` are kept, later ones removed, new ones appended;
@@ -45,6 +47,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import FlexmbsError, ModelError
 from .checkpoint import save_checkpoint
+from .folder import OUTPUT_FORMAT, OUTPUT_FORMAT_VERSION, refuse_user_files
 from .frames import BLOCK_NAMES, OUTPUT_FRAMES, FrameBuilder
 from .probes import Probe, probe_columns
 from .vtu import VTUSeries
@@ -116,6 +119,50 @@ def _naming(path: Path) -> Iterator[None]:
         raise
 
 
+#: the longest ending flexmbs gives a file of a run named ``<name>``: the temporary file of a
+#: multiblock piece, ``.<name>_NNNNNNN_hole_sections_K_K.vtp.tmp`` (frame numbers have 6 digits,
+#: 7 at the budget's limit of 1e6 frames; K up to 4 and 5 digits: joints, sections per hole)
+NAME_ENDING_MAX = len("._0000000_hole_sections_9999_99999.vtp.tmp")
+
+
+def name_max(directory: str | os.PathLike) -> int:
+    """The longest file name (bytes) the file system of ``directory`` (or of its nearest
+    existing parent) allows: ``pathconf(PC_NAME_MAX)``, 255 where it cannot be asked."""
+    d = Path(directory).absolute()
+    while not d.exists() and d != d.parent:
+        d = d.parent
+    try:
+        return int(os.pathconf(d, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):   # no pathconf (Windows), unknown name
+        return 255
+
+
+def check_output(directory: str | os.PathLike, name: str, asm: Any, *,
+                 probes: Sequence[Probe] = (), write_vtu: bool = True,
+                 output_frames: str = "multiblock", samples_per_element: int = 8
+                 ) -> FrameBuilder | None:
+    """Everything the output of a run can be refused for, checked before its folder is touched
+    (issue "nothing lost, part two"): the form of the frames, the run name against the file
+    system's limit on file names (with :data:`NAME_ENDING_MAX`), the probes against the model,
+    and the frames' body shapes (mesh files are read here). Returns the frame builder (None
+    without VTU frames). Raises :class:`ModelError` (one line)."""
+    if output_frames not in OUTPUT_FRAMES:
+        raise ModelError(f"output_frames must be one of {', '.join(OUTPUT_FRAMES)} "
+                         f"(got {output_frames!r})")
+    limit = name_max(directory)
+    size = len(str(name).encode("utf-8", "surrogateescape"))
+    if size + NAME_ENDING_MAX > limit:
+        short = str(name) if len(str(name)) <= 24 else f"{str(name)[:20]}..."
+        raise ModelError(
+            f"name: the run name '{short}' ({size} bytes) is too long for the file names of its "
+            f"output (e.g. <name>_000000_hole_sections_0_0.vtp): the file system of {directory} "
+            f"allows {limit} bytes per name; give a name of at most {limit - NAME_ENDING_MAX} "
+            "bytes")
+    for p in probes:
+        p.check(asm)
+    return FrameBuilder(asm, samples_per_element=samples_per_element) if write_vtu else None
+
+
 class OutputWriter:
     """Writes the output folder of one run (context manager; see the module docstring).
 
@@ -135,9 +182,10 @@ class OutputWriter:
                  metadata: dict | None = None, samples_per_element: int = 8,
                  vtu_encoding: str = "binary", resume_at: float | None = None,
                  checkpoint_interval: float = 10.0, output_frames: str = "multiblock") -> None:
-        if output_frames not in OUTPUT_FRAMES:
-            raise ModelError(f"output_frames must be one of {', '.join(OUTPUT_FRAMES)} "
-                             f"(got {output_frames!r})")
+        # before the folder is touched: what can refuse the output
+        frames = check_output(directory, name, asm, probes=probes, write_vtu=write_vtu,
+                              output_frames=output_frames,
+                              samples_per_element=samples_per_element)
         self.output_frames = output_frames
         self.directory = Path(directory)
         self.name = str(name)
@@ -148,9 +196,9 @@ class OutputWriter:
         self.checkpoint_interval = float(checkpoint_interval)
         self._pending_checkpoint: tuple[Any, dict] | None = None
         self._last_checkpoint = -math.inf
-        for p in self.probes:
-            p.check(asm)
         self.probe_columns = probe_columns(self.probes)
+        if resume_at is None:       # a user's own probes.csv, summary.json, ... are not written over
+            refuse_user_files(self.directory, label="")
         self.directory.mkdir(parents=True, exist_ok=True)
         self._t_start = time.perf_counter()
         self.n_outputs = 0
@@ -171,8 +219,8 @@ class OutputWriter:
             if isinstance(initial, dict):
                 self.initial_energy = initial
         try:
-            if write_vtu:
-                self.frames = FrameBuilder(asm, samples_per_element=samples_per_element)
+            if frames is not None:
+                self.frames = frames
                 self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding,
                                         resume_at=self.resume_at, background=True)
                 if self.series.entries:     # a resumed series keeps its form
@@ -306,6 +354,8 @@ class OutputWriter:
         energy.update(energy_balance or {})
         model = self.asm.model
         return _jsonable({
+            "format": OUTPUT_FORMAT,
+            "format_version": OUTPUT_FORMAT_VERSION,
             "scenario": self.name,
             "flexmbs_version": __version__,
             "status": self.status,

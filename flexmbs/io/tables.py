@@ -98,8 +98,12 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Parse a TOML file (no validation); a missing file or bad TOML is a ScenarioError."""
     p = Path(path)
     if not p.is_file():
-        what = "is a directory, not a file" if p.is_dir() else "not found"
-        raise ScenarioError(f"scenario file {what}: {display_path(p)}")
+        if p.is_dir():
+            raise ScenarioError(f"scenario file is a directory, not a file: {display_path(p)}")
+        if p.exists():      # /dev/null, a pipe, a socket
+            raise ScenarioError(f"scenario file {display_path(p)} exists but is not a regular "
+                                "file (a device, a pipe or a socket); give a .toml file")
+        raise ScenarioError(f"scenario file not found: {display_path(p)}")
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)

@@ -150,6 +150,19 @@ class _AlphaStep:
         return self.asm.stiffness_scale
 
 
+def _massless(asm: Assembly) -> str:
+    """The cause of a singular mass matrix a user can act on: the beams without mass (density
+    0), named with their scenario key; '' when every beam has mass."""
+    beams = [b.name for b in asm.model.beams if not b.stiffness.mass_per_length > 0.0]
+    if not beams:
+        return ""
+    keys = ", ".join(f"beams[{name}].density" for name in beams[:3])
+    return (f"beam{'s' if len(beams) > 1 else ''} {', '.join(repr(b) for b in beams[:3])}"
+            f"{' ...' if len(beams) > 3 else ''} {'have' if len(beams) > 1 else 'has'} no mass "
+            f"(density 0: {keys}); a beam that can move in a dynamic run needs a density > 0 "
+            "(or integrator = \"static\")")
+
+
 def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: float) -> State:
     """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0); forces
     that depend on lam (friction on a sliding joint's reaction) by Newton iterations from it.
@@ -196,14 +209,16 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
     except RuntimeError as exc:
         raise ConvergenceError(
             f"cannot compute consistent initial accelerations: singular mass/constraint matrix "
-            f"({exc}); every coordinate needs mass or a constraint") from None
+            f"({exc}); {_massless(asm) or 'every coordinate needs mass or a constraint'}"
+        ) from None
     if not np.all(np.isfinite(x)):
         i = int(np.flatnonzero(~np.isfinite(x))[0])
         where = asm.describe_coordinate(i) if i < n else f"multiplier {i - n}"
         raise ConvergenceError(
             f"initial accelerations are not finite (first at {where}): the mass/constraint "
-            "matrix is singular or the forces overflow; every coordinate needs mass or a "
-            "constraint, and forces must stay finite")
+            "matrix is singular or the forces overflow; "
+            f"{_massless(asm) or 'every coordinate needs mass or a constraint'}, and forces must "
+            "stay finite")
     for _ in range(MULTIPLIER_ITERATIONS):
         # forces that depend on the multipliers (the sliding joint's friction on its normal
         # reaction) were evaluated at λ = 0 above: Newton on [q''; λ] with the same matrix

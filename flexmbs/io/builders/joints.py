@@ -16,6 +16,8 @@ import numpy as np
 
 from ...contact.laws import CONTACT_LAWS, FRICTION_LAWS, ForceLaw, Friction, get_law
 from ...contact.sections import HOLE_SECTIONS, HoleSection, get_section
+from ...contact.shapes.superellipse import SuperellipseSection
+from ...contact.shapes.superellipse_limits import check_exponent
 from ...errors import ModelError, ScenarioError
 from ...registry import Registry
 from ..tables import Table, at, one_line
@@ -148,7 +150,13 @@ def read_hole_section(h: Table) -> HoleSection:
     h.allow((*HOLE_KEYS, *Table.parameter_names(cls)))
     params = h.parameters(cls)
     with at(h.path):
-        return get_section(shape, **params)
+        section = get_section(shape, **params)
+    if isinstance(section, SuperellipseSection):     # before the run, naming the key
+        try:
+            check_exponent(section.a, section.b, section.exponent, key=h.key("exponent"))
+        except ModelError as exc:
+            raise ScenarioError(one_line(exc)) from None
+    return section
 
 
 def read_contact_law(c: Table) -> ForceLaw:
