@@ -524,11 +524,13 @@ class VTUSeries:
         """Wait for the frame being written in the background; raises its error, if any (and
         every later call raises it again: the series is broken)."""
         if self._pending is not None:
-            pending, self._pending = self._pending, None
-            try:
-                pending.result()
-            except BaseException as exc:   # noqa: BLE001 - re-raised below, kept for later calls
-                self._failed = exc
+            # an interrupt (Ctrl-C, a signal turned into one) while waiting propagates and
+            # leaves the frame pending, so the writer's finish waits for it again; only the
+            # worker's own error breaks the series
+            error = self._pending.exception()
+            self._pending = None
+            if error is not None:
+                self._failed = error
         if self._failed is not None:
             raise self._failed
 

@@ -301,3 +301,51 @@ def test_long_series_rewrites_its_index_at_most_every_interval(tmp_path, rng):
             listed = read_pvd(tmp_path / "run.pvd")
             assert len(listed) == min(i + 1, VTUSeries.EAGER_FRAMES)
     assert [t for t, _ in read_pvd(tmp_path / "run.pvd")] == pytest.approx(0.01 * np.arange(n))
+
+
+def test_background_series_loses_no_frame_to_an_interrupt_while_waiting(tmp_path, monkeypatch):
+    """A frame written in the background while the run is interrupted (Ctrl-C, SIGTERM turned
+    into one) as it waits for that frame: the interrupt propagates, the frame stays pending and
+    close() (the writer's finish) waits for it, so it is on disk and listed; a worker's own
+    error is raised at the next call, with the file named."""
+    import signal
+    import time
+
+    import flexmbs.io.vtu as vtu
+
+    real = vtu._store
+
+    def slow(path, text, atomic):  # noqa: ANN001, ANN202 - the worker's writes take a while
+        time.sleep(0.3)
+        return real(path, text, atomic)
+
+    monkeypatch.setattr(vtu, "_store", slow)
+    mesh = VTUMesh(np.zeros((2, 3)), [(VTK_LINE, np.array([[0, 1]]))])
+    series = VTUSeries(tmp_path / "run.pvd", background=True)
+    series.write(0.0, mesh)
+
+    def interrupt(signum, frame):  # noqa: ANN001, ANN202
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.05)
+        with pytest.raises(KeyboardInterrupt):
+            series.flush()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, old)
+    series.close()
+    assert read_pvd(tmp_path / "run.pvd") == [(0.0, "vtu/run_000000.vtu")]
+    assert (tmp_path / "vtu" / "run_000000.vtu").is_file()
+
+    def full(path, text, atomic):  # noqa: ANN001, ANN202 - a full disk
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(vtu, "_store", full)
+    series = VTUSeries(tmp_path / "b.pvd", background=True)
+    series.write(0.0, mesh)
+    with pytest.raises(OSError, match=r"b_000000\.vtu"):
+        series.write(1.0, mesh)
+    with pytest.raises(OSError):
+        series.close()
