@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from flexmbs.contact._detect import N_COLS, detect_section
 from flexmbs.contact.sections import SHAPE_CIRCLE, SHAPE_SUPERELLIPSE, section_boundary
 from flexmbs.elements.ancf_cable import shape_xi
+from tests.conftest import FULL
 
 L_ELEM = 0.02        # the beam element, centred on the section
 M_WALL = 4096        # wall samples
@@ -90,7 +91,8 @@ def _check(found: list[tuple[float, float]],
             assert any(_angle(p, psi) < PSI_TOL for p, _ in every), (psi, depth, found, clear)
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=40 if FULL else 15, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(tilt=st.floats(0.0, 1.2), roll=st.floats(0.0, 2 * math.pi), r_b=st.floats(0.5e-3, 1.2e-3),
        where=st.floats(0.0, 2 * math.pi), reach=st.floats(-0.05e-3, 0.3e-3),
        bend=st.floats(-0.05, 0.05), super_=st.booleans(), n=st.floats(2.0, 8.0),

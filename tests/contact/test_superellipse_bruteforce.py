@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from flexmbs.contact.sections import SHAPE_SUPERELLIPSE, common_normal_points, section_boundary
+from tests.conftest import FULL
 
 M_DIR = 4096        # normal directions of the brute force
 M_WALL = 8192       # wall samples of its support function
@@ -51,7 +52,7 @@ def _detected(params: np.ndarray, c: np.ndarray, ea: np.ndarray, a: float, b: fl
     return out
 
 
-@settings(max_examples=40, deadline=None, derandomize=True,
+@settings(max_examples=40 if FULL else 15, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(A=st.floats(1.5e-3, 3e-3), B=st.floats(1.5e-3, 3e-3), n=st.floats(2.0, 20.0),
        turn=st.floats(0.0, math.pi), b=st.floats(0.6e-3, 1.4e-3), ratio=st.floats(1.0, 2.5),
