@@ -27,7 +27,7 @@ from .errors import (
 # Ctrl-C during start-up meets the command's own handler, not an import traceback.
 if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LAZY
     from .constraints.sliding import SlidingJoint
-    from .contact.joint import CircleHole, Hole, SlidingClearanceJoint, SuperellipseHole
+    from .contact.joint import CircleHole, CurvedBore, Hole, SlidingClearanceJoint, SuperellipseHole
     from .contact.laws import (
         Friction,
         Hertz,
@@ -50,6 +50,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
 _LAZY = {
     "SlidingJoint": ".constraints.sliding",
     "CircleHole": ".contact.joint",
+    "CurvedBore": ".contact.joint",
     "Hole": ".contact.joint",
     "SlidingClearanceJoint": ".contact.joint",
     "SuperellipseHole": ".contact.joint",
@@ -116,7 +117,8 @@ def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (mes
 from ._version import __version__  # noqa: E402 - after the API imports, as before
 
 __all__ = [
-    "CircleHole", "Hole", "SlidingClearanceJoint", "SuperellipseHole", "Friction", "Hertz", "HuntCrossley",
+    "CircleHole", "CurvedBore", "Hole", "SlidingClearanceJoint", "SuperellipseHole", "Friction",
+    "Hertz", "HuntCrossley",
     "LankaraniNikravesh", "LinearPenalty", "RegularizedCoulomb",
     "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
     "ConvergenceError", "FlexmbsError", "Function", "GROUND", "GeneralizedAlpha", "GeometryError",

@@ -48,13 +48,25 @@ MAX_CANDIDATES = 8
 SHAPE_SAMPLES = 128
 
 
+@njit(inline="always")
+def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):  # noqa: ANN001, ANN202
+    """Origin ``r_H + A u_o`` and axes ``A frame`` (normal, e_y, e_z) of a hole section."""
+    for c in range(3):
+        origin[c] = r_H[c] + A[c, 0] * u_o[0] + A[c, 1] * u_o[1] + A[c, 2] * u_o[2]
+        n[c] = A[c, 0] * frame[0, 0] + A[c, 1] * frame[1, 0] + A[c, 2] * frame[2, 0]
+        ey[c] = A[c, 0] * frame[0, 1] + A[c, 1] * frame[1, 1] + A[c, 2] * frame[2, 1]
+        ez[c] = A[c, 0] * frame[0, 2] + A[c, 1] * frame[1, 2] + A[c, 2] * frame[2, 2]
+
+
 @njit
-def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out, r_b,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0915
+def detect_section(qe, lengths, r_H, A, origins, frames, elem_ws, xi_ws, elem_out, xi_out, r_b,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
                    shape, params, R_out, R_in, consistent, out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
-    ``A`` = hole body rotation (columns: hole axis, e_y, e_z); ``shape``, ``params``: the
+    ``r_H``, ``A``: the hole body's position and rotation; section k lies in the plane through
+    ``r_H + A origins[k]`` with the axes ``A frames[k]`` (columns: plane normal, e_y, e_z; body
+    coordinates, :meth:`flexmbs.contact.joint.Hole.frames`); ``shape``, ``params``: the
     compiled section (:func:`flexmbs.contact.sections.section_boundary`), ``R_out``/``R_in`` its
     bounding and inscribed radii. Circles take the closed-form quartic (§3), other shapes the
     generic common-normal detector (§6); with ``consistent`` each point is instead a stationary
@@ -63,9 +75,9 @@ def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, x
     The section crossings start at the warm starts
     ``(elem_ws, xi_ws)`` and are written to ``(elem_out, xi_out)`` (the same arrays to update
     the warm starts)."""
-    n = A[:, 0].copy()
-    ey = A[:, 1].copy()
-    ez = A[:, 2].copy()
+    n = np.empty(3)
+    ey = np.empty(3)
+    ez = np.empty(3)
     origin = np.empty(3)
     Y = np.empty(2)
     Yp = np.empty(2)
@@ -75,9 +87,8 @@ def detect_section(qe, lengths, centre, A, stations, elem_ws, xi_ws, elem_out, x
     kinds = np.empty(MAX_CANDIDATES, np.int64)
     depths = np.empty(MAX_CANDIDATES)
     count = 0
-    for k in range(stations.size):
-        for c in range(3):
-            origin[c] = centre[c] + stations[k] * n[c]
+    for k in range(origins.shape[0]):
+        _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
         found, e, xi, cy, cz, a, b, eax, eay = section_state(
             qe, lengths, origin, n, ey, ez, elem_ws[k], xi_ws[k], r_b, 2.0 * R_out + r_b)
         if not found:
@@ -280,21 +291,16 @@ def clearance_update(rows, m, approach, active, psi_track, anchor, stuck):  # no
 
 
 @njit
-def _frame(q, body_dofs, hole_point):  # noqa: ANN001, ANN202
-    """Hole body [r, p], rotation A(p) (homogeneous) and hole centre r + A u_H."""
+def _frame(q, body_dofs):  # noqa: ANN001, ANN202
+    """Hole body [r, p] and rotation A(p) (homogeneous)."""
     qb = np.empty(7)
     for i in range(7):
         qb[i] = q[body_dofs[i]]
-    A = rotation(qb[3:7])
-    centre = np.empty(3)
-    for c in range(3):
-        centre[c] = qb[c] + A[c, 0] * hole_point[0] + A[c, 1] * hole_point[1] \
-            + A[c, 2] * hole_point[2]
-    return qb, A, centre
+    return qb, rotation(qb[3:7])
 
 
 @njit
-def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
                      exact, r_q, K_out, C_out, elem_k, elem_i):
@@ -310,7 +316,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     linearisation (``exact``) or Gauss–Newton ``k BᵀB`` (frozen hole point, no e_I columns).
     Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left the bore at
     section k."""
-    qb, A, centre = _frame(q, body_dofs, hole_point)
+    qb, A = _frame(q, body_dofs)
     vb = np.empty(7)
     for i in range(7):
         vb[i] = v[body_dofs[i]]
@@ -318,7 +324,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     for e in range(ne):
         for k in range(CENTERLINE_SIZE):
             qe[e, k] = q[elem_dofs[e, k]]
-    m = detect_section(qe[:ne], lengths, centre, A, stations, elem_ws, xi_ws, elem_out, xi_out,
+    m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, elem_ws, xi_ws, elem_out, xi_out,
                        r_b, shape, params, R_out, R_in, consistent, rows)
     if m < 0:
         return m, 0, 0.0
@@ -330,7 +336,6 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
     Y = np.empty(2)
     Yp = np.empty(2)
     Ypp = np.empty(2)
-    u_o = np.empty(3)
     geo = np.empty(N_GEO)
     hist = np.empty(N_HISTORY)
     ve = np.empty(CENTERLINE_SIZE)
@@ -367,12 +372,10 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, hole_point, stations, 
                 scale = abs(Qc[c])
         if want_tangent and exact:
             eI = eP if consistent else elem_out[k]
-            for c in range(3):
-                u_o[c] = hole_point[c] + (stations[k] if c == 0 else 0.0)
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
-            contact_tangent(qb, vb, u_o, qe[eI], lengths[eI], xi_out[k], qe[eP], ve, lengths[eP],
-                            xiP, row[14], Y, Yp, Ypp, r_b, law, fric, hist, v_app, consistent,
-                            Qx, KX, C)
+            contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI], xi_out[k],
+                            qe[eP], ve, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law, fric,
+                            hist, v_app, consistent, Qx, KX, C)
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]
@@ -407,8 +410,8 @@ class ClearancePart(NamedTuple):
     elem_dofs: np.ndarray            # (nj, max_ne, CENTERLINE_SIZE)
     n_elem: np.ndarray
     lengths: np.ndarray              # (nj, max_ne)
-    hole_point: np.ndarray           # (nj, 3)
-    stations: np.ndarray             # (nj, max_ns)
+    origins: np.ndarray              # (nj, max_ns, 3) section origins (body coordinates)
+    frames: np.ndarray               # (nj, max_ns, 3, 3) section axes (body coordinates)
     n_sec: np.ndarray
     r_b: np.ndarray
     shape: np.ndarray                # (nj,) compiled section kind (sections.SHAPE_*)
@@ -453,8 +456,8 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     ne_j = cl.n_elem[j]
     ns = cl.n_sec[j]
     m, cnt, sc = clearance_forces(
-        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.hole_point[j],
-        cl.stations[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
+        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.origins[j, :ns],
+        cl.frames[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],

@@ -16,12 +16,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..budget import MAX_SECTIONS, require_memory
 from ..constraints.interaction import Interaction, InteractionKind, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
@@ -39,6 +37,7 @@ from ._detect import (
     tracked_approach,
     tracked_slot,
 )
+from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole
 from .geometry import closest_point, section_state
 from .laws import (
     N_FRICTION,
@@ -51,68 +50,15 @@ from .laws import (
     law_energy,
 )
 from .pair import N_HISTORY, N_LOCAL, contact_point, friction_vector
-from .sections import (
-    CircleSection,
-    Ellipse2D,
-    HoleSection,
-    SuperellipseSection,
-    section_contains,
-)
-from .shapes.superellipse_limits import check_exponent
+from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
+
+__all__ = ["SlidingClearanceJoint", "Hole", "CircleHole", "SuperellipseHole", "CurvedBore",
+           "CLEARANCE", "MAX_POINTS", "TANGENTS", "DETECTIONS"]
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
     from ..terms import DofMap, PackContext
-
-
-@dataclass(frozen=True)
-class Hole:
-    """A bore of constant section along the body x axis, checked at ``sections`` stations
-    (both end faces included)."""
-
-    section: HoleSection
-    length: float
-    sections: int = 9
-
-    def __post_init__(self) -> None:
-        if not self.length > 0:
-            raise ModelError(f"hole length must be > 0 (got {self.length})")
-        n = self.sections
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-            raise ModelError(f"hole sections must be an integer >= 1 (got {n!r})")
-        if n > MAX_SECTIONS:
-            raise ModelError(f"hole sections = {n}: more than {MAX_SECTIONS} per hole; stations "
-                             f"{self.length / (n - 1):.3g} m apart resolve nothing the beam "
-                             "elements can, and each costs time in every Newton iteration; use "
-                             "fewer sections (9-21 is typical)")
-        require_memory(n_sections=int(n), what=f"hole sections = {n}", fix="use fewer sections")
-        if isinstance(self.section, SuperellipseSection):   # what the detector can resolve
-            check_exponent(self.section.a, self.section.b, self.section.exponent)
-
-    def stations(self) -> np.ndarray:
-        """Axial positions zeta_k of the sections, from -length/2 to +length/2."""
-        if self.sections == 1:
-            return np.zeros(1)
-        return np.linspace(-0.5 * self.length, 0.5 * self.length, int(self.sections))
-
-
-class CircleHole(Hole):
-    """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``)."""
-
-    def __init__(self, radius: float, length: float, sections: int = 9) -> None:
-        super().__init__(CircleSection(radius), length, sections)
-
-
-class SuperellipseHole(Hole):
-    """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (FORMULATION Part II §6); the
-    keys are those of the scenario files (``a``, ``b``, ``exponent``, ``angle``: the section
-    turned in the body by that many radians from body y towards body z)."""
-
-    def __init__(self, a: float, b: float, exponent: float, length: float,
-                 sections: int = 9, angle: float = 0.0) -> None:
-        super().__init__(SuperellipseSection(a=a, b=b, exponent=exponent, angle=angle), length,
-                         sections)
 
 
 #: contact points tracked per section (a circle has at most 4; a superellipse's extra ones
@@ -199,6 +145,10 @@ class SlidingClearanceJoint(Interaction):
                 f"{hole.section.inscribed_radius():.6g}) is not larger than the beam (radius "
                 f"{self.beam_radius:.6g}); the beam cannot pass")
         self.stations = hole.stations()
+        # the sections in body coordinates: origins (ns, 3), axes (ns, 3, 3) (normal, e_y, e_z)
+        origins, axes = hole.frames()
+        self._origins = np.ascontiguousarray(origins + self.hole_point)
+        self._axes = np.ascontiguousarray(axes)
         ns = len(self.stations)
         # state, updated after each converged step (also by the compiled integrator, in place):
         self._elem = np.zeros(ns, np.int64)     # warm starts of the section crossings
@@ -251,22 +201,22 @@ class SlidingClearanceJoint(Interaction):
                           warn=False)
         return np.zeros(0)
 
-    def _frames(self, qb: np.ndarray):  # noqa: ANN202
+    def _planes(self, qb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Body rotation A, the sections' origins (ns, 3) and axes (ns, 3, 3) (columns: plane
+        normal, e_y, e_z), global, at the body coordinates ``qb``."""
         A = rotation_matrix(qb[3:7])
-        centre = qb[:3] + A @ self.hole_point
-        axes = np.ascontiguousarray(A.T)
-        return A, centre, axes[0], axes[1], axes[2]
+        return A, qb[:3] + self._origins @ A.T, A @ self._axes
 
     def _check_start(self, qb: np.ndarray, qe: np.ndarray, *, warn: bool) -> None:
         """The beam must cross every section plane inside the bore, and fit (no jamming); it
         should not start deep in the wall (``warn``). Sets the sections' tracking start."""
-        A, centre, n, ey, ez = self._frames(qb)
+        _, origins, axes = self._planes(qb)
         lengths = np.array(self.beam.centerline.lengths, dtype=float)
         R_out = self.hole.section.bounding_radius()
         R_in = self.hole.section.inscribed_radius()
         deepest = 0.0
         for k, zeta in enumerate(self.stations):
-            origin = centre + zeta * n
+            origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
                 qe, lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
             compiled = self.hole.section.compiled_shape()
@@ -338,15 +288,15 @@ class SlidingClearanceJoint(Interaction):
             return self._contacts_compiled(q, v, want_tangent, update)
         qb = q[self._body_dofs]
         vb = v[self._body_dofs]
-        A, centre, n, ey, ez = self._frames(qb)
+        A, origins, axes = self._planes(qb)
         qe = np.ascontiguousarray(q[self._elem_dofs])
         section = self.hole.section
         R_out = section.bounding_radius()
         R_in = section.inscribed_radius()
         r_b = self.beam_radius
         out = []
-        for k, zeta in enumerate(self.stations):
-            origin = centre + zeta * n
+        for k in range(len(self.stations)):
+            origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
                 qe, self._lengths, origin, n, ey, ez, int(self._elem[k]), float(self._xi[k]), r_b,
                 2 * R_out + r_b)
@@ -380,14 +330,15 @@ class SlidingClearanceJoint(Interaction):
         (contact/_detect.py)."""
         qb = q[self._body_dofs]
         vb = v[self._body_dofs]
-        A, centre, *_ = self._frames(qb)
+        A = rotation_matrix(qb[3:7])
         qe = np.ascontiguousarray(q[self._elem_dofs])
         e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
         section = self.hole.section
         compiled = section.compiled_shape()
         assert compiled is not None
         shape, params = compiled
-        m = detect_section(qe, self._lengths, centre, A, self.stations, self._elem, self._xi,
+        m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self._origins,
+                           self._axes, self._elem, self._xi,
                            e_out, x_out, self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
                            self.detection == "consistent", self._rows)
@@ -428,7 +379,7 @@ class SlidingClearanceJoint(Interaction):
 
         body = self.body
         A = body.pose.rotation
-        axis = A[:, 0]
+        axis = A @ self._axes[len(self.stations) // 2, :, 0]   # the middle section's normal
         d = np.asarray(direction, float).reshape(3)
         d = d - axis * (axis @ d)
         if not np.linalg.norm(d) > 0:
@@ -441,12 +392,13 @@ class SlidingClearanceJoint(Interaction):
         R_out = section.bounding_radius()
 
         def deepest(shift: float) -> float:
-            centre = body.pose.position + shift * d + A @ self.hole_point
+            origins = body.pose.position + shift * d + self._origins @ A.T
+            axes = A @ self._axes
             worst = -np.inf
-            for zeta in self.stations:
-                origin = centre + zeta * axis
+            for k in range(len(self.stations)):
+                n, ey, ez = axes[k].T
                 found, _e, _xi, cy, cz, a, b, eax, eay = section_state(
-                    qe, L, origin, axis, A[:, 1], A[:, 2], 0, 0.5, self.beam_radius, np.inf)
+                    qe, L, origins[k], n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
                 if not found:
                     return np.inf
                 ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
@@ -477,15 +429,15 @@ class SlidingClearanceJoint(Interaction):
 
     def hole_record(self) -> dict[str, Any]:
         """The hole as data (``summary.json["hole_sections"]``, read by the section view):
-        ``shape`` (registered name) and the section's parameters, ``length``, ``sections``."""
+        ``shape`` (registered name) and the section's parameters, ``length``, ``sections``
+        (:meth:`Hole.record`)."""
         from .sections import HOLE_SECTIONS
 
         section = self.hole.section
         shape = next((n for n in HOLE_SECTIONS.names() if HOLE_SECTIONS.get(n) is type(section)),
                      type(section).__name__)
         params: dict[str, Any] = dataclasses.asdict(section) if dataclasses.is_dataclass(section) else {}
-        return {"shape": shape, **params, "length": float(self.hole.length),
-                "sections": int(self.hole.sections)}
+        return {"shape": shape, **params, **self.hole.record()}
 
     def compiled_form(self) -> bool:
         """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): a section
@@ -584,15 +536,15 @@ class SlidingClearanceJoint(Interaction):
         """Per hole section: section frame, beam ellipse (section coordinates), bore radius and
         number of contact points (``sections.csv``, used by the section view)."""
         qb = q[self._body_dofs]
-        A, centre, n, ey, ez = self._frames(qb)
+        _, origins, axes = self._planes(qb)
         qe = np.ascontiguousarray(q[self._elem_dofs])
         R = self.hole.section.bounding_radius()
         counts: dict[int, int] = {}
         for k, *_ in self._contacts(q, v, False, False):
             counts[k] = counts.get(k, 0) + 1
         rows = []
-        for k, zeta in enumerate(self.stations):
-            origin = centre + zeta * n
+        for k in range(len(self.stations)):
+            origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
                 qe, self._lengths, origin, n, ey, ez, int(self._elem[k]), float(self._xi[k]),
                 self.beam_radius, 2 * R + self.beam_radius)
@@ -607,20 +559,20 @@ class SlidingClearanceJoint(Interaction):
 
     def section_outlines(self, q: np.ndarray, samples: int = 48) -> np.ndarray:
         """The bore outline of every hole section at ``q`` (output: the ``hole_sections`` block):
-        ``(n_sections, samples, 3)`` global points ``c + zeta_k n + Y_y(psi) e_y + Y_z(psi) e_z``
+        ``(n_sections, samples, 3)`` global points ``o_k + Y_y(psi) e_y,k + Y_z(psi) e_z,k``
         of the section boundary ``Y(psi)`` at ``psi = 2 pi j / samples`` in each section plane."""
-        _, centre, n, ey, ez = self._frames(q[self._body_dofs])
+        _, origins, axes = self._planes(q[self._body_dofs])
         Y = self.hole.section.boundary(np.linspace(0.0, 2.0 * np.pi, int(samples), endpoint=False))[0]
-        ring = Y[:, :1] * ey + Y[:, 1:] * ez
-        return centre + np.asarray(self.stations)[:, None, None] * n + ring[None]
+        return (origins[:, None, :] + Y[None, :, :1] * axes[:, None, :, 1]
+                + Y[None, :, 1:] * axes[:, None, :, 2])
 
     def slide_coordinate(self, q: np.ndarray) -> float:
-        """Arc length (from the beam's first node) of the projection of the hole centre onto
-        the beam centreline."""
+        """Arc length (from the beam's first node) of the projection of the hole centre (the
+        middle section's origin) onto the beam centreline."""
         qb = q[self._body_dofs]
-        _, centre, *_ = self._frames(qb)
-        qe = np.ascontiguousarray(q[self._elem_dofs])
         k = len(self.stations) // 2
+        centre = self._planes(qb)[1][k]
+        qe = np.ascontiguousarray(q[self._elem_dofs])
         e, xi, *_ = closest_point(qe, self._lengths, centre, int(self._elem[k]), float(self._xi[k]))
         return float(np.sum(self._lengths[:e]) + xi * self._lengths[e])
 
@@ -715,8 +667,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
         np.array([len(j._lengths) for j in joints], i64),
         pad_stack([j._lengths for j in joints], (), 1.0, float),
-        c(np.array([j.hole_point for j in joints], float).reshape(nj, 3)),
-        pad_stack([j.stations for j in joints], (), 0.0, float),
+        pad_stack([j._origins for j in joints], (3,), 0.0, float),
+        pad_stack([j._axes for j in joints], (3, 3), 0.0, float),
         np.array([len(j.stations) for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
         np.array([shapes[i][0] for i in range(nj)], i64),

@@ -245,11 +245,13 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
 
 
 @njit
-def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law, fric,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                    hist, approach_velocity, consistent, Qc, K, C):
+def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+                    fric, hist, approach_velocity, consistent, Qc, K, C):
     """Force and exact tangent of one detected contact.
 
-    ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin; ``qI``
+    ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin;
+    ``frame`` (3, 3): the section's axes in body coordinates (columns: plane normal, e_y, e_z;
+    the identity for a straight bore along body x, :meth:`flexmbs.contact.joint.Hole.frames`); ``qI``
     (12), ``LI``, ``xiI``: crossing element, its length and the crossing; ``qP``, ``vP``,
     ``LP``, ``xiP``: the element of the closest point and ξ_P (converged); ``phi``: the
     ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
@@ -268,13 +270,13 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     p = qb[3:7]
     A = rotation(p)
     Te = _body_basis()
-    # body basis n, e_y, e_z (columns of A) and their derivatives 2T(e_j)p
-    nvec = A[:, 0].copy()
-    ey = A[:, 1].copy()
-    ez = A[:, 2].copy()
-    Dn = np.zeros((3, NX))
-    Dey = np.zeros((3, NX))
-    Dez = np.zeros((3, NX))
+    # body basis b_j (columns of A) and their derivatives 2T(e_j)p
+    bx = A[:, 0].copy()
+    by = A[:, 1].copy()
+    bz = A[:, 2].copy()
+    Dbx = np.zeros((3, NX))
+    Dby = np.zeros((3, NX))
+    Dbz = np.zeros((3, NX))
     unit = np.zeros(3)
     for j in range(3):
         unit[:] = 0.0
@@ -283,11 +285,26 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
         for c in range(3):
             for i in range(4):
                 if j == 0:
-                    Dn[c, 3 + i] = Bj[c, i]
+                    Dbx[c, 3 + i] = Bj[c, i]
                 elif j == 1:
-                    Dey[c, 3 + i] = Bj[c, i]
+                    Dby[c, 3 + i] = Bj[c, i]
                 else:
-                    Dez[c, 3 + i] = Bj[c, i]
+                    Dbz[c, 3 + i] = Bj[c, i]
+    # the section's normal n, e_y, e_z = A frame (T is linear in u: D(A f) = Σ_j f_j D b_j)
+    nvec = np.empty(3)
+    ey = np.empty(3)
+    ez = np.empty(3)
+    Dn = np.zeros((3, NX))
+    Dey = np.zeros((3, NX))
+    Dez = np.zeros((3, NX))
+    for c in range(3):
+        nvec[c] = bx[c] * frame[0, 0] + by[c] * frame[1, 0] + bz[c] * frame[2, 0]
+        ey[c] = bx[c] * frame[0, 1] + by[c] * frame[1, 1] + bz[c] * frame[2, 1]
+        ez[c] = bx[c] * frame[0, 2] + by[c] * frame[1, 2] + bz[c] * frame[2, 2]
+        for i in range(3, 7):
+            Dn[c, i] = Dbx[c, i] * frame[0, 0] + Dby[c, i] * frame[1, 0] + Dbz[c, i] * frame[2, 0]
+            Dey[c, i] = Dbx[c, i] * frame[0, 1] + Dby[c, i] * frame[1, 1] + Dbz[c, i] * frame[2, 1]
+            Dez[c, i] = Dbx[c, i] * frame[0, 2] + Dby[c, i] * frame[1, 2] + Dbz[c, i] * frame[2, 2]
     # section origin o = r_H + A u_o
     o = np.empty(3)
     Do = np.zeros((3, NX))
@@ -308,8 +325,8 @@ def contact_tangent(qb, vb, u_o, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, 
     uQ = np.empty(3)
     DuQ = np.zeros((3, NX))
     for jj in range(3):
-        col = nvec if jj == 0 else (ey if jj == 1 else ez)
-        Dcol = Dn if jj == 0 else (Dey if jj == 1 else Dez)
+        col = bx if jj == 0 else (by if jj == 1 else bz)
+        Dcol = Dbx if jj == 0 else (Dby if jj == 1 else Dbz)
         uQ[jj] = col[0] * w[0] + col[1] * w[1] + col[2] * w[2]
         for j in range(NX):
             acc = 0.0

@@ -64,8 +64,8 @@ def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in
     rows = np.zeros((8, N_COLS))
     ws_e, ws_x = np.zeros(1, np.int64), np.full(1, 0.5)
     m = detect_section(qe.reshape(1, 12), np.array([L_ELEM]), np.zeros(3), np.eye(3),
-                       np.zeros(1), ws_e, ws_x, ws_e.copy(), ws_x.copy(), r_b, shape, params,
-                       R_out, R_in, True, rows)
+                       np.zeros((1, 3)), np.eye(3)[None].copy(), ws_e, ws_x, ws_e.copy(),
+                       ws_x.copy(), r_b, shape, params, R_out, R_in, True, rows)
     if m < 0:
         return None
     return [(float(r[11]), float(r[10])) for r in rows[:m] if r[2] > 0]

@@ -29,14 +29,16 @@ def _point(qe: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return S @ E, dS @ E, ddS @ E
 
 
-def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray, fric: np.ndarray,
+def _reference(x: np.ndarray, vel: np.ndarray, sec: tuple, law: np.ndarray, fric: np.ndarray,
                hist: np.ndarray, start: tuple[float, float, float], same: bool
                ) -> tuple[np.ndarray, tuple]:
-    """Q_c of one contact at coordinates ``x = [body, e_I, e_P]`` (numpy, Newton solves)."""
+    """Q_c of one contact at coordinates ``x = [body, e_I, e_P]`` (numpy, Newton solves) in
+    the section ``sec = (u_o, frame)`` (origin and axes in body coordinates)."""
+    u_o, frame = sec
     qb, qI = x[:7], x[I_OFF:I_OFF + CENTERLINE_SIZE]
     qP = qI if same else x[P_OFF:]
     A = rotation(qb[3:7])
-    n, ey, ez = A[:, 0], A[:, 1], A[:, 2]
+    n, ey, ez = A @ frame[:, 0], A @ frame[:, 1], A @ frame[:, 2]
     o = qb[:3] + A @ u_o
     xi, phi, xp = start
     for _ in range(50):
@@ -67,7 +69,7 @@ def _reference(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law: np.ndarray,
     Y, Yp, Ypp = np.empty(2), np.empty(2), np.empty(2)
     circle_boundary(R_BORE, psi, Y, Yp, Ypp)
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
-    g, _, f = contact_tangent(qb, vel[:7], u_o, qI, L_ELEM, xi, qP, vel[7:], L_ELEM, xp, phi, Y, Yp,
+    g, _, f = contact_tangent(qb, vel[:7], u_o, frame, qI, L_ELEM, xi, qP, vel[7:], L_ELEM, xp, phi, Y, Yp,
                               Ypp, R_BEAM, law, fric, hist, 0.3, False, Qc, K, C)
     return Qc, (K, C, xi, phi, xp, g, f)
 
@@ -102,6 +104,19 @@ CASES = [  # tilt, bore offset, same element, friction, law [K, n, chi, c_d, v_m
 ]
 
 
+def _turned() -> np.ndarray:
+    """Section axes turned in the body (normal tilted 0.15 rad about z, e_y spun 0.7 rad about
+    it): a section of a curved bore."""
+    cz, sz, cx, sx = math.cos(0.15), math.sin(0.15), math.cos(0.7), math.sin(0.7)
+    Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    return Rz @ Rx
+
+
+#: section axes in body coordinates (columns: normal, e_y, e_z)
+FRAMES = {"straight": np.eye(3), "turned": _turned()}
+
+
 def _regularised(mu: float) -> np.ndarray:
     return np.array([FRICTION_REGULARISED if mu > 0 else FRICTION_NONE, mu, mu, 1.0, 0.0, 1e-3])
 
@@ -119,7 +134,7 @@ def _history(x: np.ndarray, same: bool, seed: int) -> np.ndarray:
     return hist
 
 
-def _check_tangent(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law_a: np.ndarray,
+def _check_tangent(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray,
                    fric: np.ndarray, hist: np.ndarray, same: bool, info: tuple) -> None:
     """K and C of the contact at ``info`` against central differences of :func:`_reference`."""
     K, C, xi, phi, xp = info[:5]
@@ -132,8 +147,8 @@ def _check_tangent(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law_a: np.nd
         xp_, xm_ = x.copy(), x.copy()
         xp_[j] += h
         xm_[j] -= h
-        Kfd[:, j] = -(_reference(xp_, vel, u_o, law_a, fric, hist, start, same)[0]
-                      - _reference(xm_, vel, u_o, law_a, fric, hist, start, same)[0]) / (2 * h)
+        Kfd[:, j] = -(_reference(xp_, vel, sec, law_a, fric, hist, start, same)[0]
+                      - _reference(xm_, vel, sec, law_a, fric, hist, start, same)[0]) / (2 * h)
     if same:   # e_I and e_P are one element: their columns add
         K = K.copy()
         K[:, I_OFF:P_OFF] += K[:, P_OFF:]
@@ -145,31 +160,34 @@ def _check_tangent(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law_a: np.nd
         vp, vm = vel.copy(), vel.copy()
         vp[j] += h
         vm[j] -= h
-        Cfd[:, j] = -(_reference(x, vp, u_o, law_a, fric, hist, start, same)[0]
-                      - _reference(x, vm, u_o, law_a, fric, hist, start, same)[0]) / (2 * h)
+        Cfd[:, j] = -(_reference(x, vp, sec, law_a, fric, hist, start, same)[0]
+                      - _reference(x, vm, sec, law_a, fric, hist, start, same)[0]) / (2 * h)
     assert np.abs(C - Cfd).max() <= 1e-6 * max(np.abs(Cfd).max(), 1e-12) + 1e-12
 
 
-def _deepest(x: np.ndarray, vel: np.ndarray, u_o: np.ndarray, law_a: np.ndarray,
+def _deepest(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray,
              fric: np.ndarray, hist: np.ndarray, same: bool) -> tuple:
     """The deepest stationary point (scan of starting angles)."""
-    found = [_reference(x, vel, u_o, law_a, fric, hist, (0.5, phi0, 0.5), same)[1]
+    found = [_reference(x, vel, sec, law_a, fric, hist, (0.5, phi0, 0.5), same)[1]
              for phi0 in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)]
     info = min(found, key=lambda i: i[5])
     assert info[5] < 0.0, "the configuration must be in contact"
     return info
 
 
+@pytest.mark.parametrize("frame", list(FRAMES))
 @pytest.mark.parametrize(("tilt", "offset", "same", "mu", "law"), CASES)
 def test_exact_tangent_equals_central_differences(tilt: float, offset: float, same: bool,
-                                                  mu: float, law: list) -> None:
+                                                  mu: float, law: list, frame: str) -> None:
+    """Sections of a straight bore (axes = the body's) and of a curved one (axes turned in the
+    body: :class:`flexmbs.CurvedBore`)."""
     x, vel = _configuration(tilt, offset, same, seed=3)
     law_a = np.array(law, float)
-    u_o = np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0])
+    sec = (np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0]), FRAMES[frame])
     fric = _regularised(mu)
     hist = _history(x, same, seed=4)
-    _check_tangent(x, vel, u_o, law_a, fric, hist, same,
-                   _deepest(x, vel, u_o, law_a, fric, hist, same))
+    _check_tangent(x, vel, sec, law_a, fric, hist, same,
+                   _deepest(x, vel, sec, law_a, fric, hist, same))
 
 
 #: |trial force| / cone radius of the stick-law cases: stick, slip, either side of the transition
@@ -184,26 +202,27 @@ RATIOS = [0.5, 3.0, 0.99, 1.01]
                          ids=["one_element", "two_elements", "two_point_regime"])
 def test_stick_law_tangent_equals_central_differences(ratio: float, tilt: float, offset: float,
                                                       same: bool, law: list) -> None:
+    frame = "turned" if ratio > 1.0 else "straight"
     """The stick law's exact tangent (trial displacement from the step's start, anchor in the
     hole frame, return mapping) in stick, in slip and on either side of the cone: the
     tangential stiffness is set so that |T| = ratio · μ f_N at the contact (damping 0.3 % of
     it, so the C block has a friction part too)."""
     x, vel = _configuration(tilt, offset, same, seed=3)
     law_a = np.array(law, float)
-    u_o = np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0])
+    sec = (np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0]), FRAMES[frame])
     hist = _history(x, same, seed=4)
     vel *= 1e-3          # slow: the damping part of the trial force stays small
     mu = 0.3
     probe = np.array([FRICTION_STICK, mu, mu, 1.0, 0.0, 1e-3])
-    info = _deepest(x, vel, u_o, law_a, probe, hist, same)
-    Qc, _ = _reference(x, vel, u_o, law_a, probe, hist, info[2:5], same)
+    info = _deepest(x, vel, sec, law_a, probe, hist, same)
+    Qc, _ = _reference(x, vel, sec, law_a, probe, hist, info[2:5], same)
     # with k_t = 1 and no damping the friction force is −d (inside any cone of these forces)
-    Qn, _ = _reference(x, vel, u_o, law_a, _regularised(0.0), hist, info[2:5], same)
+    Qn, _ = _reference(x, vel, sec, law_a, _regularised(0.0), hist, info[2:5], same)
     d_norm = np.linalg.norm((Qc - Qn)[:3])      # body translation rows: W = [I, ...] → F_t
     k_t = ratio * mu * info[6] / d_norm
     fric = np.array([FRICTION_STICK, mu, mu, k_t, 0.0, 1e-3])
-    _check_tangent(x, vel, u_o, law_a, fric, hist, same,
-                   _deepest(x, vel, u_o, law_a, fric, hist, same))
+    _check_tangent(x, vel, sec, law_a, fric, hist, same,
+                   _deepest(x, vel, sec, law_a, fric, hist, same))
     fric[4] = 1e-3 * k_t
-    _check_tangent(x, vel, u_o, law_a, fric, hist, same,
-                   _deepest(x, vel, u_o, law_a, fric, hist, same))
+    _check_tangent(x, vel, sec, law_a, fric, hist, same,
+                   _deepest(x, vel, sec, law_a, fric, hist, same))

@@ -31,7 +31,7 @@ __all__ = ["FRICTION_KEYS", "HOLE_KEYS", "JOINTS", "read_contact_law", "read_fri
 JOINTS: Registry[Builder] = Registry("joint type")
 
 #: keys of ``hole = { ... }`` besides the section's own parameters
-HOLE_KEYS = ("shape", "length", "sections", "point")
+HOLE_KEYS = ("shape", "length", "sections", "point", "path", "spacing", "up")
 _CONTACT_KEYS = ("law", "friction", "friction_velocity")
 #: keys of ``friction = { ... }`` (the fields of :class:`~flexmbs.contact.laws.Friction`)
 FRICTION_KEYS = ("mu", "mu_static", "law", "stiffness", "damping", "velocity")
@@ -108,7 +108,13 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     body = ctx.body(t)
     h = t.table("hole")
     section = read_hole_section(h)
-    hole = Hole(section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1))
+    for k in ("spacing", "up"):
+        if h.has(k) and not h.has("path"):
+            raise ScenarioError(f"{h.key(k)}: only for a bore along a curve (hole.path = "
+                                "{ line | arc | polyline | mesh }); a straight bore takes "
+                                "length and sections")
+    hole = read_bore(h, section, ctx) if h.has("path") else Hole(
+        section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1))
     c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
     contact_law = read_contact_law(c)
     friction = read_friction(c)
@@ -157,6 +163,34 @@ def read_hole_section(h: Table) -> HoleSection:
         except ModelError as exc:
             raise ScenarioError(one_line(exc)) from None
     return section
+
+
+#: cubic elements of a ``line`` or ``arc`` bore path (an arc's position error ~1e-8 of its
+#: radius for a quarter circle; the sections are placed along the curve, not at its nodes)
+PATH_ELEMENTS = 64
+
+
+def read_bore(h: Table, section: HoleSection, ctx: BuildContext) -> Any:
+    """``hole = { ..., path = { line | arc | polyline | mesh }, sections | spacing, up }``: a
+    :class:`~flexmbs.contact.bores.CurvedBore` along the path (body coordinates; ``point``
+    shifts it)."""
+    from ...contact.bores import CurvedBore
+    from .beams import read_geometry
+
+    if h.has("length"):
+        raise ScenarioError(f"{h.key('length')}: a bore along a path is as long as its path; "
+                            "drop length (or drop path for a straight bore along body x)")
+    which = h.exclusive("sections", "spacing")
+    if which is None:
+        raise ScenarioError(f"{h.path}: a bore along a path needs sections = <count> or "
+                            "spacing = <distance along the path> [m]")
+    g = h.table("path")
+    path = read_geometry(ctx, g, PATH_ELEMENTS if g.present(("line", "arc")) else None, h)
+    with at(h.path):
+        return CurvedBore(path, section=section,
+                          sections=h.integer("sections", ge=2) if which == "sections" else None,
+                          spacing=h.number("spacing", gt=0.0) if which == "spacing" else None,
+                          up=h.vector("up") if h.has("up") else None)
 
 
 def read_contact_law(c: Table) -> ForceLaw:

@@ -1,0 +1,217 @@
+"""The bore of a clearance joint: a hole section repeated at stations along an axis, each
+station a plane that cuts the beam (FORMULATION Part II §1, §8).
+
+A bore gives the kernels its sections as data (:meth:`Hole.frames`): an origin and three axes
+(plane normal, e_y, e_z) per section, in the coordinates of the hole (the joint adds its
+``hole_point``). :class:`Hole` is the paper's bore, straight along body x; :class:`CurvedBore`
+follows a curve (issue "a rod or wire inside a curved tube"): sections normal to the curve,
+their e_y carried along it without twist, so a section shape that is not round keeps its
+orientation relative to the tube. Both feed the same compiled detection and exact tangent.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..budget import MAX_SECTIONS, require_memory
+from ..errors import ModelError
+from .sections import CircleSection, HoleSection, SuperellipseSection
+from .shapes.superellipse_limits import check_exponent
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..geometry.curves import Centerline
+
+__all__ = ["Hole", "CircleHole", "SuperellipseHole", "CurvedBore", "transported_frames"]
+
+
+def _check_count(n: Any, what: str, fix: str) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ModelError(f"{what} must be an integer >= 1 (got {n!r})")
+    if n > MAX_SECTIONS:
+        raise ModelError(f"{what} = {n}: more than {MAX_SECTIONS} per hole; {fix}")
+    require_memory(n_sections=int(n), what=f"{what} = {n}", fix=fix)
+    return int(n)
+
+
+@dataclass(frozen=True)
+class Hole:
+    """A bore of constant section along the body x axis, checked at ``sections`` stations
+    (both end faces included)."""
+
+    section: HoleSection
+    length: float
+    sections: int = 9
+
+    def __post_init__(self) -> None:
+        if not self.length > 0:
+            raise ModelError(f"hole length must be > 0 (got {self.length})")
+        n = self.sections
+        spacing = self.length / (n - 1) if isinstance(n, (int, np.integer)) and n > 1 else 0.0
+        _check_count(n, "hole sections",
+                     f"stations {spacing:.3g} m apart resolve nothing the beam elements can, and "
+                     "each costs time in every Newton iteration; use fewer sections (9-21 is "
+                     "typical)")
+        if isinstance(self.section, SuperellipseSection):   # what the detector can resolve
+            check_exponent(self.section.a, self.section.b, self.section.exponent)
+
+    def stations(self) -> np.ndarray:
+        """Axial positions of the sections along the bore, from -length/2 to +length/2."""
+        if self.sections == 1:
+            return np.zeros(1)
+        return np.linspace(-0.5 * self.length, 0.5 * self.length, int(self.sections))
+
+    def frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """Origins ``(n, 3)`` and axes ``(n, 3, 3)`` (columns: plane normal, e_y, e_z) of the
+        sections in the hole's coordinates: here ``(ζ_k, 0, 0)`` and the identity."""
+        zeta = self.stations()
+        origins = np.zeros((zeta.size, 3))
+        origins[:, 0] = zeta
+        return origins, np.repeat(np.eye(3)[None], zeta.size, axis=0)
+
+    def record(self) -> dict[str, Any]:
+        """The bore's geometry beyond its section for ``summary.json["hole_sections"]``."""
+        return {"length": float(self.length), "sections": int(self.sections)}
+
+
+class CircleHole(Hole):
+    """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``)."""
+
+    def __init__(self, radius: float, length: float, sections: int = 9) -> None:
+        super().__init__(CircleSection(radius), length, sections)
+
+
+class SuperellipseHole(Hole):
+    """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (FORMULATION Part II §6); the
+    keys are those of the scenario files (``a``, ``b``, ``exponent``, ``angle``: the section
+    turned in the body by that many radians from body y towards body z)."""
+
+    def __init__(self, a: float, b: float, exponent: float, length: float,
+                 sections: int = 9, angle: float = 0.0) -> None:
+        super().__init__(SuperellipseSection(a=a, b=b, exponent=exponent, angle=angle), length,
+                         sections)
+
+
+def transported_frames(points: np.ndarray, tangents: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Axes ``(n, 3, 3)`` (columns: t_k, e_y, e_z) along a curve sampled at ``points`` with unit
+    ``tangents``: e_y starts as ``up`` made normal to t_0 and is carried from station to station
+    by the double reflection of Wang, Jüttler, Zheng and Liu (ACM TOG 27, 2008), a
+    rotation-minimising frame (no twist about the curve; fourth order in the spacing); e_z = t × e_y.
+    A straight curve keeps e_y exactly."""
+    n = points.shape[0]
+    t0 = tangents[0]
+    e = up - (up @ t0) * t0
+    if not np.linalg.norm(e) > 1e-9 * max(1.0, float(np.linalg.norm(up))):
+        raise ModelError("bore: 'up' is along the path's tangent at its start; give a direction "
+                         "across it")
+    e = e / np.linalg.norm(e)
+    out = np.empty((n, 3, 3))
+    for k in range(n):
+        t = tangents[k]
+        if k > 0:
+            v1 = points[k] - points[k - 1]
+            c1 = v1 @ v1
+            tL = tangents[k - 1]
+            if c1 > 0.0:
+                e = e - (2.0 / c1) * (v1 @ e) * v1
+                tL = tL - (2.0 / c1) * (v1 @ tL) * v1
+            v2 = t - tL
+            c2 = v2 @ v2
+            if c2 > 0.0:
+                e = e - (2.0 / c2) * (v2 @ e) * v2
+            e = e - (e @ t) * t                # round-off only: e stays normal to t
+            e = e / np.linalg.norm(e)
+        out[k, :, 0] = t
+        out[k, :, 1] = e
+        out[k, :, 2] = np.cross(t, e)
+    return out
+
+
+class CurvedBore(Hole):
+    """A bore of constant ``section`` along a curve ``path`` (a
+    :class:`~flexmbs.geometry.curves.Centerline` in the body's coordinates: ``fm.line``,
+    ``fm.arc``, ``fm.polyline``, ``fm.read_curve``), cut by sections normal to the curve at
+    ``sections`` stations equally spaced in arc length (both ends included) or every
+    ``spacing`` (rounded so that both ends are stations). The sections' e_y axis starts as
+    ``up`` (default body y, body z if y is along the curve's start) made normal to the curve
+    and is carried along it without twist (:func:`transported_frames`). ``radius`` is short
+    for ``section = CircleSection(radius)``. A straight path along body x is :class:`Hole`."""
+
+    path: Centerline
+    up: np.ndarray
+
+    def __init__(self, path: Centerline, *, radius: float | None = None,
+                 section: HoleSection | None = None, sections: int | None = None,
+                 spacing: float | None = None, up: Any = None) -> None:
+        if (radius is None) == (section is None):
+            raise ModelError("CurvedBore: give either radius= (a circular bore) or section=")
+        if section is None:
+            section = CircleSection(float(radius))  # type: ignore[arg-type]
+        if (sections is None) == (spacing is None):
+            raise ModelError("CurvedBore: give either sections= (a count) or spacing= (a "
+                             "distance along the path)")
+        length = float(path.total_length)
+        if spacing is not None:
+            if not (isinstance(spacing, (int, float)) and math.isfinite(spacing) and spacing > 0):
+                raise ModelError(f"CurvedBore: spacing must be a number > 0 (got {spacing!r})")
+            count = max(2, int(math.ceil(length / float(spacing) - 1e-9)) + 1)
+            if count > MAX_SECTIONS:
+                raise ModelError(f"CurvedBore: spacing = {spacing:g} m gives {count} sections "
+                                 f"on the {length:g} m path, more than {MAX_SECTIONS}; use a "
+                                 "larger spacing")
+            sections = count
+        super().__init__(section, length, sections)  # type: ignore[arg-type]
+        object.__setattr__(self, "path", path)
+        t0 = path.frame_at(0.0)[1]
+        if up is None:
+            up = np.array([0.0, 1.0, 0.0]) if abs(t0[1]) < 0.9 else np.array([0.0, 0.0, 1.0])
+        up = np.asarray(up, dtype=float).reshape(3)
+        object.__setattr__(self, "up", up)
+        s = self.stations()
+        points = np.empty((s.size, 3))
+        tangents = np.empty((s.size, 3))
+        for k, sk in enumerate(s):
+            points[k], tangents[k] = path.frame_at(float(sk))
+        axes = transported_frames(points, tangents, up)
+        self._check_bend(s, tangents)
+        for arr in (points, axes):
+            arr.setflags(write=False)
+        object.__setattr__(self, "_origins", points)
+        object.__setattr__(self, "_axes", axes)
+
+    def _check_bend(self, s: np.ndarray, tangents: np.ndarray) -> None:
+        """Neighbouring section planes meet at the path's radius of curvature from it: where
+        that is inside the bore, the sections overlap and the bore is not a tube."""
+        if s.size < 2:
+            return
+        turn = np.arccos(np.clip(np.einsum("ij,ij->i", tangents[1:], tangents[:-1]), -1.0, 1.0))
+        ds = np.diff(s)
+        with np.errstate(divide="ignore"):
+            rho = np.where(turn > 0.0, ds / np.where(turn > 0.0, turn, 1.0), np.inf)
+        k = int(np.argmin(rho))
+        R = self.section.bounding_radius()
+        if rho[k] <= R:
+            raise ModelError(f"CurvedBore: the path bends with a radius of {rho[k]:.4g} m near "
+                             f"arc length {s[k]:.4g} m, tighter than the bore's radius {R:.4g} m "
+                             "(the sections would overlap); smooth the path")
+
+    def stations(self) -> np.ndarray:
+        """Arc lengths of the sections along the path, from 0 to its length."""
+        if self.sections == 1:
+            return np.zeros(1)
+        return np.linspace(0.0, self.length, int(self.sections))
+
+    def frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """Origins ``(n, 3)`` (points of the path) and axes ``(n, 3, 3)`` (columns: the path's
+        tangent, e_y, e_z) of the sections."""
+        return np.array(self._origins), np.array(self._axes)  # type: ignore[attr-defined]
+
+    def record(self) -> dict[str, Any]:
+        return {**super().record(), "path": "curve"}
+
+    def __repr__(self) -> str:
+        return (f"CurvedBore({type(self.section).__name__}, length={self.length:.6g}, "
+                f"sections={self.sections})")
