@@ -218,7 +218,8 @@ class SlidingClearanceJoint(Interaction):
         for k, zeta in enumerate(self.stations):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
-                qe, lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
+                qe, lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius,
+                2.0 * R_out + self.beam_radius)   # a beam looping back crosses the plane twice
             compiled = self.hole.section.compiled_shape()
             outside = (math.hypot(cy, cz) > R_out if compiled is None
                        else not section_contains(compiled[0], compiled[1], cy, cz))
@@ -398,7 +399,8 @@ class SlidingClearanceJoint(Interaction):
             for k in range(len(self.stations)):
                 n, ey, ez = axes[k].T
                 found, _e, _xi, cy, cz, a, b, eax, eay = section_state(
-                    qe, L, origins[k], n, ey, ez, 0, 0.5, self.beam_radius, np.inf)
+                    qe, L, origins[k], n, ey, ez, 0, 0.5, self.beam_radius,
+                    4.0 * R_out + self.beam_radius)   # the crossing near the bore
                 if not found:
                     return np.inf
                 ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
