@@ -57,9 +57,10 @@ class SectionState:
         shape) or the circle of radius R."""
         if self.hole is None:
             return self.R * np.stack([np.cos(psi), np.sin(psi)], axis=-1)
+        from flexmbs.contact.bores import BORE_KEYS
         from flexmbs.contact.sections import get_section
 
-        params = {k: v for k, v in self.hole.items() if k not in ("shape", "length", "sections")}
+        params = {k: v for k, v in self.hole.items() if k not in ("shape", *BORE_KEYS)}
         return get_section(self.hole["shape"], **params).boundary(psi)[0]
 
     @property
@@ -171,8 +172,10 @@ def section_figure(out_dir: str | Path, *, joint: str | None = None, section: in
     if st.hole is None:
         bore = f"bore, R = {1e3 * R:.4g} mm (drawn {1e3 * Rd:.3g} mm)"
     else:
+        from flexmbs.contact.bores import BORE_KEYS
+
         shown = ", ".join(f"{k} = {v:.4g}" for k, v in st.hole.items()
-                          if k not in ("shape", "length", "sections", "samples"))
+                          if k not in ("shape", "samples", *BORE_KEYS))
         bore = f"bore: {st.hole['shape']} ({shown})"
     ax.plot(mm * wall[:, 0], mm * wall[:, 1], "k-", lw=1.5, label=bore)
     ax.plot([0.0], [0.0], "k+", ms=10, label="hole centre O")

@@ -18,8 +18,10 @@ import numpy as np
 
 from .._jit import FLAG, njit
 from ..elements.ancf_cable import CENTERLINE_SIZE
+from ..elements.centerline import element_bounding_sphere, element_crossings, element_plane_range
 from ..elements.rigid_body import rotation
-from .geometry import closest_point_kernel, section_state
+from .bores import sections_near
+from .geometry import closest_point_kernel, section_ellipse_at
 from .pair import N_GEO, N_HISTORY, N_LOCAL, contact_force
 from .sections import (
     SHAPE_CIRCLE,
@@ -33,9 +35,11 @@ from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
-        "gap_rate", "phi", "dx", "dy", "dz", "stick")
+        "gap_rate", "phi", "dx", "dy", "dz", "stick", "elem_i", "xi_i")
 #: first column of the friction history after the step (``d_new`` (3), ``stick``; pair.N_GEO)
 ANCHOR_COL = 15
+#: the section crossing a row's contact belongs to (element, ξ): columns elem_i, xi_i
+CROSSING_COL = 19
 N_COLS = len(COLS)
 #: two contact points of one section are the same contact from one step to the next if the
 #: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
@@ -44,6 +48,8 @@ MATCH_ANGLE = 0.5
 
 #: stationary points of one section kept at most (a flat side and two corners can each touch)
 MAX_CANDIDATES = 8
+#: crossings of one section plane by the beam kept at most (a beam looping back in a tube)
+MAX_CROSSINGS = 4
 #: samples of the common-normal residual in the generic (non-circular) detector
 SHAPE_SAMPLES = 128
 
@@ -59,8 +65,9 @@ def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):  # noqa: ANN001, ANN2
 
 
 @njit
-def detect_section(qe, lengths, r_H, A, origins, frames, elem_ws, xi_ws, elem_out, xi_out, r_b,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                   shape, params, R_out, R_in, consistent, out):
+def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+                   open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, elem_out,
+                   xi_out, r_b, shape, params, R_out, R_in, consistent, out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
@@ -72,9 +79,24 @@ def detect_section(qe, lengths, r_H, A, origins, frames, elem_ws, xi_ws, elem_ou
     generic common-normal detector (§6); with ``consistent`` each point is instead a stationary
     pair of the wall and the beam axis (§4b, :mod:`flexmbs.contact.stationary`), seeded by the
     line model, and its row's ``depth`` is the penetration ``r_b − |x − Y|`` (``phi`` = ψ).
-    The section crossings start at the warm starts
-    ``(elem_ws, xi_ws)`` and are written to ``(elem_out, xi_out)`` (the same arrays to update
-    the warm starts)."""
+
+    The crossings (issue 30, "many sections, cheap"): every element's bounding sphere is put
+    to the bore's section tree (:func:`~flexmbs.contact.bores.sections_near`, body
+    coordinates), so a section no element comes near costs nothing; a section near an element
+    whose control points straddle its plane gets the element's crossings
+    (:func:`~flexmbs.elements.centerline.element_crossings`), up to :data:`MAX_CROSSINGS` (a
+    beam looping back crosses a plane twice). A crossing farther than ``2 R_out + r_b`` from
+    the section's centre is another part of the beam, not in the bore; nearer but outside the
+    bore it is the axis through the wall (an error), except at an end section of a bore with
+    ``open_ends`` (the beam outside the mouth). Without ``open_ends`` every section must be
+    crossed inside the bore. ``cross_n`` (zero on entry and on return), ``cross_e``,
+    ``cross_xi``, ``touched`` (ns,) and ``work`` (ns + 64) are work arrays; the first crossing
+    inside the bore of each section goes to ``(elem_out, xi_out)`` (the next step's start,
+    ``(elem_ws, xi_ws)``) and every row records its own crossing (columns ``elem_i``,
+    ``xi_i``)."""
+    ns = origins.shape[0]
+    ne = qe.shape[0]
+    reach = 2.0 * R_out + r_b
     n = np.empty(3)
     ey = np.empty(3)
     ez = np.empty(3)
@@ -86,100 +108,173 @@ def detect_section(qe, lengths, r_H, A, origins, frames, elem_ws, xi_ws, elem_ou
     phis = np.empty(MAX_CANDIDATES)
     kinds = np.empty(MAX_CANDIDATES, np.int64)
     depths = np.empty(MAX_CANDIDATES)
+    centre = np.empty(3)
+    xb = np.empty(3)
+    roots = np.empty(3)
+    stack = work[:64]
+    near = work[64:]
+    # ---- broad phase: the sections each element comes near, and its crossings with them
+    scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]   # |p|^4 (homogeneous A)
+    n_touched = 0
+    for e in range(ne):
+        rho = element_bounding_sphere(qe[e], lengths[e], centre)
+        for c in range(3):
+            xb[c] = ((centre[0] - r_H[0]) * A[0, c] + (centre[1] - r_H[1]) * A[1, c]
+                     + (centre[2] - r_H[2]) * A[2, c]) / scale
+        m = sections_near(tree_c, tree_r, tree_lo, tree_hi, xb, 1.01 * rho + 1e-12, stack,
+                          near)
+        for i in range(m):
+            k = near[i]
+            _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
+            lo, hi = element_plane_range(qe[e], lengths[e], origin, n)
+            if lo > 0.0 or hi < 0.0:
+                continue
+            xi0 = xi_ws[k] if elem_ws[k] == e else -1.0     # the last step's crossing
+            nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), xi0, roots)
+            for j in range(nr):
+                if cross_n[k] == 0:
+                    touched[n_touched] = k
+                    n_touched += 1
+                if cross_n[k] < MAX_CROSSINGS:
+                    ee = min(int(math.floor(roots[j])), ne - 1)
+                    cross_e[k, cross_n[k]] = ee
+                    cross_xi[k, cross_n[k]] = roots[j] - ee
+                    cross_n[k] += 1
+    # sections in order (deterministic rows, as the sections lie along the bore)
+    for i in range(1, n_touched):
+        v = touched[i]
+        j = i - 1
+        while j >= 0 and touched[j] > v:
+            touched[j + 1] = touched[j]
+            j -= 1
+        touched[j + 1] = v
     count = 0
-    for k in range(origins.shape[0]):
+    status = 0
+    expect = 0                     # closed bores: the next section that must be crossed
+    for t in range(n_touched):
+        k = touched[t]
+        if not open_ends and k != expect:
+            status = -1 - expect   # a section without a crossing: the beam left the hole
+            break
+        expect = k + 1
         _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
-        found, e, xi, cy, cz, a, b, eax, eay = section_state(
-            qe, lengths, origin, n, ey, ez, elem_ws[k], xi_ws[k], r_b, 2.0 * R_out + r_b)
-        if not found:
-            return -1 - k   # no crossing near the section: the beam left the hole
-        elem_out[k] = e
-        xi_out[k] = xi
-        if not section_contains(shape, params, cy, cz):
-            return -1 - k   # the beam axis left the bore: the penetration is no longer defined
-        if math.hypot(cy, cz) + a < R_in:
-            continue   # broad phase: ellipse strictly inside the bore
-        if consistent:
-            # line-model seeds near contact, converged on the axis
-            m = line_model_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES, psis,
-                                  kinds, depths)
-            first = count
+        first = count
+        inside = 0
+        for cc in range(cross_n[k]):
+            e = cross_e[k, cc]
+            xi = cross_xi[k, cc]
+            cy, cz, a, b, eax, eay = section_ellipse_at(qe, lengths, e, xi, origin, n, ey, ez,
+                                                        r_b)
+            if math.hypot(cy, cz) > reach:
+                continue           # another part of the beam, away from the bore
+            if not section_contains(shape, params, cy, cz):
+                if open_ends and (k == 0 or k == ns - 1):
+                    continue       # the beam crosses an end face outside the mouth
+                status = -1 - k    # the axis went through the wall
+                break
+            if inside == 0:
+                elem_out[k] = e
+                xi_out[k] = xi
+            inside += 1
+            if math.hypot(cy, cz) + a < R_in:
+                continue   # broad phase: ellipse strictly inside the bore
+            if consistent:
+                # line-model seeds near contact, converged on the axis
+                m = line_model_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
+                                      psis, kinds, depths)
+                for j in range(m):
+                    if r_b - depths[j] <= -PAIR_MARGIN * (R_in - r_b) or count >= out.shape[0]:
+                        continue
+                    psi, kind, eP, xiP, ell, _, Q0, Q1, Q2 = stationary_pair(
+                        qe, lengths, origin, ey, ez, shape, params, psis[j], kinds[j], e, xi)
+                    if ell >= r_b:
+                        continue
+                    dup = False
+                    for i in range(first, count):
+                        if _angle_distance(out[i, 11], psi) < 1e-7:
+                            dup = True
+                    if dup:
+                        continue
+                    row = out[count]
+                    row[0] = k
+                    row[1] = j
+                    row[2] = kind
+                    row[3] = eP
+                    row[4] = xiP
+                    row[5] = Q0
+                    row[6] = Q1
+                    row[7] = Q2
+                    row[8] = a
+                    row[9] = b
+                    row[10] = r_b - ell
+                    row[11] = psi
+                    row[12] = 0.0
+                    row[13] = 0.0
+                    row[14] = psi
+                    row[CROSSING_COL] = e
+                    row[CROSSING_COL + 1] = xi
+                    count += 1
+                continue
+            if shape == SHAPE_CIRCLE:
+                R = params[0]
+                cphi, ckind = circle_stationary_points(cy, cz, eax, eay, a, b, R)
+                m = 0
+                for j in range(min(cphi.size, MAX_CANDIDATES)):
+                    ca = math.cos(cphi[j])
+                    sa = math.sin(cphi[j])
+                    x = cy + a * ca * eax - b * sa * eay
+                    y = cz + a * ca * eay + b * sa * eax
+                    rho = math.hypot(x, y)
+                    if rho == 0.0:
+                        continue
+                    psis[m] = math.atan2(y, x)
+                    phis[m] = cphi[j]
+                    kinds[m] = ckind[j]
+                    depths[m] = rho - R
+                    m += 1
+            else:
+                m = common_normal_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
+                                         psis, phis, kinds, depths)
             for j in range(m):
-                if r_b - depths[j] <= -PAIR_MARGIN * (R_in - r_b) or count >= out.shape[0]:
+                if depths[j] <= 0.0 or count >= out.shape[0]:
                     continue
-                psi, kind, eP, xiP, ell, _, Q0, Q1, Q2 = stationary_pair(
-                    qe, lengths, origin, ey, ez, shape, params, psis[j], kinds[j], e, xi)
-                if ell >= r_b:
-                    continue
-                dup = False
-                for i in range(first, count):
-                    if _angle_distance(out[i, 11], psi) < 1e-7:
-                        dup = True
-                if dup:
-                    continue
+                section_boundary(shape, params, psis[j], Y, Yp, Ypp)
+                Q = np.empty(3)
+                for c in range(3):
+                    Q[c] = origin[c] + Y[0] * ey[c] + Y[1] * ez[c]
+                eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13,
+                                                np.int64(30))
                 row = out[count]
                 row[0] = k
                 row[1] = j
-                row[2] = kind
+                row[2] = kinds[j]
                 row[3] = eP
                 row[4] = xiP
-                row[5] = Q0
-                row[6] = Q1
-                row[7] = Q2
+                row[5] = Q[0]
+                row[6] = Q[1]
+                row[7] = Q[2]
                 row[8] = a
                 row[9] = b
-                row[10] = r_b - ell
-                row[11] = psi
+                row[10] = depths[j]
+                row[11] = psis[j]
                 row[12] = 0.0
                 row[13] = 0.0
-                row[14] = psi
+                row[14] = phis[j]
+                row[CROSSING_COL] = e
+                row[CROSSING_COL + 1] = xi
                 count += 1
-            continue
-        if shape == SHAPE_CIRCLE:
-            R = params[0]
-            cphi, ckind = circle_stationary_points(cy, cz, eax, eay, a, b, R)
-            m = 0
-            for j in range(min(cphi.size, MAX_CANDIDATES)):
-                ca = math.cos(cphi[j])
-                sa = math.sin(cphi[j])
-                x = cy + a * ca * eax - b * sa * eay
-                y = cz + a * ca * eay + b * sa * eax
-                rho = math.hypot(x, y)
-                if rho == 0.0:
-                    continue
-                psis[m] = math.atan2(y, x)
-                phis[m] = cphi[j]
-                kinds[m] = ckind[j]
-                depths[m] = rho - R
-                m += 1
-        else:
-            m = common_normal_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
-                                     psis, phis, kinds, depths)
-        for j in range(m):
-            if depths[j] <= 0.0 or count >= out.shape[0]:
-                continue
-            section_boundary(shape, params, psis[j], Y, Yp, Ypp)
-            Q = np.empty(3)
-            for c in range(3):
-                Q[c] = origin[c] + Y[0] * ey[c] + Y[1] * ez[c]
-            eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13, np.int64(30))
-            row = out[count]
-            row[0] = k
-            row[1] = j
-            row[2] = kinds[j]
-            row[3] = eP
-            row[4] = xiP
-            row[5] = Q[0]
-            row[6] = Q[1]
-            row[7] = Q[2]
-            row[8] = a
-            row[9] = b
-            row[10] = depths[j]
-            row[11] = psis[j]
-            row[12] = 0.0
-            row[13] = 0.0
-            row[14] = phis[j]
-            count += 1
+
+        if status != 0:
+            break
+        if inside == 0 and not open_ends:
+            status = -1 - k
+            break
+    if status == 0 and not open_ends and expect != ns:
+        status = -1 - expect
+    for t in range(n_touched):
+        cross_n[touched[t]] = 0
+    if status != 0:
+        return status
     return count
 
 
@@ -232,23 +327,38 @@ def clearance_update(rows, m, approach, active, psi_track, anchor, stuck):  # no
     to the nearest tracked contact of its section (section angle, greedy by distance, within
     :data:`MATCH_ANGLE`) and keeps its approach velocity; a new one stores ``−ġ_N`` (approach
     velocity at onset, used by the dissipative laws); each takes its anchor and stick state
-    from its row; tracked contacts not found are released (their anchors cleared)."""
+    from its row; tracked contacts not found are released (their anchors cleared). ``rows``
+    sorted by section."""
     P = active.shape[1]
     taken = np.zeros(P, dtype=np.bool_)
     new_app = np.zeros(P)
     new_psi = np.zeros(P)
     new_anchor = np.zeros((P, 4))
+    idx = np.empty(max(m, 1), dtype=np.int64)
+    slot_of = np.empty(max(m, 1), dtype=np.int64)
+    r0 = 0
     for k in range(active.shape[0]):
-        idx = np.empty(m, dtype=np.int64)
+        # the rows of section k (rows come sorted by section, as detect_section writes them):
+        # O(rows + sections) per step, not O(rows x sections)
+        while r0 < m and int(rows[r0, 0]) < k:
+            r0 += 1
         nc = 0
-        for i in range(m):
-            if int(rows[i, 0]) == k and rows[i, 12] < 0.0:
+        i = r0
+        while i < m and int(rows[i, 0]) == k:
+            if rows[i, 12] < 0.0:
                 idx[nc] = i
                 nc += 1
-        if nc == 0 and not np.any(active[k]):
-            continue
+            i += 1
+        if nc == 0:
+            tracked = False
+            for s in range(P):
+                if active[k, s]:
+                    tracked = True
+                    break
+            if not tracked:
+                continue
         taken[:] = False
-        slot_of = np.full(nc, -1, dtype=np.int64)
+        slot_of[:nc] = -1
         while True:   # greedy matching, nearest pair first
             best = MATCH_ANGLE
             bi = -1
@@ -300,8 +410,9 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
 
 
 @njit
-def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, elem_ws, xi_ws,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
-                     elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, fric,
+def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_c, tree_r, tree_lo,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+                     tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                     xi_ws, elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
                      exact, r_q, K_out, C_out, elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
@@ -324,8 +435,9 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, elem_
     for e in range(ne):
         for k in range(CENTERLINE_SIZE):
             qe[e, k] = q[elem_dofs[e, k]]
-    m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, elem_ws, xi_ws, elem_out, xi_out,
-                       r_b, shape, params, R_out, R_in, consistent, rows)
+    m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
+                       tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                       xi_ws, elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, rows)
     if m < 0:
         return m, 0, 0.0
     Qc = np.empty(N_LOCAL)
@@ -371,9 +483,10 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, elem_
             if abs(Qc[c]) > scale:
                 scale = abs(Qc[c])
         if want_tangent and exact:
-            eI = eP if consistent else elem_out[k]
+            eI = eP if consistent else int(row[CROSSING_COL])
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
-            contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI], xi_out[k],
+            contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI],
+                            row[CROSSING_COL + 1],
                             qe[eP], ve, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law, fric,
                             hist, v_app, consistent, Qx, KX, C)
             for a in range(N_LOCAL):
@@ -412,6 +525,16 @@ class ClearancePart(NamedTuple):
     lengths: np.ndarray              # (nj, max_ne)
     origins: np.ndarray              # (nj, max_ns, 3) section origins (body coordinates)
     frames: np.ndarray               # (nj, max_ns, 3, 3) section axes (body coordinates)
+    tree_c: np.ndarray               # (nj, max_nodes, 3) the sections' bounding-sphere tree
+    tree_r: np.ndarray               # (nj, max_nodes)     (bores.section_tree)
+    tree_lo: np.ndarray              # (nj, max_nodes)
+    tree_hi: np.ndarray              # (nj, max_nodes)
+    open_ends: np.ndarray            # (nj,) the beam may enter and leave the bore
+    cross_n: np.ndarray              # work (max_ns,) crossings per section (zero between calls)
+    cross_e: np.ndarray              # work (max_ns, MAX_CROSSINGS)
+    cross_xi: np.ndarray             # work (max_ns, MAX_CROSSINGS)
+    touched: np.ndarray              # work (max_ns,)
+    work: np.ndarray                 # work (max_ns + 64,)
     n_sec: np.ndarray
     r_b: np.ndarray
     shape: np.ndarray                # (nj,) compiled section kind (sections.SHAPE_*)
@@ -457,7 +580,9 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     ns = cl.n_sec[j]
     m, cnt, sc = clearance_forces(
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.origins[j, :ns],
-        cl.frames[j, :ns], cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
+        cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
+        cl.open_ends[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
+        cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._jit import njit
 from ..budget import MAX_SECTIONS, require_memory
 from ..errors import ModelError
 from .sections import CircleSection, HoleSection, SuperellipseSection
@@ -25,7 +26,12 @@ from .shapes.superellipse_limits import check_exponent
 if TYPE_CHECKING:  # pragma: no cover
     from ..geometry.curves import Centerline
 
-__all__ = ["Hole", "CircleHole", "SuperellipseHole", "CurvedBore", "transported_frames"]
+__all__ = ["Hole", "CircleHole", "SuperellipseHole", "CurvedBore", "transported_frames",
+           "section_tree", "sections_near", "TREE_LEAF", "BORE_KEYS"]
+
+#: keys of a bore's record beyond its section's parameters (:meth:`Hole.record`, read back by
+#: the section view)
+BORE_KEYS = ("length", "sections", "open_ends", "path")
 
 
 def _check_count(n: Any, what: str, fix: str) -> int:
@@ -40,11 +46,14 @@ def _check_count(n: Any, what: str, fix: str) -> int:
 @dataclass(frozen=True)
 class Hole:
     """A bore of constant section along the body x axis, checked at ``sections`` stations
-    (both end faces included)."""
+    (both end faces included). ``open_ends``: the beam may enter and leave the bore (a section
+    it does not cross is idle); else it must cross every section (a beam that leaves is an
+    error: the paper's sleeve on its rail)."""
 
     section: HoleSection
     length: float
     sections: int = 9
+    open_ends: bool = False
 
     def __post_init__(self) -> None:
         if not self.length > 0:
@@ -74,7 +83,8 @@ class Hole:
 
     def record(self) -> dict[str, Any]:
         """The bore's geometry beyond its section for ``summary.json["hole_sections"]``."""
-        return {"length": float(self.length), "sections": int(self.sections)}
+        return {"length": float(self.length), "sections": int(self.sections),
+                "open_ends": bool(self.open_ends)}
 
 
 class CircleHole(Hole):
@@ -138,14 +148,16 @@ class CurvedBore(Hole):
     ``spacing`` (rounded so that both ends are stations). The sections' e_y axis starts as
     ``up`` (default body y, body z if y is along the curve's start) made normal to the curve
     and is carried along it without twist (:func:`transported_frames`). ``radius`` is short
-    for ``section = CircleSection(radius)``. A straight path along body x is :class:`Hole`."""
+    for ``section = CircleSection(radius)``. ``open_ends`` (default here): the beam may enter
+    and leave (a tube); ``False``: it must cross every section. A straight path along body x
+    is :class:`Hole`."""
 
     path: Centerline
     up: np.ndarray
 
     def __init__(self, path: Centerline, *, radius: float | None = None,
                  section: HoleSection | None = None, sections: int | None = None,
-                 spacing: float | None = None, up: Any = None) -> None:
+                 spacing: float | None = None, up: Any = None, open_ends: bool = True) -> None:
         if (radius is None) == (section is None):
             raise ModelError("CurvedBore: give either radius= (a circular bore) or section=")
         if section is None:
@@ -163,7 +175,7 @@ class CurvedBore(Hole):
                                  f"on the {length:g} m path, more than {MAX_SECTIONS}; use a "
                                  "larger spacing")
             sections = count
-        super().__init__(section, length, sections)  # type: ignore[arg-type]
+        super().__init__(section, length, sections, bool(open_ends))  # type: ignore[arg-type]
         object.__setattr__(self, "path", path)
         t0 = path.frame_at(0.0)[1]
         if up is None:
@@ -215,3 +227,67 @@ class CurvedBore(Hole):
     def __repr__(self) -> str:
         return (f"CurvedBore({type(self.section).__name__}, length={self.length:.6g}, "
                 f"sections={self.sections})")
+
+
+#: sections per leaf of a bore's bounding-sphere tree (:func:`section_tree`)
+TREE_LEAF = 4
+
+
+def section_tree(origins: np.ndarray, reach: float) -> tuple[np.ndarray, ...]:
+    """Bounding-sphere tree over consecutive sections (issue 30, "many sections, cheap"): node
+    0 covers sections ``[0, n)``, node i's children 2i+1 and 2i+2 its halves, down to
+    :data:`TREE_LEAF` sections; a node's sphere holds the discs of radius ``reach`` about its
+    sections' origins (body coordinates). Returns ``(centre (m, 3), radius (m,), lo (m,),
+    hi (m,))``; unused nodes have ``radius = -1``. Consecutive sections of a bore are close in
+    space, so the ranges are compact."""
+    n = origins.shape[0]
+    m = 1
+    while m < 4 * max(1, -(-n // TREE_LEAF)):
+        m *= 2
+    centre = np.zeros((m, 3))
+    radius = np.full(m, -1.0)
+    lo = np.zeros(m, np.int64)
+    hi = np.zeros(m, np.int64)
+    stack = [(0, 0, n)]
+    while stack:
+        i, a, b = stack.pop()
+        c = origins[a:b].mean(axis=0)
+        centre[i] = c
+        radius[i] = float(np.sqrt(((origins[a:b] - c) ** 2).sum(axis=1)).max()) + reach
+        lo[i], hi[i] = a, b
+        if b - a > TREE_LEAF:
+            mid = (a + b) // 2
+            stack += [(2 * i + 1, a, mid), (2 * i + 2, mid, b)]
+    return centre, radius, lo, hi
+
+
+@njit(inline="always")
+def sections_near(centre, radius, lo, hi, x, rho, stack, out):  # noqa: ANN001, ANN201
+    """Sections whose discs (the tree's ``reach``) may meet the sphere ``(x, rho)`` (body
+    coordinates): their indices into ``out`` (ascending within each leaf), returns how many.
+    ``stack``: int64 work array of at least 64."""
+    count = 0
+    if radius.shape[0] == 0 or radius[0] < 0.0:
+        return 0
+    top = 0
+    stack[0] = 0
+    while top >= 0:
+        i = stack[top]
+        top -= 1
+        d0 = x[0] - centre[i, 0]
+        d1 = x[1] - centre[i, 1]
+        d2 = x[2] - centre[i, 2]
+        r = radius[i] + rho
+        if d0 * d0 + d1 * d1 + d2 * d2 > r * r:
+            continue
+        left = 2 * i + 1
+        if left < radius.shape[0] and radius[left] >= 0.0:
+            top += 1
+            stack[top] = left + 1      # the right half after the left one
+            top += 1
+            stack[top] = left
+        else:
+            for k in range(lo[i], hi[i]):
+                out[count] = k
+                count += 1
+    return count

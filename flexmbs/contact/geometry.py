@@ -29,6 +29,7 @@ __all__ = [
     "section_crossing_kernel",
     "closest_point_kernel",
     "section_ellipse",
+    "section_ellipse_at",
     "closest_point",
     "to_section",
     "from_section",
@@ -84,6 +85,15 @@ def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_d
                                            np.int64(30), max_distance)
     if not found:
         return False, e, xi, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0
+    cy, cz, a, b, eax, eay = section_ellipse_at(q_e, lengths, e, xi, origin, normal, e_y, e_z,
+                                                r_b)
+    return True, e, xi, cy, cz, a, b, eax, eay
+
+
+@njit
+def section_ellipse_at(q_e, lengths, e, xi, origin, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
+    """The beam's section ellipse where its axis crosses the plane at ``(e, xi)``, in section
+    coordinates: ``(cy, cz, a, b, eax, eay)`` (centre, semi-axes a ≥ b, unit major axis)."""
     r, rx, _ = beam_point(q_e, lengths, e, xi)
     a, b, ea3, _, _ = section_ellipse(rx, normal, e_y, e_z, r_b)
     cy = 0.0
@@ -101,4 +111,4 @@ def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_d
         eax, eay = 1.0, 0.0
     if a < b:
         a = b
-    return True, e, xi, cy, cz, a, b, eax, eay
+    return cy, cz, a, b, eax, eay

@@ -29,6 +29,7 @@ from ._detect import (
     ANCHOR_COL,
     ERR_LEFT_BORE,
     MAX_CANDIDATES,
+    MAX_CROSSINGS,
     N_COLS,
     ClearancePart,
     clearance_update,
@@ -37,7 +38,7 @@ from ._detect import (
     tracked_approach,
     tracked_slot,
 )
-from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole
+from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole, section_tree
 from .geometry import closest_point, section_state
 from .laws import (
     N_FRICTION,
@@ -164,6 +165,13 @@ class SlidingClearanceJoint(Interaction):
         self._q_start: np.ndarray | None = None   # the step's start (the packed part's array)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
+        # the sections' bounding-sphere tree (body coordinates; reach: a crossing that far from
+        # a section's centre counts, _detect.detect_section) and the detection's work arrays
+        self._tree = section_tree(self._origins, 2.0 * hole.section.bounding_radius()
+                                  + self.beam_radius)
+        self._cross = (np.zeros(ns, np.int64), np.zeros((ns, MAX_CROSSINGS), np.int64),
+                       np.zeros((ns, MAX_CROSSINGS)), np.zeros(ns, np.int64),
+                       np.zeros(ns + 64, np.int64))
         self._rows = np.zeros((MAX_CANDIDATES * ns, N_COLS))  # stationary points per section
         self._elem_out = np.zeros(ns, np.int64)  # crossings of the last evaluation
         self._xi_out = np.zeros(ns)
@@ -208,13 +216,16 @@ class SlidingClearanceJoint(Interaction):
         return A, qb[:3] + self._origins @ A.T, A @ self._axes
 
     def _check_start(self, qb: np.ndarray, qe: np.ndarray, *, warn: bool) -> None:
-        """The beam must cross every section plane inside the bore, and fit (no jamming); it
-        should not start deep in the wall (``warn``). Sets the sections' tracking start."""
+        """The beam must cross every section plane inside the bore (with ``open_ends``: wherever
+        it crosses an inner section near the bore, inside it), and fit (no jamming); it should
+        not start deep in the wall (``warn``). Sets the sections' tracking start."""
         _, origins, axes = self._planes(qb)
         lengths = np.array(self.beam.centerline.lengths, dtype=float)
         R_out = self.hole.section.bounding_radius()
         R_in = self.hole.section.inscribed_radius()
         deepest = 0.0
+        ns = len(self.stations)
+        crossed = 0
         for k, zeta in enumerate(self.stations):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
@@ -223,6 +234,8 @@ class SlidingClearanceJoint(Interaction):
             compiled = self.hole.section.compiled_shape()
             outside = (math.hypot(cy, cz) > R_out if compiled is None
                        else not section_contains(compiled[0], compiled[1], cy, cz))
+            if self.hole.open_ends and (not found or (outside and k in (0, ns - 1))):
+                continue          # the beam is not in the bore here (yet)
             if not found or outside:
                 raise ModelError(
                     f"joint '{self.name}': beam '{self.beam.name}' does not pass through the hole "
@@ -234,9 +247,14 @@ class SlidingClearanceJoint(Interaction):
                     f"{k} (ellipse semi-axis {a:.6g} > bore {R_in:.6g}: jamming); align the hole "
                     "axis with the beam")
             self._elem[k], self._xi[k] = e, xi
+            crossed += 1
             ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, _b)
             deepest = max(deepest, max((c.depth for c in self.hole.section.candidates(ell)),
                                        default=0.0))
+        if warn and crossed == 0:
+            warnings.warn(FlexmbsWarning(
+                f"joint '{self.name}': beam '{self.beam.name}' crosses none of the bore's "
+                "sections at the start (open ends: it acts once the beam enters)"), stacklevel=2)
         clearance = self.hole.section.inscribed_radius() - self.beam_radius
         if warn and deepest > 0.05 * clearance:
             warnings.warn(FlexmbsWarning(
@@ -339,8 +357,8 @@ class SlidingClearanceJoint(Interaction):
         assert compiled is not None
         shape, params = compiled
         m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self._origins,
-                           self._axes, self._elem, self._xi,
-                           e_out, x_out, self.beam_radius, shape, params,
+                           self._axes, *self._tree, bool(self.hole.open_ends), *self._cross,
+                           self._elem, self._xi, e_out, x_out, self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
                            self.detection == "consistent", self._rows)
         if m < 0:
@@ -671,6 +689,13 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j._lengths for j in joints], (), 1.0, float),
         pad_stack([j._origins for j in joints], (3,), 0.0, float),
         pad_stack([j._axes for j in joints], (3, 3), 0.0, float),
+        pad_stack([j._tree[0] for j in joints], (3,), 0.0, float),
+        pad_stack([j._tree[1] for j in joints], (), -1.0, float),   # -1: no node
+        pad_stack([j._tree[2] for j in joints], (), 0, np.int64),
+        pad_stack([j._tree[3] for j in joints], (), 0, np.int64),
+        np.array([j.hole.open_ends for j in joints], dtype=np.bool_),
+        np.zeros(max_ns, i64), np.zeros((max_ns, MAX_CROSSINGS), i64),
+        np.zeros((max_ns, MAX_CROSSINGS)), np.zeros(max_ns, i64), np.zeros(max_ns + 64, i64),
         np.array([len(j.stations) for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
         np.array([shapes[i][0] for i in range(nj)], i64),

@@ -100,6 +100,125 @@ def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter):
     return s, False
 
 
+@njit(inline="always")
+def element_bounding_sphere(q, L, centre):  # noqa: ANN001, ANN201
+    """A sphere holding the element's centreline (the cubic's Bézier control points ``r0``,
+    ``r0 + L r0′/3``, ``r1 − L r1′/3``, ``r1``: the curve lies in their convex hull): writes the
+    centre (3,) and returns the radius."""
+    for c in range(3):
+        centre[c] = 0.25 * (q[c] + (q[c] + L * q[3 + c] / 3.0) + (q[6 + c] - L * q[9 + c] / 3.0)
+                            + q[6 + c])
+    rho = 0.0
+    for m in range(4):
+        d2 = 0.0
+        for c in range(3):
+            if m == 0:
+                x = q[c]
+            elif m == 1:
+                x = q[c] + L * q[3 + c] / 3.0
+            elif m == 2:
+                x = q[6 + c] - L * q[9 + c] / 3.0
+            else:
+                x = q[6 + c]
+            d2 += (x - centre[c]) ** 2
+        rho = max(rho, math.sqrt(d2))
+    return rho
+
+
+@njit(inline="always")
+def element_plane_range(q, L, origin, normal):  # noqa: ANN001, ANN201
+    """Least and largest signed distance ``n·(P − O)`` of the element's Bézier control points
+    from the plane (the centreline cannot cross the plane unless they straddle it)."""
+    lo = np.inf
+    hi = -np.inf
+    for m in range(4):
+        f = 0.0
+        for c in range(3):
+            if m == 0:
+                x = q[c]
+            elif m == 1:
+                x = q[c] + L * q[3 + c] / 3.0
+            elif m == 2:
+                x = q[6 + c] - L * q[9 + c] / 3.0
+            else:
+                x = q[6 + c]
+            f += normal[c] * (x - origin[c])
+        lo = min(lo, f)
+        hi = max(hi, f)
+    return lo, hi
+
+
+@njit
+def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, s_out):  # noqa: ANN001, ANN201
+    """Every crossing of element ``e`` with the plane ``n·(x − O) = 0`` (chain parameter
+    ``s = e + ξ`` into ``s_out``, at most 3: a cubic). When the Bézier control values of φ
+    are monotone the cubic has one root, found by bracketed Newton from ``xi_start`` (the last
+    step's crossing; outside [0, 1]: the chord's); else sign changes of φ at ξ = 0, ¼, ½, ¾, 1,
+    each solved by bracketed Newton (:func:`_solve_in_bracket`). A root on the element's end
+    node counts for the element that starts there (the last element keeps its end). Returns
+    their number."""
+    atol = tol * max(1.0, math.sqrt(dot3(origin, origin)))
+    q = q_e[e]
+    L = lengths[e]
+    b0 = 0.0
+    b1 = 0.0
+    b2 = 0.0
+    b3 = 0.0
+    for c in range(3):
+        b0 += normal[c] * (q[c] - origin[c])
+        b1 += normal[c] * (q[c] + L * q[3 + c] / 3.0 - origin[c])
+        b2 += normal[c] * (q[6 + c] - L * q[9 + c] / 3.0 - origin[c])
+        b3 += normal[c] * (q[6 + c] - origin[c])
+    if (b0 < b1 < b2 < b3) or (b0 > b1 > b2 > b3):     # monotone: one root at most
+        f0, _, _, _, _ = _phi_at(q_e, lengths, origin, normal, float(e))
+        if f0 == 0.0:
+            s_out[0] = float(e)
+            return 1
+        f1, _, _, _, _ = _phi_at(q_e, lengths, origin, normal, e + 1.0)
+        if f0 * f1 > 0.0 or (f1 == 0.0 and e < q_e.shape[0] - 1):
+            return 0                      # no root, or the next element's node
+        if f1 == 0.0:
+            s_out[0] = e + 1.0
+            return 1
+        lo = float(e)
+        hi = e + 1.0
+        flo = f0
+        x = xi_start if 0.0 <= xi_start <= 1.0 else f0 / (f0 - f1)
+        s = e + min(max(x, 1e-9), 1.0 - 1e-9)
+        for _ in range(max_iter + 30):
+            f, df, _, _, _ = _phi_at(q_e, lengths, origin, normal, s)
+            if abs(f) <= atol:
+                s_out[0] = s
+                return 1
+            s, lo, hi, flo = bracketed_newton_step(s, f, df, lo, hi, flo)
+            if hi - lo <= 1e-15 * (1.0 + abs(hi)):
+                s_out[0] = s
+                return 1
+        s_out[0] = s
+        return 1
+    count = 0
+    f_prev, _, _, _, _ = _phi_at(q_e, lengths, origin, normal, float(e))
+    for j in range(1, 5):
+        s_j = e + 0.25 * j
+        f, _, _, _, _ = _phi_at(q_e, lengths, origin, normal, s_j)
+        s_a = e + 0.25 * (j - 1)
+        if f_prev == 0.0:
+            if count < s_out.shape[0]:
+                s_out[count] = s_a
+                count += 1
+        elif f_prev * f < 0.0:
+            sr, ok = _solve_in_bracket(q_e, lengths, origin, normal, s_a, s_j, f_prev, atol,
+                                       max_iter)
+            if ok and count < s_out.shape[0]:
+                s_out[count] = sr
+                count += 1
+        f_prev = f
+    if f_prev == 0.0 and e == q_e.shape[0] - 1 and count < s_out.shape[0]:
+        s_out[count] = e + 1.0
+        count += 1
+    return count
+
+
 def section_crossing(q_e: np.ndarray, lengths: np.ndarray, origin: np.ndarray, normal: np.ndarray,
                      elem0: int, xi0: float, *, tol: float = 1e-12, max_iter: int = 30,
                      max_distance: float = np.inf) -> tuple[int, float, bool]:

@@ -217,3 +217,81 @@ def test_scenario_bore_along_a_path(tmp_path):  # noqa: ANN001
                         ("path = { circle = 1 }, sections = 5", "unknown key 'circle'")]:
         with pytest.raises(ScenarioError, match=match):
             _load(tmp_path, hole)
+
+
+# ---------------------------------------------------------------------------------------------
+# open ends and crossings found by the section tree (issue 30, item 2)
+def _wire_into_bore(open_ends: bool, tip: float = 0.0, push: float = 1.3e-3):  # noqa: ANN202
+    """A clamped wire along x ending at ``tip``, a 40 mm bore (21 sections) centred at the
+    origin, pushed along y so the wire touches its wall."""
+    model = fm.Model(gravity=(0, 0, 0))
+    wire = model.add_beam(fm.line((-0.1, 0, 0), (tip, 0, 0), elements=10), name="wire",
+                          section=fm.CircularSection(0.8e-3), material=fm.Material(E=7e10, rho=2700))
+    model.clamp(wire.first_node)
+    body = model.add_rigid_body(mass=2e-3, inertia=(2e-8, 1e-6, 1e-6),
+                                pose=fm.Pose(np.array([0.0, push, 0.0]), np.eye(3)), name="tube")
+    model.fix_body(body)
+    hole = fm.Hole(fm.CircleHole(BORE_R, 0.04).section, 0.04, 21, open_ends=open_ends)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        joint = model.add_joint(fm.SlidingClearanceJoint(
+            wire, body, hole=hole, contact=fm.LinearPenalty(stiffness=2e5)))
+    return model, joint
+
+
+def test_open_ends_the_beam_may_end_inside_the_bore():
+    """A wire ending in the middle of an open bore: the sections past its tip are idle, the
+    others carry its contacts; a closed bore refuses the same start."""
+    model, joint = _wire_into_bore(True)
+    asm = Assembly(model)
+    q = asm.q_ref
+    sections = {k for k, *_ in joint._contacts(q, np.zeros_like(q), False, False)}
+    assert sections and max(sections) <= 10 and min(sections) == 0
+    r = np.zeros(asm.n_coords)
+    joint.evaluate(None, q, np.zeros_like(q), None, 0.0, r, None)
+    assert np.abs(r).max() > 0.0
+    with pytest.raises(ModelError, match="does not pass through the hole"):
+        _wire_into_bore(False)
+
+
+def test_a_beam_looping_back_crosses_each_section_twice():
+    """A hairpin wire whose two strands pass through a wide bore (R = 10 mm) touching its wall
+    on opposite sides: every section finds both crossings and a contact on each strand; the
+    forces on the body cancel and each equals the penalty law's k δ."""
+    R, r_b, y = 10e-3, 1e-3, 9.5e-3
+    pts, tans = [], []
+    for x in np.linspace(-0.05, 0.05, 11):
+        pts.append((x, -y, 0.0))
+        tans.append((1.0, 0.0, 0.0))
+    for a in np.linspace(-math.pi / 2, math.pi / 2, 9)[1:-1]:
+        pts.append((0.05 + y * math.cos(a), y * math.sin(a), 0.0))
+        tans.append((-math.sin(a), math.cos(a), 0.0))
+    for x in np.linspace(0.05, -0.05, 11):
+        pts.append((x, y, 0.0))
+        tans.append((-1.0, 0.0, 0.0))
+    model = fm.Model(gravity=(0, 0, 0))
+    wire = model.add_beam(fm.polyline(pts, tans), name="wire", section=fm.CircularSection(r_b),
+                          material=fm.Material(E=7e10, rho=2700))
+    model.clamp(wire.first_node)
+    model.clamp(wire.last_node)
+    body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), name="tube")
+    model.fix_body(body)
+    k = 2e5
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        joint = model.add_joint(fm.SlidingClearanceJoint(
+            wire, body, hole=fm.CircleHole(R, 0.04, 9), contact=fm.LinearPenalty(stiffness=k)))
+    asm = Assembly(model)
+    q = asm.q_ref
+    contacts = joint._contacts(q, np.zeros_like(q), False, False)
+    per: dict[int, list[float]] = {}
+    for kk, _j, kind, _e, res, *_ in contacts:
+        assert kind == 1
+        per.setdefault(kk, []).append(res.Q[1])
+    assert sorted(per) == list(range(9))
+    assert all(len(v) == 2 and min(v) < 0 < max(v) for v in per.values())
+    F = joint.contact_force(q, np.zeros_like(q))
+    assert np.abs(F).max() < 1e-9
+    delta = y + r_b - R
+    for _k, _j, _kind, _e, res, *_ in contacts:
+        assert res.f_n == pytest.approx(k * delta, rel=1e-9)

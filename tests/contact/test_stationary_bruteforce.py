@@ -14,7 +14,8 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from flexmbs.contact._detect import N_COLS, detect_section
+from flexmbs.contact._detect import MAX_CROSSINGS, N_COLS, detect_section
+from flexmbs.contact.bores import section_tree
 from flexmbs.contact.sections import SHAPE_CIRCLE, SHAPE_SUPERELLIPSE, section_boundary
 from flexmbs.elements.ancf_cable import shape_xi
 from tests.conftest import FULL
@@ -63,9 +64,12 @@ def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in
               r_b: float) -> list[tuple[float, float]] | None:
     rows = np.zeros((8, N_COLS))
     ws_e, ws_x = np.zeros(1, np.int64), np.full(1, 0.5)
+    tree = section_tree(np.zeros((1, 3)), 2 * R_out + r_b)
+    work = (np.zeros(1, np.int64), np.zeros((1, MAX_CROSSINGS), np.int64),
+            np.zeros((1, MAX_CROSSINGS)), np.zeros(1, np.int64), np.zeros(65, np.int64))
     m = detect_section(qe.reshape(1, 12), np.array([L_ELEM]), np.zeros(3), np.eye(3),
-                       np.zeros((1, 3)), np.eye(3)[None].copy(), ws_e, ws_x, ws_e.copy(),
-                       ws_x.copy(), r_b, shape, params, R_out, R_in, True, rows)
+                       np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, False, *work, ws_e,
+                       ws_x, ws_e.copy(), ws_x.copy(), r_b, shape, params, R_out, R_in, True, rows)
     if m < 0:
         return None
     return [(float(r[11]), float(r[10])) for r in rows[:m] if r[2] > 0]

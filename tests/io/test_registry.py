@@ -115,7 +115,8 @@ def test_a_registered_shape_is_a_scenario_shape_without_scenario_code() -> None:
         assert isinstance(joint.hole.section, _ScaledCircle)
         assert joint.hole.section.radius == pytest.approx(2.5e-3)
         with pytest.raises(ScenarioError, match=r"unknown key 'diameter' in joints\[sleeve\]\.hole "
-                                                r"\(allowed: length, path, point, radius, scale, "):
+                                                r"\(allowed: length, open_ends, path, point, "
+                                                r"radius, scale, "):
             load_scenario(SLEEVE, [_shape('{ shape = "scaled_circle", diameter = 1.0, '
                                           'length = 0.04 }')])
     finally:

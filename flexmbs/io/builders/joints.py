@@ -31,7 +31,7 @@ __all__ = ["FRICTION_KEYS", "HOLE_KEYS", "JOINTS", "read_contact_law", "read_fri
 JOINTS: Registry[Builder] = Registry("joint type")
 
 #: keys of ``hole = { ... }`` besides the section's own parameters
-HOLE_KEYS = ("shape", "length", "sections", "point", "path", "spacing", "up")
+HOLE_KEYS = ("shape", "length", "sections", "point", "path", "spacing", "up", "open_ends")
 _CONTACT_KEYS = ("law", "friction", "friction_velocity")
 #: keys of ``friction = { ... }`` (the fields of :class:`~flexmbs.contact.laws.Friction`)
 FRICTION_KEYS = ("mu", "mu_static", "law", "stiffness", "damping", "velocity")
@@ -114,7 +114,8 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
                                 "{ line | arc | polyline | mesh }); a straight bore takes "
                                 "length and sections")
     hole = read_bore(h, section, ctx) if h.has("path") else Hole(
-        section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1))
+        section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1),
+        h.boolean("open_ends", False))
     c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
     contact_law = read_contact_law(c)
     friction = read_friction(c)
@@ -190,7 +191,8 @@ def read_bore(h: Table, section: HoleSection, ctx: BuildContext) -> Any:
         return CurvedBore(path, section=section,
                           sections=h.integer("sections", ge=2) if which == "sections" else None,
                           spacing=h.number("spacing", gt=0.0) if which == "spacing" else None,
-                          up=h.vector("up") if h.has("up") else None)
+                          up=h.vector("up") if h.has("up") else None,
+                          open_ends=h.boolean("open_ends", True))
 
 
 def read_contact_law(c: Table) -> ForceLaw:
