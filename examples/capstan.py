@@ -51,12 +51,15 @@ def wire_path(wrap: float, ds: float = ELEMENT) -> tuple[np.ndarray, np.ndarray]
 
 
 def build(wrap: float, mu: float, *, speed: float = 0.02, ramp: float = 0.02,
-          stiffness: float = 2e6) -> tuple[fm.Model, fm.Beam, str]:
-    """The wire through the tube; returns (model, wire, name of the pull's prescribed motion)."""
+          stiffness: float = 2e6, motion: fm.TimeFunction | None = None,
+          damping: float = 1e-4) -> tuple[fm.Model, fm.Beam, str]:
+    """The wire through the tube; returns (model, wire, name of the pull's prescribed motion).
+    The exit end moves along the exit line by ``motion(t)`` (default: at ``speed`` from
+    ``ramp``, when the load is in); ``damping``: the wire's material damping [s]."""
     pts, tans = wire_path(wrap)
     model = fm.Model(name="capstan", gravity=(0.0, 0.0, 0.0))
     wire = model.add_beam(fm.polyline(pts, tans), section=fm.CircularSection(WIRE_R),
-                          material=STEEL, damping=1e-4, name="wire")
+                          material=STEEL, damping=damping, name="wire")
     tube = model.add_rigid_body(mass=1.0, inertia=(1e-3, 1e-3, 1e-3), name="tube")
     model.fix_body(tube)
     arc = fm.arc((0.0, 0.0, 0.0), RHO, (-RHO, 0.0, 0.0), -wrap, normal=(0.0, 0.0, 1.0),
@@ -74,8 +77,10 @@ def build(wrap: float, mu: float, *, speed: float = 0.02, ramp: float = 0.02,
     if not np.isclose(abs(t_out[axis]), 1.0):
         raise ValueError("the example pulls along a coordinate axis: wrap = 90 or 180 degrees")
     sign = float(np.sign(t_out[axis]))
-    model.prescribe(wire.last_node, [axis], fm.Ramp(start=ramp, end=ramp + 1.0,
-                                                    value=sign * speed), name="pull")
+    if motion is None:
+        motion = fm.Ramp(start=ramp, end=ramp + 1.0, value=speed)
+    along = motion if sign > 0 else fm.Function(lambda t: -motion(t))
+    model.prescribe(wire.last_node, [axis], along, name="pull")
     model.prescribe(wire.last_node, [c for c in range(3) if c != axis], name="pull_line")
     return model, wire, "pull"
 

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
+from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -11,6 +14,16 @@ import flexmbs as fm
 
 #: run long validations in full only when asked (CI runs their fast form)
 FULL = os.environ.get("FLEXMBS_FULL", "") == "1"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def load_example(name: str) -> ModuleType:
+    """The example script ``examples/<name>.py`` as a module (its model builders)."""
+    spec = importlib.util.spec_from_file_location(f"example_{name}", EXAMPLES / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def straight_beam(model: fm.Model, n_elem: int, *, length: float = 1.0, EA: float = 1e7,

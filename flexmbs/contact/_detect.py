@@ -65,6 +65,36 @@ def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):  # noqa: ANN001, ANN2
 
 
 @njit
+def _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, elem_out, r_b, shape, params,  # noqa: ANN001, ANN202, PLR0913
+                   R_out, origin, n, ey, ez, roots):
+    """An open bore: a section crossed inside the bore at the step's start (``elem_ws[k] ≥ 0``)
+    and not now. Legitimate if the beam has left the plane there (its end passed: the elements
+    around the tracked one no longer cross it); if they cross it outside the bore, at any
+    distance, the iterate pushed the axis through the wall (a Newton step can jump farther
+    than the section's reach, where the crossing would otherwise read "another part of the
+    beam"): ``-1 - k``, else 0. End faces excepted (the beam outside the mouth)."""
+    ns = origins.shape[0]
+    ne = qe.shape[0]
+    for k in range(1, ns - 1):
+        e0 = elem_ws[k]
+        if e0 < 0 or elem_out[k] >= 0:
+            continue
+        _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
+        for e in range(max(0, e0 - 2), min(ne, e0 + 3)):
+            lo, hi = element_plane_range(qe[e], lengths[e], origin, n)
+            if lo > 0.0 or hi < 0.0:
+                continue
+            nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), -1.0, roots)
+            for j in range(nr):
+                ee = min(int(math.floor(roots[j])), ne - 1)
+                cy, cz, _, _, _, _ = section_ellipse_at(qe, lengths, ee, roots[j] - ee, origin,
+                                                        n, ey, ez, r_b)
+                if not section_contains(shape, params, cy, cz):
+                    return -1 - k
+    return 0
+
+
+@njit
 def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
                    open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, elem_out,
                    xi_out, r_b, shape, params, R_out, R_in, consistent, out):
@@ -140,6 +170,9 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
                     cross_e[k, cross_n[k]] = ee
                     cross_xi[k, cross_n[k]] = roots[j] - ee
                     cross_n[k] += 1
+    if open_ends:                  # crossed inside the bore in this evaluation: set below
+        for k in range(ns):
+            elem_out[k] = -1
     # sections in order (deterministic rows, as the sections lie along the bore)
     for i in range(1, n_touched):
         v = touched[i]
@@ -271,6 +304,9 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
             break
     if status == 0 and not open_ends and expect != ns:
         status = -1 - expect
+    if status == 0 and open_ends:
+        status = _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, elem_out, r_b,
+                                shape, params, R_out, origin, n, ey, ez, roots)
     for t in range(n_touched):
         cross_n[touched[t]] = 0
     if status != 0:

@@ -226,6 +226,9 @@ class SlidingClearanceJoint(Interaction):
         deepest = 0.0
         ns = len(self.stations)
         crossed = 0
+        if self.hole.open_ends:       # -1: not crossed inside the bore (the detection's state)
+            self._elem[:] = -1
+            self._xi[:] = 0.5
         for k, zeta in enumerate(self.stations):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
@@ -317,7 +320,7 @@ class SlidingClearanceJoint(Interaction):
         for k in range(len(self.stations)):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, int(self._elem[k]), float(self._xi[k]), r_b,
+                qe, self._lengths, origin, n, ey, ez, max(0, int(self._elem[k])), float(self._xi[k]), r_b,
                 2 * R_out + r_b)
             if not found:
                 continue
@@ -566,7 +569,7 @@ class SlidingClearanceJoint(Interaction):
         for k in range(len(self.stations)):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, int(self._elem[k]), float(self._xi[k]),
+                qe, self._lengths, origin, n, ey, ez, max(0, int(self._elem[k])), float(self._xi[k]),
                 self.beam_radius, 2 * R + self.beam_radius)
             if not found:
                 continue
@@ -593,7 +596,7 @@ class SlidingClearanceJoint(Interaction):
         k = len(self.stations) // 2
         centre = self._planes(qb)[1][k]
         qe = np.ascontiguousarray(q[self._elem_dofs])
-        e, xi, *_ = closest_point(qe, self._lengths, centre, int(self._elem[k]), float(self._xi[k]))
+        e, xi, *_ = closest_point(qe, self._lengths, centre, max(0, int(self._elem[k])), float(self._xi[k]))
         return float(np.sum(self._lengths[:e]) + xi * self._lengths[e])
 
     def contact_energy(self, q: np.ndarray, v: np.ndarray | None = None) -> float:

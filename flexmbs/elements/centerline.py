@@ -101,26 +101,31 @@ def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter):
 
 
 @njit(inline="always")
+def _control_point(q, L, m, c):  # noqa: ANN001, ANN202
+    """Component c of the element's Bézier control point m: ``r0``, ``r0 + L r0′/3``,
+    ``r1 − L r1′/3``, ``r1`` (the cubic lies in their convex hull)."""
+    if m == 0:
+        return q[c]
+    if m == 1:
+        return q[c] + L * q[3 + c] / 3.0
+    if m == 2:
+        return q[6 + c] - L * q[9 + c] / 3.0
+    return q[6 + c]
+
+
+@njit(inline="always")
 def element_bounding_sphere(q, L, centre):  # noqa: ANN001, ANN201
     """A sphere holding the element's centreline (the cubic's Bézier control points ``r0``,
     ``r0 + L r0′/3``, ``r1 − L r1′/3``, ``r1``: the curve lies in their convex hull): writes the
     centre (3,) and returns the radius."""
     for c in range(3):
-        centre[c] = 0.25 * (q[c] + (q[c] + L * q[3 + c] / 3.0) + (q[6 + c] - L * q[9 + c] / 3.0)
-                            + q[6 + c])
+        centre[c] = 0.25 * (_control_point(q, L, 0, c) + _control_point(q, L, 1, c)
+                            + _control_point(q, L, 2, c) + _control_point(q, L, 3, c))
     rho = 0.0
     for m in range(4):
         d2 = 0.0
         for c in range(3):
-            if m == 0:
-                x = q[c]
-            elif m == 1:
-                x = q[c] + L * q[3 + c] / 3.0
-            elif m == 2:
-                x = q[6 + c] - L * q[9 + c] / 3.0
-            else:
-                x = q[6 + c]
-            d2 += (x - centre[c]) ** 2
+            d2 += (_control_point(q, L, m, c) - centre[c]) ** 2
         rho = max(rho, math.sqrt(d2))
     return rho
 
@@ -134,15 +139,7 @@ def element_plane_range(q, L, origin, normal):  # noqa: ANN001, ANN201
     for m in range(4):
         f = 0.0
         for c in range(3):
-            if m == 0:
-                x = q[c]
-            elif m == 1:
-                x = q[c] + L * q[3 + c] / 3.0
-            elif m == 2:
-                x = q[6 + c] - L * q[9 + c] / 3.0
-            else:
-                x = q[6 + c]
-            f += normal[c] * (x - origin[c])
+            f += normal[c] * (_control_point(q, L, m, c) - origin[c])
         lo = min(lo, f)
         hi = max(hi, f)
     return lo, hi
@@ -165,10 +162,10 @@ def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, 
     b2 = 0.0
     b3 = 0.0
     for c in range(3):
-        b0 += normal[c] * (q[c] - origin[c])
-        b1 += normal[c] * (q[c] + L * q[3 + c] / 3.0 - origin[c])
-        b2 += normal[c] * (q[6 + c] - L * q[9 + c] / 3.0 - origin[c])
-        b3 += normal[c] * (q[6 + c] - origin[c])
+        b0 += normal[c] * (_control_point(q, L, 0, c) - origin[c])
+        b1 += normal[c] * (_control_point(q, L, 1, c) - origin[c])
+        b2 += normal[c] * (_control_point(q, L, 2, c) - origin[c])
+        b3 += normal[c] * (_control_point(q, L, 3, c) - origin[c])
     if (b0 < b1 < b2 < b3) or (b0 > b1 > b2 > b3):     # monotone: one root at most
         f0, _, _, _, _ = _phi_at(q_e, lengths, origin, normal, float(e))
         if f0 == 0.0:
