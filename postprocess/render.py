@@ -7,7 +7,9 @@ tubes of their section radius, coloured by a beam point field with a scalar bar;
 (``block_id == 1``) are translucent surfaces in their pose; contact points (``block_id == 2``)
 are spheres with arrows of the force on the beam, ``-normal_force * normal``, scaled so that the
 largest normal force of the run is 8 % of the scene diagonal; translational spring-dampers
-(``block_id == 3``, lines) are drawn as thin dark-green lines. A time label sits in the upper left;
+(``block_id == 3``, lines) are drawn as thin dark-green lines; the bore outlines of clearance
+joints (the multiblock group ``hole_sections``, e.g. a curved tube's rings) as thin grey
+lines. A time label sits in the upper left;
 the camera frames the bounding box of the whole motion (union over all frames), so it does not
 move during a movie.
 
@@ -48,7 +50,9 @@ def configure_offscreen() -> None:
 
 
 #: the group of a multiblock frame that holds each block_id of the merged frame
-_GROUPS = {0: "beams", 1: "bodies", 2: "contacts", 3: "springs"}
+_GROUPS = {0: "beams", 1: "bodies", 2: "contacts", 3: "springs", 4: "hole_sections"}
+#: the bore outlines of clearance joints: a group of the multiblock frames only
+BORE_OUTLINES = 4
 
 
 def _leaves(mb: Any) -> list[Any]:
@@ -321,6 +325,10 @@ def render(out_dir: str | Path, *, movie: str | Path | None = None, png_every: i
             transient.append(plotter.add_mesh(bodies, color="orange", opacity=0.35,
                                               smooth_shading=True, render=False,
                                               reset_camera=False))
+        bores = _block(grid, BORE_OUTLINES)
+        if bores is not None and bores.n_points:
+            transient.append(plotter.add_mesh(bores, color="dimgray", line_width=1,
+                                              opacity=0.6, render=False, reset_camera=False))
         springs = _block(grid, 3)
         if springs is not None and springs.n_lines:
             transient.append(plotter.add_mesh(springs, color="darkgreen", line_width=3,
