@@ -518,6 +518,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
         for c in range(N_LOCAL):
             if abs(Qc[c]) > scale:
                 scale = abs(Qc[c])
+        if want_tangent and count >= K_out.shape[0]:
+            return _OVERFLOW, count, scale
         if want_tangent and exact:
             eI = eP if consistent else int(row[CROSSING_COL])
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
@@ -552,6 +554,16 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
 # the clearance-joint term of the assembler (flexmbs.terms): all clearance joints
 #: error code: the beam axis left the bore (joint in ``error[1]``, section in ``error[2]``)
 ERR_LEFT_BORE = 1
+#: error code: more contacts at once than the tangent's work arrays hold (joint in
+#: ``error[1]``, contacts in ``error[2]``; :data:`CONTACTS_PER_SECTION`)
+ERR_TOO_MANY_CONTACTS = 3
+#: contacts per section the tangent's work arrays hold on average (plus
+#: :data:`EXTRA_CONTACTS`): a section has one, two past a²/b > R, a third with a local minimum;
+#: sized by the candidates instead (MAX_CANDIDATES per section) they took 60 kB per section
+CONTACTS_PER_SECTION = 2
+EXTRA_CONTACTS = 64
+#: ``clearance_forces``' first result when the contacts overflow the work arrays
+_OVERFLOW = -(1 << 40)
 
 
 class ClearancePart(NamedTuple):
@@ -598,14 +610,19 @@ class ClearancePart(NamedTuple):
     n_candidates: np.ndarray         # (nj,) their number
     elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
     xi_out: np.ndarray
-    K: np.ndarray                    # work (MAX_CANDIDATES max_ns, N_LOCAL, N_EXT)
-    C: np.ndarray                    # work (MAX_CANDIDATES max_ns, N_LOCAL, N_LOCAL)
-    kelem: np.ndarray                # work (MAX_CANDIDATES max_ns,): contact point's element
-    kelem_i: np.ndarray              # work (MAX_CANDIDATES max_ns,): crossing's element
+    K: np.ndarray                    # work (n_contacts, N_LOCAL, N_EXT), n_contacts =
+    C: np.ndarray                    # work (n_contacts, N_LOCAL, N_LOCAL)  contact_capacity()
+    kelem: np.ndarray                # work (n_contacts,): contact point's element
+    kelem_i: np.ndarray              # work (n_contacts,): crossing's element
     no_K: np.ndarray                 # (0, N_LOCAL, N_EXT): no tangent in the residual
     no_C: np.ndarray                 # (0, N_LOCAL, N_LOCAL)
     no_elem: np.ndarray              # (0,)
     scratch: np.ndarray              # (n + m,) residual written while assembling the matrix
+
+
+def contact_capacity(max_sections: int) -> int:
+    """Contacts at once the tangent's work arrays of a joint with ``max_sections`` hold."""
+    return min(MAX_CANDIDATES * max_sections, CONTACTS_PER_SECTION * max_sections + EXTRA_CONTACTS)
 
 
 @njit(inline="always")
@@ -623,6 +640,12 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
         want_tangent, cl.exact[j], r, K, C, elem, elem_i)
+    if m == _OVERFLOW:
+        cl.n_candidates[j] = 0
+        error[0] = ERR_TOO_MANY_CONTACTS
+        error[1] = j
+        error[2] = cnt
+        return m, cnt, sc
     cl.n_candidates[j] = m
     if m < 0:
         error[0] = ERR_LEFT_BORE
@@ -667,7 +690,7 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
         m, cnt, _ = _joint_forces(cl, j, q, v, FLAG[1], cl.scratch, cl.K, cl.C, cl.kelem,
                                   cl.kelem_i, error)
         if m < 0:
-            return ERR_LEFT_BORE
+            return error[0]
         for i in range(cnt):
             eP = cl.kelem[i]
             eI = cl.kelem_i[i]

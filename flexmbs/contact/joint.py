@@ -27,12 +27,15 @@ from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ANCHOR_COL,
+    CONTACTS_PER_SECTION,
     ERR_LEFT_BORE,
+    ERR_TOO_MANY_CONTACTS,
     MAX_CANDIDATES,
     MAX_CROSSINGS,
     N_COLS,
     ClearancePart,
     clearance_update,
+    contact_capacity,
     contact_history,
     detect_section,
     tracked_approach,
@@ -506,7 +509,13 @@ class SlidingClearanceJoint(Interaction):
     def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
         """A Newton iterate (or a step) pushed the beam axis through the bore wall at section
         ``detail``: the iterate is rejected so that the step or load increment is cut, instead
-        of losing the contact silently."""
+        of losing the contact silently. (``ERR_TOO_MANY_CONTACTS``: ``detail`` contacts at once,
+        more than the tangent holds.)"""
+        if code == ERR_TOO_MANY_CONTACTS:
+            return ConvergenceError(
+                f"joint '{self.name}': more than {detail} contact points at once, the most "
+                f"its tangent holds ({CONTACTS_PER_SECTION} per section on average); use "
+                "fewer sections (a contact per section and element length is plenty)")
         return ConvergenceError(
             f"joint '{self.name}': the beam axis left the bore at hole section {detail} "
             "(penetration larger than the clearance); use a smaller time step, more load "
@@ -671,6 +680,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
     nj = len(joints)
     max_ne = max((len(j._lengths) for j in joints), default=0)
     max_ns = max((len(j.stations) for j in joints), default=0)
+    n_contacts = contact_capacity(max_ns)
     pos = np.zeros((nj, max_ne, N_LOCAL * N_LOCAL), np.int64)
     ne2 = CENTERLINE_SIZE * CENTERLINE_SIZE
     cross = np.zeros((nj, max_ne, 2, ne2), np.int64)
@@ -720,9 +730,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.array(q_ref, dtype=float, copy=True),
         pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
         np.zeros(nj, i64), np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)),
-        np.zeros((MAX_CANDIDATES * max_ns, N_LOCAL, N_EXT)),
-        np.zeros((MAX_CANDIDATES * max_ns, N_LOCAL, N_LOCAL)),
-        np.zeros(MAX_CANDIDATES * max_ns, i64), np.zeros(MAX_CANDIDATES * max_ns, i64),
+        np.zeros((n_contacts, N_LOCAL, N_EXT)), np.zeros((n_contacts, N_LOCAL, N_LOCAL)),
+        np.zeros(n_contacts, i64), np.zeros(n_contacts, i64),
         np.zeros((0, N_LOCAL, N_EXT)),
         np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
@@ -750,6 +759,7 @@ def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
 #: a joint without a compiled form at the moment is switched off here and evaluated in Python;
 #: its contact potential is the energy "contact"
 CLEARANCE = InteractionKind(
-    name="clearance", pattern=clearance_pattern, pack=pack_clearance, errors=(ERR_LEFT_BORE,),
+    name="clearance", pattern=clearance_pattern, pack=pack_clearance,
+    errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS),
     enable=_enable_clearance, begin=_begin_clearance,
     energy=("contact", SlidingClearanceJoint.contact_energy))

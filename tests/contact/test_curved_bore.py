@@ -254,11 +254,13 @@ def test_open_ends_the_beam_may_end_inside_the_bore():
         _wire_into_bore(False)
 
 
-def test_a_beam_looping_back_crosses_each_section_twice():
-    """A hairpin wire whose two strands pass through a wide bore (R = 10 mm) touching its wall
-    on opposite sides: every section finds both crossings and a contact on each strand; the
-    forces on the body cancel and each equals the penalty law's k δ."""
-    R, r_b, y = 10e-3, 1e-3, 9.5e-3
+HAIRPIN = dict(R=10e-3, r_b=1e-3, y=9.5e-3, k=2e5)
+
+
+def _hairpin_model() -> fm.Model:
+    """A hairpin wire whose two strands pass through a wide bore (R = 10 mm, 9 sections)
+    touching its wall on opposite sides (joint 'hairpin')."""
+    R, r_b, y, k = HAIRPIN["R"], HAIRPIN["r_b"], HAIRPIN["y"], HAIRPIN["k"]
     pts, tans = [], []
     for x in np.linspace(-0.05, 0.05, 11):
         pts.append((x, -y, 0.0))
@@ -276,11 +278,21 @@ def test_a_beam_looping_back_crosses_each_section_twice():
     model.clamp(wire.last_node)
     body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), name="tube")
     model.fix_body(body)
-    k = 2e5
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        joint = model.add_joint(fm.SlidingClearanceJoint(
-            wire, body, hole=fm.CircleHole(R, 0.04, 9), contact=fm.LinearPenalty(stiffness=k)))
+        model.add_joint(fm.SlidingClearanceJoint(wire, body, hole=fm.CircleHole(R, 0.04, 9),
+                                                 contact=fm.LinearPenalty(stiffness=k),
+                                                 name="hairpin"))
+    return model
+
+
+def test_a_beam_looping_back_crosses_each_section_twice():
+    """A hairpin wire whose two strands pass through a wide bore (R = 10 mm) touching its wall
+    on opposite sides: every section finds both crossings and a contact on each strand; the
+    forces on the body cancel and each equals the penalty law's k δ."""
+    R, r_b, y, k = HAIRPIN["R"], HAIRPIN["r_b"], HAIRPIN["y"], HAIRPIN["k"]
+    model = _hairpin_model()
+    joint = next(j for j in model.interactions if isinstance(j, fm.SlidingClearanceJoint))
     asm = Assembly(model)
     q = asm.q_ref
     contacts = joint._contacts(q, np.zeros_like(q), False, False)
@@ -295,3 +307,20 @@ def test_a_beam_looping_back_crosses_each_section_twice():
     delta = y + r_b - R
     for _k, _j, _kind, _e, res, *_ in contacts:
         assert res.f_n == pytest.approx(k * delta, rel=1e-9)
+
+
+def test_more_contacts_than_the_tangent_holds_is_a_clear_error(monkeypatch):  # noqa: ANN001
+    """The tangent's work arrays hold CONTACTS_PER_SECTION contacts per section (plus a margin):
+    a joint with more at once rejects the iterate with a message that names the joint (here the
+    hairpin's 18 contacts against a capacity cut to 4)."""
+    import flexmbs.contact.joint as joint_module
+    from flexmbs.errors import ConvergenceError
+
+    monkeypatch.setattr(joint_module, "contact_capacity", lambda ns: 4)
+    model = _hairpin_model()
+    with pytest.raises(ConvergenceError, match=r"joint 'hairpin': more than 4 contact points at "
+                                                r"once, the most its tangent holds"):
+        asm = Assembly(model)          # (its set-up evaluates the matrix once)
+        n, m = asm.n_coords, asm.n_mult
+        asm.evaluate(asm.q_ref, np.zeros(n), np.zeros(n), np.zeros(m), 0.0, np.zeros(n),
+                     np.zeros(m), matrix=(0.0, 0.0, 1.0))
