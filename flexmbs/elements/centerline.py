@@ -86,9 +86,10 @@ def bracketed_newton_step(s, f, df, lo, hi, flo):  # noqa: ANN001, ANN201
 
 
 @njit
-def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter):  # noqa: ANN001, ANN202
-    """Root of φ(s) in [lo, hi] with φ(lo)φ(hi) ≤ 0: Newton, bisection if it leaves the bracket."""
-    s = 0.5 * (lo + hi)
+def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter, s0):  # noqa: ANN001, ANN202
+    """Root of φ(s) in [lo, hi] with φ(lo)φ(hi) ≤ 0: Newton from ``s0`` (the midpoint when
+    ``s0`` is not inside the bracket), bisection if it leaves the bracket."""
+    s = s0 if lo < s0 < hi else 0.5 * (lo + hi)
     for _ in range(max_iter + 30):
         f, df, _, _, _ = _phi_at(q_e, lengths, origin, normal, s)
         if abs(f) <= tol:
@@ -177,21 +178,12 @@ def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, 
         if f1 == 0.0:
             s_out[0] = e + 1.0
             return 1
-        lo = float(e)
-        hi = e + 1.0
-        flo = f0
         x = xi_start if 0.0 <= xi_start <= 1.0 else f0 / (f0 - f1)
-        s = e + min(max(x, 1e-9), 1.0 - 1e-9)
-        for _ in range(max_iter + 30):
-            f, df, _, _, _ = _phi_at(q_e, lengths, origin, normal, s)
-            if abs(f) <= atol:
-                s_out[0] = s
-                return 1
-            s, lo, hi, flo = bracketed_newton_step(s, f, df, lo, hi, flo)
-            if hi - lo <= 1e-15 * (1.0 + abs(hi)):
-                s_out[0] = s
-                return 1
-        s_out[0] = s
+        sr, ok = _solve_in_bracket(q_e, lengths, origin, normal, float(e), e + 1.0, f0, atol,
+                                   max_iter, e + min(max(x, 1e-9), 1.0 - 1e-9))
+        if not ok:
+            return 0
+        s_out[0] = sr
         return 1
     count = 0
     f_prev, _, _, _, _ = _phi_at(q_e, lengths, origin, normal, float(e))
@@ -205,7 +197,7 @@ def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, 
                 count += 1
         elif f_prev * f < 0.0:
             sr, ok = _solve_in_bracket(q_e, lengths, origin, normal, s_a, s_j, f_prev, atol,
-                                       max_iter)
+                                       max_iter, -1.0)
             if ok and count < s_out.shape[0]:
                 s_out[count] = sr
                 count += 1
@@ -291,7 +283,7 @@ def section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, tol, max_i
                 sr, ok = float(k + 1), True
             else:
                 sr, ok = _solve_in_bracket(q_e, lengths, origin, normal, float(k), float(k + 1),
-                                           fa, atol, max_iter)
+                                           fa, atol, max_iter, -1.0)
             if ok:
                 _, _, _, _, dist = _phi_at(q_e, lengths, origin, normal, sr)
                 if dist < best_d:
