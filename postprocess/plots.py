@@ -1,5 +1,6 @@
 """Time-history figures of an output folder (matplotlib, Agg): every probe, contact forces per
-section, number of active contact points, energies; optionally a second run overlaid."""
+section, number of active contact points, energies, and for a bore of many sections the contact
+force along it; optionally a second run overlaid."""
 
 from __future__ import annotations
 
@@ -32,6 +33,59 @@ def _contact_series(run: Run) -> tuple[np.ndarray, dict[tuple[str, int], np.ndar
     return t, forces, count
 
 
+#: a clearance joint with more sections than this gets the figure of the contact force along
+#: its bore (:func:`_along_bore`), and no per-section legend in the time-history figure
+MANY_SECTIONS = 12
+
+#: times drawn in the along-the-bore figure's upper panel
+ALONG_TIMES = 6
+
+
+def _bores(run: Run) -> dict[str, tuple[float, int]]:
+    """Clearance joints of many sections (summary.json ``hole_sections``): name -> (bore
+    length, number of sections); the sections are equally spaced along the bore."""
+    out: dict[str, tuple[float, int]] = {}
+    for name, rec in (run.summary.get("hole_sections") or {}).items():
+        try:
+            length, n = float(rec["length"]), int(rec["sections"])
+        except (KeyError, TypeError, ValueError):
+            continue
+        if n > MANY_SECTIONS:
+            out[name] = (length, n)
+    return out
+
+
+def _along_bore(run: Run, joint: str, length: float, n: int) -> Any:
+    """The contact force along the bore of ``joint``: per section (summed over its points)
+    against the distance from the bore's first section, at up to :data:`ALONG_TIMES` output
+    times (the last included), and as a map over time and distance."""
+    import matplotlib.pyplot as plt
+
+    t, forces, _ = _contact_series(run)
+    spacing = length / (n - 1)
+    grid = np.zeros((len(t), n))
+    for (name, k), f in forces.items():
+        if name == joint and 0 <= k < n:
+            grid[:, k] = f
+    s = np.arange(n) * spacing
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6.5))
+    touched = np.flatnonzero(np.any(grid != 0.0, axis=1))
+    if touched.size:
+        picks = np.unique(np.linspace(touched[0], len(t) - 1, ALONG_TIMES).round().astype(int))
+        for i in picks:
+            ax1.plot(s, grid[i], drawstyle="steps-mid", label=f"t = {t[i]:.4g} s")
+        ax1.legend(fontsize=8)
+    ax1.set(xlabel="distance along the bore [m]", ylabel="normal force [N]",
+            title=f"{joint}: contact force per section ({n} sections, {spacing:.3g} m apart)")
+    ax1.grid(True, alpha=0.3)
+    if len(t) > 1:
+        mesh = ax2.pcolormesh(s, t, grid, shading="nearest", cmap="viridis")
+        fig.colorbar(mesh, ax=ax2, label="normal force [N]")
+    ax2.set(xlabel="distance along the bore [m]", ylabel="t [s]")
+    fig.tight_layout()
+    return fig
+
+
 def _labels(runs: list[Run]) -> list[str]:
     """Legend names of the runs: their folder names (with the parent when they coincide)."""
     names = [r.label for r in runs]
@@ -52,7 +106,9 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
     (all probe columns whose name contains "energy", in joules; probes.csv does not record
     probe types, hence the name rule), ``contacts`` (normal
     force per hole section summed over its points, and the number of active contact points)
-    when either run has contacts. With ``compare`` the second run is overlaid dashed, in the
+    when either run has contacts, ``contact_along_<joint>`` (the contact force along the bore,
+    :func:`_along_bore`) for each clearance joint of the run with more than
+    :data:`MANY_SECTIONS` sections. With ``compare`` the second run is overlaid dashed, in the
     same colour per series; legends name the folders."""
     import matplotlib
 
@@ -104,6 +160,7 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
         keys = sorted({(c["joint"], int(c["section"])) for r in runs for c in r.contacts})
         colour_of = {k: colours[i % len(colours)] for i, k in enumerate(keys)}
+        many = len(keys) > MANY_SECTIONS
         for r, lab_run, ls in zip(runs, names, styles, strict=False):
             t, forces, count = _contact_series(r)
             for (joint, sec), f in sorted(forces.items()):
@@ -112,8 +169,10 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
             if len(t):
                 ax2.plot(t, count, ls, drawstyle="steps-post", label=lab_run)
         ax1.set_ylabel("normal force [N]")
-        ax1.set_title("contact normal force per hole section (sum over its points)")
-        ax1.legend(fontsize=7, ncol=3)
+        ax1.set_title("contact normal force per hole section (sum over its points)"
+                      + (f": {len(keys)} sections" if many else ""))
+        if not many:
+            ax1.legend(fontsize=7, ncol=3)
         ax1.grid(True, alpha=0.3)
         ax2.set_ylabel("active contact points")
         ax2.set_xlabel("t [s]")
@@ -122,6 +181,8 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
         ax2.grid(True, alpha=0.3)
         fig.tight_layout()
         figs["contacts"] = fig
+    for joint, (length, n) in _bores(run).items():
+        figs[f"contact_along_{joint}"] = _along_bore(run, joint, length, n)
     return figs
 
 

@@ -263,3 +263,46 @@ def test_section_view_draws_a_non_circular_bore(tmp_path):
     expect = sorted(math.degrees(math.atan2(Q[1], Q[0])) for Q in st.Q)
     assert sorted(ang[sel]) == pytest.approx(expect, abs=1e-9)
     assert postprocess.contact_angles_view(out, "sleeve").is_file()
+
+
+def test_contact_force_along_a_bore_of_many_sections(tmp_path):
+    """A wire held in a 90° curved tube (examples/capstan.py, sections 2 mm apart): the figure
+    of the contact force along the bore draws, at the last output time, each section's force
+    of contacts.csv (summed over its points) at its distance along the bore, and the same
+    forces over time as a map; the time-history figure drops its per-section legend."""
+    import warnings
+
+    import flexmbs as fm
+    from postprocess.plots import MANY_SECTIONS, make_figures
+    from tests.conftest import load_example
+
+    cap = load_example("capstan")
+    model, _, _ = cap.build(math.pi / 2, 0.0, motion=fm.Constant(0.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fm.simulate(model, t_end=0.03, dt=2e-4, output_interval=0.01, out=tmp_path / "tube",
+                    integrator=fm.GeneralizedAlpha(rho_inf=0.8))
+    run = postprocess.read_run(tmp_path / "tube")
+    rec = run.summary["hole_sections"]["tube"]
+    n, spacing = rec["sections"], rec["length"] / (rec["sections"] - 1)
+    assert n > MANY_SECTIONS
+    figs = make_figures(run)
+    upper, lower = figs["contact_along_tube"].axes[:2]
+    last = upper.lines[-1]
+    t_last = float(run.probes["t"][-1]) if "t" in run.probes else max(float(r["t"]) for r in
+                                                                      run.contacts)
+    assert last.get_label() == f"t = {t_last:.4g} s"
+    rows = _contact_rows(tmp_path / "tube")
+    expected = np.zeros(n)
+    for r in rows:
+        if float(r["t"]) == t_last:
+            expected[int(r["section"])] += float(r["normal_force"])
+    assert np.count_nonzero(expected) > MANY_SECTIONS          # the wire lies along the arc
+    np.testing.assert_allclose(last.get_xdata(), np.arange(n) * spacing, rtol=1e-12)
+    np.testing.assert_allclose(last.get_ydata(), expected, rtol=1e-12)
+    grid = np.asarray(lower.collections[0].get_array()).reshape(-1, n)
+    np.testing.assert_allclose(grid[-1], expected, rtol=1e-12)
+    assert figs["contacts"].axes[0].get_legend() is None
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
