@@ -37,7 +37,7 @@ from .elements.group import MAX_GROUPS
 from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
 from .errors import FlexmbsError, ModelError, RedundantConstraintError
 from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
-from .loads import TimeFunction, moments_pattern, pack_loads
+from .loads import Constant, TimeFunction, moments_pattern, pack_loads
 from .model import Beam, Ground, Model, Node, RigidBody
 from .solvers._compiled import idle_run
 from .springs import pack_springs, spring_energy, springs_pattern
@@ -237,6 +237,34 @@ class Assembly:
                                      frame if frame is not None else np.eye(3))
         raise ModelError(f"cannot attach a constraint to {obj!r}")
 
+    def _check_prescribed_twists(self) -> None:
+        """A rod node's twist is prescribed only with its slope held (clamped, or its three
+        slope components prescribed without motion): the twist is the section's turn relative
+        to the node's chart, which is re-based when the tangent turns far (FORMULATION §2.4),
+        and a prescribed value cannot follow that."""
+        held: set[tuple[int, int, int]] = set()
+        turned: list[Any] = []
+        for spec in self.model.constraints:
+            node = spec.a
+            if not isinstance(node, Node):
+                continue
+            key = (id(node.beam), node.index)
+            if spec.kind == "clamp":
+                held.update((*key, c) for c in node.beam.layout.slope)
+            elif spec.kind == "prescribed":
+                if node.beam.layout.twist in spec.components:
+                    turned.append(spec)
+                fn = spec.function
+                if isinstance(fn, Constant) and fn.value == 0.0:
+                    held.update((*key, c) for c in spec.components)
+        for spec in turned:
+            node = spec.a
+            if not all((id(node.beam), node.index, c) in held for c in node.beam.layout.slope):
+                raise ModelError(
+                    f"prescribed '{spec.name}': the twist of node {node.index} of beam "
+                    f"'{node.beam.name}' is prescribed but its slope is free; hold the slope "
+                    "too (prescribe components 3, 4, 5 without a function, or clamp the node)")
+
     def _build_constraints(self, policy: str, rank_tol: float) -> None:
         lin_rows: list[tuple[np.ndarray, np.ndarray]] = []   # (cols, vals) per row
         lin_rhs: list[float] = []
@@ -245,6 +273,7 @@ class Assembly:
         lin_owner: list[str] = []       # the constraint (spec name) of each linear row
         nonlinear: list[Constraint] = []
         q0 = self.q_ref
+        self._check_prescribed_twists()
         for spec in self.model.constraints:
             k = spec.kind
             if k in ("clamp", "pin"):
@@ -465,7 +494,7 @@ class Assembly:
                         raise ModelError(f"load '{load.name}': moments are supported at nodes only")
                     idx, vals = dofs, Q
             fn = load.function
-            if type(fn).__name__ == "Constant" and getattr(fn, "value", None) == 1.0:
+            if isinstance(fn, Constant) and fn.value == 1.0:
                 np.add.at(f_const, idx, vals)
             else:
                 timed.append((idx, vals, fn))

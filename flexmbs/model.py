@@ -439,11 +439,16 @@ class Model:
     def prescribe(self, target: Node | RigidBody, components: Sequence[int], function=None, *,
                   name: str | None = None) -> ConstraintSpec:
         """Prescribe coordinates: ``q_i(t) = q_i(0) + f(t)`` for the listed local coordinate
-        indices (node: 0-2 position, 3-5 slope; body: 0-2 position, 3-6 Euler parameters)."""
-        n = 6 if isinstance(target, Node) else 7
+        indices (node: 0-2 position, 3-5 slope, 6 the twist of a rod's node — the section's turn
+        about its tangent, rad, which needs the node's slope held; body: 0-2 position, 3-6
+        Euler parameters)."""
+        n = target.beam.layout.node_size if isinstance(target, Node) else 7
         comps = tuple(int(c) for c in components)
         if not comps or any(not 0 <= c < n for c in comps):
-            raise ModelError(f"prescribe: components must be in 0..{n - 1} (got {components!r})")
+            twist = (" (a cable's node has no twist: element = \"ancf_rod14\")"
+                     if isinstance(target, Node) and 6 in comps else "")
+            raise ModelError(f"prescribe: components must be in 0..{n - 1} (got {components!r})"
+                             + twist)
         return self._add_constraint(ConstraintSpec(
             "prescribed", self._unique(name, "prescribed"), target, components=comps,
             function=as_time_function(function if function is not None else 0.0)))

@@ -110,3 +110,73 @@ def test_reaction_probe_in_a_scenario_and_errors(tmp_path, capsys):
     root.write_text(bad)
     assert main(["info", str(root)]) == 2
     assert "probes[R].constraint: no constraint or joint named 'rooot'" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------- a rod node's twist
+STEEL = fm.Material(E=2e11, rho=7800.0, nu=0.3)
+
+
+def _rod(length: float = 0.5, elements: int = 10, radius: float = 5e-3):  # noqa: ANN202
+    model = fm.Model()
+    rod = model.add_beam(fm.line((0, 0, 0), (length, 0, 0), elements=elements),
+                         section=fm.CircularSection(radius), material=STEEL,
+                         element="ancf_rod14", name="rod")
+    return model, rod
+
+
+def test_turning_a_rods_end_takes_the_torsional_torque():
+    """A straight rod turned by Φ at one end (its twist prescribed, position and slope held)
+    and clamped at the other: the torque is GJ Φ / L, about the axis, at both ends."""
+    model, rod = _rod()
+    phi = 0.3
+    model.prescribe(rod.first_node, [0, 1, 2, 3, 4, 5], name="hold")
+    model.prescribe(rod.first_node, [6], fm.Constant(phi), name="turn")
+    model.clamp(rod.last_node, name="end")
+    asm = Assembly(model)
+    st = fm.solve_static(asm)
+    G = STEEL.E / (2 * (1 + STEEL.nu))
+    torque = G * np.pi * 5e-3**4 / 2 * phi / 0.5
+    (turn,) = reactions(asm, st.q, st.lam, "turn")
+    (end,) = reactions(asm, st.q, st.lam, "end")
+    assert turn.moment == pytest.approx([torque, 0.0, 0.0], rel=1e-9, abs=1e-9 * torque)
+    assert end.moment == pytest.approx([-torque, 0.0, 0.0], rel=1e-9, abs=1e-9 * torque)
+    assert np.allclose(turn.force, 0.0, atol=1e-9) and np.allclose(end.force, 0.0, atol=1e-9)
+
+
+def test_rigid_node_reaction_on_a_turned_rod_node_balances_the_body():
+    """A rod cantilever carrying a rigid body at its tip (``rigid``: position, slope and the
+    section's turn), the body loaded by a force and a moment that turn the tip 37° from
+    its chart's base: the reaction on the beam (through the node's rotation map, twist and
+    chart included) is equal and opposite to the reaction on the body, and that one balances
+    the load."""
+    model, rod = _rod(length=1.0, elements=8, radius=4e-3)
+    model.clamp(rod.first_node, name="root")
+    tip = model.add_rigid_body(mass=1.0, inertia=(1e-3, 1e-3, 1e-3),
+                               pose=fm.Pose(position=(1.0, 0.0, 0.0)), name="tip")
+    model.rigid(rod.last_node, tip, name="weld")
+    F, M = np.array([0.0, 60.0, -40.0]), np.array([25.0, 10.0, -15.0])
+    model.add_point_load(tip, F, moment=M, name="load")
+    asm = Assembly(model)
+    st = fm.solve_static(asm, fm.StaticOptions(load_steps=8))
+    g = st.q[asm.node_dofs(rod.last_node)[3:6]]
+    assert np.degrees(np.arccos(g[0] / np.linalg.norm(g))) > 30.0       # the tip turned far
+    on = {r.part: r for r in reactions(asm, st.q, st.lam, "weld")}
+    assert np.allclose(on["tip"].force, -F, atol=1e-8)
+    assert np.allclose(on["tip"].moment, -M, atol=1e-8)
+    assert np.allclose(on["rod"].point, on["tip"].point, atol=1e-12)
+    assert np.allclose(on["rod"].force, F, atol=1e-8)
+    assert np.allclose(on["rod"].moment, M, atol=1e-7)
+
+
+def test_a_prescribed_twist_needs_a_held_slope_and_a_rod():
+    model, rod = _rod()
+    model.prescribe(rod.first_node, [0, 1, 2], name="hold")
+    model.prescribe(rod.first_node, [6], fm.Constant(0.1), name="turn")
+    with pytest.raises(fm.ModelError, match=r"prescribed 'turn': the twist of node 0 of beam "
+                                            r"'rod' is prescribed but its slope is free"):
+        Assembly(model)
+    cable = fm.Model()
+    wire = cable.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2),
+                          section=fm.CircularSection(1e-3), material=STEEL)
+    with pytest.raises(fm.ModelError, match="a cable's node has no twist"):
+        cable.prescribe(wire.first_node, [6])
