@@ -65,17 +65,37 @@ def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):  # noqa: ANN001, ANN2
 
 
 @njit
-def _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, elem_out, r_b, shape, params,  # noqa: ANN001, ANN202, PLR0913
-                   R_out, origin, n, ey, ez, roots):
+def reset_crossings(elem_out, out_list):  # noqa: ANN001, ANN201
+    """``elem_out[k] = −1`` wherever it is set, from its list ``out_list`` (``[count, k₀, k₁,
+    …]``, count −1: not known, every section is reset); the list is emptied. Sections never
+    crossed cost nothing."""
+    count = out_list[0]
+    if count < 0:
+        for k in range(elem_out.shape[0]):
+            elem_out[k] = -1
+    else:
+        for i in range(count):
+            elem_out[out_list[1 + i]] = -1
+    out_list[0] = 0
+
+
+@njit
+def _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, ws_list, elem_out, r_b, shape,  # noqa: ANN001, ANN202, PLR0913
+                   params, R_out, origin, n, ey, ez, roots):
     """An open bore: a section crossed inside the bore at the step's start (``elem_ws[k] ≥ 0``)
     and not now. Legitimate if the beam has left the plane there (its end passed: the elements
     around the tracked one no longer cross it); if they cross it outside the bore, at any
     distance, the iterate pushed the axis through the wall (a Newton step can jump farther
     than the section's reach, where the crossing would otherwise read "another part of the
-    beam"): ``-1 - k``, else 0. End faces excepted (the beam outside the mouth)."""
+    beam"): ``-1 - k``, else 0. End faces excepted (the beam outside the mouth). The sections
+    crossed at the step's start are those of ``ws_list`` (see :func:`reset_crossings`)."""
     ns = origins.shape[0]
     ne = qe.shape[0]
-    for k in range(1, ns - 1):
+    listed = ws_list[0] >= 0
+    for i in range(ws_list[0] if listed else ns):
+        k = ws_list[1 + i] if listed else i
+        if k < 1 or k > ns - 2:
+            continue
         e0 = elem_ws[k]
         if e0 < 0 or elem_out[k] >= 0:
             continue
@@ -96,8 +116,8 @@ def _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, elem_out, r_b,
 
 @njit
 def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                   open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, elem_out,
-                   xi_out, r_b, shape, params, R_out, R_in, consistent, out):
+                   open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
+                   elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
@@ -122,8 +142,10 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     crossed inside the bore. ``cross_n`` (zero on entry and on return), ``cross_e``,
     ``cross_xi``, ``touched`` (ns,) and ``work`` (ns + 64) are work arrays; the first crossing
     inside the bore of each section goes to ``(elem_out, xi_out)`` (the next step's start,
-    ``(elem_ws, xi_ws)``) and every row records its own crossing (columns ``elem_i``,
-    ``xi_i``)."""
+    ``(elem_ws, xi_ws)``; −1: not crossed inside the bore) and every row records its own
+    crossing (columns ``elem_i``, ``xi_i``). ``out_list`` and ``ws_list`` list the sections
+    whose ``elem_out``, ``elem_ws`` are set (:func:`reset_crossings`): a section far from the
+    beam costs nothing."""
     ns = origins.shape[0]
     ne = qe.shape[0]
     reach = 2.0 * R_out + r_b
@@ -170,9 +192,7 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
                     cross_e[k, cross_n[k]] = ee
                     cross_xi[k, cross_n[k]] = roots[j] - ee
                     cross_n[k] += 1
-    if open_ends:                  # crossed inside the bore in this evaluation: set below
-        for k in range(ns):
-            elem_out[k] = -1
+    reset_crossings(elem_out, out_list)    # crossed inside the bore in this evaluation: below
     # sections in order (deterministic rows, as the sections lie along the bore)
     for i in range(1, n_touched):
         v = touched[i]
@@ -208,6 +228,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
             if inside == 0:
                 elem_out[k] = e
                 xi_out[k] = xi
+                out_list[0] += 1
+                out_list[out_list[0]] = k
             inside += 1
             if math.hypot(cy, cz) + a < R_in:
                 continue   # broad phase: ellipse strictly inside the bore
@@ -305,8 +327,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     if status == 0 and not open_ends and expect != ns:
         status = -1 - expect
     if status == 0 and open_ends:
-        status = _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, elem_out, r_b,
-                                shape, params, R_out, origin, n, ey, ez, roots)
+        status = _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, ws_list, elem_out,
+                                r_b, shape, params, R_out, origin, n, ey, ez, roots)
     for t in range(n_touched):
         cross_n[touched[t]] = 0
     if status != 0:
@@ -357,14 +379,16 @@ def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, hist)
 
 
 @njit
-def clearance_update(rows, m, approach, active, psi_track, anchor, stuck):  # noqa: ANN001, ANN201, C901
+def clearance_update(rows, m, sections, approach, active, psi_track, anchor, stuck):  # noqa: ANN001, ANN201, C901, PLR0912
     """Contact state after a converged step from the candidate rows of the converged state
     (with ``gap``, ``gap_rate`` and the friction history): every penetrating point is matched
     to the nearest tracked contact of its section (section angle, greedy by distance, within
     :data:`MATCH_ANGLE`) and keeps its approach velocity; a new one stores ``−ġ_N`` (approach
     velocity at onset, used by the dissipative laws); each takes its anchor and stick state
     from its row; tracked contacts not found are released (their anchors cleared). ``rows``
-    sorted by section."""
+    sorted by section; ``sections`` (``[count, k₀, …]`` sorted, count −1: every section) the
+    sections crossed at the step's start, where every tracked contact lies: O(rows + crossed
+    sections) per step."""
     P = active.shape[1]
     taken = np.zeros(P, dtype=np.bool_)
     new_app = np.zeros(P)
@@ -373,11 +397,23 @@ def clearance_update(rows, m, approach, active, psi_track, anchor, stuck):  # no
     idx = np.empty(max(m, 1), dtype=np.int64)
     slot_of = np.empty(max(m, 1), dtype=np.int64)
     r0 = 0
-    for k in range(active.shape[0]):
-        # the rows of section k (rows come sorted by section, as detect_section writes them):
-        # O(rows + sections) per step, not O(rows x sections)
-        while r0 < m and int(rows[r0, 0]) < k:
-            r0 += 1
+    listed = sections[0] >= 0
+    n_listed = sections[0] if listed else active.shape[0]
+    w = 0
+    while True:
+        # the next section with rows (sorted by section, as detect_section writes them) or
+        # tracked contacts (in the list of sections crossed at the step's start)
+        k = -1
+        if r0 < m:
+            k = int(rows[r0, 0])
+        if w < n_listed:
+            kw = sections[1 + w] if listed else w
+            if k < 0 or kw < k:
+                k = kw
+        if k < 0:
+            break
+        while w < n_listed and (sections[1 + w] if listed else w) <= k:
+            w += 1
         nc = 0
         i = r0
         while i < m and int(rows[i, 0]) == k:
@@ -385,6 +421,7 @@ def clearance_update(rows, m, approach, active, psi_track, anchor, stuck):  # no
                 idx[nc] = i
                 nc += 1
             i += 1
+        r0 = i
         if nc == 0:
             tracked = False
             for s in range(P):
@@ -448,7 +485,8 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
 @njit
 def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_c, tree_r, tree_lo,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
-                     xi_ws, elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, law, fric,
+                     xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
+                     consistent, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
                      exact, r_q, K_out, C_out, elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
@@ -473,7 +511,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
             qe[e, k] = q[elem_dofs[e, k]]
     m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
                        tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
-                       xi_ws, elem_out, xi_out, r_b, shape, params, R_out, R_in, consistent, rows)
+                       xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
+                       consistent, rows)
     if m < 0:
         return m, 0, 0.0
     Qc = np.empty(N_LOCAL)
@@ -594,8 +633,10 @@ class ClearancePart(NamedTuple):
     fric: np.ndarray                 # (nj, N_FRICTION) friction law (laws.Friction.parameters)
     enabled: np.ndarray              # (nj,) evaluated here (else by the joint's Python path)
     exact: np.ndarray                # (nj,) exact tangent (else Gauss-Newton)
-    elem_ws: np.ndarray              # (nj, max_ns) state: warm starts
+    elem_ws: np.ndarray              # (nj, max_ns) state: warm starts (−1: not crossed)
     xi_ws: np.ndarray
+    ws_list: np.ndarray              # (nj, max_ns + 1) the sections with elem_ws set
+                                     # ([count, k...], count −1: not known; reset_crossings)
     approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
     active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
     psi: np.ndarray                  # (nj, max_ns, P)
@@ -610,6 +651,7 @@ class ClearancePart(NamedTuple):
     n_candidates: np.ndarray         # (nj,) their number
     elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
     xi_out: np.ndarray
+    out_list: np.ndarray             # (nj, max_ns + 1) the sections with elem_out set
     K: np.ndarray                    # work (n_contacts, N_LOCAL, N_EXT), n_contacts =
     C: np.ndarray                    # work (n_contacts, N_LOCAL, N_LOCAL)  contact_capacity()
     kelem: np.ndarray                # work (n_contacts,): contact point's element
@@ -635,8 +677,8 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.origins[j, :ns],
         cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
         cl.open_ends[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
-        cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.elem_out[j, :ns],
-        cl.xi_out[j, :ns], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
+        cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
+        cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
         want_tangent, cl.exact[j], r, K, C, elem, elem_i)
@@ -734,8 +776,14 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
         if not cl.enabled[j]:
             continue
         ns = cl.n_sec[j]
-        for k in range(ns):
+        ws_list = cl.ws_list[j]
+        out_list = cl.out_list[j]
+        clearance_update(cl.rows[j], cl.n_candidates[j], ws_list, cl.approach[j, :ns],
+                         cl.active[j, :ns], cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns])
+        reset_crossings(cl.elem_ws[j, :ns], ws_list)
+        for i in range(out_list[0]):
+            k = out_list[1 + i]
             cl.elem_ws[j, k] = cl.elem_out[j, k]
             cl.xi_ws[j, k] = cl.xi_out[j, k]
-        clearance_update(cl.rows[j], cl.n_candidates[j], cl.approach[j, :ns], cl.active[j, :ns],
-                         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns])
+            ws_list[1 + i] = k
+        ws_list[0] = out_list[0]

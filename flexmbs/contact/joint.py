@@ -157,6 +157,9 @@ class SlidingClearanceJoint(Interaction):
         # state, updated after each converged step (also by the compiled integrator, in place):
         self._elem = np.zeros(ns, np.int64)     # warm starts of the section crossings
         self._xi = np.full(ns, 0.5)
+        # the sections with a warm start ([count, k...], _detect.reset_crossings); −1: not
+        # known (written here in Python: the compiled step lists them again)
+        self._ws_list = np.full(ns + 1, -1, np.int64)
         # tracked contacts per section (identity: section angle of the hole point, FORMULATION
         # II §3): approach velocity -g_N' at onset, section angle, in use
         self._approach = np.zeros((ns, MAX_POINTS))
@@ -232,6 +235,7 @@ class SlidingClearanceJoint(Interaction):
         if self.hole.open_ends:       # -1: not crossed inside the bore (the detection's state)
             self._elem[:] = -1
             self._xi[:] = 0.5
+            self._ws_list[0] = -1
         for k, zeta in enumerate(self.stations):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
@@ -253,6 +257,7 @@ class SlidingClearanceJoint(Interaction):
                     f"{k} (ellipse semi-axis {a:.6g} > bore {R_in:.6g}: jamming); align the hole "
                     "axis with the beam")
             self._elem[k], self._xi[k] = e, xi
+            self._ws_list[0] = -1
             crossed += 1
             ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, _b)
             deepest = max(deepest, max((c.depth for c in self.hole.section.candidates(ell)),
@@ -329,6 +334,7 @@ class SlidingClearanceJoint(Interaction):
                 continue
             if update:
                 self._elem[k], self._xi[k] = e, xi
+                self._ws_list[0] = -1
             if math.hypot(cy, cz) + a < R_in:
                 continue  # broad phase: the ellipse is strictly inside the bore
             ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
@@ -358,13 +364,18 @@ class SlidingClearanceJoint(Interaction):
         A = rotation_matrix(qb[3:7])
         qe = np.ascontiguousarray(q[self._elem_dofs])
         e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
+        unknown = np.full(1, -1, np.int64)        # lists not kept here: every section scanned
+        out_list = np.full(len(self.stations) + 1, -1, np.int64)
+        if update:
+            self._ws_list[0] = -1
         section = self.hole.section
         compiled = section.compiled_shape()
         assert compiled is not None
         shape, params = compiled
         m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self._origins,
                            self._axes, *self._tree, bool(self.hole.open_ends), *self._cross,
-                           self._elem, self._xi, e_out, x_out, self.beam_radius, shape, params,
+                           self._elem, self._xi, unknown, e_out, x_out, out_list,
+                           self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
                            self.detection == "consistent", self._rows)
         if m < 0:
@@ -544,8 +555,8 @@ class SlidingClearanceJoint(Interaction):
             rows[i, [0, 11, 12, 13]] = k, psi, res.gap, res.gap_rate
             rows[i, ANCHOR_COL:ANCHOR_COL + 3] = res.anchor
             rows[i, ANCHOR_COL + 3] = res.stuck
-        clearance_update(rows, len(contacts), self._approach, self._active, self._psi,
-                         self._anchor, self._stuck)
+        clearance_update(rows, len(contacts), np.full(1, -1, np.int64), self._approach,
+                         self._active, self._psi, self._anchor, self._stuck)
 
     # ------------------------------------------------------------------ output
     def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
@@ -641,6 +652,7 @@ class SlidingClearanceJoint(Interaction):
         check_resumed_friction(self.name, state.get("friction"), self.friction_parameters())
         self._elem[:] = state["elem"]
         self._xi[:] = state["xi"]
+        self._ws_list[0] = -1
         self._approach[:] = 0.0
         self._psi[:] = 0.0
         self._active[:] = False
@@ -722,6 +734,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),
         pad_stack([j._elem for j in joints], (), 0, np.int64),
         pad_stack([j._xi for j in joints], (), 0.5, float),
+        np.full((nj, max_ns + 1), -1, i64),          # not known: listed by the first step
         pad_stack([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
         pad_stack([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
         pad_stack([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
@@ -729,7 +742,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j._stuck for j in joints], (MAX_POINTS,), 0.0, float),
         np.array(q_ref, dtype=float, copy=True),
         pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
-        np.zeros(nj, i64), np.zeros((nj, max_ns), i64), np.zeros((nj, max_ns)),
+        np.zeros(nj, i64), np.full((nj, max_ns), -1, i64), np.zeros((nj, max_ns)),
+        np.full((nj, max_ns + 1), -1, i64),
         np.zeros((n_contacts, N_LOCAL, N_EXT)), np.zeros((n_contacts, N_LOCAL, N_LOCAL)),
         np.zeros(n_contacts, i64), np.zeros(n_contacts, i64),
         np.zeros((0, N_LOCAL, N_EXT)),
@@ -738,6 +752,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         ns = len(j.stations)
         j._elem = part.elem_ws[i, :ns]
         j._xi = part.xi_ws[i, :ns]
+        j._ws_list = part.ws_list[i]
         j._approach = part.approach[i, :ns]
         j._active = part.active[i, :ns]
         j._psi = part.psi[i, :ns]

@@ -221,13 +221,20 @@ def test_scenario_bore_along_a_path(tmp_path):  # noqa: ANN001
 
 # ---------------------------------------------------------------------------------------------
 # open ends and crossings found by the section tree (issue 30, item 2)
-def _wire_into_bore(open_ends: bool, tip: float = 0.0, push: float = 1.3e-3):  # noqa: ANN202
+def _wire_into_bore(open_ends: bool, tip: float = 0.0, push: float = 1.3e-3,  # noqa: ANN202
+                    feed: float = 0.0):
     """A clamped wire along x ending at ``tip``, a 40 mm bore (21 sections) centred at the
-    origin, pushed along y so the wire touches its wall."""
+    origin, pushed along y so the wire touches its wall; with ``feed`` the clamp moves the
+    wire that far along x in 0.01 s."""
     model = fm.Model(gravity=(0, 0, 0))
     wire = model.add_beam(fm.line((-0.1, 0, 0), (tip, 0, 0), elements=10), name="wire",
                           section=fm.CircularSection(0.8e-3), material=fm.Material(E=7e10, rho=2700))
-    model.clamp(wire.first_node)
+    if feed:
+        model.prescribe(wire.first_node, [0], fm.Ramp(start=0.0, end=0.01, value=feed,
+                                                      smooth=True), name="feed")
+        model.prescribe(wire.first_node, [1, 2, 3, 4, 5], name="feed_line")
+    else:
+        model.clamp(wire.first_node)
     body = model.add_rigid_body(mass=2e-3, inertia=(2e-8, 1e-6, 1e-6),
                                 pose=fm.Pose(np.array([0.0, push, 0.0]), np.eye(3)), name="tube")
     model.fix_body(body)
@@ -252,6 +259,22 @@ def test_open_ends_the_beam_may_end_inside_the_bore():
     assert np.abs(r).max() > 0.0
     with pytest.raises(ModelError, match="does not pass through the hole"):
         _wire_into_bore(False)
+
+
+def test_the_sections_crossed_are_listed_as_the_wire_advances():
+    """A wire fed 12 mm into an open bore (its tip from the middle towards the far mouth): the
+    compiled steps keep the list of sections crossed at each step's start equal to the
+    sections whose warm start is set (far sections are never visited), and the wire gains
+    the sections it enters."""
+    model, joint = _wire_into_bore(True, feed=0.012)
+    before = int(np.count_nonzero(np.asarray(joint._elem) >= 0))
+    res = fm.simulate(model, t_end=0.012, dt=2e-4, output_interval=0.004,
+                      integrator=fm.GeneralizedAlpha(rho_inf=0.8))
+    listed = joint._ws_list
+    assert listed[0] >= 0, "the compiled post-step lists the crossed sections"
+    crossed = np.flatnonzero(np.asarray(joint._elem) >= 0)
+    np.testing.assert_array_equal(listed[1:1 + listed[0]], crossed)
+    assert crossed.size >= before + 5 and res.t[-1] == pytest.approx(0.012)
 
 
 HAIRPIN = dict(R=10e-3, r_b=1e-3, y=9.5e-3, k=2e5)
