@@ -150,13 +150,13 @@ def test_divergence_exit_3_keeps_valid_output(tmp_path, capsys):
 
 
 def test_interrupt_exit_130(tmp_path, capsys, monkeypatch):
-    from flexmbs import cli
+    from flexmbs.commands import run as run_command
 
     def ctrl_c(self, state, stats):
         if state.t > 0.02:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli._Progress, "__call__", ctrl_c)
+    monkeypatch.setattr(run_command.Progress, "__call__", ctrl_c)
     out = tmp_path / "int"
     assert main(["run", CANTILEVER, "--t-end", "0.1", "--quiet", "--out", str(out)]) \
         == EXIT_INTERRUPTED

@@ -324,7 +324,7 @@ def test_a_signal_inside_numba_waits_for_the_next_step():
     raises at once. Real signals to this process."""
     import os
 
-    from flexmbs import cli
+    from flexmbs.commands import _common as cli
     from flexmbs.errors import Interrupted
 
     inside_numba = {"__name__": "numba.core.compiler", "os": os, "signal": signal, "time": time}
@@ -332,18 +332,18 @@ def test_a_signal_inside_numba_waits_for_the_next_step():
          "    os.kill(os.getpid(), signal.SIGINT)\n"
          "    for _ in range(1000):\n"
          "        time.sleep(0.001)\n", inside_numba)
-    restore = cli._terminate_like_ctrl_c()
+    restore = cli.terminate_like_ctrl_c()
     try:
         inside_numba["compile_step"]()                     # deferred: no exception here
         with pytest.raises(Interrupted):
-            cli._raise_pending()
-        cli._PENDING[0].append("SIGINT")                   # one deferred already ...
+            cli.raise_pending()
+        cli.PENDING[0].append("SIGINT")                   # one deferred already ...
         with pytest.raises(Interrupted):                   # ... so the next raises at once
             inside_numba["compile_step"]()
-        cli._PENDING[0].clear()
+        cli.PENDING[0].clear()
         with pytest.raises(Interrupted):                   # outside numba: at once
             os.kill(os.getpid(), signal.SIGINT)
             time.sleep(1.0)
     finally:
         restore()
-        cli._PENDING.clear()
+        cli.PENDING.clear()

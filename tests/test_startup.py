@@ -13,7 +13,8 @@ import flexmbs as fm
 from flexmbs import kernel as kmod
 from flexmbs._jit import HAVE_NUMBA
 from flexmbs.assembly import Assembly
-from flexmbs.cli import _compile_notice, main
+from flexmbs.cli import main
+from flexmbs.commands.compile import compile_notice
 from flexmbs.driver import OPTIONAL_KINDS
 
 HEAVY = ("matplotlib", "pyvista", "vtk", "dask", "distributed", "meshio", "imageio")
@@ -75,8 +76,8 @@ def test_compile_announces_once_with_the_recorded_estimate(tmp_path, monkeypatch
     kmod._write_times(tmp_path, {"BeamPart": 12.0, "RodPart+bodies": 40.0})
     assert kmod._read_times(tmp_path) == {"BeamPart": 12.0, "RodPart+bodies": 40.0}
     assert kmod._read_times(tmp_path / "missing") == {}
-    assert "about 12 s" in _compile_notice(12.0) and "\n" not in _compile_notice(None)
-    assert "took 40 s" in _compile_notice(40.0, same_kind=False)
+    assert "about 12 s" in compile_notice(12.0) and "\n" not in compile_notice(None)
+    assert "took 40 s" in compile_notice(40.0, same_kind=False)
     assert asm.kernel_system is not None
 
 
