@@ -231,7 +231,7 @@ class Assembly:
             d = self.node_dofs(obj)
             lay = obj.beam.layout
             cols = [*lay.position, *lay.slope] + ([] if lay.twist is None else [lay.twist])
-            return Attachment.beam_node(d[cols])
+            return Attachment.beam_node(d[cols], twist=lay.twist is not None)
         if isinstance(obj, Ground):
             return Attachment.ground(point if point is not None else np.zeros(3),
                                      frame if frame is not None else np.eye(3))

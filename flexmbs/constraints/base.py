@@ -34,7 +34,8 @@ class Attachment:
     """Where a constraint attaches: ground, a rigid body or a beam node.
 
     - ``dofs``: global coordinate indices, 7 for a rigid body (``[r, p]``), 6 for a beam node
-      (``[r, r′]``) or 7 with a twist (``[r, r′, φ]``), none for ground.
+      (``[r, r′]``) or 7 with a twist (``[r, r′, φ]``, ``twist`` True: declared by the
+      element's layout), none for ground.
     - ``point``: body-frame point (rigid body) or global point (ground); unused for a beam node
       (its point is the node position).
     - ``frame``: joint frame, columns = axes, in body coordinates (rigid body) or global
@@ -45,15 +46,19 @@ class Attachment:
     dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))
     frame: np.ndarray = field(default_factory=lambda: np.eye(3))
+    twist: bool = False     #: a beam node with a twist coordinate (the rod's φ, last of dofs)
 
     def __post_init__(self) -> None:
         if self.kind not in _N_DOFS:
             raise ModelError(f"Attachment kind must be one of {sorted(_N_DOFS)} "
                              f"(got {self.kind!r})")
         dofs = np.asarray(self.dofs, dtype=np.int64).reshape(-1)
-        if dofs.size != _N_DOFS[self.kind] and not (self.kind == "beam_node" and dofs.size == 7):
-            raise ModelError(f"Attachment '{self.kind}' needs {_N_DOFS[self.kind]} dofs "
-                             f"(got {dofs.size})")
+        if self.twist and self.kind != "beam_node":
+            raise ModelError(f"Attachment '{self.kind}' has no twist (only a beam node)")
+        needed = _N_DOFS[self.kind] + int(self.twist)
+        if dofs.size != needed:
+            raise ModelError(f"Attachment '{self.kind}' needs {needed} dofs "
+                             f"{'with its twist ' if self.twist else ''}(got {dofs.size})")
         point = np.asarray(self.point, dtype=float)
         frame = np.asarray(self.frame, dtype=float)
         if point.shape != (3,) or not np.all(np.isfinite(point)):
@@ -81,10 +86,10 @@ class Attachment:
                    np.eye(3) if frame is None else np.asarray(frame, dtype=float))
 
     @classmethod
-    def beam_node(cls, dofs: np.ndarray) -> Attachment:
-        """Beam node; ``dofs`` = global indices of [r (3), r′ (3)], or [r, r′, φ] (7) for a
-        node with a twist angle (the rod)."""
-        return cls("beam_node", np.asarray(dofs))
+    def beam_node(cls, dofs: np.ndarray, *, twist: bool = False) -> Attachment:
+        """Beam node; ``dofs`` = global indices of [r (3), r′ (3)], or with ``twist`` [r, r′, φ]
+        (7) for a node with a twist angle (an element layout with ``twist``, the rod)."""
+        return cls("beam_node", np.asarray(dofs), twist=twist)
 
     @property
     def is_ground(self) -> bool:

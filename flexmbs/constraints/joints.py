@@ -609,7 +609,7 @@ class BeamNodeRigid(_TermConstraint):
         self.node = node
         self.body = body
         self.normals_body = N.copy()
-        twisted = node.dofs.size == 7
+        twisted = node.twist
         if twisted and (twist_normal is None or base is None):
             raise ModelError(f"{name}: a node with a twist needs its base (t̄, D̄) and the body "
                              "normal holding its section (use from_configuration)")
@@ -658,7 +658,7 @@ class BeamNodeRigid(_TermConstraint):
         if at_node:
             body = replace(body, point=A.T @ (q_node[:3] - origin))
         twist_normal = None
-        if node.dofs.size == 7:
+        if node.twist:
             if base is None:
                 raise ModelError(f"{name}: a node with a twist needs its base (t̄, D̄)")
             d2 = np.empty(3)
