@@ -100,7 +100,8 @@ def _is_energy(column: str) -> bool:
     return "energy" in column.lower()
 
 
-def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
+def make_figures(run: Run, compare: Run | None = None, *,
+                 against: str | None = None) -> dict[str, Any]:
     """matplotlib Figures by file stem (not saved): ``probe_<name>`` for every probe of
     probes.csv (vector probes: their components in one axes) except energies, ``energies``
     (all probe columns whose name contains "energy", in joules; probes.csv does not record
@@ -109,7 +110,10 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
     when either run has contacts, ``contact_along_<joint>`` (the contact force along the bore,
     :func:`_along_bore`) for each clearance joint of the run with more than
     :data:`MANY_SECTIONS` sections. With ``compare`` the second run is overlaid dashed, in the
-    same colour per series; legends name the folders."""
+    same colour per series; legends name the folders. ``against``: a probes.csv column (e.g.
+    ``depth_x``) that the probe figures and energies take as abscissa instead of the time
+    (an insertion force against the depth; their stems end in ``_vs_<column>``); a column
+    missing from a run is a ValueError naming the known ones."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -118,6 +122,14 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
     figs: dict[str, Any] = {}
     runs = [run] + ([compare] if compare is not None else [])
     names = _labels(runs)
+    x_col = "t" if against is None else against
+    for r in runs:
+        if against is not None and against not in r.probes:
+            known = ", ".join(c for c in r.probes if c != "t") or "none"
+            raise ValueError(f"--against {against}: no such column in {r.directory / 'probes.csv'}"
+                             f" (known: {known})")
+    x_label = "t [s]" if against is None else against
+    vs = "" if against is None else f"_vs_{against}"     # its own files beside the time plots
     styles = ["-", "--"]
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     groups = dict(run.probe_groups())
@@ -130,32 +142,32 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
         fig, ax = plt.subplots(figsize=(7, 3.5))
         for r, lab_run, ls in zip(runs, names, styles, strict=False):
             for i, c in enumerate(cols):
-                if c in r.probes and "t" in r.probes:
+                if c in r.probes and x_col in r.probes:
                     lab = c if compare is None else f"{c} ({lab_run})"
-                    ax.plot(r.probes["t"], r.probes[c], ls, color=colours[i % len(colours)],
+                    ax.plot(r.probes[x_col], r.probes[c], ls, color=colours[i % len(colours)],
                             label=lab)
-        ax.set_xlabel("t [s]")
+        ax.set_xlabel(x_label)
         ax.set_ylabel(name)
         ax.set_title(f"probe {name}")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
         fig.tight_layout()
-        figs[f"probe_{name}"] = fig
+        figs[f"probe_{name}{vs}"] = fig
     energy_cols = [c for c in groups if _is_energy(c)]
     energy_cols = [c for name in energy_cols for c in groups[name]]
     if energy_cols:
         fig, ax = plt.subplots(figsize=(7, 3.5))
         for r, lab_run, ls in zip(runs, names, styles, strict=False):
             for i, c in enumerate(energy_cols):
-                if c in r.probes and "t" in r.probes:
+                if c in r.probes and x_col in r.probes:
                     lab = c if compare is None else f"{c} ({lab_run})"
-                    ax.plot(r.probes["t"], r.probes[c], ls, color=colours[i % len(colours)],
+                    ax.plot(r.probes[x_col], r.probes[c], ls, color=colours[i % len(colours)],
                             label=lab)
-        ax.set(xlabel="t [s]", ylabel="energy [J]", title="energies")
+        ax.set(xlabel=x_label, ylabel="energy [J]", title="energies")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
         fig.tight_layout()
-        figs["energies"] = fig
+        figs[f"energies{vs}"] = fig
     if any(r.contacts for r in runs):
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
         keys = sorted({(c["joint"], int(c["section"])) for r in runs for c in r.contacts})
@@ -187,9 +199,10 @@ def make_figures(run: Run, compare: Run | None = None) -> dict[str, Any]:
 
 
 def plot(out_dir: str | Path, *, compare: str | Path | None = None,
-         formats: Sequence[str] = ("png", "svg")) -> list[Path]:
+         formats: Sequence[str] = ("png", "svg"), against: str | None = None) -> list[Path]:
     """Write the figures of :func:`make_figures` into ``out_dir/figures``; returns the paths.
-    A sweep folder (``sweep.csv``) gets the sweep's figures (:mod:`postprocess.sweep`)."""
+    A sweep folder (``sweep.csv``) gets the sweep's figures (:mod:`postprocess.sweep`).
+    ``against``: the probes.csv column the probe figures take as abscissa (default the time)."""
 
     from .sweep import is_sweep, plot_sweep
 
@@ -197,9 +210,11 @@ def plot(out_dir: str | Path, *, compare: str | Path | None = None,
         if f not in ("png", "svg", "pdf"):
             raise ValueError(f"unknown figure format '{f}' (known: png, svg, pdf)")
     if is_sweep(out_dir):
-        if compare is not None:
-            raise ValueError(f"{out_dir} is a sweep folder: --compare applies to run folders")
+        if compare is not None or against is not None:
+            raise ValueError(f"{out_dir} is a sweep folder: --compare and --against apply to "
+                             "run folders")
         return plot_sweep(out_dir, formats=formats)
     run = read_run(out_dir)
     other = read_run(compare) if compare is not None else None
-    return save_figures(make_figures(run, other), run.directory / "figures", formats)
+    figs = make_figures(run, other, against=against)    # checked before anything is written
+    return save_figures(figs, run.directory / "figures", formats)

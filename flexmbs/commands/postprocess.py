@@ -38,6 +38,9 @@ def add_parsers(sub: Any) -> None:
                                       "forces, active contacts, hole sections) to DIR/figures.")
     plot.add_argument("directory", metavar="DIR")
     plot.add_argument("--compare", metavar="OTHER_DIR", help="overlay a second run")
+    plot.add_argument("--against", metavar="COLUMN",
+                      help="draw the probes against this probes.csv column instead of the "
+                           "time (e.g. depth_x: an insertion force against the depth)")
     plot.add_argument("--format", action="append", choices=("png", "svg", "pdf"),
                       help="figure format (repeatable; default png and svg)")
     plot.add_argument("--section", action="store_true",
@@ -104,7 +107,8 @@ def run(args: argparse.Namespace) -> int:
                                      f"{args.directory} (known: {', '.join(known)})")
                 joints = [args.joint] if args.joint else known
             files = postprocess.plot(args.directory, compare=args.compare,
-                                     formats=tuple(args.format or ("png", "svg")))
+                                     formats=tuple(args.format or ("png", "svg")),
+                                     against=args.against)
             for joint in joints:
                 files.append(postprocess.section_view(
                     args.directory, joint=joint, section=args.section_index, time=args.time,

@@ -306,3 +306,26 @@ def test_contact_force_along_a_bore_of_many_sections(tmp_path):
     import matplotlib.pyplot as plt
 
     plt.close("all")
+
+
+def test_probes_against_another_column(sleeve_run, tmp_path, capsys):
+    """``--against COLUMN``: every probe figure (and the energies) takes that probes.csv column
+    as abscissa, in files of their own; an unknown column is one line naming the known ones,
+    before anything is written."""
+    from postprocess.plots import make_figures
+
+    run = postprocess.read_run(sleeve_run)
+    figs = make_figures(run, against="sleeve_s")
+    ax = figs["probe_lowest_point_vs_sleeve_s"].axes[0]
+    np.testing.assert_array_equal(ax.lines[2].get_xdata(), run.probes["sleeve_s"])
+    np.testing.assert_array_equal(ax.lines[2].get_ydata(), run.probes["lowest_point_z"])
+    assert ax.get_xlabel() == "sleeve_s" and "energies_vs_sleeve_s" in figs
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+    before = sorted((sleeve_run / "figures").glob("*")) if (sleeve_run / "figures").exists() else []
+    assert main(["plot", str(sleeve_run), "--against", "depth_x"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--against depth_x: no such column" in err[0] and "sleeve_s" in err[0]
+    after = sorted((sleeve_run / "figures").glob("*")) if (sleeve_run / "figures").exists() else []
+    assert after == before
