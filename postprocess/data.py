@@ -65,7 +65,9 @@ class Run:
         return self.directory.name
 
     def probe_groups(self) -> dict[str, list[str]]:
-        """Probe name -> its columns (vector probes: name_x, name_y, name_z)."""
+        """Probe name -> its columns (vector probes: name_x, name_y, name_z; a reaction's
+        force name_fx, _fy, _fz and moment name_mx, _my, _mz as ``name_force`` and
+        ``name_moment``: one unit per figure)."""
         groups: dict[str, list[str]] = {}
         for c in self.probes:
             if c == "t":
@@ -75,6 +77,11 @@ class Run:
                 if c.endswith(suffix) and any(k != c and k.startswith(c[: -len(suffix)] + "_")
                                               for k in self.probes):
                     base = c[: -len(suffix)]
+            for kind, name in (("f", "force"), ("m", "moment")):
+                stem = c[:-3]
+                if c[-3:] in (f"_{kind}x", f"_{kind}y", f"_{kind}z") and all(
+                        f"{stem}_{k}{a}" in self.probes for k in "fm" for a in "xyz"):
+                    base = f"{stem}_{name}"
             groups.setdefault(base, []).append(c)
         return groups
 

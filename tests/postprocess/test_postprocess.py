@@ -329,3 +329,18 @@ def test_probes_against_another_column(sleeve_run, tmp_path, capsys):
     assert len(err) == 1 and "--against depth_x: no such column" in err[0] and "sleeve_s" in err[0]
     after = sorted((sleeve_run / "figures").glob("*")) if (sleeve_run / "figures").exists() else []
     assert after == before
+
+
+def test_a_reaction_probe_is_drawn_as_its_force_and_its_moment(tmp_path):
+    """A reaction probe's six columns (``_fx`` … ``_mz``) make two figures, the force and the
+    moment (one unit each), not six."""
+    from postprocess.data import Run
+
+    t = np.linspace(0.0, 1.0, 3)
+    cols = {f"feed_{k}{a}": t * (i + 1) for i, (k, a) in
+            enumerate((k, a) for k in "fm" for a in "xyz")}
+    run = Run(tmp_path, "r", {}, [], {"t": t, **cols, "tip_x": t, "tip_y": t, "tip_z": t})
+    groups = run.probe_groups()
+    assert groups["feed_force"] == ["feed_fx", "feed_fy", "feed_fz"]
+    assert groups["feed_moment"] == ["feed_mx", "feed_my", "feed_mz"]
+    assert groups["tip"] == ["tip_x", "tip_y", "tip_z"] and len(groups) == 3
