@@ -48,6 +48,8 @@ from .contact._detect import (
     clearance_jacobian,
     clearance_post_step_all,
     clearance_residual,
+    clearance_restart,
+    clearance_set_bases,
 )
 from .contact.joint import CLEARANCE
 from .elements.group import (
@@ -186,6 +188,7 @@ def rebase(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     count = groups_rebase(sy.beams, q, v, qdd, acc, sy.bases)
     if count > 0:
         set_bases(sy, sy.bases, count, False)
+        clearance_restart(sy.clearance, q)     # the friction's step start, re-based too
     return count
 
 
@@ -216,3 +219,4 @@ def set_bases(sy, log, stop, elements):  # noqa: ANN001, ANN201
         groups_set_bases(sy.beams, log, stop)
     terms_set_bases(sy.terms, log, stop)
     loads_set_bases(sy.loads, log, stop)
+    clearance_set_bases(sy.clearance, log, stop)

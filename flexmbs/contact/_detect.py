@@ -22,7 +22,7 @@ from ..elements.centerline import element_bounding_sphere, element_crossings, el
 from ..elements.rigid_body import rotation
 from .bores import sections_near
 from .geometry import closest_point_kernel, section_ellipse_at
-from .pair import N_GEO, N_HISTORY, N_LOCAL, contact_force
+from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, TWIST_OFF, contact_force
 from .sections import (
     SHAPE_CIRCLE,
     circle_stationary_points,
@@ -31,7 +31,7 @@ from .sections import (
     section_contains,
 )
 from .stationary import PAIR_MARGIN, line_model_points, stationary_pair
-from .tangent import I_OFF, N_EXT, P_OFF, contact_tangent
+from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
 
 #: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
@@ -366,9 +366,10 @@ def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN2
 
 
 @njit
-def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, hist):  # noqa: ANN001, ANN201
+def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, twist_dofs, hist):  # noqa: ANN001, ANN201
     """History of a contact (pair.N_HISTORY) from its tracked slot (−1: a new contact, no
-    anchor, counted as sticking) and the coordinates the step started from."""
+    anchor, counted as sticking) and the coordinates the step started from (the element's
+    twists where it has them, ``twist_dofs`` ≥ 0)."""
     for c in range(3):
         hist[c] = anchor[k, slot, c] if slot >= 0 else 0.0
     hist[3] = stuck[k, slot] if slot >= 0 else 1.0
@@ -376,6 +377,21 @@ def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, hist)
         hist[4 + c] = q_start[body_dofs[c]]
     for c in range(CENTERLINE_SIZE):
         hist[11 + c] = q_start[elem_dofs[c]]
+    for a in range(N_TWIST):
+        hist[HIST_TWIST + a] = q_start[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
+
+
+@njit
+def element_spin(q, v, twist_dofs, t_bar, spin):  # noqa: ANN001, ANN201
+    """The spin data (pair.N_SPIN) of a contact element: its nodes' twists, their rates and
+    their charts' base tangents ``t_bar`` (2, 3); ``spin[0] = 0`` for an element without twist
+    (``twist_dofs`` −1, a cable)."""
+    spin[0] = 1.0 if twist_dofs[0] >= 0 else 0.0
+    for a in range(N_TWIST):
+        spin[1 + a] = q[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
+        spin[3 + a] = v[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
+        for c in range(3):
+            spin[5 + 3 * a + c] = t_bar[a, c]
 
 
 @njit
@@ -483,7 +499,8 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
 
 
 @njit
-def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_c, tree_r, tree_lo,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+                     tree_c, tree_r, tree_lo,
                      tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                      consistent, law, fric,
@@ -525,6 +542,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
     Ypp = np.empty(2)
     geo = np.empty(N_GEO)
     hist = np.empty(N_HISTORY)
+    spin = np.empty(N_SPIN)
     ve = np.empty(CENTERLINE_SIZE)
     u_Q = np.empty(3)
     count = 0
@@ -540,10 +558,12 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
             ve[c] = v[elem_dofs[eP, c]]
         slot = tracked_slot(active, psi_track, k, row[11])
         v_app = approach[k, slot] if slot >= 0 else 0.0
-        contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP], hist)
-        g, gdot, _, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, lengths[eP], row[4], r_b, law,
-                                        fric, hist, v_app, want_tangent and not exact, Qc, K, C,
-                                        geo)
+        contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP],
+                        twist_dofs[eP], hist)
+        element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
+        g, gdot, _, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
+                                        law, fric, hist, v_app, want_tangent and not exact, Qc, K,
+                                        C, geo)
         row[12] = g
         row[13] = gdot
         for c in range(4):
@@ -554,6 +574,9 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
             r_q[body_dofs[c]] -= sign * Qc[c]
         for c in range(CENTERLINE_SIZE):
             r_q[elem_dofs[eP, c]] -= sign * Qc[7 + c]
+        for c in range(N_TWIST):
+            if twist_dofs[eP, c] >= 0:
+                r_q[twist_dofs[eP, c]] -= sign * Qc[TWIST_OFF + c]
         for c in range(N_LOCAL):
             if abs(Qc[c]) > scale:
                 scale = abs(Qc[c])
@@ -564,8 +587,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
             contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI],
                             row[CROSSING_COL + 1],
-                            qe[eP], ve, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law, fric,
-                            hist, v_app, consistent, Qx, KX, C)
+                            qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
+                            fric, hist, v_app, consistent, Qx, KX, C)
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]
@@ -581,6 +604,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, lengths, origins, frames, tree_
                     K_out[count, a, b] = sign * K[a, b]
                 for b in range(CENTERLINE_SIZE):
                     K_out[count, a, P_OFF + b] = sign * K[a, 7 + b]
+                for b in range(N_TWIST):
+                    K_out[count, a, T_OFF + b] = sign * K[a, TWIST_OFF + b]
                 for b in range(N_LOCAL):
                     C_out[count, a, b] = sign * C[a, b]
             elem_k[count] = eP
@@ -608,6 +633,9 @@ _OVERFLOW = -(1 << 40)
 class ClearancePart(NamedTuple):
     body: np.ndarray                 # (nj, 7)
     elem_dofs: np.ndarray            # (nj, max_ne, CENTERLINE_SIZE)
+    twist_dofs: np.ndarray           # (nj, max_ne, N_TWIST) the nodes' twists (−1: a cable)
+    t_bar: np.ndarray                # (nj, max_ne, 2, 3) their charts' base tangents (a holder
+                                     # of the nodal bases: clearance_set_bases)
     n_elem: np.ndarray
     lengths: np.ndarray              # (nj, max_ne)
     origins: np.ndarray              # (nj, max_ns, 3) section origins (body coordinates)
@@ -674,7 +702,8 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     ne_j = cl.n_elem[j]
     ns = cl.n_sec[j]
     m, cnt, sc = clearance_forces(
-        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.lengths[j, :ne_j], cl.origins[j, :ns],
+        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j],
+        cl.lengths[j, :ne_j], cl.origins[j, :ns],
         cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
         cl.open_ends[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
         cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
@@ -737,7 +766,9 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
             eP = cl.kelem[i]
             eI = cl.kelem_i[i]
             pos = cl.pos[j, eP]
-            for a in range(N_LOCAL):
+            # a rod's rows and columns of its twists (a cable has none: −1)
+            n_rows = N_LOCAL if cl.twist_dofs[j, eP, 0] >= 0 else TWIST_OFF
+            for a in range(n_rows):
                 for c in range(7):
                     data[pos[N_LOCAL * a + c]] += cK * cl.K[i, a, c] + cC * cl.C[i, a, c]
                 for c in range(ne):
@@ -745,6 +776,9 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
                     if eI == eP:
                         kk += cl.K[i, a, I_OFF + c]
                     data[pos[N_LOCAL * a + 7 + c]] += cK * kk + cC * cl.C[i, a, 7 + c]
+                for c in range(n_rows - TWIST_OFF):
+                    data[pos[N_LOCAL * a + TWIST_OFF + c]] += (cK * cl.K[i, a, T_OFF + c]
+                                                               + cC * cl.C[i, a, TWIST_OFF + c])
             if eI == eP:
                 continue
             posI = cl.pos[j, eI]
@@ -761,6 +795,33 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
                     if at >= 0:     # the shared node's entries (see clearance_pattern)
                         data[at] += cK * cl.K[i, 7 + a, I_OFF + c]
     return 0
+
+
+@njit
+def clearance_set_bases(cl, log, stop):  # noqa: ANN001, ANN201
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION I
+    §2.4): the contact elements holding them read the new base tangent."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
+    for j in range(cl.r_b.size):
+        for e in range(cl.n_elem[j]):
+            for a in range(N_TWIST):
+                dof = cl.twist_dofs[j, e, a]
+                if dof < 0:
+                    continue
+                for i in range(stop):
+                    if np.int64(log[i, 0]) == dof:
+                        for c in range(3):
+                            cl.t_bar[j, e, a, c] = log[i, 1 + c]
+
+
+@njit
+def clearance_restart(cl, q):  # noqa: ANN001, ANN201
+    """``q`` (re-based: its twists changed) is the start of the next step."""
+    if cl is None:
+        return
+    for i in range(cl.q_start.size):
+        cl.q_start[i] = q[i]
 
 
 @njit

@@ -38,6 +38,7 @@ from ._detect import (
     contact_capacity,
     contact_history,
     detect_section,
+    element_spin,
     tracked_approach,
     tracked_slot,
 )
@@ -53,7 +54,7 @@ from .laws import (
     check_resumed_friction,
     law_energy,
 )
-from .pair import N_HISTORY, N_LOCAL, contact_point, friction_vector
+from .pair import N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, contact_point, friction_vector
 from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
 
@@ -206,6 +207,14 @@ class SlidingClearanceJoint(Interaction):
         self._body_dofs = dofs.body_dofs(self.body)
         # the Hermite centreline coordinates of every element (the element's declared layout)
         self._elem_dofs = dofs.element_dofs(self.beam)[:, self.beam.layout.centerline]
+        # the twists of every element's nodes (a rod's: its surface turns under the friction;
+        # −1 for a cable) and their charts' base tangents (set when packed, then re-based)
+        lay = self.beam.layout
+        ne = len(self.beam.centerline.lengths)
+        self._twist_dofs = (np.full((ne, N_TWIST), -1, np.int64) if lay.twist is None else
+                            np.ascontiguousarray(dofs.element_dofs(self.beam)[
+                                :, [lay.twist, lay.node_size + lay.twist]], dtype=np.int64))
+        self._t_bar = np.zeros((ne, N_TWIST, 3))
         # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
         self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._beam_dofs = dofs.beam_dofs(self.beam)
@@ -310,7 +319,8 @@ class SlidingClearanceJoint(Interaction):
                                     self.friction, self._approach_for(k, psi),
                                     self.consistent and want_tangent,
                                     history=self._history(q, k, psi, eP),
-                                    friction_stiffness=self.friction_stiffness())
+                                    friction_stiffness=self.friction_stiffness(),
+                                    spin=self._spin(q, v, eP))
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b, psi))
             return out
@@ -349,7 +359,8 @@ class SlidingClearanceJoint(Interaction):
                                     self._lengths[eP], xiP, r_b, self.contact, self.friction,
                                     self._approach_for(k, psi), self.consistent and want_tangent,
                                     history=self._history(q, k, psi, eP),
-                                    friction_stiffness=self.friction_stiffness())
+                                    friction_stiffness=self.friction_stiffness(),
+                                    spin=self._spin(q, v, eP))
                 if res.gap >= 0.0:
                     continue
                 out.append((k, j, cand.kind, eP, res, a, b, psi))
@@ -389,7 +400,8 @@ class SlidingClearanceJoint(Interaction):
                                 self.beam_radius, self.contact, self.friction,
                                 self._approach_for(k, row[11]), self.consistent and want_tangent,
                                 history=self._history(q, k, row[11], eP),
-                                friction_stiffness=self.friction_stiffness())
+                                friction_stiffness=self.friction_stiffness(),
+                                spin=self._spin(q, v, eP))
             if res.gap < 0.0:
                 out.append((k, j, kind, eP, res, row[8], row[9], float(row[11])))
         return out
@@ -511,8 +523,15 @@ class SlidingClearanceJoint(Interaction):
         start = self._q_start if self._q_start is not None else q
         contact_history(self._anchor, self._stuck, tracked_slot(self._active, self._psi, int(k),
                                                                 float(psi)),
-                        int(k), start, self._body_dofs, self._elem_dofs[eP], hist)
+                        int(k), start, self._body_dofs, self._elem_dofs[eP],
+                        self._twist_dofs[eP], hist)
         return hist
+
+    def _spin(self, q: np.ndarray, v: np.ndarray, eP: int) -> np.ndarray:
+        """The spin data (pair.N_SPIN) of element eP (:func:`_detect.element_spin`)."""
+        spin = np.empty(N_SPIN)
+        element_spin(q, v, self._twist_dofs[eP], self._t_bar[eP], spin)
+        return spin
 
     def _raise_left_bore(self, m: int) -> None:
         raise self.error(ERR_LEFT_BORE, -1 - m, np.zeros(0), 0.0)
@@ -540,11 +559,16 @@ class SlidingClearanceJoint(Interaction):
             sign = float(kind)
             r_q[self._body_dofs] -= sign * res.Q_body
             r_q[self._elem_dofs[eP]] -= sign * res.Q_elem
+            twisted = self._twist_dofs[eP, 0] >= 0
+            if twisted:
+                r_q[self._twist_dofs[eP]] -= sign * res.Q_twist
             scale = max(scale, float(np.abs(res.Q_body).max()), float(np.abs(res.Q_elem).max()))
             if matrix is not None:
                 _, cC, cK = matrix
-                idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]])
-                sink.add_to_matrix(idx, idx, sign * (cK * res.K + cC * res.C))
+                idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]]
+                                     + ([self._twist_dofs[eP]] if twisted else []))
+                n = idx.size
+                sink.add_to_matrix(idx, idx, sign * (cK * res.K + cC * res.C)[:n, :n])
         return scale
 
     def post_step(self, q: np.ndarray, v: np.ndarray, t: float) -> None:
@@ -685,6 +709,22 @@ def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[
     return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
 
 
+def _chart_tangents(joint: SlidingClearanceJoint, ctx: PackContext) -> np.ndarray:
+    """The base tangents t̄ of the charts of every element's nodes (n_elem, 2, 3) at the
+    model's start, as the rod's own packing gives them (its ``node_base``); zeros for a beam
+    without twist."""
+    beam = joint.beam
+    out = np.zeros((len(joint._lengths), N_TWIST, 3))
+    node_base = beam.element_type.node_base
+    if beam.layout.twist is None or node_base is None:
+        return out
+    element_dofs = ctx.element_dofs(beam)
+    for e, nodes in enumerate(beam.connectivity):
+        for a, node in enumerate(nodes):
+            out[e, a] = node_base(element_dofs, ctx.q_ref, int(node))[0]
+    return out
+
+
 def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> ClearancePart:
     """All clearance joints; their state arrays become views of the packed ones. The steps
     start from ``ctx.q_ref`` until :meth:`~flexmbs.assembly.Assembly.begin` says otherwise."""
@@ -693,14 +733,18 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
     max_ne = max((len(j._lengths) for j in joints), default=0)
     max_ns = max((len(j.stations) for j in joints), default=0)
     n_contacts = contact_capacity(max_ns)
-    pos = np.zeros((nj, max_ne, N_LOCAL * N_LOCAL), np.int64)
+    pos = np.full((nj, max_ne, N_LOCAL * N_LOCAL), -1, np.int64)
     ne2 = CENTERLINE_SIZE * CENTERLINE_SIZE
     cross = np.zeros((nj, max_ne, 2, ne2), np.int64)
     for i, j in enumerate(joints):
         n_el = len(j._lengths)
+        j._t_bar[:] = _chart_tangents(j, ctx)
         for k in range(n_el):
-            idx = np.concatenate([j._body_dofs, j._elem_dofs[k]])
-            pos[i, k] = dofs.positions(idx, idx)
+            twisted = j._twist_dofs[k, 0] >= 0
+            idx = np.concatenate([j._body_dofs, j._elem_dofs[k]]
+                                 + ([j._twist_dofs[k]] if twisted else []))
+            block = pos[i, k].reshape(N_LOCAL, N_LOCAL)   # a cable: no twist rows, columns
+            block[:idx.size, :idx.size] = dofs.positions(idx, idx).reshape(idx.size, idx.size)
             for side, other in ((0, k - 1), (1, k + 1)):
                 if 0 <= other < n_el:
                     cross[i, k, side] = dofs.positions_present(j._elem_dofs[k],
@@ -710,6 +754,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
     part = ClearancePart(
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
         pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
+        pad_stack([j._twist_dofs for j in joints], (N_TWIST,), -1, np.int64),
+        pad_stack([j._t_bar for j in joints], (N_TWIST, 3), 0.0, float),
         np.array([len(j._lengths) for j in joints], i64),
         pad_stack([j._lengths for j in joints], (), 1.0, float),
         pad_stack([j._origins for j in joints], (3,), 0.0, float),
@@ -753,6 +799,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         j._elem = part.elem_ws[i, :ns]
         j._xi = part.xi_ws[i, :ns]
         j._ws_list = part.ws_list[i]
+        j._t_bar = part.t_bar[i, :len(j._lengths)]
         j._approach = part.approach[i, :ns]
         j._active = part.active[i, :ns]
         j._psi = part.psi[i, :ns]

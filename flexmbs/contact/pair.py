@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
+from ..elements._rod_derivatives import spin as chart_spin
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
 from .laws import (
@@ -35,11 +36,20 @@ from .laws import (
     tangential_force,
 )
 
-#: local coordinates of a contact ``[r_H, p, e_k]``: the hole body's 7 and the element's centreline
-N_LOCAL = 7 + CENTERLINE_SIZE
+#: the twist angles of the contact element's two nodes (a rod's; zero columns for a cable)
+N_TWIST = 2
+#: first of them in the local coordinates
+TWIST_OFF = 7 + CENTERLINE_SIZE
+#: local coordinates of a contact ``[r_H, p, e_k, φ_k]``: the hole body's 7, the element's
+#: centreline and its nodes' twists (they move the beam's surface under friction, not its axis)
+N_LOCAL = TWIST_OFF + N_TWIST
+#: a contact element's spin data ``[on, φ_0, φ_1, φ̇_0, φ̇_1, t̄_0 (3), t̄_1 (3)]``: ``on`` 0 for
+#: a cable (no twist), else its nodes' twists and rates and their charts' base tangents
+N_SPIN = 11
 
-__all__ = ["ContactResult", "N_HISTORY", "contact_point", "contact_geometry", "contact_force",
-           "fresh_history", "stick_trial"]
+__all__ = ["ContactResult", "N_HISTORY", "N_SPIN", "contact_point", "contact_geometry",
+           "contact_force", "fresh_history", "no_spin", "spin_map", "stick_trial",
+           "twist_increment"]
 
 
 class ContactResult(NamedTuple):
@@ -53,6 +63,7 @@ class ContactResult(NamedTuple):
     force_on_hole: np.ndarray  #: (3,) F_H = f_n n + F_t (the beam gets −F_H at P)
     Q_body: np.ndarray         #: (7,) external generalized force on [r_H, p]
     Q_elem: np.ndarray         #: (CENTERLINE_SIZE,) external generalized force on e_k
+    Q_twist: np.ndarray        #: (N_TWIST,) on the element's twists (a rod under friction)
     K: np.ndarray              #: (N_LOCAL, N_LOCAL) −∂Q/∂q_c
     C: np.ndarray              #: (N_LOCAL, N_LOCAL) −∂Q/∂q̇_c
     xi: float                  #: re-projected ξ_P (may lie outside [0, 1])
@@ -172,31 +183,114 @@ def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want
 
 #: history of one contact at the start of the step (what its friction remembers):
 #: ``[d_A (3): elastic tangential displacement from the anchor, body coordinates; stuck;
-#: r_H, p at the step's start (7); e_P at the step's start (CENTERLINE_SIZE)]``
-N_HISTORY = 4 + 7 + CENTERLINE_SIZE
+#: r_H, p at the step's start (7); e_P at the step's start (CENTERLINE_SIZE); its nodes'
+#: twists at the step's start (N_TWIST)]``
+HIST_TWIST = 4 + 7 + CENTERLINE_SIZE
+N_HISTORY = HIST_TWIST + N_TWIST
 #: ``geo`` of :func:`contact_force`: ``[n, P, Q, F_H, d_new (body coordinates), stuck]``
 N_GEO = 16
 
 
-def fresh_history(q_body: np.ndarray, q_elem: np.ndarray) -> np.ndarray:
-    """History of a contact without an anchor whose step starts at ``(q_body, q_elem)``."""
+def fresh_history(q_body: np.ndarray, q_elem: np.ndarray,
+                  spin: np.ndarray | None = None) -> np.ndarray:
+    """History of a contact without an anchor whose step starts at ``(q_body, q_elem)`` (and
+    the element's twists of ``spin``, :data:`N_SPIN`)."""
     h = np.zeros(N_HISTORY)
     h[3] = 1.0
     h[4:11] = q_body
-    h[11:] = q_elem
+    h[11:HIST_TWIST] = q_elem
+    if spin is not None:
+        h[HIST_TWIST:] = spin[1:3]
     return h
 
 
+def no_spin() -> np.ndarray:
+    """The spin data (:data:`N_SPIN`) of a contact element without twist (a cable)."""
+    return np.zeros(N_SPIN)
+
+
 @njit
-def stick_trial(A, hist, u_Q, Q, P, S, n, delta, d):  # noqa: ANN001, ANN201, PLR0913
+def node_spins(spin, q_elem, v_elem, b, db, w, dw):  # noqa: ANN001, ANN201
+    """The contact element's nodes' chart spins (FORMULATION I §2.4, the rod's generated
+    ``spin`` map, the one its twist inertia uses): node a's section turns about its tangent at
+    ``φ̇_a + w_a`` with ``w_a = b_a·ġ_a``; writes ``b`` (2, 3), ``∂b_a/∂g_a`` ``db`` (2, 3, 3),
+    ``w`` (2,) and ``∂w_a/∂g_a`` ``dw`` (2, 3)."""
+    x = np.empty(6)
+    val = np.empty(8)
+    jac = np.empty((8, 6))
+    for a in range(2):
+        for c in range(3):
+            x[c] = q_elem[6 * a + 3 + c]
+            x[3 + c] = v_elem[6 * a + 3 + c]
+        chart_spin(x, spin[5 + 3 * a:8 + 3 * a], val, jac)
+        w[a] = val[0]
+        for c in range(3):
+            b[a, c] = val[1 + c]
+            dw[a, c] = jac[0, c]
+            for k in range(3):
+                db[a, c, k] = jac[1 + c, k]
+
+
+@njit
+def spin_map(spin, q_elem, v_elem, xi, r_b, rx, n, Wf, b, db, w, dw):  # noqa: ANN001, ANN201
+    """The beam surface's turn under the contact (docs/design-notes.md "Torque and drag"): the
+    surface point ``C = P + r_b n`` of a rod moves by ``ω (t × n) r_b`` with the section spin
+    ``ω = Σ N_a (φ̇_a + w_a)`` interpolated as the rod's twist inertia does (N_0 = 1 − ξ,
+    N_1 = ξ); adds ``∂(x_Q − x_C)/∂q_c`` of the spin to the friction map ``Wf`` (3, N_LOCAL):
+    ``−r_b N_a s`` on twist a and ``−r_b N_a s b_aᵀ`` on slope a, ``s = t × n``. Writes the
+    node spins (:func:`node_spins`) and returns ``(ω, s)``."""
+    node_spins(spin, q_elem, v_elem, b, db, w, dw)
+    nr = math.sqrt(rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2])
+    t = rx / nr
+    s = np.empty(3)
+    s[0] = t[1] * n[2] - t[2] * n[1]
+    s[1] = t[2] * n[0] - t[0] * n[2]
+    s[2] = t[0] * n[1] - t[1] * n[0]
+    omega = 0.0
+    for a in range(2):
+        Na = xi if a == 1 else 1.0 - xi
+        omega += Na * (spin[3 + a] + w[a])
+        for c in range(3):
+            Wf[c, TWIST_OFF + a] -= r_b * Na * s[c]
+            for k in range(3):
+                Wf[c, 7 + 6 * a + 3 + k] -= r_b * Na * s[c] * b[a, k]
+    return omega, s
+
+
+@njit
+def twist_increment(spin, hist, q_elem, xi, b, bbar, dg):  # noqa: ANN001, ANN201
+    """The section's turn at ξ over the step, ``Δψ = Σ N_a (φ_a − φ_a,n + b̄_a·Δg_a)`` with
+    ``b̄_a = ½(b_a(g_a) + b_a(g_a,n))`` on the same chart (the chart spin integrated by the
+    trapezoidal rule; ``hist``: the step's start). Writes ``bbar``, ``dg`` (2, 3); returns Δψ."""
+    x = np.zeros(6)
+    val = np.empty(8)
+    jac = np.empty((8, 6))
+    dpsi = 0.0
+    for a in range(2):
+        for c in range(3):
+            x[c] = hist[11 + 6 * a + 3 + c]
+        chart_spin(x, spin[5 + 3 * a:8 + 3 * a], val, jac)
+        psi = spin[1 + a] - hist[HIST_TWIST + a]
+        for c in range(3):
+            bbar[a, c] = 0.5 * (b[a, c] + val[1 + c])
+            dg[a, c] = q_elem[6 * a + 3 + c] - hist[11 + 6 * a + 3 + c]
+            psi += bbar[a, c] * dg[a, c]
+        dpsi += (xi if a == 1 else 1.0 - xi) * psi
+    return dpsi
+
+
+@njit
+def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):  # noqa: ANN001, ANN201, PLR0913
     """Trial elastic tangential displacement of a sticking contact (docs/design-notes.md
-    "Friction that sticks"): ``Δ = A d_A + (Q − P) − (Q_n − P_n)``, ``d = (I − nnᵀ)Δ``, with
-    the material points in contact now (hole point u_Q, beam point ξ_P: shape functions ``S``)
-    at the step's start ``Q_n = r_H,n + A_n u_Q``, ``P_n = S e_P,n`` (``hist``, :data:`N_HISTORY`)
-    and the anchor's displacement ``d_A`` carried in the hole's frame. Writes ``delta``, ``d``."""
+    "Friction that sticks"): ``Δ = A d_A + (Q − P) − (Q_n − P_n) + turn``, ``d = (I − nnᵀ)Δ``,
+    with the material points in contact now (hole point u_Q, beam point ξ_P: shape functions
+    ``S``) at the step's start ``Q_n = r_H,n + A_n u_Q``, ``P_n = S e_P,n`` (``hist``,
+    :data:`N_HISTORY`), the anchor's displacement ``d_A`` carried in the hole's frame and
+    ``turn`` the surface's own turn over the step (``−r_b Δψ (t × n)`` on a rod, else zero).
+    Writes ``delta``, ``d``."""
     An = rotation(hist[7:11])
     for c in range(3):
-        acc = Q[c] - P[c] - hist[4 + c]
+        acc = Q[c] - P[c] - hist[4 + c] + turn[c]
         for j in range(3):
             acc += A[c, j] * hist[j] - An[c, j] * u_Q[j]
         for m in range(4):
@@ -208,14 +302,16 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, delta, d):  # noqa: ANN001, ANN201, PL
 
 
 @njit
-def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0913, PLR0915, C901
+def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0912, PLR0913, PLR0915, C901
                   approach_velocity, want_tangent, Qc, K, C, geo):
     """Penalty force of one contact point and its Gauss–Newton tangent (FORMULATION II §4–§5).
 
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
     and ``hist`` (:data:`N_HISTORY`) the contact's history, for
-    :func:`~flexmbs.contact.laws.tangential_force`. Writes ``Qc`` (N_LOCAL,) = ``Wᵀ F_H``
-    (external generalized force on [r_H, p, e_k]), with ``want_tangent`` ``K = k_t BᵀB`` plus
+    :func:`~flexmbs.contact.laws.tangential_force`; ``spin`` (:data:`N_SPIN`) the element's
+    twists: on a rod the friction acts at the turning surface (:func:`spin_map`). Writes ``Qc``
+    (N_LOCAL,) = ``W_fᵀ F_H`` (external generalized force on [r_H, p, e_k, φ_k]; W_f = W with
+    the surface's turn), with ``want_tangent`` ``K = k_t BᵀB`` plus
     the friction terms at frozen n, u_Q, ξ_P and ``C = c_t BᵀB`` plus friction (N_LOCAL,
     N_LOCAL), and ``geo`` (:data:`N_GEO`) = [n, P, Q, F_H, d_new (body coordinates), stuck].
     Returns ``(g_N, ġ_N, f_N, ξ_P)``.
@@ -229,14 +325,29 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, fr
     for c in range(12, N_GEO):
         geo[c] = 0.0
     friction = fric[0] != FRICTION_NONE and f > 0.0
+    Wf = W                 # the friction map: W and, on a rod, the surface's turn
     if friction:
+        turn = np.zeros(3)
+        if spin[0] != 0.0:
+            Wf = W.copy()
+            b = np.empty((2, 3))
+            _, rx, _ = element_point(q_elem, length, xi)
+            _, sv = spin_map(spin, q_elem, v_elem, xi, r_b, rx, n, Wf, b, np.empty((2, 3, 3)),
+                             np.empty(2), np.empty((2, 3)))
+            if fric[0] == FRICTION_STICK:
+                dpsi = twist_increment(spin, hist, q_elem, xi, b, np.empty((2, 3)),
+                                       np.empty((2, 3)))
+                for c in range(3):
+                    turn[c] = -r_b * dpsi * sv[c]
         vrel = np.zeros(3)
         for c in range(3):
             acc = 0.0
             for j in range(7):
-                acc += W[c, j] * v_body[j]
+                acc += Wf[c, j] * v_body[j]
             for j in range(CENTERLINE_SIZE):
-                acc += W[c, 7 + j] * v_elem[j]
+                acc += Wf[c, 7 + j] * v_elem[j]
+            for a in range(N_TWIST):
+                acc += Wf[c, TWIST_OFF + a] * spin[3 + a]
             vrel[c] = acc
         vn = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
         vt = vrel - vn * n
@@ -246,7 +357,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, fr
             A = rotation(q_body[3:7])
             S, _, _ = shape_xi(xi, length)
             delta = np.empty(3)
-            stick_trial(A, hist, u_Q, Q, P, S, n, delta, d)
+            stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d)
         Ft = np.empty(3)
         dF_dd = np.empty((3, 3))
         dF_dv = np.empty((3, 3))
@@ -260,7 +371,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, fr
             for c in range(3):
                 geo[12 + c] = (A[0, c] * d_new[0] + A[1, c] * d_new[1] + A[2, c] * d_new[2]) / p4
     for j in range(N_LOCAL):
-        Qc[j] = W[0, j] * F_H[0] + W[1, j] * F_H[1] + W[2, j] * F_H[2]
+        Qc[j] = Wf[0, j] * F_H[0] + Wf[1, j] * F_H[1] + Wf[2, j] * F_H[2]
     for c in range(3):
         geo[c] = n[c]
         geo[3 + c] = P[c]
@@ -288,29 +399,35 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, law, fr
             WtdF = np.zeros(N_LOCAL)
             for j in range(N_LOCAL):
                 for a in range(3):
-                    MdW[a, j] = Md[a, 0] * W[0, j] + Md[a, 1] * W[1, j] + Md[a, 2] * W[2, j]
-                    MvW[a, j] = Mv[a, 0] * W[0, j] + Mv[a, 1] * W[1, j] + Mv[a, 2] * W[2, j]
-                WtdF[j] = W[0, j] * dF_dfn[0] + W[1, j] * dF_dfn[1] + W[2, j] * dF_dfn[2]
+                    MdW[a, j] = Md[a, 0] * Wf[0, j] + Md[a, 1] * Wf[1, j] + Md[a, 2] * Wf[2, j]
+                    MvW[a, j] = Mv[a, 0] * Wf[0, j] + Mv[a, 1] * Wf[1, j] + Mv[a, 2] * Wf[2, j]
+                WtdF[j] = Wf[0, j] * dF_dfn[0] + Wf[1, j] * dF_dfn[1] + Wf[2, j] * dF_dfn[2]
             for i in range(N_LOCAL):
                 for j in range(N_LOCAL):
-                    C[i, j] += ct * WtdF[i] * B[j] - (W[0, i] * MvW[0, j] + W[1, i] * MvW[1, j]
-                                                      + W[2, i] * MvW[2, j])
-                    K[i, j] += kt * WtdF[i] * B[j] - (W[0, i] * MdW[0, j] + W[1, i] * MdW[1, j]
-                                                      + W[2, i] * MdW[2, j])
+                    C[i, j] += ct * WtdF[i] * B[j] - (Wf[0, i] * MvW[0, j] + Wf[1, i] * MvW[1, j]
+                                                      + Wf[2, i] * MvW[2, j])
+                    K[i, j] += kt * WtdF[i] * B[j] - (Wf[0, i] * MdW[0, j] + Wf[1, i] * MdW[1, j]
+                                                      + Wf[2, i] * MdW[2, j])
     return g, gdot, f, xi
 
 
-def _friction_force(q_c: np.ndarray, v_c: np.ndarray, u_Q: np.ndarray, length: float, xi: float,
-                    r_b: float, law: np.ndarray, fric: np.ndarray, hist: np.ndarray,
-                    approach_velocity: float) -> np.ndarray:
-    """Friction part ``Wᵀ F_t`` of the generalized force (for the finite-difference tangent):
-    :func:`contact_force` with and without friction."""
+def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.ndarray,
+                    length: float, xi: float, r_b: float, law: np.ndarray, fric: np.ndarray,
+                    hist: np.ndarray, approach_velocity: float) -> np.ndarray:
+    """Friction part ``W_fᵀ F_t`` of the generalized force (for the finite-difference tangent):
+    :func:`contact_force` with and without friction (the twists of ``q_c``, ``v_c`` in
+    ``spin``)."""
+    sp = spin.copy()
+    if sp[0] != 0.0:
+        sp[1:3] = q_c[TWIST_OFF:]
+        sp[3:5] = v_c[TWIST_OFF:]
     out = []
     for fr in (fric, no_friction()):
         Qc = np.empty(N_LOCAL)
-        contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:].copy(), v_c[7:].copy(),
-                      float(length), float(xi), float(r_b), law, fr, hist, approach_velocity,
-                      False, Qc, np.empty((0, 0)), np.empty((0, 0)), np.empty(N_GEO))
+        contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:TWIST_OFF].copy(),
+                      v_c[7:TWIST_OFF].copy(), sp, float(length), float(xi), float(r_b), law, fr,
+                      hist, approach_velocity, False, Qc, np.empty((0, 0)), np.empty((0, 0)),
+                      np.empty(N_GEO))
         out.append(Qc)
     return out[0] - out[1]
 
@@ -329,7 +446,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                   friction: Friction | RegularizedCoulomb | None = None,
                   approach_velocity: float = 0.0, consistent: bool = False, *,
                   history: np.ndarray | None = None,
-                  friction_stiffness: float | None = None) -> ContactResult:
+                  friction_stiffness: float | None = None,
+                  spin: np.ndarray | None = None) -> ContactResult:
     """Gap, penalty force and tangent of one beam/hole contact point (FORMULATION II §4–§5).
 
     ``g_N = |Q − P| − r_b``, ``n = (Q − P)/|Q − P|``, ``f_N = law(−g_N, −ġ_N, approach_velocity)``,
@@ -338,7 +456,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     ``friction``: its law's ``F_t`` (:func:`~flexmbs.contact.laws.tangential_force`) with the
     contact's ``history`` (:data:`N_HISTORY`; default: no anchor, the step starting here) and
     the stick law's stiffness ``friction_stiffness`` when the law leaves it open (default: the
-    normal law's first parameter).
+    normal law's first parameter); ``spin`` (:data:`N_SPIN`, default none) a rod element's
+    twists, whose surface turns under the friction (:func:`spin_map`).
 
     Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction terms at frozen n, u_Q, ξ_P);
     ``consistent=True`` adds the exact geometric and damping terms of the normal force,
@@ -354,13 +473,14 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     law_p = law.parameters()
     fric = friction_vector(friction, float(law_p[0] if friction_stiffness is None
                                            else friction_stiffness))
-    hist = (fresh_history(q_body, q_elem) if history is None
+    sp = no_spin() if spin is None else np.ascontiguousarray(spin, dtype=float)
+    hist = (fresh_history(q_body, q_elem, sp) if history is None
             else np.ascontiguousarray(history, dtype=float))
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
     geo = np.empty(N_GEO)
-    g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
-                                     float(r_b), law_p, fric, hist, float(approach_velocity), True,
-                                     Qc, K, C, geo)
+    g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, sp, float(length),
+                                     float(xi), float(r_b), law_p, fric, hist,
+                                     float(approach_velocity), True, Qc, K, C, geo)
     n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
     if consistent:
         # exact geometric and damping terms of the normal force (§5), and the friction
@@ -368,32 +488,33 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
         _, _, _, _, _, _, B, W, H = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem,
                                                      float(length), float(xi), float(r_b), True)
         _, kt, ct = law.force(-g, -gdot, approach_velocity)
-        v_c = np.concatenate([v_body, v_elem])
+        v_c = np.concatenate([v_body, v_elem, sp[3:5]])
         K += ct * np.outer(B, H @ v_c) - f * H
         if fric[0] != 0.0 and f > 0.0:
             # the friction stiffness by central differences in place of its Gauss-Newton part
             Qf = np.empty(N_LOCAL)
             Kf, Cf = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
             Kn, Cn = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
-            contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
+            contact_force(q_body, v_body, u_Q, q_elem, v_elem, sp, float(length), float(xi),
                           float(r_b), law_p, fric, hist, float(approach_velocity), True, Qf, Kf,
                           Cf, np.empty(N_GEO))
-            contact_force(q_body, v_body, u_Q, q_elem, v_elem, float(length), float(xi),
+            contact_force(q_body, v_body, u_Q, q_elem, v_elem, sp, float(length), float(xi),
                           float(r_b), law_p, no_friction(), hist, float(approach_velocity), True,
                           Qf, Kn, Cn, np.empty(N_GEO))
             K -= Kf - Kn
-            q_c = np.concatenate([q_body, q_elem])
+            q_c = np.concatenate([q_body, q_elem, sp[1:3]])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
             for j in range(N_LOCAL):
                 qp = q_c.copy()
                 qm = q_c.copy()
                 qp[j] += hstep
                 qm[j] -= hstep
-                dQ = (_friction_force(qp, v_c, u_Q, length, xi_p, r_b, law_p, fric, hist,
+                dQ = (_friction_force(qp, v_c, sp, u_Q, length, xi_p, r_b, law_p, fric, hist,
                                       approach_velocity)
-                      - _friction_force(qm, v_c, u_Q, length, xi_p, r_b, law_p, fric, hist,
+                      - _friction_force(qm, v_c, sp, u_Q, length, xi_p, r_b, law_p, fric, hist,
                                         approach_velocity)) / (2.0 * hstep)
                 K[:, j] -= dQ
     return ContactResult(gap=float(g), normal=n, P=P, Q=Q, f_n=float(f), force_on_hole=F_H,
-                         Q_body=Qc[:7], Q_elem=Qc[7:], K=K, C=C, xi=float(xi_p),
+                         Q_body=Qc[:7], Q_elem=Qc[7:TWIST_OFF], Q_twist=Qc[TWIST_OFF:], K=K,
+                         C=C, xi=float(xi_p),
                          gap_rate=float(gdot), anchor=geo[12:15].copy(), stuck=float(geo[15]))

@@ -30,14 +30,25 @@ from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
 from .laws import FRICTION_NONE, FRICTION_STICK, law_force, tangential_force
-from .pair import N_LOCAL, contact_map, stick_trial
+from .pair import (
+    HIST_TWIST,
+    N_LOCAL,
+    N_TWIST,
+    TWIST_OFF,
+    contact_map,
+    spin_map,
+    stick_trial,
+    twist_increment,
+)
 
-__all__ = ["N_EXT", "I_OFF", "P_OFF", "contact_tangent"]
+__all__ = ["N_EXT", "I_OFF", "P_OFF", "T_OFF", "contact_tangent"]
 
 #: local coordinates of the exact tangent's columns: body (7), crossing element e_I, element e_P
-N_EXT = 7 + 2 * CENTERLINE_SIZE
+#: and e_P's twists (N_TWIST)
+N_EXT = 7 + 2 * CENTERLINE_SIZE + N_TWIST
 I_OFF = 7
 P_OFF = 7 + CENTERLINE_SIZE
+T_OFF = 7 + 2 * CENTERLINE_SIZE
 
 
 @njit
@@ -245,15 +256,17 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
 
 
 @njit
-def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp, Ypp, r_b, law,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                    fric, hist, approach_velocity, consistent, Qc, K, C):
+def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+                    r_b, law, fric, hist, approach_velocity, consistent, Qc, K, C):
     """Force and exact tangent of one detected contact.
 
     ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin;
     ``frame`` (3, 3): the section's axes in body coordinates (columns: plane normal, e_y, e_z;
     the identity for a straight bore along body x, :meth:`flexmbs.contact.joint.Hole.frames`); ``qI``
     (12), ``LI``, ``xiI``: crossing element, its length and the crossing; ``qP``, ``vP``,
-    ``LP``, ``xiP``: the element of the closest point and ξ_P (converged); ``phi``: the
+    ``LP``, ``xiP``: the element of the closest point and ξ_P (converged), ``spin``
+    (:data:`~flexmbs.contact.pair.N_SPIN`) its twists (a rod's surface turns under the
+    friction, :func:`~flexmbs.contact.pair.spin_map`); ``phi``: the
     ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
     section at the contact's ψ and its first and second ψ-derivatives (section coordinates, from
     the hole shape's boundary kernel, e.g. :func:`flexmbs.contact.sections.circle_boundary`);
@@ -262,9 +275,9 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp
     :func:`~flexmbs.contact.pair.stick_trial` differentiated here too); ``consistent``: the
     contact is a stationary pair
     of FORMULATION II §4b (:mod:`flexmbs.contact.stationary`; ``qI``, ``xiI``, ``phi`` unused,
-    the e_I columns zero), else the paper's 2-D common normal. Writes ``Qc`` (N_LOCAL) on ``[r_H, p, e_P]``,
-    ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P] and ``C`` (N_LOCAL, N_LOCAL) =
-    −∂Q_c/∂[ṙ_H, ṗ, ė_P]. Returns ``(g, ġ, f_N)``.
+    the e_I columns zero), else the paper's 2-D common normal. Writes ``Qc`` (N_LOCAL) on
+    ``[r_H, p, e_P, φ_P]``, ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P, φ_P] and ``C``
+    (N_LOCAL, N_LOCAL) = −∂Q_c/∂[ṙ_H, ṗ, ė_P, φ̇_P]. Returns ``(g, ġ, f_N)``.
     """
     NX = N_EXT
     p = qb[3:7]
@@ -427,6 +440,55 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp
             DF[c, j] = Df[j] * nc[c] + f * Dnc[c, j]
         for j in range(N_LOCAL):
             dFv[c, j] = -ct * Bn[j] * nc[c]
+    Wf = W                 # the friction map: W and, on a rod, the surface's turn
+    on = fric[0] != FRICTION_NONE and f > 0.0 and spin[0] != 0.0
+    b = np.zeros((2, 3))
+    db = np.zeros((2, 3, 3))
+    sv = np.zeros(3)
+    Ds = np.zeros((3, NX))
+    DN = np.zeros((2, NX))
+    Na = np.array([1.0 - xiP, xiP])
+    if on:
+        # s = t × n, ω = Σ N_a (φ̇_a + w_a) and their derivatives (pair.spin_map)
+        Wf = W.copy()
+        w_s = np.empty(2)
+        dw_s = np.empty((2, 3))
+        omega, sv = spin_map(spin, qP, vP, xiP, r_b, rxP, nc, Wf, b, db, w_s, dw_s)
+        nr = math.sqrt(rxP[0] * rxP[0] + rxP[1] * rxP[1] + rxP[2] * rxP[2])
+        tP = rxP / nr
+        Drx = np.zeros((3, NX))
+        for c in range(3):
+            for j in range(NX):
+                Drx[c, j] = rxxP[c] * DxiP[j]
+        for m in range(4):
+            for c in range(3):
+                Drx[c, P_OFF + 3 * m + c] += dSP[m]
+        Dt = np.empty((3, NX))
+        for j in range(NX):
+            tD = tP[0] * Drx[0, j] + tP[1] * Drx[1, j] + tP[2] * Drx[2, j]
+            for c in range(3):
+                Dt[c, j] = (Drx[c, j] - tP[c] * tD) / nr
+        for j in range(NX):
+            Ds[0, j] = (Dt[1, j] * nc[2] - Dt[2, j] * nc[1] + tP[1] * Dnc[2, j]
+                        - tP[2] * Dnc[1, j])
+            Ds[1, j] = (Dt[2, j] * nc[0] - Dt[0, j] * nc[2] + tP[2] * Dnc[0, j]
+                        - tP[0] * Dnc[2, j])
+            Ds[2, j] = (Dt[0, j] * nc[1] - Dt[1, j] * nc[0] + tP[0] * Dnc[1, j]
+                        - tP[1] * Dnc[0, j])
+            DN[0, j] = -DxiP[j]
+            DN[1, j] = DxiP[j]
+        Domega = np.zeros(NX)
+        for a in range(2):
+            om_a = spin[3 + a] + w_s[a]
+            for j in range(NX):
+                Domega[j] += DN[a, j] * om_a
+            for c in range(3):
+                Domega[P_OFF + 6 * a + 3 + c] += Na[a] * dw_s[a, c]
+        # the surface's velocity −r_b ω s joins v_Q − v_P (⟂ n: ġ_N is unchanged)
+        for c in range(3):
+            vrel[c] -= r_b * omega * sv[c]
+            for j in range(NX):
+                Dvrel[c, j] -= r_b * (Domega[j] * sv[c] + omega * Ds[c, j])
     if fric[0] != FRICTION_NONE and f > 0.0:
         vn = gdot
         vt = vrel - vn * nc
@@ -437,10 +499,34 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp
         d = np.zeros(3)
         Dd = np.zeros((3, NX))
         if fric[0] == FRICTION_STICK:
-            # Δ = A d_A + (Q − P) − (Q_n − P_n), d = (I − nnᵀ)Δ (pair.stick_trial) and DΔ:
-            # D(A d_A) = 2T(d_A)p, D(Q − P) = Du, DQ_n = A_n Du_Q, DP_n = r′_n(ξ_P) Dξ_P
+            # Δ = A d_A + (Q − P) − (Q_n − P_n) + turn, d = (I − nnᵀ)Δ (pair.stick_trial) and
+            # DΔ: D(A d_A) = 2T(d_A)p, D(Q − P) = Du, DQ_n = A_n Du_Q, DP_n = r′_n(ξ_P) Dξ_P,
+            # D turn = −r_b (Ds Δψ + s DΔψ) (pair.twist_increment)
+            turn = np.zeros(3)
+            Dturn = np.zeros((3, NX))
+            if on:
+                bbar = np.empty((2, 3))
+                dg = np.empty((2, 3))
+                dpsi = twist_increment(spin, hist, qP, xiP, b, bbar, dg)
+                Dpsi = np.zeros(NX)
+                for a in range(2):
+                    psi_a = spin[1 + a] - hist[HIST_TWIST + a]
+                    for c in range(3):
+                        psi_a += bbar[a, c] * dg[a, c]
+                    for j in range(NX):
+                        Dpsi[j] += DN[a, j] * psi_a
+                    Dpsi[T_OFF + a] += Na[a]
+                    for c in range(3):
+                        acc = bbar[a, c]
+                        for k in range(3):
+                            acc += 0.5 * db[a, k, c] * dg[a, k]
+                        Dpsi[P_OFF + 6 * a + 3 + c] += Na[a] * acc
+                for c in range(3):
+                    turn[c] = -r_b * dpsi * sv[c]
+                    for j in range(NX):
+                        Dturn[c, j] = -r_b * (Ds[c, j] * dpsi + sv[c] * Dpsi[j])
             delta = np.empty(3)
-            stick_trial(A, hist, uQ, Q, P, SP, nc, delta, d)
+            stick_trial(A, hist, uQ, Q, P, SP, nc, turn, delta, d)
             An = rotation(hist[7:11])
             _, rxn, _ = element_point(hist[11:], LP, xiP)
             Bd = _t_times(hist[0:3], p)
@@ -452,6 +538,8 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp
                                     - An[c, 2] * DuQ[2, j])
                 for i in range(4):
                     Ddelta[c, 3 + i] += Bd[c, i]
+                for j in range(NX):
+                    Ddelta[c, j] += Dturn[c, j]
             ndel = nc[0] * delta[0] + nc[1] * delta[1] + nc[2] * delta[2]
             Dndel = np.empty(NX)
             _d_dot(nc, Dnc, delta, Ddelta, Dndel)
@@ -464,11 +552,11 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp
         dF_dfn = np.empty(3)
         d_new = np.empty(3)
         tangential_force(fric, hist[3], f, d, vt, Ft, dF_dd, dF_dv, dF_dfn, d_new)
-        # ∂v_t/∂q̇_c = (I − n nᵀ) W
+        # ∂v_t/∂q̇_c = (I − n nᵀ) W_f
         PW = np.empty((3, N_LOCAL))
         for c in range(3):
             for j in range(N_LOCAL):
-                PW[c, j] = W[c, j] - nc[c] * Bn[j]
+                PW[c, j] = Wf[c, j] - nc[c] * Bn[j]
         for c in range(3):
             F[c] += Ft[c]
             for j in range(NX):
@@ -481,14 +569,28 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, LP, xiP, phi, Y, Yp
                 for e in range(3):
                     acc += dF_dv[c, e] * PW[e, j]
                 dFv[c, j] += acc
-    # ---- generalized force Q_c = Wᵀ F_H and K = −∂Q_c/∂q, C = −∂Q_c/∂q̇
+    # ---- generalized force Q_c = W_fᵀ F_H and K = −∂Q_c/∂q, C = −∂Q_c/∂q̇
     for j in range(N_LOCAL):
-        Qc[j] = W[0, j] * F[0] + W[1, j] * F[1] + W[2, j] * F[2]
+        Qc[j] = Wf[0, j] * F[0] + Wf[1, j] * F[1] + Wf[2, j] * F[2]
     for a_ in range(N_LOCAL):
         for j in range(NX):
-            K[a_, j] = -(W[0, a_] * DF[0, j] + W[1, a_] * DF[1, j] + W[2, a_] * DF[2, j])
+            K[a_, j] = -(Wf[0, a_] * DF[0, j] + Wf[1, a_] * DF[1, j] + Wf[2, a_] * DF[2, j])
         for j in range(N_LOCAL):
-            C[a_, j] = -(W[0, a_] * dFv[0, j] + W[1, a_] * dFv[1, j] + W[2, a_] * dFv[2, j])
+            C[a_, j] = -(Wf[0, a_] * dFv[0, j] + Wf[1, a_] * dFv[1, j] + Wf[2, a_] * dFv[2, j])
+    if on:
+        # W_f's turn columns depend on q: σ_a = −r_b N_a s·F on twist a, b_a σ_a on slope a
+        sF = sv[0] * F[0] + sv[1] * F[1] + sv[2] * F[2]
+        for a in range(2):
+            sigma = -r_b * Na[a] * sF
+            for j in range(NX):
+                Dsig = -r_b * (DN[a, j] * sF + Na[a] * (Ds[0, j] * F[0] + Ds[1, j] * F[1]
+                                                          + Ds[2, j] * F[2]))
+                K[TWIST_OFF + a, j] -= Dsig
+                for c in range(3):
+                    K[7 + 6 * a + 3 + c, j] -= b[a, c] * Dsig
+            for c in range(3):
+                for k in range(3):
+                    K[7 + 6 * a + 3 + c, P_OFF + 6 * a + 3 + k] -= db[a, c, k] * sigma
     # W_p = 2T(u_Q)p depends on p and on u_Q: (W_pᵀF)_i = 2 Σ_k F_k (T_k(u_Q) p)_i
     for i in range(4):
         for m in range(4):

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from flexmbs.contact.laws import FRICTION_NONE, FRICTION_REGULARISED, FRICTION_STICK
-from flexmbs.contact.pair import N_HISTORY, N_LOCAL
+from flexmbs.contact.pair import HIST_TWIST, N_HISTORY, N_LOCAL, N_SPIN, TWIST_OFF
 from flexmbs.contact.sections import circle_boundary
-from flexmbs.contact.tangent import I_OFF, N_EXT, P_OFF, contact_tangent
+from flexmbs.contact.tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
 from flexmbs.elements.ancf_cable import CENTERLINE_SIZE, shape_xi
 from flexmbs.elements.rigid_body import rotation
 
@@ -30,13 +30,21 @@ def _point(qe: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def _reference(x: np.ndarray, vel: np.ndarray, sec: tuple, law: np.ndarray, fric: np.ndarray,
-               hist: np.ndarray, start: tuple[float, float, float], same: bool
-               ) -> tuple[np.ndarray, tuple]:
-    """Q_c of one contact at coordinates ``x = [body, e_I, e_P]`` (numpy, Newton solves) in
-    the section ``sec = (u_o, frame)`` (origin and axes in body coordinates)."""
+               hist: np.ndarray, start: tuple[float, float, float], same: bool,
+               tbar: np.ndarray | None = None) -> tuple[np.ndarray, tuple]:
+    """Q_c of one contact at coordinates ``x = [body, e_I, e_P, φ_P]`` (numpy, Newton solves)
+    in the section ``sec = (u_o, frame)`` (origin and axes in body coordinates); with ``tbar``
+    (2, 3) e_P is a rod's element whose nodes' charts have these base tangents (its twists
+    and their rates the last two entries of ``x`` and ``vel``), else a cable's."""
     u_o, frame = sec
     qb, qI = x[:7], x[I_OFF:I_OFF + CENTERLINE_SIZE]
-    qP = qI if same else x[P_OFF:]
+    qP = qI if same else x[P_OFF:T_OFF]
+    spin = np.zeros(N_SPIN)
+    if tbar is not None:
+        spin[0] = 1.0
+        spin[1:3] = x[T_OFF:]
+        spin[3:5] = vel[TWIST_OFF:]
+        spin[5:] = tbar.ravel()
     A = rotation(qb[3:7])
     n, ey, ez = A @ frame[:, 0], A @ frame[:, 1], A @ frame[:, 2]
     o = qb[:3] + A @ u_o
@@ -69,8 +77,9 @@ def _reference(x: np.ndarray, vel: np.ndarray, sec: tuple, law: np.ndarray, fric
     Y, Yp, Ypp = np.empty(2), np.empty(2), np.empty(2)
     circle_boundary(R_BORE, psi, Y, Yp, Ypp)
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
-    g, _, f = contact_tangent(qb, vel[:7], u_o, frame, qI, L_ELEM, xi, qP, vel[7:], L_ELEM, xp, phi, Y, Yp,
-                              Ypp, R_BEAM, law, fric, hist, 0.3, False, Qc, K, C)
+    g, _, f = contact_tangent(qb, vel[:7], u_o, frame, qI, L_ELEM, xi, qP, vel[7:TWIST_OFF], spin,
+                              L_ELEM, xp, phi, Y, Yp, Ypp, R_BEAM, law, fric, hist, 0.3, False, Qc,
+                              K, C)
     return Qc, (K, C, xi, phi, xp, g, f)
 
 
@@ -91,8 +100,8 @@ def _configuration(tilt: float, offset: float, same: bool, seed: int) -> tuple:
     p = np.array([1.0, *rng.normal(scale=0.05, size=3)])
     p *= 1.001 / np.linalg.norm(p)
     qb = np.concatenate([rng.normal(scale=3e-4, size=3) + [0.0, 0.0, offset], p])
-    vel = rng.normal(scale=0.1, size=7 + CENTERLINE_SIZE)
-    return np.concatenate([qb, qI, qP]), vel
+    vel = rng.normal(scale=0.1, size=N_LOCAL)        # [body, e_P, the twists' rates]
+    return np.concatenate([qb, qI, qP, rng.normal(scale=0.3, size=2)]), vel
 
 
 CASES = [  # tilt, bore offset, same element, friction, law [K, n, chi, c_d, v_min]
@@ -125,34 +134,38 @@ def _history(x: np.ndarray, same: bool, seed: int) -> np.ndarray:
     """A step that started near ``x`` (the body and e_P a little elsewhere, an anchor
     displacement in the hole frame): the stick law's history (pair.N_HISTORY)."""
     rng = np.random.default_rng(seed)
-    qP = x[I_OFF:P_OFF] if same else x[P_OFF:]
+    qP = x[I_OFF:P_OFF] if same else x[P_OFF:T_OFF]
     hist = np.empty(N_HISTORY)
     hist[0:3] = rng.normal(scale=5e-5, size=3)
     hist[3] = 1.0
     hist[4:11] = x[:7] + rng.normal(scale=1e-4, size=7)
-    hist[11:] = qP + rng.normal(scale=1e-4, size=CENTERLINE_SIZE)
+    hist[11:HIST_TWIST] = qP + rng.normal(scale=1e-4, size=CENTERLINE_SIZE)
+    hist[HIST_TWIST:] = x[T_OFF:] + rng.normal(scale=1e-2, size=2)
     return hist
 
 
 def _check_tangent(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray,
-                   fric: np.ndarray, hist: np.ndarray, same: bool, info: tuple) -> None:
-    """K and C of the contact at ``info`` against central differences of :func:`_reference`."""
+                   fric: np.ndarray, hist: np.ndarray, same: bool, info: tuple,
+                   tbar: np.ndarray | None = None, step: float = 1e-7) -> None:
+    """K and C of the contact at ``info`` against central differences of :func:`_reference`
+    (relative ``step``)."""
     K, C, xi, phi, xp = info[:5]
     start = (xi, phi, xp)
     Kfd = np.zeros_like(K)
     for j in range(N_EXT):
-        if same and j >= P_OFF:
+        if same and P_OFF <= j < T_OFF:
             continue
-        h = 1e-7 * max(1.0, abs(x[j]))
+        h = step * max(1.0, abs(x[j]))
         xp_, xm_ = x.copy(), x.copy()
         xp_[j] += h
         xm_[j] -= h
-        Kfd[:, j] = -(_reference(xp_, vel, sec, law_a, fric, hist, start, same)[0]
-                      - _reference(xm_, vel, sec, law_a, fric, hist, start, same)[0]) / (2 * h)
+        Kfd[:, j] = -(_reference(xp_, vel, sec, law_a, fric, hist, start, same, tbar)[0]
+                      - _reference(xm_, vel, sec, law_a, fric, hist, start, same, tbar)[0]
+                      ) / (2 * h)
     if same:   # e_I and e_P are one element: their columns add
         K = K.copy()
-        K[:, I_OFF:P_OFF] += K[:, P_OFF:]
-        K[:, P_OFF:] = 0.0
+        K[:, I_OFF:P_OFF] += K[:, P_OFF:T_OFF]
+        K[:, P_OFF:T_OFF] = 0.0
     assert np.abs(K - Kfd).max() <= 1e-6 * np.abs(Kfd).max()
     Cfd = np.zeros_like(C)
     for j in range(N_LOCAL):
@@ -160,15 +173,16 @@ def _check_tangent(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray
         vp, vm = vel.copy(), vel.copy()
         vp[j] += h
         vm[j] -= h
-        Cfd[:, j] = -(_reference(x, vp, sec, law_a, fric, hist, start, same)[0]
-                      - _reference(x, vm, sec, law_a, fric, hist, start, same)[0]) / (2 * h)
+        Cfd[:, j] = -(_reference(x, vp, sec, law_a, fric, hist, start, same, tbar)[0]
+                      - _reference(x, vm, sec, law_a, fric, hist, start, same, tbar)[0]) / (2 * h)
     assert np.abs(C - Cfd).max() <= 1e-6 * max(np.abs(Cfd).max(), 1e-12) + 1e-12
 
 
 def _deepest(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray,
-             fric: np.ndarray, hist: np.ndarray, same: bool) -> tuple:
+             fric: np.ndarray, hist: np.ndarray, same: bool,
+             tbar: np.ndarray | None = None) -> tuple:
     """The deepest stationary point (scan of starting angles)."""
-    found = [_reference(x, vel, sec, law_a, fric, hist, (0.5, phi0, 0.5), same)[1]
+    found = [_reference(x, vel, sec, law_a, fric, hist, (0.5, phi0, 0.5), same, tbar)[1]
              for phi0 in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)]
     info = min(found, key=lambda i: i[5])
     assert info[5] < 0.0, "the configuration must be in contact"
@@ -226,3 +240,51 @@ def test_stick_law_tangent_equals_central_differences(ratio: float, tilt: float,
     fric[4] = 1e-3 * k_t
     _check_tangent(x, vel, sec, law_a, fric, hist, same,
                    _deepest(x, vel, sec, law_a, fric, hist, same))
+
+
+def _charts(x: np.ndarray, same: bool) -> np.ndarray:
+    """Base tangents of e_P's nodes' charts: their slopes turned by 0.2 and 0.35 rad (a chart
+    whose base is not the tangent: the chart spin's b is not zero)."""
+    qP = x[I_OFF:P_OFF] if same else x[P_OFF:T_OFF]
+    out = np.empty((2, 3))
+    for a, turn in enumerate((0.2, 0.35)):
+        g = qP[6 * a + 3:6 * a + 6] / np.linalg.norm(qP[6 * a + 3:6 * a + 6])
+        side = np.cross(g, [0.0, 1.0, 0.0])
+        side /= np.linalg.norm(side)
+        out[a] = math.cos(turn) * g + math.sin(turn) * side
+    return out
+
+
+@pytest.mark.parametrize("law_kind", ["regularised", "stick", "slip"])
+@pytest.mark.parametrize(("tilt", "offset", "same"), [(0.3, 1e-3, True), (0.6, 1.6e-3, False)],
+                         ids=["one_element", "two_elements"])
+def test_a_rods_turning_surface_tangent_equals_central_differences(law_kind: str, tilt: float,
+                                                                   offset: float,
+                                                                   same: bool) -> None:
+    """A rod's element under friction (issue 30, "turn": torque and drag): its surface turns
+    with the section spin ``ω = Σ N_a (φ̇_a + b_a·ġ_a)``, so the friction force and its twist
+    and slope shares depend on the twists, their rates and the charts; K (with the twist
+    columns) and C (with the twist rates) against central differences, in the regularised law
+    and in the stick law sticking and slipping."""
+    x, vel = _configuration(tilt, offset, same, seed=5)
+    vel *= 1e-2                              # slow translation, the sections spinning
+    vel[TWIST_OFF:] = [3.0, -2.0]
+    law_a = np.array([1e6, 1.5, 0.0, 2.0, 1e-3])
+    sec = (np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0]), FRAMES["turned"])
+    hist = _history(x, same, seed=6)
+    tbar = _charts(x, same)
+    if law_kind == "regularised":
+        fric = _regularised(0.3)
+    else:
+        k_t = {"stick": 1e2, "slip": 1e7}[law_kind]
+        fric = np.array([FRICTION_STICK, 0.3, 0.3, k_t, 1e-3 * k_t, 1e-3])
+    info = _deepest(x, vel, sec, law_a, fric, hist, same, tbar)
+    K, C = info[0], info[1]
+    assert info[6] > 0.0, "a loaded contact"
+    # the twist rates always act (slip velocity); the twists themselves in the stick law
+    assert np.abs(C[:, TWIST_OFF:]).max() > 1e-6 * np.abs(C).max(), "the spin must matter"
+    if law_kind != "regularised":
+        assert np.abs(K[:, T_OFF:]).max() > 1e-6 * np.abs(K).max(), "the turn must matter"
+    # the slip speed r_b ω is near the laws' regularisation: central differences need a
+    # smaller step (their error measured ∝ h²: 2.7e-6 → 2.7e-8 from h = 1e-7 to 1e-8)
+    _check_tangent(x, vel, sec, law_a, fric, hist, same, info, tbar, step=1e-8)
