@@ -230,7 +230,7 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
         drx0 = 0.0
         drx1 = 0.0
         drx2 = 0.0
-        if j >= P_OFF:
+        if P_OFF <= j < T_OFF:        # e_P's centreline (its twists move no point)
             m = (j - P_OFF) // 3
             c = (j - P_OFF) % 3
             if c == 0:
