@@ -21,12 +21,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .commands import compile as compile_command
-from .commands import info as info_command
-from .commands import paraview as paraview_command
-from .commands import postprocess as postprocess_command
-from .commands import run as run_command
-from .commands import sweep as sweep_command
 from .commands._common import (
     EXIT_BAD_INPUT,
     EXIT_FAILED,
@@ -39,16 +33,21 @@ from .commands._common import (
 __all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "build_parser",
            "console_main", "main"]
 
-#: the commands: name -> the function that runs it (``args`` from :func:`build_parser`)
-COMMANDS = {"run": run_command.run, "info": info_command.run,
-            "render": postprocess_command.run, "plot": postprocess_command.run,
-            "sweep": sweep_command.run, "compile": compile_command.run,
-            "paraview": paraview_command.run}
+#: the commands: name -> the module of :mod:`flexmbs.commands` whose ``run(args)`` runs it;
+#: imported by :func:`build_parser`, inside :func:`main` (a Ctrl-C while they load is one line)
+COMMANDS = {"run": "run", "info": "info", "render": "postprocess", "plot": "postprocess",
+            "sweep": "sweep", "compile": "compile", "paraview": "paraview"}
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``flexmbs`` parser: each command adds its own sub-parser."""
     from . import __version__
+    from .commands import compile as compile_command
+    from .commands import info as info_command
+    from .commands import paraview as paraview_command
+    from .commands import postprocess as postprocess_command
+    from .commands import run as run_command
+    from .commands import sweep as sweep_command
 
     parser = OneLineParser(
         prog="flexmbs", description="Flexible multibody dynamics: ANCF beams, rigid bodies, "
@@ -133,7 +132,10 @@ def _main(argv: Sequence[str] | None) -> int:
     except SystemExit as exc:   # --help, --version, usage errors (argparse printed them)
         return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
     try:
-        return COMMANDS[args.command](args)
+        import importlib
+
+        return int(importlib.import_module(f".commands.{COMMANDS[args.command]}",
+                                           __package__).run(args))
     except BrokenPipeError:   # e.g. `flexmbs info ... | head`: the reader left, not an error
         import os
 
