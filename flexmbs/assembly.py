@@ -881,6 +881,28 @@ class Assembly:
                 out[nl.rows] += nl.constraint.velocity_rhs(q[nl.coords], t)
         return out
 
+    def velocity_rows(self) -> np.ndarray:
+        """(n_mult,) 1.0 for the equations whose velocity form is ``Phi_q v = 0`` (no time in
+        Phi), 0.0 for prescribed coordinates with a time function and drivers (``Phi_t != 0``,
+        which the velocity corrector leaves as they are)."""
+        out = np.ones(self.n_mult)
+        for row, _ in self.lin_functions:
+            out[row] = 0.0
+        for nl in self.nonlinear:
+            if isinstance(nl.constraint, JointDriver):
+                out[nl.rows] = 0.0
+        return out
+
+    def has_nonlinear_constraints(self) -> bool:
+        """Whether some kept equation is nonlinear in q (joints, Euler parameters, sliding)."""
+        return bool(self.nonlinear)
+
+    def matrix_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """CSC ``(indptr, indices)`` of the iteration matrix as int64 (what compiled code that
+        reads ``data`` by column needs, e.g. :func:`flexmbs.driver.constraint_velocity`)."""
+        return (np.ascontiguousarray(self.matrix.indptr, dtype=np.int64),
+                np.ascontiguousarray(self.matrix.indices, dtype=np.int64))
+
     def constraint_time_terms(self, q: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
         """Right-hand side of the acceleration-level constraints,
         ``-(Phi_q v)_q v - 2 Phi_qt v - Phi_tt`` (FORMULATION §6.1 INIT)."""

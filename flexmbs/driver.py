@@ -63,9 +63,9 @@ from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
 from .springs import SpringPart, springs_jacobian, springs_post_step, springs_residual
 
-__all__ = ["SystemPart", "residual", "jacobian", "post_step", "rebase", "rebase_static", "set_bases",
-           "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS", "KIND_OF_ERROR", "STOPS_RUN",
-           "stops_run"]
+__all__ = ["SystemPart", "residual", "jacobian", "constraint_velocity", "post_step", "rebase",
+           "rebase_static", "set_bases", "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS",
+           "KIND_OF_ERROR", "STOPS_RUN", "stops_run"]
 
 #: the compiled interaction kinds, each a field of :class:`SystemPart` whose kernels the
 #: functions below call (docs/extending.md: a new kind is its module, one entry here, a field
@@ -220,3 +220,22 @@ def set_bases(sy, log, stop, elements):  # noqa: ANN001, ANN201
     terms_set_bases(sy.terms, log, stop)
     loads_set_bases(sy.loads, log, stop)
     clearance_set_bases(sy.clearance, log, stop)
+
+
+@njit
+def constraint_velocity(indptr, indices, n, data, v, rows, scale, r):  # noqa: ANN001, ANN201
+    """``r[n + i] = scale rows[i] (Φ_q v)_i`` with ``Φ_q`` read from the constraint rows of the
+    iteration matrix (CSC ``indptr``, ``indices``, ``data`` after :func:`jacobian`): the
+    velocity-level constraints from what every owner already wrote, no second statement of
+    any constraint. ``rows[i] = 0`` leaves row i at 0 (a row with ``Φ_t != 0``)."""
+    m = rows.size
+    for i in range(m):
+        r[n + i] = 0.0
+    for j in range(n):
+        vj = v[j]
+        for k in range(indptr[j], indptr[j + 1]):
+            row = indices[k]
+            if row >= n:
+                r[row] += data[k] * vj
+    for i in range(m):
+        r[n + i] *= scale * rows[i]

@@ -171,23 +171,39 @@ def _warn_undamped_constraints(model: Model, opts: GeneralizedAlpha) -> None:
     oscillation of the multipliers is not damped (a double root at -1 of the trapezoidal
     limit; Cardona & Geradin 1989), grows, and through the q-dependent constraint Jacobian
     feeds energy into the motion (issue "nothing lost": a heavy top gains 8 % of its energy in
-    0.2 s). Warned once per message."""
+    0.2 s). ``constraint_level = "position_velocity"`` removes the cause (the velocity
+    corrector, docs/design-notes.md) except for drivers, whose ``Phi_t`` it leaves alone.
+    Warned once per message."""
     if opts.rho_inf <= 0.99:
         return
-    nonlinear = [c.name for c in model.constraints if c.kind not in _LINEAR_CONSTRAINTS]
-    nonlinear += [j.name for j in model.interactions]
+    corrected = opts.constraint_level == "position_velocity"
+    if corrected:
+        nonlinear = [c.name for c in model.constraints if c.kind == "driver"]
+    else:
+        nonlinear = [c.name for c in model.constraints if c.kind not in _LINEAR_CONSTRAINTS]
+        nonlinear += [j.name for j in model.interactions]
     if not nonlinear:
         return
     import warnings
 
     from .errors import FlexmbsWarning
 
+    names = f"{', '.join(nonlinear[:3])}{' ...' if len(nonlinear) > 3 else ''}"
+    if corrected:
+        warnings.warn(
+            f"rho_inf = {opts.rho_inf:g} with the driver(s) {names}: the velocity corrector "
+            "(constraint_level = \"position_velocity\") leaves equations with a time function "
+            "at index 3, whose constraint forces oscillate from step to step with a growing "
+            "amplitude; use rho_inf <= 0.95", FlexmbsWarning, stacklevel=1)
+        return
     warnings.warn(
-        f"rho_inf = {opts.rho_inf:g} with the nonlinear constraint(s) {', '.join(nonlinear[:3])}"
-        f"{' ...' if len(nonlinear) > 3 else ''}: without numerical damping the constraint "
-        "forces oscillate from step to step with a growing amplitude and energy drifts (index-3 "
-        "constraints under the trapezoidal limit of generalized-alpha/HHT); use rho_inf <= 0.95, "
-        "which damps only the unresolved high frequencies", FlexmbsWarning, stacklevel=1)
+        f"rho_inf = {opts.rho_inf:g} with the nonlinear constraint(s) {names}: without "
+        "numerical damping the constraint forces oscillate from step to step with a growing "
+        "amplitude and energy drifts (index-3 constraints under the trapezoidal limit of "
+        "generalized-alpha/HHT); set constraint_level = \"position_velocity\" (the velocity "
+        "constraints held at every step: bounded forces, conserved energy), or use "
+        "rho_inf <= 0.95, which damps only the unresolved high frequencies",
+        FlexmbsWarning, stacklevel=1)
 
 
 def simulate(model: Model | Assembly, *, t_end: float, dt: float,

@@ -81,7 +81,8 @@ class Scenario:
                                 newton=sim.newton_options(), adaptive=sim.adaptive,
                                 min_step=sim.min_step or 0.0,
                                 predictor=sim.predictor,  # type: ignore[arg-type]
-                                compiled=sim.compiled)
+                                compiled=sim.compiled,
+                                constraint_level=sim.constraint_level)  # type: ignore[arg-type]
 
     def static_options(self) -> StaticOptions:
         """Options of the static solver (``integrator = "static"`` or ``initial_static``)."""

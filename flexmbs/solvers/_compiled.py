@@ -4,11 +4,20 @@ One call of :func:`alpha_run` performs, for up to ``n_steps`` steps, the predict
 modified-Newton iterations (residual :func:`flexmbs.driver.residual`, convergence test,
 Jacobian refresh :func:`flexmbs.driver.jacobian` + :func:`~flexmbs.solvers._bordered.bordered_factorize`
 when modified Newton contracts too slowly, solve with the bordered banded LU factors), the
-corrector and the interactions' post-step update (:func:`flexmbs.driver.post_step`). Python is
+corrector, with ``velocity`` the velocity corrector (below), and the interactions' post-step
+update (:func:`flexmbs.driver.post_step`). Python is
 re-entered only at output times and on failure, so a step costs what compiled code costs. The
 arithmetic and the convergence test are those of :mod:`flexmbs.solvers.newton` and
 :mod:`flexmbs.solvers.generalized_alpha`; the tests run both paths on the same problems
 (FORMULATION Part I §6.1).
+
+Velocity corrector (``constraint_level = "position_velocity"``, docs/design-notes.md "rho_inf
+= 1 with joints"): after the position step has converged, q stays and (v, q'', λ) move along
+the Newmark direction (v += γ' u, q'' += β' u, λ += μ / s) until the velocity constraints
+``Φ_q v = 0`` hold with the equations of motion: Newton on
+``[[s(β' M + γ' C), Φ_qᵀ], [Φ_q, 0]] [u; μ] = -[s r_q; Φ_q v / γ']``, the iteration matrix
+with no stiffness (q does not move), factorised once per step into its own ``factor_v``.
+``Φ_q v`` is read from the constraint rows of that matrix (:func:`flexmbs.driver.constraint_velocity`).
 """
 
 from __future__ import annotations
@@ -18,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
-from ..driver import jacobian, post_step, residual, stops_run
+from ..driver import constraint_velocity, jacobian, post_step, residual, stops_run
 from ._bordered import BorderedFactor, bordered_factorize, bordered_solve
 from .newton import renew_jacobian
 
@@ -32,8 +41,8 @@ ERR_SINGULAR = 100
 #: ``info`` entries
 (INFO_IT, INFO_PREV, INFO_ERR, INFO_WORST, INFO_DONE, INFO_TOTAL, INFO_CODE, INFO_HAVE,
  INFO_KSCALE, INFO_FACT, INFO_RES, INFO_PIVOT, INFO_CYC_STEPS, INFO_CYC_ITS, INFO_STEP_ITS,
- INFO_RENEW) = range(16)
-INFO_SIZE = 16
+ INFO_RENEW, INFO_VEL_ITS) = range(17)
+INFO_SIZE = 17
 
 
 class AlphaRun(NamedTuple):
@@ -61,6 +70,11 @@ class AlphaRun(NamedTuple):
     refresh_cost: float
     keep_acceleration: bool
     info: np.ndarray            # (INFO_SIZE,) float
+    velocity: bool              # the velocity corrector after each step (module docstring)
+    factor_v: BorderedFactor    # its factorisation (the idle factor without it)
+    indptr: np.ndarray          # int64 (N + 1,): CSC pattern of the iteration matrix ...
+    indices: np.ndarray         # int64 (nnz,): ... (Φ_q v from its constraint rows)
+    velocity_rows: np.ndarray   # (m,) 1.0: Φ_q v = 0 held; 0.0: a row with Φ_t, kept as is
 
 
 def idle_run() -> AlphaRun:
@@ -68,16 +82,23 @@ def idle_run() -> AlphaRun:
     evaluate pass to :func:`flexmbs.kernel.kernel` (one signature, one compiled library)."""
     z = np.zeros(0)
     zi = np.zeros(0, np.int64)
-    factor = BorderedFactor(
+    return AlphaRun(n_steps=0, h=0.0, am=0.0, af=0.0, gamma=0.0, beta=0.0, a=z,
+                    backup=np.zeros((5, 0)), factor=idle_factor(), rhs=z, dx=z, a_star=z, max_it=0,
+                    full_newton=False, rtol=0.0, ctol=0.0, floor_factor=0.0, refresh_ratio=0.0,
+                    refresh_iterations=0.0, refresh_cost=0.0, keep_acceleration=False,
+                    info=np.zeros(INFO_SIZE), velocity=False, factor_v=idle_factor(),
+                    indptr=zi, indices=zi, velocity_rows=z)
+
+
+def idle_factor() -> BorderedFactor:
+    """A :class:`BorderedFactor` of nothing, typed like a real one."""
+    z = np.zeros(0)
+    zi = np.zeros(0, np.int64)
+    return BorderedFactor(
         n=0, n_band=0, n_border=0, kl=0, ku=0, perm=zi, border=zi, fill_pos=zi, fill_row=zi,
         fill_col=zi, fill_ptr=zi, ab=np.zeros((2, 2), order="F"),   # 2x2: typed F-contiguous
         piv=zi, xt=np.zeros((0, 0)), a_ba=np.zeros((0, 0)), s=np.zeros((0, 0)), piv_s=zi,
         work_a=z, work_b=z)
-    return AlphaRun(n_steps=0, h=0.0, am=0.0, af=0.0, gamma=0.0, beta=0.0, a=z,
-                    backup=np.zeros((5, 0)), factor=factor, rhs=z, dx=z, a_star=z, max_it=0,
-                    full_newton=False, rtol=0.0, ctol=0.0, floor_factor=0.0, refresh_ratio=0.0,
-                    refresh_iterations=0.0, refresh_cost=0.0, keep_acceleration=False,
-                    info=np.zeros(INFO_SIZE))
 
 
 @njit
@@ -106,21 +127,25 @@ def _restore(backup, q, v, qdd, a, lam):  # noqa: ANN001, ANN202
 def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, ANN201, C901, PLR0912, PLR0915
     """Up to ``run.n_steps`` gen-alpha steps of size ``run.h`` (settings and work arrays in
     ``run``, an :class:`AlphaRun`): predictor, modified-Newton iterations
-    (Jacobian refreshed in place when needed), corrector, post-step update; ``fv[k]`` holds
+    (Jacobian refreshed in place when needed), corrector, with ``run.velocity`` the velocity
+    corrector (module docstring), post-step update; ``fv[k]`` holds
     the time-function values at the end of step k of this call. ``info`` (float, INFO_SIZE)
     carries between calls whether a factorisation is held (INFO_HAVE; set 0 when h changes),
     the stiffness scale of the rounding floor (INFO_KSCALE) and counters (factorisations,
-    residual evaluations, iterations); per call: iterations of the current step, errors, worst
-    equation, steps completed, error code (``flexmbs.driver.ERR_*`` or ERR_SINGULAR).
+    residual evaluations, iterations, velocity-corrector iterations); per call: iterations of
+    the current step, errors, worst equation, steps completed, error code
+    (``flexmbs.driver.ERR_*`` or ERR_SINGULAR).
     Refresh rules: within a step, when modified Newton contracts too slowly (:func:`_slow`);
     between steps, the renewal rule (:func:`flexmbs.solvers.newton.renew_jacobian`).
     Returns a ``STATUS_*``.
 
     Inlined into :func:`flexmbs.kernel.kernel`, the one compiled entry (a call with more than
-    30 arguments could not be inlined: Python passes them as ``*args``, hence ``run``)."""
+    30 arguments could not be inlined: Python passes them as ``*args``, hence ``run``). The
+    position iterations and the velocity corrector share one call of the residual and one of
+    the Jacobian (each inlines the whole model)."""
     (n_steps, h, am, af, gamma, beta, a, backup, factor, rhs, dx, a_star, max_it, full_newton,
      rtol, ctol, floor_factor, refresh_ratio, refresh_iterations, refresh_cost,
-     keep_acceleration, info) = run
+     keep_acceleration, info, velocity, factor_v, indptr, indices, velocity_rows) = run
     n = q.size
     m = lam.size
     bp = (1 - am) / (h * h * beta * (1 - af))
@@ -154,6 +179,10 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
         info[INFO_STEP_ITS] = 0.0
         refreshes = 0
         status = -1
+        corrector = False       # the velocity corrector's iterations (q fixed)
+        factored_v = False      # its matrix factorised at this step's q
+        fac = factor
+        err = np.inf
         while status < 0:
             scale, code = residual(model, q, v, qdd, lam, fvk, mode, r)
             info[INFO_RES] += 1.0
@@ -161,75 +190,96 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
                 info[INFO_CODE] = code
                 status = STATUS_FAILED
                 break
-            tol = max(rtol * scale, floor_factor * info[INFO_KSCALE])
-            eq = 0.0
-            worst = 0
-            for i in range(n):
-                e = abs(r[i]) / tol
-                if e > eq:
-                    eq = e
-                    worst = i
-            ec = 0.0
-            for i in range(m):
-                e = abs(r[n + i]) / ctol
-                if e > ec:
-                    ec = e
-                    if ec > eq:
-                        worst = n + i
-            err = max(eq, ec)
-            info[INFO_ERR] = err
-            info[INFO_WORST] = worst
-            if not np.isfinite(err) or (err > 1.0 and info[INFO_IT] >= max_it):
-                status = STATUS_FAILED
-                break
-            if err <= 1.0:
-                status = STATUS_CONVERGED
-                break
-            if info[INFO_HAVE] == 0.0 or full_newton or (
-                    info[INFO_IT] == 0 and info[INFO_RENEW] != 0.0) or (
-                    info[INFO_IT] > 0 and _slow(err, info[INFO_PREV], refresh_ratio,
-                                                refresh_iterations)):
-                # Jacobian at the current iterate (poor contraction with the old one)
+            if corrector and factored_v:
+                constraint_velocity(indptr, indices, n, data, v, velocity_rows, 1.0 / gp, r)
+            if not corrector or factored_v:
+                tol = max(rtol * scale, floor_factor * info[INFO_KSCALE])
+                eq = 0.0
+                worst = 0
+                for i in range(n):
+                    e = abs(r[i]) / tol
+                    if e > eq:
+                        eq = e
+                        worst = i
+                ec = 0.0
+                for i in range(m):
+                    e = abs(r[n + i]) / ctol
+                    if e > ec:
+                        ec = e
+                        if ec > eq:
+                            worst = n + i
+                err = max(eq, ec)
+                info[INFO_ERR] = err
+                info[INFO_WORST] = worst
+                if not np.isfinite(err) or (err > 1.0 and info[INFO_IT] >= max_it):
+                    status = STATUS_FAILED
+                    break
+                if err <= 1.0:
+                    if velocity and not corrector:
+                        # positions converged: the velocity corrector at this q
+                        corrector = True
+                        fac = factor_v
+                        info[INFO_IT] = 0.0
+                        continue
+                    status = STATUS_CONVERGED
+                    break
+            if (corrector and not factored_v) or (not corrector and (
+                    info[INFO_HAVE] == 0.0 or full_newton or (
+                        info[INFO_IT] == 0 and info[INFO_RENEW] != 0.0) or (
+                        info[INFO_IT] > 0 and _slow(err, info[INFO_PREV], refresh_ratio,
+                                                    refresh_iterations)))):
+                # Jacobian at the current iterate (poor contraction with the old one); the
+                # corrector's: no stiffness (q fixed), its own factorisation, once per step
                 if refreshes > 2 * max_it:
                     status = STATUS_FAILED
                     break
-                kscale, code = jacobian(model, q, v, qdd, lam, fvk, mode, s * bp, s * gp, s, data)
+                kscale, code = jacobian(model, q, v, qdd, lam, fvk, mode, s * bp, s * gp,
+                                        0.0 if corrector else s, data)
                 if code != 0:
                     info[INFO_CODE] = code
                     status = STATUS_FAILED
                     break
                 if kscale > 0.0:
                     info[INFO_KSCALE] = kscale
-                pivot = bordered_factorize(factor, data)
+                pivot = bordered_factorize(fac, data)
                 info[INFO_FACT] += 1.0
                 refreshes += 1
                 if pivot != 0:
-                    info[INFO_HAVE] = 0.0
+                    if not corrector:
+                        info[INFO_HAVE] = 0.0
                     info[INFO_PIVOT] = pivot
                     info[INFO_CODE] = ERR_SINGULAR
                     status = STATUS_FAILED
                     break
-                info[INFO_HAVE] = 1.0
-                info[INFO_RENEW] = 0.0
-                info[INFO_CYC_STEPS] = 0.0
-                info[INFO_CYC_ITS] = 0.0
-                info[INFO_STEP_ITS] = 0.0
+                if corrector:
+                    factored_v = True
+                    constraint_velocity(indptr, indices, n, data, v, velocity_rows, 1.0 / gp, r)
+                else:
+                    info[INFO_HAVE] = 1.0
+                    info[INFO_RENEW] = 0.0
+                    info[INFO_CYC_STEPS] = 0.0
+                    info[INFO_CYC_ITS] = 0.0
+                    info[INFO_STEP_ITS] = 0.0
             for i in range(n):
                 rhs[i] = -s * r[i]
             for i in range(m):
                 rhs[n + i] = -r[n + i]
-            bordered_solve(factor, rhs, dx)
+            bordered_solve(fac, rhs, dx)
             for i in range(n):
                 d = dx[i]
-                q[i] += d
+                if not corrector:
+                    q[i] += d
                 v[i] += gp * d
                 qdd[i] += bp * d
             for i in range(m):
                 lam[i] += dx[n + i] / s
             info[INFO_IT] += 1.0
-            info[INFO_STEP_ITS] += 1.0
-            info[INFO_TOTAL] += 1.0
-            info[INFO_PREV] = err
+            info[INFO_PREV] = err if not corrector or factored_v else np.inf
+            if corrector:
+                info[INFO_VEL_ITS] += 1.0
+            else:
+                info[INFO_STEP_ITS] += 1.0
+                info[INFO_TOTAL] += 1.0
         if status == STATUS_FAILED:
             _restore(backup, q, v, qdd, a, lam)
             return STATUS_FAILED

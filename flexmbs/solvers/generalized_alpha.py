@@ -3,6 +3,13 @@
 Arnold & Brüls, Multibody Syst. Dyn. 18 (2007) 185-202, with the scaled iteration matrix of
 Bottasso, Bauchau & Cardona (2007): dynamic rows times s = beta h^2, multiplier update divided by
 s (FORMULATION Part I §6.1). HHT is the special case alpha_m = 0 (Chung & Hulbert 1993).
+
+``constraint_level="position_velocity"`` adds a velocity corrector after each converged step:
+q stays, (v, q'', lam) move along the Newmark direction (v += gamma' u, q'' += beta' u) until
+``Phi_q v = 0`` holds with the equations of motion (:class:`_VelocityStep`; the index-2
+velocity constraint of Gear-Gupta-Leimkuhler and Arnold, Brüls & Cardona, Numer. Math. 129
+(2015) 149-179, in the projected form of ALI3-P, Cuadrado et al. 2004). It removes the
+undamped period-2 mode of the multipliers at rho_inf = 1 (docs/design-notes.md).
 """
 
 from __future__ import annotations
@@ -16,9 +23,13 @@ from typing import Any, Literal
 import numpy as np
 
 from ..assembly import Assembly
+from ..driver import constraint_velocity
 from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
 from .newton import Newton, NewtonOptions
+
+#: values of :attr:`GeneralizedAlpha.constraint_level` (the scenario key of the same name)
+CONSTRAINT_LEVELS = ("position", "position_velocity")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -32,6 +43,11 @@ class GeneralizedAlpha:
     Brüls) or from ``q''_{n+1} = q''_n`` (``"constant_acceleration"``), with q and v consistent
     with it. On Newton failure the step is halved (``adaptive``) down to ``min_step``, then
     grows back. ``compiled``: run the compiled path when the model allows it.
+    ``constraint_level``: ``"position"`` holds ``Phi = 0`` at every step (index 3);
+    ``"position_velocity"`` also ``Phi_q v = 0`` (velocity corrector, module docstring): with
+    joints and ``rho_inf = 1`` the constraint forces then stay bounded and the energy is
+    conserved (an extra factorisation per step; equations with ``Phi_t != 0``, prescribed
+    motion and drivers, keep their velocity).
     """
 
     rho_inf: float = 0.8
@@ -42,8 +58,12 @@ class GeneralizedAlpha:
     grow_after: int = 10             # successful steps before the step is doubled back
     compiled: bool = True            # compiled Newton loop when the model allows it
     predictor: Literal["zero_acceleration", "constant_acceleration"] = "constant_acceleration"
+    constraint_level: Literal["position", "position_velocity"] = "position"
 
     def __post_init__(self) -> None:
+        if self.constraint_level not in CONSTRAINT_LEVELS:
+            raise ModelError(f"unknown constraint_level {self.constraint_level!r} (known: "
+                             f"{', '.join(CONSTRAINT_LEVELS)})")
         if self.predictor not in ("zero_acceleration", "constant_acceleration"):
             raise ModelError(f"unknown predictor '{self.predictor}' (known: zero_acceleration, "
                              "constant_acceleration)")
@@ -87,6 +107,7 @@ class IntegrationStats:
     newton_iterations: int = 0
     factorizations: int = 0
     residual_evaluations: int = 0
+    velocity_iterations: int = 0    # of the velocity corrector (constraint_level)
 
 
 class _AlphaStep:
@@ -148,6 +169,46 @@ class _AlphaStep:
 
     def stiffness_scale(self) -> float:
         return self.asm.stiffness_scale
+
+
+class _VelocityStep(_AlphaStep):
+    """The velocity corrector of one step, seen by :class:`Newton`: q fixed, unknowns ``u``
+    (v += gamma' u, q'' += beta' u) and lam; residual ``[r_q; Phi_q v / gamma']`` with
+    ``Phi_q`` from the constraint rows of the iteration matrix without stiffness
+    (:func:`flexmbs.driver.constraint_velocity`), which is its exact Newton matrix. The same
+    equations as the compiled corrector (:mod:`flexmbs.solvers._compiled`)."""
+
+    def __init__(self, asm: Assembly, state: State) -> None:
+        super().__init__(asm, state)
+        self.rows = asm.velocity_rows()
+        self.indptr, self.indices = asm.matrix_pattern()
+        self.data: np.ndarray | None = None
+        self._r = np.zeros(asm.n_total)
+
+    def setup(self, t: float, beta_p: float, gamma_p: float, s: float) -> None:
+        super().setup(t, beta_p, gamma_p, s)
+        self.data = None            # Phi_q at this step's q: read at the first evaluation
+
+    def evaluate(self, want_matrix: bool):
+        s = self.scale_s
+        mat = (s * self.bp, s * self.gp, 0.0) if want_matrix or self.data is None else None
+        scale = self.asm.evaluate(self.s.q, self.s.v, self.s.qdd, self.s.lam, self.t, self.r_q,
+                                  self.r_lam, matrix=mat)
+        if mat is not None:
+            self.data = self.asm.matrix.data.copy()
+        n = self.r_q.size
+        constraint_velocity(self.indptr, self.indices, n, self.data, self.s.v, self.rows,
+                            1.0 / self.gp, self._r)
+        self.r_lam[:] = self._r[n:]
+        return self.r_q, self.r_lam, scale
+
+    def apply(self, dx, factor: float) -> None:
+        n = self.r_q.size
+        du = dx[:n]
+        st = self.s
+        st.v += (factor * self.gp) * du
+        st.qdd += (factor * self.bp) * du
+        st.lam += (factor / self.scale_s) * dx[n:]
 
 
 def _massless(asm: Assembly) -> str:
@@ -258,6 +319,9 @@ class _PythonStepper:
         self.newton = Newton(options.newton, asm.length_scale)
         self.step = _AlphaStep(asm, state)
         self.state = state
+        self.velocity = options.constraint_level == "position_velocity" and asm.n_mult > 0
+        self.corrector = Newton(options.newton, asm.length_scale)
+        self.velocity_step = _VelocityStep(asm, state) if self.velocity else None
 
     def max_chunk(self) -> int:
         return 1
@@ -283,6 +347,10 @@ class _PythonStepper:
         self.step.setup(t0 + h, bp, gp, beta * h * h)
         try:
             self.newton.solve(self.step)
+            if self.velocity_step is not None:
+                self.velocity_step.setup(t0 + h, bp, gp, beta * h * h)
+                self.corrector.invalidate()     # its matrix: this step's q, no stiffness
+                self.corrector.solve(self.velocity_step)
         except ConvergenceError as exc:
             st.q[:], st.v[:], st.qdd[:], st.a[:], st.lam[:] = (saved.q, saved.v, saved.qdd,
                                                                saved.a, saved.lam)
@@ -297,8 +365,12 @@ class _PythonStepper:
         self.step.asm.post_step(st.q, st.v, st.t, st.qdd, st.a, lam=st.lam)
 
     def totals(self) -> tuple[int, int, int]:
-        t = self.newton.total
-        return t.iterations, t.factorizations, t.residual_evaluations
+        t, c = self.newton.total, self.corrector.total
+        return (t.iterations, t.factorizations + c.factorizations,
+                t.residual_evaluations + c.residual_evaluations)
+
+    def velocity_iterations(self) -> int:
+        return self.corrector.total.iterations
 
 
 class _StepFailure(Exception):
@@ -339,6 +411,17 @@ class _CompiledStepper:
         self.data = np.zeros_like(asm.matrix.data)
         self.lu = BorderedBandedLU(asm.matrix, asm.border_indices())
         self.stopped: Exception | None = None
+        # the velocity corrector (constraint_level): its own factorisation, the matrix pattern
+        # to read Phi_q from, the equations it holds
+        self.velocity = options.constraint_level == "position_velocity" and m > 0
+        if self.velocity:
+            self.factor_v = BorderedBandedLU(asm.matrix, asm.border_indices()).factor
+            self.pattern = asm.matrix_pattern()
+            self.velocity_rows = asm.velocity_rows()
+        else:
+            self.factor_v = cc.idle_factor()
+            self.pattern = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+            self.velocity_rows = np.zeros(0)
 
     def max_chunk(self) -> int:
         return 1_000_000
@@ -396,7 +479,8 @@ class _CompiledStepper:
             floor_factor=float(o.roundoff_factor * 2.2e-16 * asm.length_scale),
             refresh_ratio=float(o.refresh_ratio), refresh_iterations=float(o.refresh_iterations),
             refresh_cost=float(o.refresh_cost), keep_acceleration=self.keep_acceleration,
-            info=self.info)
+            info=self.info, velocity=self.velocity, factor_v=self.factor_v,
+            indptr=self.pattern[0], indices=self.pattern[1], velocity_rows=self.velocity_rows)
         value, _ = kernel(OP_STEPS, asm.kernel_system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
                           self._coef, self.r, self.data, run)
         status = int(value)
@@ -418,6 +502,9 @@ class _CompiledStepper:
     def totals(self) -> tuple[int, int, int]:
         cc, info = self.cc, self.info
         return int(info[cc.INFO_TOTAL]), int(info[cc.INFO_FACT]), int(info[cc.INFO_RES])
+
+    def velocity_iterations(self) -> int:
+        return int(self.info[self.cc.INFO_VEL_ITS])
 
 
 def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: float,
@@ -522,4 +609,5 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
                 stepper.totals())
             progress(state, stats)
     stats.newton_iterations, stats.factorizations, stats.residual_evaluations = stepper.totals()
+    stats.velocity_iterations = stepper.velocity_iterations()
     return state, stats

@@ -113,6 +113,7 @@ def test_overrides_scalar_nested_and_array_entry_by_name():
         "simulation.predictor=zero_acceleration",
         "simulation.compiled=false",
         "simulation.newton.refresh_cost=8.0",
+        "simulation.constraint_level=position_velocity",
     ])
     assert sc.simulation.dt == 2e-4
     rod = sc.model.beams[0]
@@ -123,6 +124,9 @@ def test_overrides_scalar_nested_and_array_entry_by_name():
     assert opts.scheme == "hht" and opts.newton.max_iterations == 40 and not opts.newton.modified
     assert opts.predictor == "zero_acceleration" and not opts.compiled
     assert opts.newton.refresh_cost == 8.0
+    assert opts.constraint_level == "position_velocity"
+    assert load_scenario(EXAMPLES / "cantilever.toml").integrator_options().constraint_level == (
+        "position")
     assert sc.raw["simulation"]["newton"] == {"max_iterations": 40, "modified": False,
                                               "refresh_cost": 8.0}
     assert sc.raw["beams"][0]["elements"] == 8

@@ -88,6 +88,9 @@ CASES = [
     ("unknown_predictor", SIM + "predictor = 'linear'\n",
      "simulation.predictor: unknown predictor 'linear' (known: constant_acceleration, "
      "zero_acceleration)"),
+    ("unknown_constraint_level", SIM + "constraint_level = 'index2'\n",
+     "simulation.constraint_level: unknown constraint level 'index2' (known: position, "
+     "position_velocity)"),
     ("compiled_not_bool", SIM + "compiled = 'yes'\n",
      "simulation.compiled: expected true or false, got 'yes'"),
     ("initial_static_not_bool", SIM + "initial_static = 1\n",

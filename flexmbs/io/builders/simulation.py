@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ...solvers.generalized_alpha import CONSTRAINT_LEVELS
 from ...solvers.newton import NewtonOptions
 from ...solvers.static import StaticOptions
 from ..frames import OUTPUT_FRAMES
@@ -41,6 +42,7 @@ class SimulationSettings:
     static_stabilizer: float = 0.0             #: mass-proportional stabiliser c_s [1/s^2]
     predictor: str = "constant_acceleration"   #: Newton start of each step
     compiled: bool = True                      #: compiled integrator when the model allows it
+    constraint_level: str = "position"         #: "position" | "position_velocity"
     newton: dict[str, Any] = field(default_factory=dict)  #: NewtonOptions overrides
 
     def newton_options(self, *, static: bool = False) -> NewtonOptions:
@@ -55,7 +57,7 @@ def read_simulation(t: Table) -> SimulationSettings:
     """Validate the ``[simulation]`` table."""
     t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval", "output_frames",
              "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
-             "static_stabilizer", "predictor", "compiled",
+             "static_stabilizer", "predictor", "compiled", "constraint_level",
              "newton"))
     integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
     static = integrator == "static"
@@ -92,4 +94,7 @@ def read_simulation(t: Table) -> SimulationSettings:
         load_steps=t.integer("load_steps", 1, ge=1),
         static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0),
         predictor=t.choice("predictor", PREDICTORS, "constant_acceleration", what="predictor"),
-        compiled=t.boolean("compiled", True), newton=newton)
+        compiled=t.boolean("compiled", True),
+        constraint_level=t.choice("constraint_level", CONSTRAINT_LEVELS, "position",
+                                  what="constraint level"),
+        newton=newton)
