@@ -96,7 +96,11 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
         for d in levels[::-1][::max(1, levels.size // 6)]:
             candidates.append(np.flatnonzero(degree >= d).astype(np.int64))
     best: FactorPlan | None = None
+    seen: set[bytes] = set()
     for border in candidates:
+        if border.tobytes() in seen:
+            continue
+        seen.add(border.tobytes())
         in_border = np.zeros(N, bool)
         in_border[border] = True
         if border.size:   # closure: multipliers left without band neighbours
@@ -107,10 +111,13 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
             continue
         band = np.flatnonzero(~in_border).astype(np.int64)
         order, w = _band_order(G, band)
-        alt = saddle_order(G, is_coord, band, owner)
-        w_alt = _bandwidth(G, alt)
-        if w_alt < w:
-            order, w = alt, w_alt
+        # the second order only where it can matter (bodies in the band, or a border whose
+        # rows leave multipliers in it): a plain beam model keeps its plan at RCM's cost
+        if border.size or (owner is not None and (owner[band] >= 0).any()):
+            alt = saddle_order(G, is_coord, band, owner)
+            w_alt = _bandwidth(G, alt)
+            if w_alt < w:
+                order, w = alt, w_alt
         cost = factor_cost(band.size, border.size, w)
         if best is None or cost < best.cost:
             best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost)
