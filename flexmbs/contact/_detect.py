@@ -18,9 +18,14 @@ import numpy as np
 
 from .._jit import FLAG, njit
 from ..elements.ancf_cable import CENTERLINE_SIZE
-from ..elements.centerline import element_bounding_sphere, element_crossings, element_plane_range
+from ..elements.centerline import (
+    beam_point,
+    element_bounding_sphere,
+    element_crossings,
+    element_plane_range,
+)
 from ..elements.rigid_body import rotation
-from .bores import sections_near
+from .bores import section_between, sections_near
 from .geometry import closest_point_kernel, section_ellipse_at
 from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, TWIST_OFF, contact_force
 from .sections import (
@@ -52,6 +57,11 @@ MAX_CANDIDATES = 8
 MAX_CROSSINGS = 4
 #: samples of the common-normal residual in the generic (non-circular) detector
 SHAPE_SAMPLES = 128
+#: section slots of a joint past its bore's sections: one per end of the beam (first node,
+#: last node), the tip sections of an open bore (:func:`place_tips`)
+N_TIPS = 2
+#: a tip section cuts the beam this many beam radii behind its end (measured along the beam)
+TIP_SETBACK = 0.5
 
 
 @njit(inline="always")
@@ -79,22 +89,38 @@ def reset_crossings(elem_out, out_list):  # noqa: ANN001, ANN201
     out_list[0] = 0
 
 
+@njit(inline="always")
+def _add_crossing(k, s, ne, cross_n, cross_e, cross_xi, touched, n_touched):  # noqa: ANN001, ANN202
+    """Record the crossing ``s = e + ξ`` of section k (up to :data:`MAX_CROSSINGS`); a section
+    crossed for the first time joins ``touched``. Returns the new count of touched sections."""
+    if cross_n[k] == 0:
+        touched[n_touched] = k
+        n_touched += 1
+    if cross_n[k] < MAX_CROSSINGS:
+        ee = min(int(math.floor(s)), ne - 1)
+        cross_e[k, cross_n[k]] = ee
+        cross_xi[k, cross_n[k]] = s - ee
+        cross_n[k] += 1
+    return n_touched
+
+
 @njit
-def _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, ws_list, elem_out, r_b, shape,  # noqa: ANN001, ANN202, PLR0913
-                   params, R_out, origin, n, ey, ez, roots):
+def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list, elem_out, r_b,  # noqa: ANN001, ANN202, PLR0913
+                   shape, params, R_out, origin, n, ey, ez, roots):
     """An open bore: a section crossed inside the bore at the step's start (``elem_ws[k] ≥ 0``)
     and not now. Legitimate if the beam has left the plane there (its end passed: the elements
     around the tracked one no longer cross it); if they cross it outside the bore, at any
     distance, the iterate pushed the axis through the wall (a Newton step can jump farther
     than the section's reach, where the crossing would otherwise read "another part of the
     beam"): ``-1 - k``, else 0. End faces excepted (the beam outside the mouth). The sections
-    crossed at the step's start are those of ``ws_list`` (see :func:`reset_crossings`)."""
+    crossed at the step's start are those of ``ws_list`` (see :func:`reset_crossings`); the
+    bore's own sections are the first ``n_reg`` (tip sections move: not checked here)."""
     ns = origins.shape[0]
     ne = qe.shape[0]
     listed = ws_list[0] >= 0
     for i in range(ws_list[0] if listed else ns):
         k = ws_list[1 + i] if listed else i
-        if k < 1 or k > ns - 2:
+        if k < 1 or k > n_reg - 2:
             continue
         e0 = elem_ws[k]
         if e0 < 0 or elem_out[k] >= 0:
@@ -116,7 +142,7 @@ def _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, ws_list, elem_
 
 @njit
 def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                   open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
+                   open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
                    elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
@@ -145,8 +171,13 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     ``(elem_ws, xi_ws)``; −1: not crossed inside the bore) and every row records its own
     crossing (columns ``elem_i``, ``xi_i``). ``out_list`` and ``ws_list`` list the sections
     whose ``elem_out``, ``elem_ws`` are set (:func:`reset_crossings`): a section far from the
-    beam costs nothing."""
+    beam costs nothing.
+
+    The last ``tip_on.size`` sections are the tip sections (:func:`place_tips`): one whose
+    ``tip_on`` is set is crossed by the elements at its end of the beam (the first, the last)
+    and is otherwise a section like the bore's own."""
     ns = origins.shape[0]
+    n_reg = ns - tip_on.shape[0]
     ne = qe.shape[0]
     reach = 2.0 * R_out + r_b
     n = np.empty(3)
@@ -184,14 +215,24 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
             xi0 = xi_ws[k] if elem_ws[k] == e else -1.0     # the last step's crossing
             nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), xi0, roots)
             for j in range(nr):
-                if cross_n[k] == 0:
-                    touched[n_touched] = k
-                    n_touched += 1
-                if cross_n[k] < MAX_CROSSINGS:
-                    ee = min(int(math.floor(roots[j])), ne - 1)
-                    cross_e[k, cross_n[k]] = ee
-                    cross_xi[k, cross_n[k]] = roots[j] - ee
-                    cross_n[k] += 1
+                n_touched = _add_crossing(k, roots[j], ne, cross_n, cross_e, cross_xi, touched,
+                                          n_touched)
+    # the tip sections: crossed by the elements at their end of the beam
+    for t in range(tip_on.shape[0]):
+        if not tip_on[t]:
+            continue
+        k = n_reg + t
+        _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
+        e_end = 0 if t == 0 else ne - 1
+        for e in range(max(0, e_end - 1), min(ne, e_end + 2)):
+            lo, hi = element_plane_range(qe[e], lengths[e], origin, n)
+            if lo > 0.0 or hi < 0.0:
+                continue
+            xi0 = xi_ws[k] if elem_ws[k] == e else -1.0
+            nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), xi0, roots)
+            for j in range(nr):
+                n_touched = _add_crossing(k, roots[j], ne, cross_n, cross_e, cross_xi, touched,
+                                          n_touched)
     reset_crossings(elem_out, out_list)    # crossed inside the bore in this evaluation: below
     # sections in order (deterministic rows, as the sections lie along the bore)
     for i in range(1, n_touched):
@@ -221,7 +262,7 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
             if math.hypot(cy, cz) > reach:
                 continue           # another part of the beam, away from the bore
             if not section_contains(shape, params, cy, cz):
-                if open_ends and (k == 0 or k == ns - 1):
+                if open_ends and (k == 0 or k == n_reg - 1):
                     continue       # the beam crosses an end face outside the mouth
                 status = -1 - k    # the axis went through the wall
                 break
@@ -324,16 +365,97 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
         if inside == 0 and not open_ends:
             status = -1 - k
             break
-    if status == 0 and not open_ends and expect != ns:
+    if status == 0 and not open_ends and expect != n_reg:
         status = -1 - expect
     if status == 0 and open_ends:
-        status = _lost_crossing(qe, lengths, r_H, A, origins, frames, elem_ws, ws_list, elem_out,
-                                r_b, shape, params, R_out, origin, n, ey, ez, roots)
+        status = _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list,
+                                elem_out, r_b, shape, params, R_out, origin, n, ey, ez, roots)
     for t in range(n_touched):
         cross_n[touched[t]] = 0
     if status != 0:
         return status
     return count
+
+
+@njit
+def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, PLR0913
+               tip_reach, r_b, shape, params, tip_on, tip_station, work):
+    """The tip sections of an open bore at the start of a step (issue 30, "the free tip"):
+    an end of the beam inside the bore past the last section it crosses would otherwise go
+    into the wall unchecked. For each end (first node, last node) the beam point
+    :data:`TIP_SETBACK` radii behind it is located between two neighbouring sections k, k+1
+    (signed distances to their planes, ``λ = d_k / (d_k − d_{k+1})``); the tip section is the
+    plane there (:func:`~flexmbs.contact.bores.section_between`, into the slot
+    ``n_reg + t`` of ``origins``, ``frames``). It is fixed in the body during the step, so it
+    is a section like the bore's own: the same detection, contact law, friction history and
+    exact tangent. ``tip_on[t]``: placed (the beam crosses it inside the bore);
+    ``tip_station[t]``: its station along the bore. ``tip_reach``: the largest distance
+    between neighbouring sections; ``work``: int64 (n_sections + 64)."""
+    n_tips = tip_on.shape[0]
+    n_reg = origins.shape[0] - n_tips
+    ne = qe.shape[0]
+    scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]   # |p|^4 (homogeneous A)
+    u = np.empty(3)
+    origin = np.empty(3)
+    n = np.empty(3)
+    ey = np.empty(3)
+    ez = np.empty(3)
+    roots = np.empty(3)
+    stack = work[:64]
+    near = work[64:]
+    for t in range(n_tips):
+        tip_on[t] = False
+        if n_reg < 2 or ne == 0:
+            continue
+        e_end = 0 if t == 0 else ne - 1
+        back = min(TIP_SETBACK * r_b / lengths[e_end], 1.0)
+        xi = back if t == 0 else 1.0 - back
+        X, _, _ = beam_point(qe, lengths, e_end, xi)
+        for c in range(3):
+            u[c] = ((X[0] - r_H[0]) * A[0, c] + (X[1] - r_H[1]) * A[1, c]
+                    + (X[2] - r_H[2]) * A[2, c]) / scale
+        m = sections_near(tree_c, tree_r, tree_lo, tree_hi, u, tip_reach, stack, near)
+        best = -1
+        best_lam = 0.0
+        best_off = np.inf
+        for i in range(m):
+            k = near[i]
+            if k > n_reg - 2:
+                continue
+            d0 = 0.0
+            d1 = 0.0
+            off = 0.0
+            for c in range(3):
+                d0 += frames[k, c, 0] * (u[c] - origins[k, c])
+                d1 += frames[k + 1, c, 0] * (u[c] - origins[k + 1, c])
+            if d0 < 0.0 or d1 >= 0.0:
+                continue
+            lam = d0 / (d0 - d1)
+            for c in range(3):   # off the chord between the origins (a loop's other pass)
+                w = u[c] - origins[k, c] - lam * (origins[k + 1, c] - origins[k, c])
+                off += w * w
+            if off < best_off:
+                best, best_lam, best_off = k, lam, off
+        if best < 0:
+            continue              # outside the bore's length: no tip section
+        j = n_reg + t
+        section_between(origins, frames, stations, best, best_lam, origins[j], frames[j])
+        _section_plane(r_H, A, origins[j], frames[j], origin, n, ey, ez)
+        # the beam must cross it inside the bore: the crossing nearest the setback point
+        near_s = -1.0
+        for e in range(max(0, e_end - 1), min(ne, e_end + 2)):
+            nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), -1.0, roots)
+            for r in range(nr):
+                if near_s < 0.0 or abs(roots[r] - e_end - xi) < abs(near_s - e_end - xi):
+                    near_s = roots[r]
+        if near_s < 0.0:
+            continue
+        ee = min(int(math.floor(near_s)), ne - 1)
+        cy, cz, _, _, _, _ = section_ellipse_at(qe, lengths, ee, near_s - ee, origin, n, ey, ez,
+                                                r_b)
+        if section_contains(shape, params, cy, cz):
+            tip_on[t] = True
+            tip_station[t] = stations[best] + best_lam * (stations[best + 1] - stations[best])
 
 
 @njit
@@ -501,7 +623,7 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
 @njit
 def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      tree_c, tree_r, tree_lo,
-                     tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                     tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                      consistent, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
@@ -527,7 +649,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, ori
         for k in range(CENTERLINE_SIZE):
             qe[e, k] = q[elem_dofs[e, k]]
     m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
-                       tree_hi, open_ends, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                       tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                        xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                        consistent, rows)
     if m < 0:
@@ -688,6 +810,11 @@ class ClearancePart(NamedTuple):
     no_C: np.ndarray                 # (0, N_LOCAL, N_LOCAL)
     no_elem: np.ndarray              # (0,)
     scratch: np.ndarray              # (n + m,) residual written while assembling the matrix
+    stations: np.ndarray             # (nj, max_ns) the sections' stations along the bore
+    tip_on: np.ndarray               # (nj, N_TIPS) state: tip section placed (place_tips; its
+    tip_station: np.ndarray          # (nj, N_TIPS)   slot n_sec − N_TIPS + t), its station
+    tip_reach: np.ndarray            # (nj,) largest distance of neighbouring sections
+    tips_due: np.ndarray             # (nj,) state: place the tip sections at q_start first
 
 
 def contact_capacity(max_sections: int) -> int:
@@ -701,11 +828,14 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
     ne_j = cl.n_elem[j]
     ns = cl.n_sec[j]
+    if cl.tips_due[j]:     # the step's first evaluation: its tip sections, at its start
+        cl.tips_due[j] = False
+        joint_place_tips(cl, j, cl.q_start)
     m, cnt, sc = clearance_forces(
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j],
         cl.lengths[j, :ne_j], cl.origins[j, :ns],
         cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
-        cl.open_ends[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
+        cl.open_ends[j], cl.tip_on[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
         cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
@@ -828,7 +958,9 @@ def clearance_restart(cl, q):  # noqa: ANN001, ANN201
 def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
     """After a converged step (following a residual at that state, whose detection it reuses):
     warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`),
-    ``q`` the start of the next step."""
+    ``q`` the start of the next step, where the tip sections of open bores will be placed
+    (:func:`place_tips`) by its first evaluation: the output of this state still sees the
+    sections its equilibrium was found with."""
     if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
     for i in range(cl.q_start.size):
@@ -848,3 +980,19 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
             cl.xi_ws[j, k] = cl.xi_out[j, k]
             ws_list[1 + i] = k
         ws_list[0] = out_list[0]
+        cl.tips_due[j] = cl.open_ends[j]
+
+
+@njit
+def joint_place_tips(cl, j, q):  # noqa: ANN001, ANN201
+    """:func:`place_tips` of clearance joint j at ``q`` (the start of a step)."""
+    ne = cl.n_elem[j]
+    ns = cl.n_sec[j]
+    for e in range(ne):
+        for c in range(CENTERLINE_SIZE):
+            cl.qe[e, c] = q[cl.elem_dofs[j, e, c]]
+    qb, A = _frame(q, cl.body[j])
+    place_tips(cl.qe[:ne], cl.lengths[j, :ne], qb[:3], A, cl.origins[j, :ns], cl.frames[j, :ns],
+               cl.stations[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
+               cl.tip_reach[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j],
+               cl.tip_station[j], cl.work)

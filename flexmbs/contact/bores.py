@@ -27,7 +27,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..geometry.curves import Centerline
 
 __all__ = ["Hole", "CircleHole", "SuperellipseHole", "CurvedBore", "transported_frames",
-           "section_tree", "sections_near", "TREE_LEAF", "BORE_KEYS"]
+           "section_tree", "sections_near", "section_between", "TREE_LEAF", "BORE_KEYS"]
 
 #: keys of a bore's record beyond its section's parameters (:meth:`Hole.record`, read back by
 #: the section view)
@@ -291,3 +291,49 @@ def sections_near(centre, radius, lo, hi, x, rho, stack, out):  # noqa: ANN001, 
                 out[count] = k
                 count += 1
     return count
+
+
+@njit
+def section_between(origins, frames, stations, k, lam, origin, frame):  # noqa: ANN001, ANN201
+    """A section plane between sections k and k+1 at the fraction ``lam`` of their distance
+    along the bore (a free tip's section, :func:`~flexmbs.contact._detect.place_tips`):
+    ``origin`` on the cubic Hermite curve through both origins with the sections' normals as
+    unit tangents (``Δs = stations[k+1] − stations[k]``; exact on a line, fourth order in Δs on
+    a curve); ``frame`` (columns: normal, e_y, e_z) the section k's axes turned by the
+    smallest rotation that takes its normal to the curve's tangent there (twist-free, as
+    :func:`transported_frames`). Body coordinates."""
+    ds = stations[k + 1] - stations[k]
+    l2 = lam * lam
+    l3 = l2 * lam
+    h00 = 2.0 * l3 - 3.0 * l2 + 1.0
+    h10 = l3 - 2.0 * l2 + lam
+    h01 = -2.0 * l3 + 3.0 * l2
+    h11 = l3 - l2
+    d00 = 6.0 * l2 - 6.0 * lam            # the weights' derivatives in lam
+    d10 = 3.0 * l2 - 4.0 * lam + 1.0
+    d01 = -d00
+    d11 = 3.0 * l2 - 2.0 * lam
+    t = np.empty(3)
+    for c in range(3):
+        n0 = frames[k, c, 0]
+        n1 = frames[k + 1, c, 0]
+        origin[c] = (h00 * origins[k, c] + h10 * ds * n0 + h01 * origins[k + 1, c]
+                     + h11 * ds * n1)
+        t[c] = (d00 * origins[k, c] + d01 * origins[k + 1, c]) / ds + d10 * n0 + d11 * n1
+    nt = math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    for c in range(3):
+        t[c] /= nt
+    # the smallest rotation n0 -> t: v' = v + w × v + w × (w × v) / (1 + n0·t), w = n0 × t
+    n0x, n0y, n0z = frames[k, 0, 0], frames[k, 1, 0], frames[k, 2, 0]
+    wx = n0y * t[2] - n0z * t[1]
+    wy = n0z * t[0] - n0x * t[2]
+    wz = n0x * t[1] - n0y * t[0]
+    f = 1.0 / (1.0 + n0x * t[0] + n0y * t[1] + n0z * t[2])
+    for col in range(3):
+        vx, vy, vz = frames[k, 0, col], frames[k, 1, col], frames[k, 2, col]
+        cx = wy * vz - wz * vy
+        cy = wz * vx - wx * vz
+        cz = wx * vy - wy * vx
+        frame[0, col] = vx + cx + f * (wy * cz - wz * cy)
+        frame[1, col] = vy + cy + f * (wz * cx - wx * cz)
+        frame[2, col] = vz + cz + f * (wx * cy - wy * cx)

@@ -33,12 +33,14 @@ from ._detect import (
     MAX_CANDIDATES,
     MAX_CROSSINGS,
     N_COLS,
+    N_TIPS,
     ClearancePart,
     clearance_update,
     contact_capacity,
     contact_history,
     detect_section,
     element_spin,
+    place_tips,
     tracked_approach,
     tracked_slot,
 )
@@ -150,38 +152,49 @@ class SlidingClearanceJoint(Interaction):
                 f"{hole.section.inscribed_radius():.6g}) is not larger than the beam (radius "
                 f"{self.beam_radius:.6g}); the beam cannot pass")
         self.stations = hole.stations()
-        # the sections in body coordinates: origins (ns, 3), axes (ns, 3, 3) (normal, e_y, e_z)
-        origins, axes = hole.frames()
-        self._origins = np.ascontiguousarray(origins + self.hole_point)
-        self._axes = np.ascontiguousarray(axes)
         ns = len(self.stations)
+        # the sections in body coordinates: origins (ns, 3), axes (ns, 3, 3) (normal, e_y, e_z);
+        # then the N_TIPS tip sections of an open bore (placed at each step's start where an
+        # end of the beam lies inside the bore: _detect.place_tips); the per-section state
+        # below has a slot for each
+        origins, axes = hole.frames()
+        slots = ns + N_TIPS
+        self._origins = np.zeros((slots, 3))
+        self._origins[:ns] = origins + self.hole_point
+        self._axes = np.repeat(np.eye(3)[None], slots, axis=0)
+        self._axes[:ns] = axes
+        self._stations = np.zeros(slots)
+        self._stations[:ns] = self.stations
+        self._tip_on = np.zeros(N_TIPS, dtype=bool)
+        self._tip_station = np.zeros(N_TIPS)
+        self._tip_reach = float(np.max(np.diff(self.stations))) if ns > 1 else 0.0
         # state, updated after each converged step (also by the compiled integrator, in place):
-        self._elem = np.zeros(ns, np.int64)     # warm starts of the section crossings
-        self._xi = np.full(ns, 0.5)
+        self._elem = np.zeros(slots, np.int64)     # warm starts of the section crossings
+        self._xi = np.full(slots, 0.5)
         # the sections with a warm start ([count, k...], _detect.reset_crossings); −1: not
         # known (written here in Python: the compiled step lists them again)
-        self._ws_list = np.full(ns + 1, -1, np.int64)
+        self._ws_list = np.full(slots + 1, -1, np.int64)
         # tracked contacts per section (identity: section angle of the hole point, FORMULATION
         # II §3): approach velocity -g_N' at onset, section angle, in use
-        self._approach = np.zeros((ns, MAX_POINTS))
-        self._psi = np.zeros((ns, MAX_POINTS))
-        self._active = np.zeros((ns, MAX_POINTS), dtype=bool)
+        self._approach = np.zeros((slots, MAX_POINTS))
+        self._psi = np.zeros((slots, MAX_POINTS))
+        self._active = np.zeros((slots, MAX_POINTS), dtype=bool)
         # friction that sticks: elastic displacement from the anchor (hole frame), stuck
-        self._anchor = np.zeros((ns, MAX_POINTS, 3))
-        self._stuck = np.zeros((ns, MAX_POINTS))
+        self._anchor = np.zeros((slots, MAX_POINTS, 3))
+        self._stuck = np.zeros((slots, MAX_POINTS))
         self._q_start: np.ndarray | None = None   # the step's start (the packed part's array)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
         # the sections' bounding-sphere tree (body coordinates; reach: a crossing that far from
         # a section's centre counts, _detect.detect_section) and the detection's work arrays
-        self._tree = section_tree(self._origins, 2.0 * hole.section.bounding_radius()
+        self._tree = section_tree(self._origins[:ns], 2.0 * hole.section.bounding_radius()
                                   + self.beam_radius)
-        self._cross = (np.zeros(ns, np.int64), np.zeros((ns, MAX_CROSSINGS), np.int64),
-                       np.zeros((ns, MAX_CROSSINGS)), np.zeros(ns, np.int64),
-                       np.zeros(ns + 64, np.int64))
-        self._rows = np.zeros((MAX_CANDIDATES * ns, N_COLS))  # stationary points per section
-        self._elem_out = np.zeros(ns, np.int64)  # crossings of the last evaluation
-        self._xi_out = np.zeros(ns)
+        self._cross = (np.zeros(slots, np.int64), np.zeros((slots, MAX_CROSSINGS), np.int64),
+                       np.zeros((slots, MAX_CROSSINGS)), np.zeros(slots, np.int64),
+                       np.zeros(slots + 64, np.int64))
+        self._rows = np.zeros((MAX_CANDIDATES * slots, N_COLS))  # stationary points per section
+        self._elem_out = np.zeros(slots, np.int64)  # crossings of the last evaluation
+        self._xi_out = np.zeros(slots)
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: ModelParts) -> None:
@@ -226,9 +239,31 @@ class SlidingClearanceJoint(Interaction):
 
     def _planes(self, qb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Body rotation A, the sections' origins (ns, 3) and axes (ns, 3, 3) (columns: plane
-        normal, e_y, e_z), global, at the body coordinates ``qb``."""
+        normal, e_y, e_z), global, at the body coordinates ``qb`` (the bore's own sections,
+        not the tip sections)."""
         A = rotation_matrix(qb[3:7])
-        return A, qb[:3] + self._origins @ A.T, A @ self._axes
+        ns = len(self.stations)
+        return A, qb[:3] + self._origins[:ns] @ A.T, A @ self._axes[:ns]
+
+    @property
+    def n_slots(self) -> int:
+        """Section slots: the bore's sections, then the :data:`N_TIPS` tip sections."""
+        return len(self.stations) + N_TIPS
+
+    def place_tips(self, qb: np.ndarray, qe: np.ndarray) -> None:
+        """The tip sections at the hole body's coordinates ``qb`` and the beam's centreline
+        ``qe`` (:func:`~flexmbs.contact._detect.place_tips`): an open bore with a compiled
+        section; else none."""
+        compiled = self.hole.section.compiled_shape()
+        self._tip_on[:] = False
+        if not self.hole.open_ends or compiled is None:
+            return
+        place_tips(np.ascontiguousarray(qe), np.array(self.beam.centerline.lengths, dtype=float),
+                   np.ascontiguousarray(qb[:3], dtype=float), rotation_matrix(qb[3:7]),
+                   self._origins, self._axes, self._stations, *self._tree,
+                   float(self._tip_reach), float(self.beam_radius), int(compiled[0]),
+                   np.ascontiguousarray(compiled[1], dtype=float), self._tip_on,
+                   self._tip_station, self._cross[4])
 
     def _check_start(self, qb: np.ndarray, qe: np.ndarray, *, warn: bool) -> None:
         """The beam must cross every section plane inside the bore (with ``open_ends``: wherever
@@ -271,6 +306,7 @@ class SlidingClearanceJoint(Interaction):
             ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, _b)
             deepest = max(deepest, max((c.depth for c in self.hole.section.candidates(ell)),
                                        default=0.0))
+        self.place_tips(qb, qe)
         if warn and crossed == 0:
             warnings.warn(FlexmbsWarning(
                 f"joint '{self.name}': beam '{self.beam.name}' crosses none of the bore's "
@@ -366,17 +402,16 @@ class SlidingClearanceJoint(Interaction):
                 out.append((k, j, cand.kind, eP, res, a, b, psi))
         return out
 
-    def _contacts_compiled(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
-                           update: bool) -> list:
-        """A section with a compiled shape: the narrow phase of all sections runs compiled
-        (contact/_detect.py)."""
+    def detect_rows(self, q: np.ndarray, update: bool = False) -> int:
+        """The compiled narrow phase of every section at ``q`` (:func:`_detect.detect_section`):
+        the candidate rows into ``self._rows``; returns their number (``-1 - k``: the axis left
+        the bore at section k). ``update``: the crossings become the warm starts."""
         qb = q[self._body_dofs]
-        vb = v[self._body_dofs]
         A = rotation_matrix(qb[3:7])
         qe = np.ascontiguousarray(q[self._elem_dofs])
         e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
         unknown = np.full(1, -1, np.int64)        # lists not kept here: every section scanned
-        out_list = np.full(len(self.stations) + 1, -1, np.int64)
+        out_list = np.full(self.n_slots + 1, -1, np.int64)
         if update:
             self._ws_list[0] = -1
         section = self.hole.section
@@ -384,11 +419,22 @@ class SlidingClearanceJoint(Interaction):
         assert compiled is not None
         shape, params = compiled
         m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self._origins,
-                           self._axes, *self._tree, bool(self.hole.open_ends), *self._cross,
+                           self._axes, *self._tree, bool(self.hole.open_ends), self._tip_on,
+                           *self._cross,
                            self._elem, self._xi, unknown, e_out, x_out, out_list,
                            self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
                            self.detection == "consistent", self._rows)
+        return int(m)
+
+    def _contacts_compiled(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
+                           update: bool) -> list:
+        """A section with a compiled shape: the narrow phase of all sections runs compiled
+        (contact/_detect.py)."""
+        qb = q[self._body_dofs]
+        vb = v[self._body_dofs]
+        A = rotation_matrix(qb[3:7])
+        m = self.detect_rows(q, update)
         if m < 0:
             self._raise_left_bore(m)
         out = []
@@ -581,6 +627,7 @@ class SlidingClearanceJoint(Interaction):
             rows[i, ANCHOR_COL + 3] = res.stuck
         clearance_update(rows, len(contacts), np.full(1, -1, np.int64), self._approach,
                          self._active, self._psi, self._anchor, self._stuck)
+        self.place_tips(q[self._body_dofs], np.ascontiguousarray(q[self._elem_dofs]))
 
     # ------------------------------------------------------------------ output
     def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
@@ -674,8 +721,9 @@ class SlidingClearanceJoint(Interaction):
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore :meth:`get_state` (bit for bit); a changed friction law is refused."""
         check_resumed_friction(self.name, state.get("friction"), self.friction_parameters())
-        self._elem[:] = state["elem"]
-        self._xi[:] = state["xi"]
+        elem, xi = state["elem"], state["xi"]   # (older checkpoints: no tip sections)
+        self._elem[:len(elem)] = elem
+        self._xi[:len(xi)] = xi
         self._ws_list[0] = -1
         self._approach[:] = 0.0
         self._psi[:] = 0.0
@@ -731,7 +779,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
     dofs, n_total, q_ref = ctx, ctx.n_total, ctx.q_ref
     nj = len(joints)
     max_ne = max((len(j._lengths) for j in joints), default=0)
-    max_ns = max((len(j.stations) for j in joints), default=0)
+    max_ns = max((j.n_slots for j in joints), default=0)
     n_contacts = contact_capacity(max_ns)
     pos = np.full((nj, max_ne, N_LOCAL * N_LOCAL), -1, np.int64)
     ne2 = CENTERLINE_SIZE * CENTERLINE_SIZE
@@ -767,7 +815,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.array([j.hole.open_ends for j in joints], dtype=np.bool_),
         np.zeros(max_ns, i64), np.zeros((max_ns, MAX_CROSSINGS), i64),
         np.zeros((max_ns, MAX_CROSSINGS)), np.zeros(max_ns, i64), np.zeros(max_ns + 64, i64),
-        np.array([len(j.stations) for j in joints], i64),
+        np.array([j.n_slots for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
         np.array([shapes[i][0] for i in range(nj)], i64),
         c(np.array([shapes[i][1] for i in range(nj)], float).reshape(nj, 4)),
@@ -793,9 +841,17 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.zeros((n_contacts, N_LOCAL, N_EXT)), np.zeros((n_contacts, N_LOCAL, N_LOCAL)),
         np.zeros(n_contacts, i64), np.zeros(n_contacts, i64),
         np.zeros((0, N_LOCAL, N_EXT)),
-        np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total))
+        np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total),
+        pad_stack([j._stations for j in joints], (), 0.0, float),
+        pad_stack([j._tip_on for j in joints], (), False, np.bool_),
+        pad_stack([j._tip_station for j in joints], (), 0.0, float),
+        np.array([j._tip_reach for j in joints], float), np.zeros(nj, np.bool_))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
-        ns = len(j.stations)
+        ns = j.n_slots
+        j._origins = part.origins[i, :ns]      # (the tip sections' rows move)
+        j._axes = part.frames[i, :ns]
+        j._tip_on = part.tip_on[i]
+        j._tip_station = part.tip_station[i]
         j._elem = part.elem_ws[i, :ns]
         j._xi = part.xi_ws[i, :ns]
         j._ws_list = part.ws_list[i]
@@ -814,7 +870,23 @@ def _enable_clearance(part: ClearancePart, i: int, on: bool) -> None:
 
 
 def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
+    """``q`` starts the next step: the friction's reference, and the tip sections of open bores
+    placed there (as after every converged step, _detect.clearance_post_step_all; a resumed
+    run places them as the uninterrupted one did)."""
     part.q_start[:] = q
+    part.tips_due[:] = False
+    for j in range(part.r_b.size):
+        part.tip_on[j] = False
+        if not part.open_ends[j]:
+            continue
+        ne, ns = int(part.n_elem[j]), int(part.n_sec[j])
+        qb = q[part.body[j]]
+        place_tips(np.ascontiguousarray(q[part.elem_dofs[j, :ne]]), part.lengths[j, :ne],
+                   np.ascontiguousarray(qb[:3]), rotation_matrix(qb[3:7]),
+                   part.origins[j, :ns], part.frames[j, :ns], part.stations[j, :ns],
+                   part.tree_c[j], part.tree_r[j], part.tree_lo[j], part.tree_hi[j],
+                   float(part.tip_reach[j]), float(part.r_b[j]), int(part.shape[j]),
+                   part.params[j], part.tip_on[j], part.tip_station[j], part.work)
 
 
 #: the clearance joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`);

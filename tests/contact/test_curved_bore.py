@@ -248,12 +248,16 @@ def _wire_into_bore(open_ends: bool, tip: float = 0.0, push: float = 1.3e-3,  # 
 
 def test_open_ends_the_beam_may_end_inside_the_bore():
     """A wire ending in the middle of an open bore: the sections past its tip are idle, the
-    others carry its contacts; a closed bore refuses the same start."""
+    others carry its contacts, and so does the tip section of its last end (slot n + 1; the
+    first end, outside the mouth, has none); a closed bore refuses the same start."""
     model, joint = _wire_into_bore(True)
     asm = Assembly(model)
     q = asm.q_ref
     sections = {k for k, *_ in joint._contacts(q, np.zeros_like(q), False, False)}
-    assert sections and max(sections) <= 10 and min(sections) == 0
+    n = len(joint.stations)
+    regular = {k for k in sections if k < n}
+    assert regular and max(regular) <= 10 and min(regular) == 0
+    assert sections - regular == {n + 1} and list(joint._tip_on) == [False, True]
     r = np.zeros(asm.n_coords)
     joint.evaluate(None, q, np.zeros_like(q), None, 0.0, r, None)
     assert np.abs(r).max() > 0.0

@@ -68,7 +68,8 @@ def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in
     work = (np.zeros(1, np.int64), np.zeros((1, MAX_CROSSINGS), np.int64),
             np.zeros((1, MAX_CROSSINGS)), np.zeros(1, np.int64), np.zeros(65, np.int64))
     m = detect_section(qe.reshape(1, 12), np.array([L_ELEM]), np.zeros(3), np.eye(3),
-                       np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, False, *work, ws_e,
+                       np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, False, np.zeros(0, np.bool_),
+                       *work, ws_e,
                        ws_x, np.full(1, -1, np.int64), ws_e.copy(), ws_x.copy(),
                        np.full(2, -1, np.int64), r_b, shape, params, R_out, R_in, True, rows)
     if m < 0:
