@@ -82,8 +82,9 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
     of bodies); each band in the narrower of two orders: reverse Cuthill-McKee of all its
     unknowns, or :func:`saddle_order` (unknowns from ``n_coords`` on are multipliers, with a
     zero diagonal block; ``owner``: a label per unknown, >= 0 for the coordinates of one rigid
-    body, kept together). A multiplier whose neighbours are all in the border joins it (a band
-    block with an empty row would be singular). Computed once per pattern."""
+    body, kept together; :data:`MASSLESS` for a coordinate without mass). Each border is
+    closed by :func:`close_border` (the band block must stay nonsingular). Computed once per
+    pattern."""
     G, _ = _graph(A)
     N = G.shape[0]
     is_coord = np.arange(N) < n_coords
@@ -103,9 +104,8 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
         seen.add(border.tobytes())
         in_border = np.zeros(N, bool)
         in_border[border] = True
-        if border.size:   # closure: multipliers left without band neighbours
-            band_nb = G @ (~in_border).astype(float)
-            in_border |= ~is_coord & (band_nb == 0) & (degree > 0)
+        if border.size:
+            in_border = close_border(G, in_border, n_coords, owner)
         border = np.flatnonzero(in_border).astype(np.int64)
         if border.size > MAX_BORDER:
             continue
@@ -123,6 +123,80 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
             best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost)
     assert best is not None
     return best
+
+
+#: :func:`plan_factorization`'s ``owner`` label of a coordinate without mass (a sliding
+#: joint's slide coordinate): in the border whenever there is one
+MASSLESS = -2
+
+
+def close_border(G: sp.csr_matrix, in_border: np.ndarray, n_coords: int,
+                 owner: np.ndarray | None = None) -> np.ndarray:
+    """The smallest border containing ``in_border`` whose band block A_aa is nonsingular
+    whenever the iteration matrix is (in dynamics: mass on every band coordinate, Φ_q of
+    full row rank); the Schur complement needs A_aa^-1 (:mod:`flexmbs.solvers._bordered`).
+
+    A_aa = [[H_aa, B_a^T], [B_a, 0]] is nonsingular if B_a (the band multipliers' rows of
+    Φ_q on the band coordinates) has full row rank and H_aa = c_M M_aa + ... is definite on
+    its null space. A multiplier that constrains a border coordinate loses those columns in
+    B_a, and its row may then depend on the others: Example 2's hinge CD, with panel 2 in the
+    border, puts 5 rows on panel 1's 7 coordinates beside panel 1's own 6 (hinge AB,
+    normalisation), 11 rows on 7 columns. Hence:
+
+    * a rigid body (``owner`` >= 0) is in the border whole or not at all (at the identity
+      orientation e0 has no mass, which only its normalisation row in the band makes up
+      for), and a coordinate without mass (``owner`` == :data:`MASSLESS`) is in the border;
+    * a multiplier that constrains a border coordinate joins the border (its rows in B_a
+      are then rows of Φ_q, independent), except the rows of a *leaf*: a band rigid body o
+      whose band multipliers touch no other band coordinate, all but at most one of them
+      (its normalisation) constrain border coordinates of one single border body b. These
+      are joints between o and b: independent functions of the relative pose, hence of o's
+      pose with b held, and orthogonal to o's normalisation gradient 2p (Φ(p) homogeneous
+      in p); they occupy o's columns alone, so B_a stays block-diagonal and of full rank.
+      The leaves keep a star's hub a border of its own 7 coordinates and their rows;
+    * a multiplier without band neighbours joins the border (an empty row of A_aa).
+    """
+    N = G.shape[0]
+    in_border = in_border.copy()
+    if owner is not None:
+        in_border[:n_coords] |= owner[:n_coords] == MASSLESS
+        body = np.where(owner[:n_coords] >= 0, owner[:n_coords], -1)
+        split = np.unique(body[in_border[:n_coords] & (body >= 0)])
+        in_border[:n_coords] |= np.isin(body, split) & (body >= 0)
+    else:
+        body = np.full(n_coords, -1, np.int64)
+    coupling = G[n_coords:, :n_coords].tocsr()   # multiplier rows x coordinates
+    m = N - n_coords
+    move = np.zeros(m, bool)
+    touches_border = np.zeros(m, bool)
+    leaf_of = np.full(m, -1, np.int64)    # the band body a border-touching row may stay on
+    for r in np.flatnonzero(~in_border[n_coords:]):
+        cols = coupling.indices[coupling.indptr[r]:coupling.indptr[r + 1]]
+        inside = in_border[cols]
+        touches_border[r] = inside.any()
+        if not touches_border[r]:
+            move[r] = not cols.size and G.indptr[n_coords + r + 1] > G.indptr[n_coords + r]
+            continue
+        mine = np.unique(body[cols[~inside]])
+        theirs = np.unique(body[cols[inside]])
+        if mine.size == 1 and mine[0] >= 0 and theirs.size == 1 and theirs[0] >= 0:
+            leaf_of[r] = mine[0]
+        else:       # no band neighbour, several bodies, beam or massless coordinates
+            move[r] = True
+    for o in np.unique(leaf_of[leaf_of >= 0]):
+        cols_o = np.flatnonzero(body == o)
+        rows_o = np.unique(coupling[:, cols_o].tocsc().indices)
+        rows_o = rows_o[~in_border[n_coords + rows_o] & ~move[rows_o]]
+        anchors: set[int] = set()
+        local = True
+        for r in rows_o:
+            cols = coupling.indices[coupling.indptr[r]:coupling.indptr[r + 1]]
+            local = local and bool((body[cols[~in_border[cols]]] == o).all())
+            anchors.update(np.unique(body[cols[in_border[cols]]]).tolist())
+        if not (local and len(anchors) == 1 and int((~touches_border[rows_o]).sum()) <= 1):
+            move[rows_o[touches_border[rows_o]]] = True
+    in_border[n_coords:] |= move
+    return in_border
 
 
 def _bandwidth(G: sp.csr_matrix, order: np.ndarray) -> int:
