@@ -823,6 +823,20 @@ class Assembly:
             parts.append(n + np.flatnonzero(pattern @ in_border.astype(float) > 0))
         return np.unique(np.concatenate(parts).astype(np.int64))
 
+    def coordinate_owners(self) -> np.ndarray:
+        """A label per unknown (coordinates and multipliers): the body index for a rigid
+        body's coordinates (the band order keeps them together), ``_ordering.MASSLESS`` for the
+        interactions' coordinates (a slide coordinate has no mass: never in the band beside a
+        border), −1 otherwise (:func:`flexmbs.solvers._ordering.close_border`)."""
+        from .solvers._ordering import MASSLESS
+
+        owner = np.full(self.n_total, -1, np.int64)
+        table = self.body_dof_table
+        owner[table.ravel()] = np.repeat(np.arange(table.shape[0]), table.shape[1])
+        for obj in self.model.interactions:
+            owner[np.asarray(self.extra_dofs(obj), np.int64)] = MASSLESS
+        return owner
+
     def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """As :meth:`positions`, with −1 for the entries outside the pattern."""
         N = self.n_total

@@ -55,7 +55,11 @@ class BorderedBandedLU:
     """Bordered-banded LU of a matrix with a fixed CSC pattern (band: RCM + dgbtf2, border:
     Schur complement + dgetf2), all in numba; see the module docstring."""
 
-    def __init__(self, A: sp.csc_matrix, border: np.ndarray) -> None:
+    def __init__(self, A: sp.csc_matrix, border: np.ndarray, order: np.ndarray | None = None
+                 ) -> None:
+        """``border``: the unknowns of the dense Schur complement; ``order``: the others in
+        band order (default: reverse Cuthill-McKee), e.g. from
+        :func:`flexmbs.solvers._ordering.plan_factorization`."""
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
         A = sp.csc_matrix(A)
@@ -70,7 +74,11 @@ class BorderedBandedLU:
         band = np.flatnonzero(~in_border).astype(np.int64)
         cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
         rows = A.indices[:cols.size].astype(np.int64)
-        if band.size:
+        if order is not None:
+            perm = np.asarray(order, np.int64)
+            if perm.shape != band.shape or not np.array_equal(np.sort(perm), band):
+                raise ValueError("BorderedBandedLU: order must list every non-border unknown once")
+        elif band.size:
             P = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(N, N))[band][:, band]
             P = (P + P.T).tocsr()
             perm = band[reverse_cuthill_mckee(P, symmetric_mode=True)]

@@ -391,6 +391,7 @@ class _CompiledStepper:
         from ..terms import dynamic_mode
         from . import _compiled as cc
         from ._bordered import BorderedBandedLU
+        from ._ordering import plan_factorization
 
         self.cc = cc
         self.asm = asm
@@ -409,7 +410,8 @@ class _CompiledStepper:
         self.info = np.zeros(cc.INFO_SIZE)
         self.info[cc.INFO_KSCALE] = asm.stiffness_scale
         self.data = np.zeros_like(asm.matrix.data)
-        self.lu = BorderedBandedLU(asm.matrix, asm.border_indices())
+        plan = plan_factorization(asm.matrix, asm.border_indices(), n, asm.coordinate_owners())
+        self.lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
         self.stopped: Exception | None = None
         # the velocity corrector (constraint_level): its own factorisation, the matrix pattern
         # to read Phi_q from, the equations it holds

@@ -1,0 +1,188 @@
+"""Side-by-side benchmark: a hanging chain of N rigid bodies on spherical joints, flexmbs and
+Exudyn in one process run (issue 37).
+
+Links of 0.1 m, m = 0.1 kg, inertia of a slender rod (1e-6, m L^2/12, m L^2/12) about the
+link's own axes, Euler parameters; the chain starts horizontal along x, its first link hinged
+to the ground at the origin, gravity -z. Generalized-alpha rho_inf = 0.8, fixed h = 1e-3,
+index 3, modified Newton on both sides, Exudyn with EigenSparse on one thread. Prints wall
+time per step, the ratio flexmbs/Exudyn, the free end's z of both and the cost exponent of
+flexmbs from N = 40 to 640; then a beam threaded through fixed eyelets.
+
+    python benchmarks/chain.py [--t-end 0.1] [--sizes 10 40 160 640] [--eyelets 50]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from exudyn_models import _quiet_settings, exudyn_available  # noqa: E402
+
+import flexmbs as fm  # noqa: E402
+
+LINK = 0.1
+MASS = 0.1
+INERTIA = (1e-6, MASS * LINK**2 / 12, MASS * LINK**2 / 12)
+G = (0.0, 0.0, -9.81)
+
+
+def build_chain(n: int) -> tuple[fm.Model, list]:
+    model = fm.Model(gravity=G)
+    bodies = []
+    prev = fm.GROUND
+    for k in range(n):
+        b = model.add_rigid_body(mass=MASS, inertia=INERTIA,
+                                 pose=fm.Pose(((k + 0.5) * LINK, 0.0, 0.0), np.eye(3)))
+        model.spherical(b, prev, point=(k * LINK, 0.0, 0.0))
+        bodies.append(b)
+        prev = b
+    return model, bodies
+
+
+def run_flexmbs_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1, repeats: int = 1) -> dict:
+    best = None
+    for _ in range(repeats):
+        model, bodies = build_chain(n)
+        integ = fm.GeneralizedAlpha(rho_inf=0.8, adaptive=False)
+        res = fm.simulate(model, t_end=t_end, dt=h, integrator=integ, output_interval=t_end,
+                          record_energy=False)
+        if best is None or res.wall_time < best[0].wall_time:
+            best = (res, bodies)
+    res, bodies = best
+    s = res.stats
+    return dict(n=n, steps=s.steps, wall_time=res.wall_time,
+                us_per_step=1e6 * res.wall_time / s.steps,
+                end_z=float(res.body_position(bodies[-1])[-1][2]),
+                newton=s.newton_iterations, jac=s.factorizations,
+                rejected=getattr(s, "rejected_steps", 0))
+
+
+def run_exudyn_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1) -> dict:
+    import exudyn as exu
+    import exudyn.itemInterface as ei
+    from exudyn.rigidBodyUtilities import RigidBodyInertia
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ei.ObjectGround())
+    inertia = RigidBodyInertia(mass=MASS, inertiaTensor=np.diag(INERTIA))
+    prev_marker = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    last = None
+    for k in range(n):
+        node = mbs.AddNode(ei.NodeRigidBodyEP(
+            referenceCoordinates=[(k + 0.5) * LINK, 0, 0, 1, 0, 0, 0],
+            initialVelocities=[0] * 7))
+        body = mbs.AddObject(ei.ObjectRigidBody(
+            physicsMass=MASS, physicsInertia=inertia.GetInertia6D(), nodeNumber=node))
+        mbs.AddLoad(ei.Force(markerNumber=mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=node)),
+                              loadVector=[MASS * g for g in G]))
+        m_left = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=body, localPosition=[-LINK / 2, 0, 0]))
+        mbs.AddObject(ei.ObjectJointSpherical(markerNumbers=[prev_marker, m_left],
+                                               constrainedAxes=[1, 1, 1]))
+        prev_marker = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=body,
+                                                        localPosition=[LINK / 2, 0, 0]))
+        last = node
+    mbs.Assemble()
+    s = _quiet_settings("EigenSparse")
+    n_steps = int(round(t_end / h))
+    ti = s.timeIntegration
+    ti.endTime = n_steps * h
+    ti.numberOfSteps = n_steps
+    ti.initialStepSize = h
+    ti.adaptiveStep = False
+    ti.automaticStepSize = False
+    ti.generalizedAlpha.spectralRadius = 0.8
+    ti.generalizedAlpha.useIndex2Constraints = False
+    ti.generalizedAlpha.useNewmark = False
+    ti.generalizedAlpha.computeInitialAccelerations = True
+    ti.newton.useModifiedNewton = True
+    ti.newton.relativeTolerance = 1e-8
+    ti.newton.residualMode = 1
+    ti.newton.absoluteTolerance = 1e-8
+    t0 = time.perf_counter()
+    ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha,
+                          storeSolver=True)
+    wall = time.perf_counter() - t0
+    if not ok:
+        raise RuntimeError("Exudyn SolveDynamic failed")
+    it = mbs.sys["dynamicSolver"].it
+    z = mbs.GetNodeOutput(last, exu.OutputVariableType.Position)[2]
+    return dict(n=n, steps=n_steps, wall_time=wall, us_per_step=1e6 * wall / n_steps,
+                end_z=float(z), newton=int(it.newtonStepsCount), jac=int(it.newtonJacobiCount))
+
+
+def build_eyelets(n_eyelets: int, n_elem: int = 100) -> fm.Model:
+    """A 1 m steel wire (r = 0.5 mm, 100 elements), clamped at its start, threaded through
+    ``n_eyelets`` fixed eyelets (rings without clearance: ``SlidingJoint(variant="ring")`` on
+    fixed bodies, each with its slide coordinate) evenly spaced along it, pulled by 1 N along
+    its axis at the free end, under gravity."""
+    model = fm.Model(gravity=G)
+    wire = model.add_beam(fm.line((0, 0, 0), (1.0, 0, 0), elements=n_elem),
+                          section=fm.CircularSection(5e-4),
+                          material=fm.Material(E=2.1e11, rho=7800.0))
+    model.clamp(wire.first_node)
+    for k, x in enumerate(np.linspace(0.0, 1.0, n_eyelets + 2)[1:-1]):
+        ring = model.add_rigid_body(mass=1e-2, inertia=(1e-6, 1e-6, 1e-6),
+                                    pose=fm.Pose((x, 0.0, 0.0), np.eye(3)), name=f"eyelet{k}")
+        model.fix_body(ring)
+        model.add_joint(fm.SlidingJoint(wire, ring, variant="ring", name=f"ring{k}"))
+    model.add_point_load(wire.last_node, force=(1.0, 0.0, 0.0))
+    return model
+
+
+def run_flexmbs_eyelets(n_eyelets: int, *, h: float = 1e-3, t_end: float = 0.05) -> dict:
+    model = build_eyelets(n_eyelets)
+    res = fm.simulate(model, t_end=t_end, dt=h, output_interval=t_end, record_energy=False,
+                      integrator=fm.GeneralizedAlpha(rho_inf=0.8, adaptive=False))
+    s = res.stats
+    return dict(steps=s.steps, us_per_step=1e6 * res.wall_time / s.steps,
+                newton=s.newton_iterations, jac=s.factorizations)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--t-end", type=float, default=0.1)
+    ap.add_argument("--dt", type=float, default=1e-3)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 40, 160, 640])
+    ap.add_argument("--eyelets", type=int, default=50)
+    args = ap.parse_args(argv)
+    run_flexmbs_chain(3, t_end=0.005)   # compile / load numba caches outside the timing
+    have_exu = exudyn_available()
+    print(f"hanging chain, h = {args.dt}, t_end = {args.t_end}, rho_inf = 0.8, modified Newton")
+    print(f"{'N':>5} {'flexmbs us/step':>16} {'Exudyn us/step':>15} {'ratio':>7} "
+          f"{'flexmbs it/jac':>15} {'Exudyn it/jac':>14} {'end z flexmbs':>14} {'end z Exudyn':>13}")
+    ts = []
+    for n in args.sizes:
+        f = run_flexmbs_chain(n, h=args.dt, t_end=args.t_end, repeats=2)
+        ts.append(f["us_per_step"])
+        if have_exu:
+            e = min((run_exudyn_chain(n, h=args.dt, t_end=args.t_end) for _ in range(2)),
+                    key=lambda d: d["us_per_step"])
+            print(f"{n:5d} {f['us_per_step']:16.1f} {e['us_per_step']:15.1f} "
+                  f"{f['us_per_step'] / e['us_per_step']:7.2f} {f['newton']:>7d}/{f['jac']:<7d} "
+                  f"{e['newton']:>6d}/{e['jac']:<7d} {f['end_z']:14.8f} {e['end_z']:13.8f}")
+        else:
+            print(f"{n:5d} {f['us_per_step']:16.1f} {'-':>15} {'-':>7} "
+                  f"{f['newton']:>7d}/{f['jac']:<7d}")
+    big = [(n, t) for n, t in zip(args.sizes, ts, strict=True) if n >= 40]
+    if len(big) >= 2:
+        k = np.polyfit(np.log([n for n, _ in big]), np.log([t for _, t in big]), 1)[0]
+        print(f"flexmbs cost per step ~ N^{k:.2f} (N = {big[0][0]}..{big[-1][0]})")
+    if args.eyelets:
+        r = run_flexmbs_eyelets(args.eyelets, h=args.dt)
+        print(f"wire through {args.eyelets} fixed eyelets (100 elements): "
+              f"{r['us_per_step']:.1f} us/step, it/jac {r['newton']}/{r['jac']}")
+    return 0
+
+
+if __name__ == "__main__":
+    t0 = time.perf_counter()
+    rc = main()
+    print(f"benchmark wall time {time.perf_counter() - t0:.1f} s")
+    sys.exit(rc)

@@ -1,0 +1,254 @@
+"""Choice of the bordered LU's border (:mod:`flexmbs.solvers._bordered`) from a cost estimate.
+
+Pure Python and scipy (no compiled code here, so that this file does not enter the compiled
+kernels' cache stamp). See ``docs/design-notes.md`` ("The border, chosen by cost").
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+
+#: borders larger than this are not considered (the dense Schur complement's memory)
+MAX_BORDER = 4000
+
+
+#: solves per factorisation assumed by the cost estimate of :func:`choose_border` (modified
+#: Newton reuses a factorisation for several iterations and steps)
+SOLVES_PER_FACTOR = 8.0
+
+
+def _graph(A: sp.csc_matrix) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Symmetric adjacency (pattern of A + A^T without the diagonal) and the structural
+    diagonal (True where the pattern stores A_ii)."""
+    A = sp.csc_matrix(A)
+    N = A.shape[0]
+    cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
+    rows = A.indices[:cols.size].astype(np.int64)
+    diag = np.zeros(N, bool)
+    diag[rows[rows == cols]] = True
+    off = rows != cols
+    G = sp.csr_matrix((np.ones(int(off.sum())), (rows[off], cols[off])), shape=(N, N))
+    G = (G + G.T).tocsr()
+    G.data[:] = 1.0
+    return G, diag
+
+
+def _band_order(G: sp.csr_matrix, band: np.ndarray) -> tuple[np.ndarray, int]:
+    """Reverse Cuthill-McKee order of the ``band`` unknowns and its half bandwidth."""
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    if not band.size:
+        return band, 0
+    P = G[band][:, band].tocsr()
+    perm = band[reverse_cuthill_mckee(P, symmetric_mode=True)]
+    local = np.empty(G.shape[0], np.int64)
+    local[perm] = np.arange(perm.size)
+    C = P.tocoo()
+    inv = local[band]
+    w = int(np.abs(inv[C.row] - inv[C.col]).max(initial=0))
+    return perm, w
+
+
+def factor_cost(n_band: int, n_border: int, bandwidth: int) -> float:
+    """Estimated flops of one bordered factorisation plus :data:`SOLVES_PER_FACTOR` solves
+    (kl = ku = ``bandwidth``; partial pivoting widens the upper band to kl + ku): band LU
+    n_a kl (kl + ku), the n_b band solves of X, the Schur product n_b^2 n_a, its dense LU."""
+    na, nb, k = float(n_band), float(n_border), float(bandwidth)
+    factor = na * k * 2 * k + nb * na * 3 * k * 2 + nb * nb * na * 2 + 2 * nb**3 / 3
+    solve = na * 3 * k * 2 + 4 * nb * na + 2 * nb * nb
+    return factor + SOLVES_PER_FACTOR * solve
+
+
+class FactorPlan(NamedTuple):
+    """Border and band order of a :class:`~flexmbs.solvers._bordered.BorderedBandedLU`."""
+
+    border: np.ndarray      # int64: unknowns of the dense Schur complement
+    order: np.ndarray       # int64: the other unknowns in band order
+    bandwidth: int          # half bandwidth of the band in that order (before pivoting)
+    cost: float             # factor_cost estimate
+
+
+def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
+                       owner: np.ndarray | None = None) -> FactorPlan:
+    """The border (unknowns of the dense Schur complement) and band order with the least
+    :func:`factor_cost` among these borders: ``suggested`` (e.g.
+    :meth:`flexmbs.assembly.Assembly.border_indices`), none (the whole saddle-point system in
+    one band: chains of bodies and joints, whose bandwidth does not grow with their number),
+    and the *hubs*: unknowns coupled to at least d others, for a few thresholds d (a slide
+    coordinate or a sliding joint's multipliers reserved along a whole beam, the hub of a star
+    of bodies); each band in the narrower of two orders: reverse Cuthill-McKee of all its
+    unknowns, or :func:`saddle_order` (unknowns from ``n_coords`` on are multipliers, with a
+    zero diagonal block; ``owner``: a label per unknown, >= 0 for the coordinates of one rigid
+    body, kept together; :data:`MASSLESS` for a coordinate without mass). Each border is
+    closed by :func:`close_border` (the band block must stay nonsingular). Computed once per
+    pattern."""
+    G, _ = _graph(A)
+    N = G.shape[0]
+    is_coord = np.arange(N) < n_coords
+    degree = np.diff(G.indptr)
+    suggested = np.unique(np.asarray(suggested, np.int64))
+    candidates = [suggested, np.zeros(0, np.int64)]
+    levels = np.unique(degree)
+    levels = levels[levels > 2 * max(float(np.median(degree)), 1.0)]
+    if levels.size:
+        for d in levels[::-1][::max(1, levels.size // 6)]:
+            candidates.append(np.flatnonzero(degree >= d).astype(np.int64))
+    best: FactorPlan | None = None
+    seen: set[bytes] = set()
+    for border in candidates:
+        if border.tobytes() in seen:
+            continue
+        seen.add(border.tobytes())
+        in_border = np.zeros(N, bool)
+        in_border[border] = True
+        if border.size:
+            in_border = close_border(G, in_border, n_coords, owner)
+        border = np.flatnonzero(in_border).astype(np.int64)
+        if border.size > MAX_BORDER:
+            continue
+        band = np.flatnonzero(~in_border).astype(np.int64)
+        order, w = _band_order(G, band)
+        # the second order only where it can matter (bodies in the band, or a border whose
+        # rows leave multipliers in it): a plain beam model keeps its plan at RCM's cost
+        if border.size or (owner is not None and (owner[band] >= 0).any()):
+            alt = saddle_order(G, is_coord, band, owner)
+            w_alt = _bandwidth(G, alt)
+            if w_alt < w:
+                order, w = alt, w_alt
+        cost = factor_cost(band.size, border.size, w)
+        if best is None or cost < best.cost:
+            best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost)
+    assert best is not None
+    return best
+
+
+#: :func:`plan_factorization`'s ``owner`` label of a coordinate without mass (a sliding
+#: joint's slide coordinate): in the border whenever there is one
+MASSLESS = -2
+
+
+def close_border(G: sp.csr_matrix, in_border: np.ndarray, n_coords: int,
+                 owner: np.ndarray | None = None) -> np.ndarray:
+    """The smallest border containing ``in_border`` whose band block A_aa is nonsingular
+    whenever the iteration matrix is (in dynamics: mass on every band coordinate, Φ_q of
+    full row rank); the Schur complement needs A_aa^-1 (:mod:`flexmbs.solvers._bordered`).
+
+    A_aa = [[H_aa, B_a^T], [B_a, 0]] is nonsingular if B_a (the band multipliers' rows of
+    Φ_q on the band coordinates) has full row rank and H_aa = c_M M_aa + ... is definite on
+    its null space. A multiplier that constrains a border coordinate loses those columns in
+    B_a, and its row may then depend on the others: Example 2's hinge CD, with panel 2 in the
+    border, puts 5 rows on panel 1's 7 coordinates beside panel 1's own 6 (hinge AB,
+    normalisation), 11 rows on 7 columns. Hence:
+
+    * a rigid body (``owner`` >= 0) is in the border whole or not at all (at the identity
+      orientation e0 has no mass, which only its normalisation row in the band makes up
+      for), and a coordinate without mass (``owner`` == :data:`MASSLESS`) is in the border;
+    * a multiplier that constrains a border coordinate joins the border (its rows in B_a
+      are then rows of Φ_q, independent), except the rows of a *leaf*: a band rigid body o
+      whose band multipliers touch no other band coordinate, all but at most one of them
+      (its normalisation) constrain border coordinates of one single border body b. These
+      are joints between o and b: independent functions of the relative pose, hence of o's
+      pose with b held, and orthogonal to o's normalisation gradient 2p (Φ(p) homogeneous
+      in p); they occupy o's columns alone, so B_a stays block-diagonal and of full rank.
+      The leaves keep a star's hub a border of its own 7 coordinates and their rows;
+    * a multiplier without band neighbours joins the border (an empty row of A_aa).
+    """
+    N = G.shape[0]
+    in_border = in_border.copy()
+    if owner is not None:
+        in_border[:n_coords] |= owner[:n_coords] == MASSLESS
+        body = np.where(owner[:n_coords] >= 0, owner[:n_coords], -1)
+        split = np.unique(body[in_border[:n_coords] & (body >= 0)])
+        in_border[:n_coords] |= np.isin(body, split) & (body >= 0)
+    else:
+        body = np.full(n_coords, -1, np.int64)
+    coupling = G[n_coords:, :n_coords].tocsr()   # multiplier rows x coordinates
+    m = N - n_coords
+    move = np.zeros(m, bool)
+    touches_border = np.zeros(m, bool)
+    leaf_of = np.full(m, -1, np.int64)    # the band body a border-touching row may stay on
+    for r in np.flatnonzero(~in_border[n_coords:]):
+        cols = coupling.indices[coupling.indptr[r]:coupling.indptr[r + 1]]
+        inside = in_border[cols]
+        touches_border[r] = inside.any()
+        if not touches_border[r]:
+            move[r] = not cols.size and G.indptr[n_coords + r + 1] > G.indptr[n_coords + r]
+            continue
+        mine = np.unique(body[cols[~inside]])
+        theirs = np.unique(body[cols[inside]])
+        if mine.size == 1 and mine[0] >= 0 and theirs.size == 1 and theirs[0] >= 0:
+            leaf_of[r] = mine[0]
+        else:       # no band neighbour, several bodies, beam or massless coordinates
+            move[r] = True
+    for o in np.unique(leaf_of[leaf_of >= 0]):
+        cols_o = np.flatnonzero(body == o)
+        rows_o = np.unique(coupling[:, cols_o].tocsc().indices)
+        rows_o = rows_o[~in_border[n_coords + rows_o] & ~move[rows_o]]
+        anchors: set[int] = set()
+        local = True
+        for r in rows_o:
+            cols = coupling.indices[coupling.indptr[r]:coupling.indptr[r + 1]]
+            local = local and bool((body[cols[~in_border[cols]]] == o).all())
+            anchors.update(np.unique(body[cols[in_border[cols]]]).tolist())
+        if not (local and len(anchors) == 1 and int((~touches_border[rows_o]).sum()) <= 1):
+            move[rows_o[touches_border[rows_o]]] = True
+    in_border[n_coords:] |= move
+    return in_border
+
+
+def _bandwidth(G: sp.csr_matrix, order: np.ndarray) -> int:
+    """Half bandwidth of the unknowns ``order`` (all others excluded) in that order."""
+    if not order.size:
+        return 0
+    pos = np.full(G.shape[0], -1, np.int64)
+    pos[order] = np.arange(order.size)
+    C = G[order][:, order].tocoo()
+    return int(np.abs(pos[order][C.row] - pos[order][C.col]).max(initial=0))
+
+
+def saddle_order(G: sp.csr_matrix, diag: np.ndarray, band: np.ndarray,
+                 owner: np.ndarray | None = None) -> np.ndarray:
+    """Band order of a saddle-point system: reverse Cuthill-McKee on the unknowns with a
+    structural diagonal (coordinates), coupled also through every zero-diagonal unknown
+    (multiplier) they share, the coordinates with one ``owner`` label (>= 0: a rigid body)
+    kept together, then each multiplier placed at the mean position of the coordinates it
+    constrains (next to them, whatever the joint graph looks like)."""
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    prim = band[diag[band]]
+    sec = band[~diag[band]]
+    if not prim.size or not sec.size:
+        return _band_order(G, band)[0]
+    Gpp = G[prim][:, prim]
+    Gps = G[prim][:, sec]
+    P = (Gpp + Gps @ Gps.T + sp.identity(prim.size)).tocsr()
+    P.data[:] = 1.0
+    # the coordinates of one owner (a rigid body's 7) form one supernode, ordered together;
+    # RCM runs on the quotient graph
+    if owner is None:
+        group = np.arange(prim.size)
+    else:
+        lab = owner[prim]
+        lab = np.where(lab >= 0, lab, lab.max(initial=0) + 1 + np.arange(prim.size))
+        _, group = np.unique(lab, return_inverse=True)
+        group = group.ravel()
+    E = sp.csr_matrix((np.ones(prim.size), (np.arange(prim.size), group)))
+    Q = (E.T @ P @ E).tocsr()
+    g_order = reverse_cuthill_mckee(Q, symmetric_mode=True)
+    g_rank = np.empty(g_order.size, np.int64)
+    g_rank[g_order] = np.arange(g_order.size)
+    order_p = prim[np.argsort(g_rank[group], kind="stable")]
+    key = np.empty(G.shape[0])
+    key[order_p] = np.arange(order_p.size, dtype=float)
+    S = G[sec][:, order_p].tocsr()
+    cnt = np.diff(S.indptr)
+    sums = S @ np.arange(order_p.size, dtype=float)
+    lonely = cnt == 0
+    key[sec] = np.where(lonely, order_p.size, sums / np.maximum(cnt, 1))
+    if lonely.any():   # multipliers of multipliers only: after everything, in RCM order
+        key[sec[lonely]] += np.arange(int(lonely.sum())) * 1e-6
+    order = np.concatenate([order_p, sec])
+    return order[np.argsort(key[order], kind="stable")]

@@ -1,0 +1,279 @@
+"""The bordered LU's plan (flexmbs.solvers._ordering): border and band order chosen by cost,
+checked against SuperLU on saddle-point systems of multibody shapes (issue 37)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from flexmbs.solvers._bordered import BorderedBandedLU
+from flexmbs.solvers._ordering import close_border, plan_factorization
+
+#: relative agreement with SuperLU (the systems below have cond ~ 1e2..1e4)
+SUPERLU_TOL = 1e-12
+
+
+def _saddle(rng: np.random.Generator, n_bodies: int, joints: list[tuple[int, int]],
+            beam_elements: int = 0, on_beam: tuple[int, ...] = (), regularise: float = 0.0,
+            ) -> tuple[sp.csc_matrix, int, np.ndarray, np.ndarray]:
+    """Saddle-point matrix of rigid bodies (7 coordinates, an SPD block each, a normalisation
+    row on the last 4), spherical-like joints (3 rows on both bodies' 7 coordinates; body −1 is
+    the ground), an optional beam (6 coordinates per node, 12 x 12 element blocks) whose node
+    ``k`` in ``on_beam`` is joined to body ``k % n_bodies``. Multipliers after coordinates;
+    ``regularise`` > 0 puts −regularise I in the multiplier block (no zero diagonal block).
+    Returns A, the number of coordinates, the suggested border (all bodies and their rows) and
+    the owner labels (body index of a body's coordinates, −1 otherwise)."""
+    nb7 = 7 * n_bodies
+    n_beam = 6 * (beam_elements + 1) if beam_elements else 0
+    n = nb7 + n_beam
+    K = sp.lil_matrix((n, n))
+    for b in range(n_bodies):
+        B = rng.standard_normal((7, 7))
+        K[7 * b:7 * b + 7, 7 * b:7 * b + 7] = B @ B.T / 7 + 2 * np.eye(7)
+    for e in range(beam_elements):
+        B = rng.standard_normal((12, 12))
+        s = slice(nb7 + 6 * e, nb7 + 6 * e + 12)
+        K[s, s] = K[s, s].toarray() + B @ B.T / 12 + np.eye(12)
+    rows = []
+    for b in range(n_bodies):        # normalisation
+        r = np.zeros(n)
+        r[7 * b + 3:7 * b + 7] = rng.uniform(0.5, 1.5, 4)
+        rows.append(r)
+    pairs = [(a, ("body", b)) for a, b in joints] + [(k % n_bodies, ("node", k)) for k in on_beam]
+    for a, (kind, b) in pairs:
+        for _ in range(3):
+            r = np.zeros(n)
+            r[7 * a:7 * a + 7] = rng.standard_normal(7)
+            if kind == "body" and b >= 0:
+                r[7 * b:7 * b + 7] = rng.standard_normal(7)
+            elif kind == "node":
+                r[nb7 + 6 * b:nb7 + 6 * b + 6] = rng.standard_normal(6)
+            rows.append(r)
+    C = sp.csr_matrix(np.array(rows))
+    m = C.shape[0]
+    # a joint's rotational coupling (Φ_qq^T λ) between the two bodies
+    for a, (kind, b) in pairs:
+        if kind == "body" and b >= 0:
+            X = 0.1 * rng.standard_normal((7, 7))
+            K[7 * a:7 * a + 7, 7 * b:7 * b + 7] = X
+            K[7 * b:7 * b + 7, 7 * a:7 * a + 7] = X.T
+    D = -regularise * sp.identity(m) if regularise else sp.csr_matrix((m, m))
+    A = sp.bmat([[sp.csr_matrix(K), C.T], [C, D]], format="csc")
+    A.sort_indices()
+    border = np.r_[np.arange(nb7), n + np.arange(m)] if n_bodies else np.zeros(0, np.int64)
+    owner = np.full(A.shape[0], -1, np.int64)
+    owner[:nb7] = np.repeat(np.arange(n_bodies), 7)
+    return A, n, border, owner
+
+
+def _chain(n):
+    return [(k, k - 1) for k in range(n)]
+
+
+def _star(n):
+    return [(0, -1)] + [(k, 0) for k in range(1, n)]
+
+
+def _binary_tree(n):
+    return [(0, -1)] + [(k, (k - 1) // 2) for k in range(1, n)]
+
+
+def _loop(n):   # a closed chain: both ends on the ground (four-bar: n = 3)
+    return _chain(n) + [(n - 1, -1)]
+
+
+SHAPES = {
+    "chain": lambda rng, reg: _saddle(rng, 60, _chain(60), regularise=reg),
+    "star": lambda rng, reg: _saddle(rng, 40, _star(40), regularise=reg),
+    "binary_tree": lambda rng, reg: _saddle(rng, 63, _binary_tree(63), regularise=reg),
+    "four_bar": lambda rng, reg: _saddle(rng, 3, _loop(3), regularise=reg),
+    "loop": lambda rng, reg: _saddle(rng, 30, _loop(30), regularise=reg),
+    "beam_with_bodies": lambda rng, reg: _saddle(rng, 4, _chain(4), beam_elements=40,
+                                                 on_beam=(10, 20, 30, 40), regularise=reg),
+}
+
+
+@pytest.mark.parametrize("regularise", [0.0, 1e-2], ids=["zero_block", "regularised"])
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_planned_lu_matches_superlu(shape, regularise):
+    rng = np.random.default_rng(abs(hash(shape)) % 2**32)
+    A, n, border, owner = SHAPES[shape](rng, regularise)
+    plan = plan_factorization(A, border, n, owner)
+    lu = BorderedBandedLU(A, plan.border, plan.order)
+    assert lu.factorize(A.data), f"pivot failure {lu.info}"
+    b = rng.standard_normal(A.shape[0])
+    x = lu.solve(b)
+    ref = spla.splu(A, permc_spec="COLAMD").solve(b)
+    assert np.abs(x - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
+    assert plan.cost <= plan_factorization(A, border, n, owner).cost   # deterministic
+
+
+def test_chain_is_one_band_of_constant_width():
+    """A chain needs no border and its bandwidth does not grow with its length (O(N))."""
+    widths = []
+    for nb in (20, 80, 320):
+        A, n, border, owner = _saddle(np.random.default_rng(nb), nb, _chain(nb))
+        plan = plan_factorization(A, border, n, owner)
+        assert plan.border.size == 0
+        widths.append(plan.bandwidth)
+    assert widths[0] == widths[1] == widths[2] <= 21
+
+
+def test_star_keeps_its_hub_in_the_border():
+    """A star's hub couples to every joint: a band would be as wide as the star; the hub's
+    coordinates (with the rows on the hub alone: normalisation, joint to the ground) form the
+    border, the leaves a narrow band."""
+    A, n, border, owner = _saddle(np.random.default_rng(3), 80, _star(80))
+    plan = plan_factorization(A, border, n, owner)
+    assert 0 < plan.border.size <= 7 + 1 + 3
+    assert plan.bandwidth <= 12
+
+
+def test_cost_estimate_prefers_the_given_border_for_a_sleeve_on_a_long_beam():
+    """A few bodies coupled along a whole beam (Example 1's sleeve): the bordered form."""
+    rng = np.random.default_rng(5)
+    A, n, border, owner = _saddle(rng, 1, [(0, -1)], beam_elements=60, on_beam=tuple(range(61)))
+    plan = plan_factorization(A, border, n, owner)
+    assert plan.border.size > 0 and plan.bandwidth <= 20
+
+
+def _hinged(rng: np.random.Generator, joints: list[tuple[int, int, int]], n_bodies: int,
+            beam_nodes: int, hubs: tuple[int, ...], copy_rows: dict[int, int] | None = None,
+            ) -> tuple[sp.csc_matrix, int, np.ndarray, np.ndarray]:
+    """Saddle-point matrix of rigid bodies (7 coordinates, SPD block, a normalisation row on
+    the last 4) joined by ``joints`` (a, b, rows: ``rows`` rows on both bodies' 7
+    coordinates, b = −1 the ground), and a beam of ``beam_nodes`` nodes (6 coordinates,
+    12 x 12 element blocks) held at both ends (6 rows each); every body in ``hubs`` couples
+    through stiffness to every beam coordinate (a contact along the wire), which makes it a
+    hub of the graph. ``copy_rows`` {j: k}: joint j's rows on its body a are those of joint
+    k (the full rows stay independent through the other bodies' columns)."""
+    nb7 = 7 * n_bodies
+    n = nb7 + 6 * beam_nodes
+    K = np.zeros((n, n))
+    for b in range(n_bodies):
+        B = rng.standard_normal((7, 7))
+        K[7 * b:7 * b + 7, 7 * b:7 * b + 7] = B @ B.T / 7 + 2 * np.eye(7)
+    for e in range(beam_nodes - 1):
+        B = rng.standard_normal((12, 12))
+        s = slice(nb7 + 6 * e, nb7 + 6 * e + 12)
+        K[s, s] += B @ B.T / 12 + np.eye(12)
+    for h in hubs:
+        X = 0.05 * rng.standard_normal((7, 6 * beam_nodes))
+        K[7 * h:7 * h + 7, nb7:] = X
+        K[nb7:, 7 * h:7 * h + 7] = X.T
+    rows = []
+    for b in range(n_bodies):
+        r = np.zeros(n)
+        r[7 * b + 3:7 * b + 7] = rng.uniform(0.5, 1.5, 4)
+        rows.append(r)
+    on_a: list[np.ndarray] = []
+    for j, (a, b, k) in enumerate(joints):
+        block = rng.standard_normal((k, 7))
+        if copy_rows and j in copy_rows:
+            block = on_a[copy_rows[j]]
+        on_a.append(block)
+        for i in range(k):
+            r = np.zeros(n)
+            r[7 * a:7 * a + 7] = block[i]
+            if b >= 0:
+                r[7 * b:7 * b + 7] = rng.standard_normal(7)
+            rows.append(r)
+    for node in (0, beam_nodes - 1):
+        for i in range(6):
+            r = np.zeros(n)
+            r[nb7 + 6 * node + i] = 1.0
+            rows.append(r)
+    C = np.array(rows)
+    m = C.shape[0]
+    A = sp.csc_matrix(np.block([[K, C.T], [C, np.zeros((m, m))]]))
+    A.sort_indices()
+    border = np.r_[np.arange(nb7), n + np.arange(m - 12)]
+    owner = np.full(n + m, -1, np.int64)
+    owner[:nb7] = np.repeat(np.arange(n_bodies), 7)
+    return A, n, border, owner
+
+
+def _wing(rng: np.random.Generator) -> tuple[sp.csc_matrix, int, np.ndarray, np.ndarray]:
+    """Example 2's structure: panel 1 hinged to the ground (5 rows), panel 2 hinged to
+    panel 1 (5), a bar on a slider (5) tied to panel 2 (2); the guide wire (13 nodes) in
+    contact with panel 2 all along, which makes panel 2 a hub."""
+    return _hinged(rng, [(0, -1, 5), (0, 1, 5), (2, -1, 5), (2, 1, 2)], 3, 13, hubs=(1,))
+
+
+def _two_anchors(rng: np.random.Generator) -> tuple[sp.csc_matrix, int, np.ndarray, np.ndarray]:
+    """A body (0) joined to two hubs (1, 2) by 3 rows each whose parts on body 0 coincide
+    (two spherical joints on one axis: the body may spin about it when both hubs are held):
+    7 rows on 7 coordinates, square yet singular once the hubs are in the border."""
+    return _hinged(rng, [(0, 1, 3), (0, 2, 3), (1, -1, 3), (2, -1, 3)], 3, 13, hubs=(1, 2),
+                   copy_rows={1: 0})
+
+
+def test_example2_shape_band_block_is_nonsingular():
+    """Regression (Example 2 failed at its first step, "zero pivot 9"): panel 2 is a hub of
+    the border, and the hinge CD and tie EF multipliers it leaves in the band put 11 rows on
+    panel 1's 7 coordinates (8 on the bar's): A_aa singular. Closed border: they join it."""
+    rng = np.random.default_rng(37)
+    A, n, border, owner = _wing(rng)
+    assert np.linalg.matrix_rank(A.toarray()) == A.shape[0]
+    plan = plan_factorization(A, border, n, owner)
+    assert 0 < plan.border.size < border.size          # the hub's border, not the assembly's
+    assert set(range(7, 14)) <= set(plan.border.tolist())
+    lu = BorderedBandedLU(A, plan.border, plan.order)
+    assert lu.factorize(A.data), f"pivot failure {lu.info}"
+    b = rng.standard_normal(A.shape[0])
+    ref = spla.splu(A, permc_spec="COLAMD").solve(b)
+    assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
+
+
+def _band_rank(A: sp.csc_matrix, in_border: np.ndarray) -> tuple[int, int]:
+    band = np.flatnonzero(~in_border)
+    return np.linalg.matrix_rank(A[band][:, band].toarray()), band.size
+
+
+@pytest.mark.parametrize("shape", ["wing", "two_anchors", "star", "chain", "binary_tree",
+                                   "loop"])
+def test_closed_border_leaves_a_nonsingular_band(shape):
+    """Every border of whole bodies (random subsets), closed by close_border, leaves a band
+    block of full rank; the rows it keeps beside a border body are a leaf's."""
+    builders = {
+        "wing": _wing, "two_anchors": _two_anchors,
+        "star": lambda rng: _saddle(rng, 12, _star(12)),
+        "chain": lambda rng: _saddle(rng, 12, _chain(12)),
+        "binary_tree": lambda rng: _saddle(rng, 15, _binary_tree(15)),
+        "loop": lambda rng: _saddle(rng, 10, _loop(10)),
+    }
+    rng = np.random.default_rng(abs(hash(shape)) % 2**32)
+    A, n, _, owner = builders[shape](rng)
+    assert np.linalg.matrix_rank(A.toarray()) == A.shape[0]
+    G = (abs(A) + abs(A).T).tocsr()
+    G.setdiag(0)
+    G.eliminate_zeros()
+    n_bodies = int(owner.max()) + 1
+    for _ in range(12):
+        chosen = rng.random(n_bodies) < 0.4
+        in_border = np.zeros(A.shape[0], bool)
+        in_border[:n] = np.isin(owner[:n], np.flatnonzero(chosen))
+        closed = close_border(G, in_border, n, owner)
+        assert (closed >= in_border).all()
+        rank, size = _band_rank(A, closed)
+        assert rank == size, f"band block rank {rank} < {size} (border of bodies {chosen})"
+
+
+def test_two_anchors_rows_join_the_border():
+    """The rows of a body held by two border bodies are not a leaf's: with both hubs in the
+    border, the body's 6 joint rows join it (left in the band, its block has rank 6 of 7
+    rows)."""
+    A, n, _, owner = _two_anchors(np.random.default_rng(1))
+    G = (abs(A) + abs(A).T).tocsr()
+    G.setdiag(0)
+    G.eliminate_zeros()
+    in_border = np.zeros(A.shape[0], bool)
+    in_border[7:21] = True
+    rank, size = _band_rank(A, in_border)
+    assert rank < size                       # the singular band the closure must prevent
+    closed = close_border(G, in_border, n, owner)
+    assert closed[n + 1:n + 7].all() and not closed[n]   # joint rows in, body 0's norm. out
+    rank, size = _band_rank(A, closed)
+    assert rank == size
