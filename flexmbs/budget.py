@@ -91,12 +91,12 @@ def _model_size(model: Any) -> tuple[int, int]:
     return elements, sections
 
 
-def check_run(model: Any, *, t_end: float, dt: float, output_interval: float | None,
-              out: str | os.PathLike[str] | None, t_start: float = 0.0, prefix: str = "") -> None:
-    """Before a run: refuse (ModelError) what cannot run here (memory, disk, more than
-    ``MAX_STEPS`` steps or ``MAX_FRAMES`` output frames), warn (FlexmbsWarning, once per
-    message) about what will take hours or fill much of the disk. ``prefix`` goes before the
-    names ``t_end``, ``dt``, ``output_interval`` in messages (``"simulation."`` for scenarios)."""
+def check_times(*, t_end: float, dt: float, output_interval: float | None,
+                t_start: float = 0.0, prefix: str = "") -> None:
+    """The run's times, the one check every entry uses (:func:`check_run`,
+    :func:`~flexmbs.solvers.generalized_alpha.integrate`): finite, ``0 < dt <= t_end −
+    t_start``, ``output_interval`` > 0. ModelError naming the setting (``prefix``: see
+    :func:`check_run`)."""
     t_key, dt_key, out_key = (f"{prefix}{k}" for k in ("t_end", "dt", "output_interval"))
     for name, value in ((t_key, t_end), (dt_key, dt)):
         if not (isinstance(value, (int, float)) and math.isfinite(value)):
@@ -111,6 +111,18 @@ def check_run(model: Any, *, t_end: float, dt: float, output_interval: float | N
                          f"{dt_key} <= {t_key}")
     if output_interval is not None and not (math.isfinite(output_interval) and output_interval > 0):
         raise ModelError(f"{out_key} must be a finite number > 0 (got {output_interval!r})")
+
+
+def check_run(model: Any, *, t_end: float, dt: float, output_interval: float | None,
+              out: str | os.PathLike[str] | None, t_start: float = 0.0, prefix: str = "") -> None:
+    """Before a run: refuse (ModelError) what cannot run here (memory, disk, more than
+    ``MAX_STEPS`` steps or ``MAX_FRAMES`` output frames), warn (FlexmbsWarning, once per
+    message) about what will take hours or fill much of the disk. ``prefix`` goes before the
+    names ``t_end``, ``dt``, ``output_interval`` in messages (``"simulation."`` for scenarios)."""
+    t_key, dt_key, out_key = (f"{prefix}{k}" for k in ("t_end", "dt", "output_interval"))
+    check_times(t_end=t_end, dt=dt, output_interval=output_interval, t_start=t_start,
+                prefix=prefix)
+    span = t_end - t_start
     elements, sections = _model_size(model)
     require_memory(elements, sections, what=f"{elements} beam elements and {sections} hole sections",
                    fix="use fewer elements or sections")

@@ -8,7 +8,7 @@ scenario reader look names up in the same registry, so they accept the same list
 the same message::
 
     HOLE_SECTIONS.get("hexagon")
-    # ModelError: unknown hole section 'hexagon' (known: circle, superellipse)
+    # ModelError: unknown hole section 'hexagon' (known: circle, rounded_rectangle, superellipse)
 
 Names are listed in registration order (the order of the documentation).
 """

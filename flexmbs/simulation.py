@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -239,11 +240,11 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     _warn_undamped_constraints(asm.model, opts)
     run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
     probes = list(probes)
-    columns = probe_columns(probes)
     for p in probes:
         p.check(asm)
     resume_t: float | None = None
     previous: dict = {}
+    solver_state: dict | None = None
     if resume:
         if out is None:
             raise ModelError("simulate(resume=True) needs out= (the folder of the stopped run)")
@@ -253,16 +254,6 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         if not t_end > resume_t:
             raise ModelError(f"cannot resume: the checkpoint in {out} is at t = {resume_t:.6g} "
                              f"and t_end = {t_end:.6g}; give a later t_end")
-    if not resume:
-        solver_state = None
-    solver_now: dict[str, Any] = {}    # the integrator's own state at the current output
-    ts: list[float] = []
-    qs: list[np.ndarray] = []
-    vs: list[np.ndarray] = []
-    ls: list[np.ndarray] = []
-    energies: dict[str, list[float]] = {}
-    probe_rows: list[np.ndarray] = []
-    last_stats: list[IntegrationStats] = []
     writer: OutputWriter | None = None
     if out is not None:
         meta = {"dt": dt, "t_end": t_end, "output_interval": output_interval,
@@ -272,94 +263,118 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         writer = OutputWriter(out, run_name, asm, probes=probes, metadata=meta,
                               write_vtu=write_vtu, resume_at=resume_t,
                               output_frames=output_frames)
-    if not resume:
-        # after the folder exists: a failure here (an initial static solve that does not
-        # converge, a singular mass matrix) still leaves summary.json saying why
-        try:
+    run = _RunRecord(asm, probes, writer, record_energy=record_energy, resume_t=resume_t,
+                     observer=observer, progress=progress, previous=previous)
+    # the writer ends the folder whatever ends the run (summary.json: "completed", "failed:
+    # <reason>", "interrupted"), from the folder's creation on: an initial static solve that
+    # does not converge still leaves a summary saying why
+    with writer if writer is not None else contextlib.nullcontext():
+        if writer is not None:
+            writer.totals = run.totals
+        if not resume:
             q0, v0 = asm.initial_state()
             if initial_static:
                 q0 = _solve_static(asm, static_options).q
             state0 = consistent_initial_state(asm, q0, v0, 0.0)
-        except BaseException as exc:
-            if writer is not None:
-                writer.finish("interrupted" + (f": {exc}" if str(exc) else "")
-                              if isinstance(exc, KeyboardInterrupt)
-                              else f"failed: {failure_reason(exc)}")
+        run.t0 = time.perf_counter()     # Result.wall_time: the integration's
+        try:
+            final, stats = integrate(asm, opts, t_end=t_end, dt=dt, state=state0,
+                                     output_interval=output_interval, observer=run.record,
+                                     progress=run.watch, solver_state=solver_state,
+                                     snapshot=run.solver_now.update)
+        except ConvergenceError as exc:
+            # keep what was computed: the partial history travels with the exception
+            exc.partial_result = run.result(  # type: ignore[attr-defined]
+                run.last_state(), run.stats(), f"failed: {failure_reason(exc)}")
             raise
-    ckpt_extra = {"scenario": run_name, "n_coords": int(asm.n_coords), "n_mult": int(asm.n_mult)}
+        run.stats_seen = stats
+    return run.result(final, stats, "completed")
 
-    def record(s: State) -> None:
-        ts.append(s.t)
-        qs.append(s.q.copy())
-        vs.append(s.v.copy())
-        ls.append(s.lam.copy())
-        energy = asm.energies(s.q, s.v) if record_energy or writer is not None else None
-        if record_energy and energy is not None:
+
+class _RunRecord:
+    """What :func:`simulate` keeps of a run: the histories at the output times (the
+    :class:`Result`), the probes, and each output written to ``writer`` with the checkpoint's
+    extras; ``totals`` gives the writer the run's counters when it ends (added to those of the
+    run it resumes)."""
+
+    def __init__(self, asm: Assembly, probes: list[Probe], writer: OutputWriter | None, *,
+                 record_energy: bool, resume_t: float | None,
+                 observer: Callable[[State], None] | None,
+                 progress: Callable[[State, IntegrationStats], None] | None,
+                 previous: dict) -> None:
+        self.asm, self.probes, self.writer = asm, probes, writer
+        self.record_energy, self.resume_t = record_energy, resume_t
+        self.observer, self.progress, self.previous = observer, progress, previous
+        self.columns = probe_columns(probes)
+        self.ts: list[float] = []
+        self.qs: list[np.ndarray] = []
+        self.vs: list[np.ndarray] = []
+        self.ls: list[np.ndarray] = []
+        self.energies: dict[str, list[float]] = {}
+        self.probe_rows: list[np.ndarray] = []
+        self.stats_seen: IntegrationStats | None = None     # the integrator's own counters
+        self.solver_now: dict[str, Any] = {}   # the integrator's own state at the output
+        self.ckpt = {"scenario": writer.name if writer is not None else "",
+                     "n_coords": int(asm.n_coords), "n_mult": int(asm.n_mult)}
+        self.t0 = time.perf_counter()
+
+    def record(self, s: State) -> None:
+        """One output time: the histories, the probes, the folder."""
+        asm, writer = self.asm, self.writer
+        self.ts.append(s.t)
+        self.qs.append(s.q.copy())
+        self.vs.append(s.v.copy())
+        self.ls.append(s.lam.copy())
+        energy = asm.energies(s.q, s.v) if self.record_energy or writer is not None else None
+        if self.record_energy and energy is not None:
             for k, val in energy.items():
-                energies.setdefault(k, []).append(val)
+                self.energies.setdefault(k, []).append(val)
         values = np.concatenate([np.asarray(p.evaluate(asm, s), float).reshape(-1)
-                                 for p in probes] + [np.zeros(0)])
-        if probes:
-            probe_rows.append(values)
+                                 for p in self.probes] + [np.zeros(0)])
+        if self.probes:
+            self.probe_rows.append(values)
         # a resumed run starts at the checkpoint, which the folder already holds
-        if writer is not None and (resume_t is None or s.t > resume_t):
+        if writer is not None and (self.resume_t is None or s.t > self.resume_t):
             writer.write(s, contacts=interaction_outputs(asm, s),
                          sections=interaction_sections(asm, s), probe_values=values,
                          energy=energy,
-                         checkpoint_extra={**ckpt_extra, "interactions": interaction_states(asm),
+                         checkpoint_extra={**self.ckpt, "interactions": interaction_states(asm),
                                            "node_bases": asm.node_bases(),
                                            "spring_angles": asm.system.springs.theta_ref.copy(),
-                                           **{f"solver_{k}": v for k, v in solver_now.items()}})
-        if observer is not None:
-            observer(s)
+                                           **{f"solver_{k}": v
+                                              for k, v in self.solver_now.items()}})
+        if self.observer is not None:
+            self.observer(s)
 
-    def watch(s: State, st: IntegrationStats) -> None:
-        if not last_stats:
-            last_stats.append(st)   # the integrator's own (mutated) counters
-        if progress is not None:
-            progress(s, st)
+    def watch(self, s: State, st: IntegrationStats) -> None:
+        if self.stats_seen is None:
+            self.stats_seen = st     # the integrator's own (mutated) counters
+        if self.progress is not None:
+            self.progress(s, st)
 
-    t0 = time.perf_counter()
+    def stats(self) -> IntegrationStats:
+        return self.stats_seen if self.stats_seen is not None else IntegrationStats()
 
-    def result(final: State, stats: IntegrationStats, status: str) -> Result:
+    def totals(self) -> tuple[IntegrationStats, float]:
+        """Counters and wall time so far, with those of the run this one resumes."""
+        wall = time.perf_counter() - self.t0 + float(self.previous.get("wall_time") or 0.0)
+        return _add_stats(self.previous.get("stats"), self.stats()), wall
+
+    def last_state(self) -> State:
+        q = self.qs[-1]
+        return State(self.ts[-1], q, self.vs[-1], np.zeros_like(q), np.zeros_like(q),
+                     self.ls[-1])
+
+    def result(self, final: State, stats: IntegrationStats, status: str) -> Result:
         extra: dict[str, Any] = {}
-        if probes:
-            arr = np.array(probe_rows).reshape(len(probe_rows), len(columns))
-            extra["probes"] = {c: arr[:, i] for i, c in enumerate(columns)}
-        if writer is not None:
-            extra["out"] = writer.directory
-        return Result(asm, np.array(ts), np.array(qs), np.array(vs), np.array(ls),
-                      {k: np.array(v) for k, v in energies.items()}, stats,
-                      time.perf_counter() - t0, final, status, extra)
-
-    def finish(status: str, stats: IntegrationStats) -> None:
-        if writer is not None:
-            total = _add_stats(previous.get("stats"), stats)
-            wall = time.perf_counter() - t0 + float(previous.get("wall_time") or 0.0)
-            writer.finish(status, stats=total, wall_time=wall)
-
-    try:
-        final, stats = integrate(asm, opts, t_end=t_end, dt=dt, state=state0,
-                                 output_interval=output_interval, observer=record,
-                                 progress=watch, solver_state=solver_state,
-                                 snapshot=solver_now.update)
-    except ConvergenceError as exc:
-        # keep what was computed: the partial history travels with the exception
-        stats = last_stats[0] if last_stats else IntegrationStats()
-        status = f"failed: {failure_reason(exc)}"
-        finish(status, stats)
-        last = State(ts[-1], qs[-1], vs[-1], np.zeros_like(qs[-1]), np.zeros_like(qs[-1]), ls[-1])
-        exc.partial_result = result(last, stats, status)  # type: ignore[attr-defined]
-        raise
-    except KeyboardInterrupt as exc:
-        finish("interrupted" + (f": {exc}" if str(exc) else ""),
-               last_stats[0] if last_stats else IntegrationStats())
-        raise
-    except BaseException as exc:
-        finish(f"failed: {failure_reason(exc)}", last_stats[0] if last_stats else IntegrationStats())
-        raise
-    finish("completed", stats)
-    return result(final, stats, "completed")
+        if self.probes:
+            arr = np.array(self.probe_rows).reshape(len(self.probe_rows), len(self.columns))
+            extra["probes"] = {c: arr[:, i] for i, c in enumerate(self.columns)}
+        if self.writer is not None:
+            extra["out"] = self.writer.directory
+        return Result(self.asm, np.array(self.ts), np.array(self.qs), np.array(self.vs),
+                      np.array(self.ls), {k: np.array(v) for k, v in self.energies.items()},
+                      stats, time.perf_counter() - self.t0, final, status, extra)
 
 
 def _add_stats(previous: dict | None, stats: IntegrationStats) -> IntegrationStats:

@@ -37,7 +37,7 @@ import json
 import math
 import os
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any, TextIO
@@ -207,6 +207,9 @@ class OutputWriter:
         self.final_energy: dict[str, float] | None = None
         self.finished = False
         self.status = "running"
+        #: what the summary reports when the run ends through ``with`` (``__exit__``): a
+        #: callable returning ``(stats, wall_time)`` (the run's counters so far), set by the run
+        self.totals: Callable[[], tuple[Any, float | None]] | None = None
         self._files: list[Any] = []
         self.series: VTUSeries | None = None
         self.frames: FrameBuilder | None = None
@@ -454,9 +457,11 @@ class OutputWriter:
                  tb: TracebackType | None) -> None:
         if self.finished:
             return
+        stats, wall = self.totals() if self.totals is not None else (None, None)
         if exc is None:
-            self.finish("completed")
+            status = "completed"
         elif isinstance(exc, KeyboardInterrupt):
-            self.finish("interrupted" + (f": {exc}" if str(exc) else ""))
+            status = "interrupted" + (f": {exc}" if str(exc) else "")
         else:
-            self.finish(f"failed: {failure_reason(exc)}")
+            status = f"failed: {failure_reason(exc)}"
+        self.finish(status, stats=stats, wall_time=wall)

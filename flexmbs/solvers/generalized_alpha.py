@@ -23,6 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..assembly import Assembly
+from ..budget import check_times
 from ..driver import constraint_velocity
 from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
@@ -525,17 +526,13 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     :class:`ConvergenceError` if a step cannot be completed even at ``min_step``; everything
     observed before stays valid.
     """
-    if not dt > 0:
-        raise ModelError(f"time step dt must be > 0 (got {dt})")
+    check_times(t_end=t_end, dt=dt, output_interval=output_interval,
+                t_start=0.0 if state is None else state.t)
     if state is None:
         q0, v0 = asm.initial_state()
         state = consistent_initial_state(asm, q0, v0, 0.0)
-    if not t_end > state.t:
-        raise ModelError(f"t_end ({t_end}) must be greater than the start time ({state.t})")
     asm.begin(state.q)
     out_dt = output_interval if output_interval is not None else dt
-    if not out_dt > 0:
-        raise ModelError(f"output_interval must be > 0 (got {output_interval})")
     compiled = options.compiled and not asm.compiled_reason()
     stepper: _PythonStepper | _CompiledStepper = (
         _CompiledStepper(asm, options, state) if compiled else _PythonStepper(asm, options, state))

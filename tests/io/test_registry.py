@@ -48,7 +48,7 @@ def test_duplicate_and_bad_names_are_rejected() -> None:
 
 
 def test_the_registries_hold_the_documented_names() -> None:
-    assert sections.HOLE_SECTIONS.names() == ("circle", "superellipse")
+    assert sections.HOLE_SECTIONS.names() == ("circle", "rounded_rectangle", "superellipse")
     assert set(laws.CONTACT_LAWS) == {"linear", "hertz", "hunt_crossley", "lankarani_nikravesh"}
     assert sections.SECTION_TYPES is sections.HOLE_SECTIONS and laws.LAWS is laws.CONTACT_LAWS
     assert ELEMENTS.names()[0] == "ancf_cable"

@@ -1,9 +1,9 @@
 """Hole sections, one module a shape (issue "a house easy to change"): :mod:`.circle`,
-:mod:`.superellipse`; what they share in :mod:`.base`. A shape module holds its compiled
-boundary kernel ``Y, Y′, Y″`` and inside test, its kind code and its :class:`HoleSection`
-class (registered in :data:`HOLE_SECTIONS`; the numpy view is derived from the kernel). The two
-dispatchers below are the only place that lists the compiled shapes: numba needs the calls
-spelt out.
+:mod:`.superellipse`, :mod:`.rounded_rectangle`; what they share in :mod:`.base`. A shape
+module holds its compiled boundary kernel ``Y, Y′, Y″`` and inside test, its kind code and its
+:class:`HoleSection` class (registered in :data:`HOLE_SECTIONS`; the numpy view is derived
+from the kernel). The two dispatchers below are the only place that lists the compiled shapes:
+numba needs the calls spelt out.
 """
 
 from __future__ import annotations
@@ -17,6 +17,12 @@ from .circle import (
     circle_contains,
     circle_stationary_points,
 )
+from .rounded_rectangle import (
+    SHAPE_ROUNDED_RECTANGLE,
+    RoundedRectangleSection,
+    rounded_rectangle_boundary,
+    rounded_rectangle_contains,
+)
 from .superellipse import (
     SHAPE_SUPERELLIPSE,
     SuperellipseSection,
@@ -25,8 +31,9 @@ from .superellipse import (
     superellipse_section_boundary,
 )
 
-__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_SUPERELLIPSE", "Candidate", "CircleSection",
-           "Ellipse2D", "HoleSection", "SuperellipseSection", "circle_boundary",
+__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_RECTANGLE", "SHAPE_SUPERELLIPSE",
+           "Candidate", "CircleSection", "Ellipse2D", "HoleSection", "RoundedRectangleSection",
+           "SuperellipseSection", "circle_boundary",
            "circle_stationary_points", "section_boundary", "section_contains",
            "superellipse_boundary"]
 
@@ -38,6 +45,8 @@ def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
     through it."""
     if kind == SHAPE_CIRCLE:
         circle_boundary(params[0], psi, Y, Yp, Ypp)
+    elif kind == SHAPE_ROUNDED_RECTANGLE:
+        rounded_rectangle_boundary(params, psi, Y, Yp, Ypp)
     else:
         superellipse_section_boundary(params, psi, Y, Yp, Ypp)
 
@@ -47,4 +56,6 @@ def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
     """Whether the point (y, z) lies inside the compiled hole section (on the wall counts)."""
     if kind == SHAPE_CIRCLE:
         return circle_contains(params, y, z)
+    if kind == SHAPE_ROUNDED_RECTANGLE:
+        return rounded_rectangle_contains(params, y, z)
     return superellipse_contains(params, y, z)
