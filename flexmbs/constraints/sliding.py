@@ -284,6 +284,15 @@ class SlideFriction(NamedTuple):
     anchor: float         #: the anchor s_A after a step ending at this state
 
 
+class SlidingState(NamedTuple):
+    """What a sliding joint carries from step to step (one-element arrays: built by the joint,
+    then views of its packed part's arrays, updated in place by the compiled steps)."""
+
+    element: np.ndarray   # the beam element holding the slide point
+    anchor: np.ndarray    # friction anchor s_A (the beam's reference arc length)
+    stuck: np.ndarray     # 1: the body stuck at the end of the last step
+
+
 class SlidingJoint(Interaction):
     """Rigid body sliding along a beam without clearance (the paper's baseline joint).
 
@@ -336,9 +345,8 @@ class SlidingJoint(Interaction):
         self.axial_force = None if axial_force is None else as_time_function(axial_force)
         # state, updated in place (also by the compiled integrator): current element, friction
         # anchor s_A and whether the body stuck at the end of the last step
-        self._element = np.zeros(1, np.int64)
-        self._anchor = np.zeros(1)
-        self._stuck = np.ones(1, np.int64)
+        self.state = SlidingState(element=np.zeros(1, np.int64), anchor=np.zeros(1),
+                                  stuck=np.ones(1, np.int64))
         self._constraint = _SlidingConstraint(self)
 
     @property
@@ -438,30 +446,30 @@ class SlidingJoint(Interaction):
     @property
     def element(self) -> int:
         """Index of the beam element holding the slide point (updated after each step)."""
-        return int(self._element[0])
+        return int(self.state.element[0])
 
     @element.setter
     def element(self, k: int) -> None:
-        self._element[0] = k
+        self.state.element[0] = k
 
     @property
     def anchor(self) -> float:
         """Friction anchor s_A: the beam's material coordinate (reference arc length) where
         the body sticks (stick law; updated after each step)."""
-        return float(self._anchor[0])
+        return float(self.state.anchor[0])
 
     @anchor.setter
     def anchor(self, s: float) -> None:
-        self._anchor[0] = s
+        self.state.anchor[0] = s
 
     @property
     def stuck(self) -> bool:
         """Whether the body stuck at the end of the last step (its cone then has μ_s)."""
-        return bool(self._stuck[0])
+        return bool(self.state.stuck[0])
 
     @stuck.setter
     def stuck(self, value: bool) -> None:
-        self._stuck[0] = 1 if value else 0
+        self.state.stuck[0] = 1 if value else 0
 
     def friction_force(self, dofs: DofMap, q: np.ndarray, v: np.ndarray,
                        lam: np.ndarray) -> SlideFriction:
@@ -585,9 +593,8 @@ def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
         np.array([j.stuck for j in joints], i64), pj, pt, ph, pse, pss, psl,
         np.zeros(N_SLIDE), np.zeros(5), np.zeros((5, N_SLIDE)), np.zeros((N_SLIDE, N_SLIDE)), np.zeros(5))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
-        j._element = part.element[i:i + 1]
-        j._anchor = part.anchor[i:i + 1]
-        j._stuck = part.stuck[i:i + 1]
+        j.state = SlidingState(element=part.element[i:i + 1], anchor=part.anchor[i:i + 1],
+                               stuck=part.stuck[i:i + 1])
     return part
 
 

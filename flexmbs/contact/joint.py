@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -75,6 +75,40 @@ MAX_POINTS = 8
 TANGENTS = ("exact", "gauss_newton", "frozen_point")
 #: contact detections of the clearance joint (see :class:`SlidingClearanceJoint`)
 DETECTIONS = ("consistent", "paper")
+
+
+class ClearanceState(NamedTuple):
+    """What a clearance joint carries from step to step, per section slot (the bore's
+    sections, then the :data:`~flexmbs.contact._detect.N_TIPS` tip sections): built by the
+    joint, then views of its packed part's arrays (:func:`pack_clearance`; the compiled steps
+    update them in place), saved in checkpoints (:meth:`SlidingClearanceJoint.get_state`)."""
+
+    origins: np.ndarray       # (slots, 3) section origins, body coordinates (tip rows move)
+    axes: np.ndarray          # (slots, 3, 3) section axes (columns: normal, e_y, e_z)
+    elem: np.ndarray          # (slots,) warm starts of the crossings (element; −1 not crossed)
+    xi: np.ndarray            # (slots,)
+    ws_list: np.ndarray       # (slots + 1,) the sections with a warm start ([count, k...],
+                              #   _detect.reset_crossings; −1: not known, listed again)
+    approach: np.ndarray      # (slots, MAX_POINTS) tracked contacts: approach velocity at
+    psi: np.ndarray           #   onset, section angle of the hole point (FORMULATION II §3),
+    active: np.ndarray        #   in use
+    anchor: np.ndarray        # (slots, MAX_POINTS, 3) friction: elastic displacement (hole
+    stuck: np.ndarray         #   frame), stuck
+    tip_on: np.ndarray        # (N_TIPS,) tip section placed (_detect.place_tips), its station
+    tip_station: np.ndarray   # (N_TIPS,)
+    t_bar: np.ndarray         # (n_elem, N_TWIST, 3) the contact elements' chart bases
+    q_start: np.ndarray | None  # (n,) the step's start (the packed part's array)
+
+    @classmethod
+    def views(cls, part: ClearancePart, i: int, slots: int, n_elem: int) -> ClearanceState:
+        """Joint i's state as views of the packed part's arrays."""
+        return cls(origins=part.origins[i, :slots], axes=part.frames[i, :slots],
+                   elem=part.elem_ws[i, :slots], xi=part.xi_ws[i, :slots],
+                   ws_list=part.ws_list[i], approach=part.approach[i, :slots],
+                   psi=part.psi[i, :slots], active=part.active[i, :slots],
+                   anchor=part.anchor[i, :slots], stuck=part.stuck[i, :slots],
+                   tip_on=part.tip_on[i], tip_station=part.tip_station[i],
+                   t_bar=part.t_bar[i, :n_elem], q_start=part.q_start)
 
 
 class SlidingClearanceJoint(Interaction):
@@ -159,35 +193,28 @@ class SlidingClearanceJoint(Interaction):
         # below has a slot for each
         origins, axes = hole.frames()
         slots = ns + N_TIPS
-        self._origins = np.zeros((slots, 3))
-        self._origins[:ns] = origins + self.hole_point
-        self._axes = np.repeat(np.eye(3)[None], slots, axis=0)
-        self._axes[:ns] = axes
+        sec_origins = np.zeros((slots, 3))
+        sec_origins[:ns] = origins + self.hole_point
+        sec_axes = np.repeat(np.eye(3)[None], slots, axis=0)
+        sec_axes[:ns] = axes
         self._stations = np.zeros(slots)
         self._stations[:ns] = self.stations
-        self._tip_on = np.zeros(N_TIPS, dtype=bool)
-        self._tip_station = np.zeros(N_TIPS)
         self._tip_reach = float(np.max(np.diff(self.stations))) if ns > 1 else 0.0
-        # state, updated after each converged step (also by the compiled integrator, in place):
-        self._elem = np.zeros(slots, np.int64)     # warm starts of the section crossings
-        self._xi = np.full(slots, 0.5)
-        # the sections with a warm start ([count, k...], _detect.reset_crossings); −1: not
-        # known (written here in Python: the compiled step lists them again)
-        self._ws_list = np.full(slots + 1, -1, np.int64)
-        # tracked contacts per section (identity: section angle of the hole point, FORMULATION
-        # II §3): approach velocity -g_N' at onset, section angle, in use
-        self._approach = np.zeros((slots, MAX_POINTS))
-        self._psi = np.zeros((slots, MAX_POINTS))
-        self._active = np.zeros((slots, MAX_POINTS), dtype=bool)
-        # friction that sticks: elastic displacement from the anchor (hole frame), stuck
-        self._anchor = np.zeros((slots, MAX_POINTS, 3))
-        self._stuck = np.zeros((slots, MAX_POINTS))
-        self._q_start: np.ndarray | None = None   # the step's start (the packed part's array)
+        # the state, updated after each converged step (by the compiled integrator in place)
+        self.state = ClearanceState(
+            origins=sec_origins, axes=sec_axes,
+            elem=np.zeros(slots, np.int64), xi=np.full(slots, 0.5),
+            ws_list=np.full(slots + 1, -1, np.int64),
+            approach=np.zeros((slots, MAX_POINTS)), psi=np.zeros((slots, MAX_POINTS)),
+            active=np.zeros((slots, MAX_POINTS), dtype=bool),
+            anchor=np.zeros((slots, MAX_POINTS, 3)), stuck=np.zeros((slots, MAX_POINTS)),
+            tip_on=np.zeros(N_TIPS, dtype=bool), tip_station=np.zeros(N_TIPS),
+            t_bar=np.zeros((0, N_TWIST, 3)), q_start=None)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
         # the sections' bounding-sphere tree (body coordinates; reach: a crossing that far from
         # a section's centre counts, _detect.detect_section) and the detection's work arrays
-        self._tree = section_tree(self._origins[:ns], 2.0 * hole.section.bounding_radius()
+        self._tree = section_tree(self.state.origins[:ns], 2.0 * hole.section.bounding_radius()
                                   + self.beam_radius)
         self._cross = (np.zeros(slots, np.int64), np.zeros((slots, MAX_CROSSINGS), np.int64),
                        np.zeros((slots, MAX_CROSSINGS)), np.zeros(slots, np.int64),
@@ -227,7 +254,7 @@ class SlidingClearanceJoint(Interaction):
         self._twist_dofs = (np.full((ne, N_TWIST), -1, np.int64) if lay.twist is None else
                             np.ascontiguousarray(dofs.element_dofs(self.beam)[
                                 :, [lay.twist, lay.node_size + lay.twist]], dtype=np.int64))
-        self._t_bar = np.zeros((ne, N_TWIST, 3))
+        self.state = self.state._replace(t_bar=np.zeros((ne, N_TWIST, 3)))
         # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
         self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
         self._beam_dofs = dofs.beam_dofs(self.beam)
@@ -243,7 +270,7 @@ class SlidingClearanceJoint(Interaction):
         not the tip sections)."""
         A = rotation_matrix(qb[3:7])
         ns = len(self.stations)
-        return A, qb[:3] + self._origins[:ns] @ A.T, A @ self._axes[:ns]
+        return A, qb[:3] + self.state.origins[:ns] @ A.T, A @ self.state.axes[:ns]
 
     @property
     def n_slots(self) -> int:
@@ -255,15 +282,15 @@ class SlidingClearanceJoint(Interaction):
         ``qe`` (:func:`~flexmbs.contact._detect.place_tips`): an open bore with a compiled
         section; else none."""
         compiled = self.hole.section.compiled_shape()
-        self._tip_on[:] = False
+        self.state.tip_on[:] = False
         if not self.hole.open_ends or compiled is None:
             return
         place_tips(np.ascontiguousarray(qe), np.array(self.beam.centerline.lengths, dtype=float),
                    np.ascontiguousarray(qb[:3], dtype=float), rotation_matrix(qb[3:7]),
-                   self._origins, self._axes, self._stations, *self._tree,
+                   self.state.origins, self.state.axes, self._stations, *self._tree,
                    float(self._tip_reach), float(self.beam_radius), int(compiled[0]),
-                   np.ascontiguousarray(compiled[1], dtype=float), self._tip_on,
-                   self._tip_station, self._cross[4])
+                   np.ascontiguousarray(compiled[1], dtype=float), self.state.tip_on,
+                   self.state.tip_station, self._cross[4])
 
     def _check_start(self, qb: np.ndarray, qe: np.ndarray, *, warn: bool) -> None:
         """The beam must cross every section plane inside the bore (with ``open_ends``: wherever
@@ -277,9 +304,9 @@ class SlidingClearanceJoint(Interaction):
         ns = len(self.stations)
         crossed = 0
         if self.hole.open_ends:       # -1: not crossed inside the bore (the detection's state)
-            self._elem[:] = -1
-            self._xi[:] = 0.5
-            self._ws_list[0] = -1
+            self.state.elem[:] = -1
+            self.state.xi[:] = 0.5
+            self.state.ws_list[0] = -1
         for k, zeta in enumerate(self.stations):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
@@ -300,8 +327,8 @@ class SlidingClearanceJoint(Interaction):
                     f"joint '{self.name}': the beam is tilted too much to fit the hole at section "
                     f"{k} (ellipse semi-axis {a:.6g} > bore {R_in:.6g}: jamming); align the hole "
                     "axis with the beam")
-            self._elem[k], self._xi[k] = e, xi
-            self._ws_list[0] = -1
+            self.state.elem[k], self.state.xi[k] = e, xi
+            self.state.ws_list[0] = -1
             crossed += 1
             ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, _b)
             deepest = max(deepest, max((c.depth for c in self.hole.section.candidates(ell)),
@@ -321,7 +348,7 @@ class SlidingClearanceJoint(Interaction):
 
     # ------------------------------------------------------------------ detection + forces
     def _approach_for(self, k: int, psi: float) -> float:
-        return tracked_approach(self._approach, self._active, self._psi, int(k), float(psi))
+        return tracked_approach(self.state.approach, self.state.active, self.state.psi, int(k), float(psi))
 
     def _contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
         """(section, index, kind, elem, ContactResult, a, b, psi) for every penetrating point
@@ -329,10 +356,10 @@ class SlidingClearanceJoint(Interaction):
         rows, section records and probes ask for the same state)."""
         if want_tangent or update or self._frozen is not None:
             return self._detect_contacts(q, v, want_tangent, update)
-        key = (q.tobytes(), v.tobytes(), self._elem.tobytes(), self._xi.tobytes(),
-               self._approach.tobytes(), self._psi.tobytes(), self._active.tobytes(),
-               self._anchor.tobytes(), self._stuck.tobytes(),
-               None if self._q_start is None else self._q_start.tobytes(),
+        key = (q.tobytes(), v.tobytes(), self.state.elem.tobytes(), self.state.xi.tobytes(),
+               self.state.approach.tobytes(), self.state.psi.tobytes(), self.state.active.tobytes(),
+               self.state.anchor.tobytes(), self.state.stuck.tobytes(),
+               None if self.state.q_start is None else self.state.q_start.tobytes(),
                self.contact, self.friction)
         if self._contact_cache is not None and self._contact_cache[0] == key:
             return self._contact_cache[1]
@@ -374,13 +401,13 @@ class SlidingClearanceJoint(Interaction):
         for k in range(len(self.stations)):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, max(0, int(self._elem[k])), float(self._xi[k]), r_b,
-                2 * R_out + r_b)
+                qe, self._lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
+                float(self.state.xi[k]), r_b, 2 * R_out + r_b)
             if not found:
                 continue
             if update:
-                self._elem[k], self._xi[k] = e, xi
-                self._ws_list[0] = -1
+                self.state.elem[k], self.state.xi[k] = e, xi
+                self.state.ws_list[0] = -1
             if math.hypot(cy, cz) + a < R_in:
                 continue  # broad phase: the ellipse is strictly inside the bore
             ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
@@ -409,19 +436,19 @@ class SlidingClearanceJoint(Interaction):
         qb = q[self._body_dofs]
         A = rotation_matrix(qb[3:7])
         qe = np.ascontiguousarray(q[self._elem_dofs])
-        e_out, x_out = (self._elem, self._xi) if update else (self._elem_out, self._xi_out)
+        e_out, x_out = (self.state.elem, self.state.xi) if update else (self._elem_out, self._xi_out)
         unknown = np.full(1, -1, np.int64)        # lists not kept here: every section scanned
         out_list = np.full(self.n_slots + 1, -1, np.int64)
         if update:
-            self._ws_list[0] = -1
+            self.state.ws_list[0] = -1
         section = self.hole.section
         compiled = section.compiled_shape()
         assert compiled is not None
         shape, params = compiled
-        m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self._origins,
-                           self._axes, *self._tree, bool(self.hole.open_ends), self._tip_on,
+        m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self.state.origins,
+                           self.state.axes, *self._tree, bool(self.hole.open_ends), self.state.tip_on,
                            *self._cross,
-                           self._elem, self._xi, unknown, e_out, x_out, out_list,
+                           self.state.elem, self.state.xi, unknown, e_out, x_out, out_list,
                            self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
                            self.detection == "consistent", self._rows)
@@ -473,7 +500,7 @@ class SlidingClearanceJoint(Interaction):
 
         body = self.body
         A = body.pose.rotation
-        axis = A @ self._axes[len(self.stations) // 2, :, 0]   # the middle section's normal
+        axis = A @ self.state.axes[len(self.stations) // 2, :, 0]   # the middle section's normal
         d = np.asarray(direction, float).reshape(3)
         d = d - axis * (axis @ d)
         if not np.linalg.norm(d) > 0:
@@ -486,8 +513,8 @@ class SlidingClearanceJoint(Interaction):
         R_out = section.bounding_radius()
 
         def deepest(shift: float) -> float:
-            origins = body.pose.position + shift * d + self._origins @ A.T
-            axes = A @ self._axes
+            origins = body.pose.position + shift * d + self.state.origins @ A.T
+            axes = A @ self.state.axes
             worst = -np.inf
             for k in range(len(self.stations)):
                 n, ey, ez = axes[k].T
@@ -566,9 +593,9 @@ class SlidingClearanceJoint(Interaction):
         """Friction history (pair.N_HISTORY) of the contact of section k at angle psi on
         element eP: its tracked anchor and the step's start (or ``q`` before the model runs)."""
         hist = np.empty(N_HISTORY)
-        start = self._q_start if self._q_start is not None else q
-        contact_history(self._anchor, self._stuck, tracked_slot(self._active, self._psi, int(k),
-                                                                float(psi)),
+        start = self.state.q_start if self.state.q_start is not None else q
+        st = self.state
+        contact_history(st.anchor, st.stuck, tracked_slot(st.active, st.psi, int(k), float(psi)),
                         int(k), start, self._body_dofs, self._elem_dofs[eP],
                         self._twist_dofs[eP], hist)
         return hist
@@ -576,7 +603,7 @@ class SlidingClearanceJoint(Interaction):
     def _spin(self, q: np.ndarray, v: np.ndarray, eP: int) -> np.ndarray:
         """The spin data (pair.N_SPIN) of element eP (:func:`_detect.element_spin`)."""
         spin = np.empty(N_SPIN)
-        element_spin(q, v, self._twist_dofs[eP], self._t_bar[eP], spin)
+        element_spin(q, v, self._twist_dofs[eP], self.state.t_bar[eP], spin)
         return spin
 
     def _raise_left_bore(self, m: int) -> None:
@@ -625,8 +652,8 @@ class SlidingClearanceJoint(Interaction):
             rows[i, [0, 11, 12, 13]] = k, psi, res.gap, res.gap_rate
             rows[i, ANCHOR_COL:ANCHOR_COL + 3] = res.anchor
             rows[i, ANCHOR_COL + 3] = res.stuck
-        clearance_update(rows, len(contacts), np.full(1, -1, np.int64), self._approach,
-                         self._active, self._psi, self._anchor, self._stuck)
+        clearance_update(rows, len(contacts), np.full(1, -1, np.int64), self.state.approach,
+                         self.state.active, self.state.psi, self.state.anchor, self.state.stuck)
         self.place_tips(q[self._body_dofs], np.ascontiguousarray(q[self._elem_dofs]))
 
     # ------------------------------------------------------------------ output
@@ -660,8 +687,8 @@ class SlidingClearanceJoint(Interaction):
         for k in range(len(self.stations)):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, max(0, int(self._elem[k])), float(self._xi[k]),
-                self.beam_radius, 2 * R + self.beam_radius)
+                qe, self._lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
+                float(self.state.xi[k]), self.beam_radius, 2 * R + self.beam_radius)
             if not found:
                 continue
             rows.append({"joint": self.name, "section": k, "ox": origin[0], "oy": origin[1],
@@ -687,7 +714,8 @@ class SlidingClearanceJoint(Interaction):
         k = len(self.stations) // 2
         centre = self._planes(qb)[1][k]
         qe = np.ascontiguousarray(q[self._elem_dofs])
-        e, xi, *_ = closest_point(qe, self._lengths, centre, max(0, int(self._elem[k])), float(self._xi[k]))
+        e, xi, *_ = closest_point(qe, self._lengths, centre, max(0, int(self.state.elem[k])),
+                                  float(self.state.xi[k]))
         return float(np.sum(self._lengths[:e]) + xi * self._lengths[e])
 
     def contact_energy(self, q: np.ndarray, v: np.ndarray | None = None) -> float:
@@ -712,32 +740,32 @@ class SlidingClearanceJoint(Interaction):
     def get_state(self) -> dict[str, Any]:
         """Warm starts, tracked contacts ``[section, slot, approach velocity, angle, anchor
         (3), stuck]`` and the friction law they were computed with."""
-        return {"elem": self._elem.tolist(), "xi": self._xi.tolist(),
+        return {"elem": self.state.elem.tolist(), "xi": self.state.xi.tolist(),
                 "friction": self.friction_parameters().tolist(),
-                "approach": [[int(k), int(s), float(self._approach[k, s]), float(self._psi[k, s]),
-                              *(float(x) for x in self._anchor[k, s]), float(self._stuck[k, s])]
-                             for k, s in zip(*np.nonzero(self._active), strict=True)]}
+                "approach": [[int(k), int(s), float(self.state.approach[k, s]), float(self.state.psi[k, s]),
+                              *(float(x) for x in self.state.anchor[k, s]), float(self.state.stuck[k, s])]
+                             for k, s in zip(*np.nonzero(self.state.active), strict=True)]}
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore :meth:`get_state` (bit for bit); a changed friction law is refused."""
         check_resumed_friction(self.name, state.get("friction"), self.friction_parameters())
         elem, xi = state["elem"], state["xi"]   # (older checkpoints: no tip sections)
-        self._elem[:len(elem)] = elem
-        self._xi[:len(xi)] = xi
-        self._ws_list[0] = -1
-        self._approach[:] = 0.0
-        self._psi[:] = 0.0
-        self._active[:] = False
-        self._anchor[:] = 0.0
-        self._stuck[:] = 0.0
+        self.state.elem[:len(elem)] = elem
+        self.state.xi[:len(xi)] = xi
+        self.state.ws_list[0] = -1
+        self.state.approach[:] = 0.0
+        self.state.psi[:] = 0.0
+        self.state.active[:] = False
+        self.state.anchor[:] = 0.0
+        self.state.stuck[:] = 0.0
         for k, s, val, *rest in state["approach"]:
-            if int(s) < self._approach.shape[1] and rest:   # (older checkpoints: no angle)
-                self._approach[int(k), int(s)] = float(val)
-                self._psi[int(k), int(s)] = float(rest[0])
-                self._active[int(k), int(s)] = True
+            if int(s) < self.state.approach.shape[1] and rest:   # (older checkpoints: no angle)
+                self.state.approach[int(k), int(s)] = float(val)
+                self.state.psi[int(k), int(s)] = float(rest[0])
+                self.state.active[int(k), int(s)] = True
                 if len(rest) == 5:                          # (older checkpoints: no anchor)
-                    self._anchor[int(k), int(s)] = rest[1:4]
-                    self._stuck[int(k), int(s)] = float(rest[4])
+                    self.state.anchor[int(k), int(s)] = rest[1:4]
+                    self.state.stuck[int(k), int(s)] = float(rest[4])
 
     def __repr__(self) -> str:
         return (f"SlidingClearanceJoint({self.name!r}, beam={self.beam.name!r}, "
@@ -786,7 +814,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
     cross = np.zeros((nj, max_ne, 2, ne2), np.int64)
     for i, j in enumerate(joints):
         n_el = len(j._lengths)
-        j._t_bar[:] = _chart_tangents(j, ctx)
+        j.state.t_bar[:] = _chart_tangents(j, ctx)
         for k in range(n_el):
             twisted = j._twist_dofs[k, 0] >= 0
             idx = np.concatenate([j._body_dofs, j._elem_dofs[k]]
@@ -803,11 +831,11 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
         pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
         pad_stack([j._twist_dofs for j in joints], (N_TWIST,), -1, np.int64),
-        pad_stack([j._t_bar for j in joints], (N_TWIST, 3), 0.0, float),
+        pad_stack([j.state.t_bar for j in joints], (N_TWIST, 3), 0.0, float),
         np.array([len(j._lengths) for j in joints], i64),
         pad_stack([j._lengths for j in joints], (), 1.0, float),
-        pad_stack([j._origins for j in joints], (3,), 0.0, float),
-        pad_stack([j._axes for j in joints], (3, 3), 0.0, float),
+        pad_stack([j.state.origins for j in joints], (3,), 0.0, float),
+        pad_stack([j.state.axes for j in joints], (3, 3), 0.0, float),
         pad_stack([j._tree[0] for j in joints], (3,), 0.0, float),
         pad_stack([j._tree[1] for j in joints], (), -1.0, float),   # -1: no node
         pad_stack([j._tree[2] for j in joints], (), 0, np.int64),
@@ -826,14 +854,14 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
         np.array([j.compiled_form() for j in joints], dtype=np.bool_),
         np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),
-        pad_stack([j._elem for j in joints], (), 0, np.int64),
-        pad_stack([j._xi for j in joints], (), 0.5, float),
+        pad_stack([j.state.elem for j in joints], (), 0, np.int64),
+        pad_stack([j.state.xi for j in joints], (), 0.5, float),
         np.full((nj, max_ns + 1), -1, i64),          # not known: listed by the first step
-        pad_stack([j._approach for j in joints], (MAX_POINTS,), 0.0, float),
-        pad_stack([j._active for j in joints], (MAX_POINTS,), False, np.bool_),
-        pad_stack([j._psi for j in joints], (MAX_POINTS,), 0.0, float),
-        pad_stack([j._anchor for j in joints], (MAX_POINTS, 3), 0.0, float),
-        pad_stack([j._stuck for j in joints], (MAX_POINTS,), 0.0, float),
+        pad_stack([j.state.approach for j in joints], (MAX_POINTS,), 0.0, float),
+        pad_stack([j.state.active for j in joints], (MAX_POINTS,), False, np.bool_),
+        pad_stack([j.state.psi for j in joints], (MAX_POINTS,), 0.0, float),
+        pad_stack([j.state.anchor for j in joints], (MAX_POINTS, 3), 0.0, float),
+        pad_stack([j.state.stuck for j in joints], (MAX_POINTS,), 0.0, float),
         np.array(q_ref, dtype=float, copy=True),
         pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
         np.zeros(nj, i64), np.full((nj, max_ns), -1, i64), np.zeros((nj, max_ns)),
@@ -843,25 +871,11 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.zeros((0, N_LOCAL, N_EXT)),
         np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total),
         pad_stack([j._stations for j in joints], (), 0.0, float),
-        pad_stack([j._tip_on for j in joints], (), False, np.bool_),
-        pad_stack([j._tip_station for j in joints], (), 0.0, float),
+        pad_stack([j.state.tip_on for j in joints], (), False, np.bool_),
+        pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
         np.array([j._tip_reach for j in joints], float), np.zeros(nj, np.bool_))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
-        ns = j.n_slots
-        j._origins = part.origins[i, :ns]      # (the tip sections' rows move)
-        j._axes = part.frames[i, :ns]
-        j._tip_on = part.tip_on[i]
-        j._tip_station = part.tip_station[i]
-        j._elem = part.elem_ws[i, :ns]
-        j._xi = part.xi_ws[i, :ns]
-        j._ws_list = part.ws_list[i]
-        j._t_bar = part.t_bar[i, :len(j._lengths)]
-        j._approach = part.approach[i, :ns]
-        j._active = part.active[i, :ns]
-        j._psi = part.psi[i, :ns]
-        j._anchor = part.anchor[i, :ns]
-        j._stuck = part.stuck[i, :ns]
-        j._q_start = part.q_start
+        j.state = ClearanceState.views(part, i, j.n_slots, len(j._lengths))
     return part
 
 

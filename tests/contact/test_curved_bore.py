@@ -257,7 +257,7 @@ def test_open_ends_the_beam_may_end_inside_the_bore():
     n = len(joint.stations)
     regular = {k for k in sections if k < n}
     assert regular and max(regular) <= 10 and min(regular) == 0
-    assert sections - regular == {n + 1} and list(joint._tip_on) == [False, True]
+    assert sections - regular == {n + 1} and list(joint.state.tip_on) == [False, True]
     r = np.zeros(asm.n_coords)
     joint.evaluate(None, q, np.zeros_like(q), None, 0.0, r, None)
     assert np.abs(r).max() > 0.0
@@ -271,12 +271,12 @@ def test_the_sections_crossed_are_listed_as_the_wire_advances():
     sections whose warm start is set (far sections are never visited), and the wire gains
     the sections it enters."""
     model, joint = _wire_into_bore(True, feed=0.012)
-    before = int(np.count_nonzero(np.asarray(joint._elem) >= 0))
+    before = int(np.count_nonzero(np.asarray(joint.state.elem) >= 0))
     res = fm.simulate(model, t_end=0.012, dt=2e-4, output_interval=0.004,
                       integrator=fm.GeneralizedAlpha(rho_inf=0.8))
-    listed = joint._ws_list
+    listed = joint.state.ws_list
     assert listed[0] >= 0, "the compiled post-step lists the crossed sections"
-    crossed = np.flatnonzero(np.asarray(joint._elem) >= 0)
+    crossed = np.flatnonzero(np.asarray(joint.state.elem) >= 0)
     np.testing.assert_array_equal(listed[1:1 + listed[0]], crossed)
     assert crossed.size >= before + 5 and res.t[-1] == pytest.approx(0.012)
 

@@ -106,7 +106,7 @@ def test_ongoing_contacts_keep_their_approach_velocity(compiled):
     history = []
 
     def watch(state, stats):
-        history.append((joint._active.copy(), joint._approach.copy(), joint._psi.copy()))
+        history.append((joint.state.active.copy(), joint.state.approach.copy(), joint.state.psi.copy()))
 
     fm.simulate(model, t_end=0.05, dt=2e-4, output_interval=2e-4, record_energy=False,
                 progress=watch, integrator=fm.GeneralizedAlpha(compiled=compiled))

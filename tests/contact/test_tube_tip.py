@@ -119,9 +119,9 @@ def test_the_tip_section_props_a_loaded_tip_as_beam_theory_says():
     rows = joint.output(None, q, np.zeros_like(q), st.lam, 0.0)
     n_reg = len(joint.stations)
     assert {r["section"] for r in rows} == {n_reg + 1}, rows     # the last node's tip section
-    assert bool(joint._tip_on[1]) and not bool(joint._tip_on[0])  # the clamped end is outside
+    assert bool(joint.state.tip_on[1]) and not bool(joint.state.tip_on[0])  # the clamped end is outside
     # the tip section's station (body x = 20 mm + ζ) is TIP_SETBACK radii behind the tip
-    x_plane = 0.02 + float(joint._tip_station[1])
+    x_plane = 0.02 + float(joint.state.tip_station[1])
     tip = q[asm.node_dofs(wire.last_node)[:3]]
     assert tip[0] - x_plane == pytest.approx(TIP_SETBACK * WIRE_R, rel=0.05)
     EI = STEEL.E * math.pi * WIRE_R**4 / 4
@@ -142,12 +142,12 @@ def test_the_tip_sections_follow_the_ends_into_and_out_of_the_bore():
     q = st.q.copy()
     body = joint._body_dofs
     joint.place_tips(q[body], np.ascontiguousarray(q[joint._elem_dofs]))
-    assert not joint._tip_on[0] and joint._tip_on[1]
+    assert not joint.state.tip_on[0] and joint.state.tip_on[1]
     q2 = q.copy()
     q2[body[0]] -= 0.05                              # the tube moved past the wire: no tips
     joint.place_tips(q2[body], np.ascontiguousarray(q2[joint._elem_dofs]))
-    assert not joint._tip_on.any()
+    assert not joint.state.tip_on.any()
     q3 = q.copy()
     q3[body[0]] -= 0.0125                            # the mouth past the clamp: both ends in
     joint.place_tips(q3[body], np.ascontiguousarray(q3[joint._elem_dofs]))
-    assert joint._tip_on.all()
+    assert joint.state.tip_on.all()
