@@ -99,6 +99,7 @@ class Assembly:
         self.stiffness_scale = 0.0
         self._idle_run = idle_run()
         self._kernel_ready = False
+        self._plans: dict[bool, Any] = {}
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -836,6 +837,24 @@ class Assembly:
         for obj in self.model.interactions:
             owner[np.asarray(self.extra_dofs(obj), np.int64)] = MASSLESS
         return owner
+
+    def factor_plan(self, *, mass: bool = True) -> Any:
+        """The factorisation plan of the iteration matrix
+        (:func:`flexmbs.solvers._ordering.plan_factorization` of this pattern with
+        :meth:`border_indices` and :meth:`coordinate_owners`), computed once. ``mass``: the
+        matrix has c_M M on every coordinate that has mass (dynamics, velocity corrector,
+        initial accelerations); without (statics, stiffness only) every coordinate is labelled
+        massless, which closes every nonempty border over the whole matrix (docs/design-notes.md,
+        "One factorisation for every solver")."""
+        from .solvers._ordering import MASSLESS, plan_factorization
+
+        if mass not in self._plans:
+            owner = self.coordinate_owners()
+            if not mass:
+                owner[:self.n_coords] = MASSLESS
+            self._plans[mass] = plan_factorization(self.matrix, self.border_indices(),
+                                                   self.n_coords, owner)
+        return self._plans[mass]
 
     def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """As :meth:`positions`, with −1 for the entries outside the pattern."""

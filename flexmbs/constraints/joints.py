@@ -198,10 +198,16 @@ def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):  # 
 # kernels
 @njit
 def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarray,
-          col: np.ndarray, ncol: np.ndarray) -> None:
-    """Slots s = (u1, u2, w1, w2) of equation i: ``val[s] = v(q)``, ``∂v/∂q[:, col[s] + j] = G[s, :, j]``."""
+          col: np.ndarray, ncol: np.ndarray, held: np.ndarray) -> None:
+    """Slots s = (u1, u2, w1, w2) of equation i: ``val[s] = v(q)``, ``∂v/∂q[:, col[s] + j] = G[s, :, j]``.
+    ``held[s]``: the vector row slot s holds from the previous equation (−1: none), kept
+    as it is (a joint's equations share their vectors: a spherical joint's three rows load
+    each body point once, not three times)."""
     for s in range(4):
         v = table.eq_vec[i, s]
+        if v >= 0 and held[s] == v:
+            continue
+        held[s] = v
         col[s] = 0
         ncol[s] = 0
         if v < 0:
@@ -279,10 +285,11 @@ def term_values(table: TermTable, e0: int, e1: int, q_local: np.ndarray, phi: np
     G = np.empty((4, 3, 7))
     col = np.empty(4, dtype=np.int64)
     ncol = np.empty(4, dtype=np.int64)
+    held = np.full(4, -1, dtype=np.int64)
     n = jac.shape[1]
     for i in range(e0, e1):
         r = i - e0
-        _load(table, i, q_local, val, G, col, ncol)
+        _load(table, i, q_local, val, G, col, ncol, held)
         phi[r] = _weights(table, i, val, wt)
         for j in range(n):
             jac[r, j] = 0.0
@@ -303,6 +310,7 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
     G = np.empty((4, 3, 7))
     col = np.empty(4, dtype=np.int64)
     ncol = np.empty(4, dtype=np.int64)
+    held = np.full(4, -1, dtype=np.int64)
     n = H.shape[0]
     for a in range(n):
         for b in range(n):
@@ -311,7 +319,7 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
         li = lam[i - e0]
         if li == 0.0:
             continue
-        _load(table, i, q_local, val, G, col, ncol)
+        _load(table, i, q_local, val, G, col, ncol, held)
         _weights(table, i, val, wt)
         for s in range(4):  # Σ_k wt_k ∂²v_k/∂p² = 2 Σ_k wt_k T_k on the body's p block
             v = table.eq_vec[i, s]

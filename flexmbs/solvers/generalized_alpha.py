@@ -27,6 +27,7 @@ from ..budget import check_times
 from ..driver import constraint_velocity
 from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
+from .factor import PlannedLU
 from .newton import Newton, NewtonOptions
 
 #: values of :attr:`GeneralizedAlpha.constraint_level` (the scenario key of the same name)
@@ -238,13 +239,13 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
     r_lam = np.zeros(m)
     zeros_acc = np.zeros(n)
     nu = asm.constraint_velocity_terms(q0, t0) if m else np.zeros(0)
+    lu = PlannedLU(asm)     # [M Phi_q^T; Phi_q 0]: mass on every coordinate that has it
     if np.any(nu != 0.0) and np.all(np.isfinite(nu)):
-        import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
-
         asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
-        A = asm.matrix.tocsc()
-        with contextlib.suppress(RuntimeError):
-            v_new = spla.splu(A).solve(np.concatenate([A[:n, :n] @ v0, nu]))[:n]
+        A = asm.matrix
+        with contextlib.suppress(ConvergenceError):
+            lu.factorize(A)
+            v_new = lu.solve(np.concatenate([A[:n, :n] @ v0, nu]))[:n]
             if np.all(np.isfinite(v_new)):
                 v0 = v_new
     asm.evaluate(q0, v0, zeros_acc, np.zeros(m), t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
@@ -264,11 +265,9 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
             f"the forces at t = {t0:g} are not finite ({float(rhs[i])} on {where}){culprit}; "
             "loads and their time functions must stay finite")
     try:
-        import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
-
-        lu = spla.splu(asm.matrix.tocsc())
+        lu.factorize(asm.matrix)
         x = lu.solve(rhs)
-    except RuntimeError as exc:
+    except ConvergenceError as exc:
         raise ConvergenceError(
             f"cannot compute consistent initial accelerations: singular mass/constraint matrix "
             f"({exc}); {_massless(asm) or 'every coordinate needs mass or a constraint'}"
@@ -287,8 +286,12 @@ def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: 
         scale = asm.evaluate(q0, v0, x[:n], x[n:], t0, r_q, r_lam, matrix=(1.0, 0.0, 0.0))
         if not np.abs(r_q).max() > 1e-10 * max(scale, 1e-300):
             break
-        A = asm.matrix.tocsc()
-        dx = spla.splu(A).solve(np.concatenate([r_q, A[n:, :n] @ x[:n] - rhs[n:]]))
+        A = asm.matrix
+        try:
+            lu.factorize(A)
+        except ConvergenceError:
+            break
+        dx = lu.solve(np.concatenate([r_q, A[n:, :n] @ x[:n] - rhs[n:]]))
         if not np.all(np.isfinite(dx)):
             break
         x = x - dx
@@ -317,11 +320,11 @@ class _PythonStepper:
     def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
         self.am, self.af, self.gamma, self.beta = options.parameters()
         self.keep_acceleration = options.predictor == "constant_acceleration"
-        self.newton = Newton(options.newton, asm.length_scale)
+        self.newton = Newton(options.newton, asm.length_scale, PlannedLU(asm))
         self.step = _AlphaStep(asm, state)
         self.state = state
         self.velocity = options.constraint_level == "position_velocity" and asm.n_mult > 0
-        self.corrector = Newton(options.newton, asm.length_scale)
+        self.corrector = Newton(options.newton, asm.length_scale, PlannedLU(asm))
         self.velocity_step = _VelocityStep(asm, state) if self.velocity else None
 
     def max_chunk(self) -> int:
@@ -392,7 +395,6 @@ class _CompiledStepper:
         from ..terms import dynamic_mode
         from . import _compiled as cc
         from ._bordered import BorderedBandedLU
-        from ._ordering import plan_factorization
 
         self.cc = cc
         self.asm = asm
@@ -411,14 +413,16 @@ class _CompiledStepper:
         self.info = np.zeros(cc.INFO_SIZE)
         self.info[cc.INFO_KSCALE] = asm.stiffness_scale
         self.data = np.zeros_like(asm.matrix.data)
-        plan = plan_factorization(asm.matrix, asm.border_indices(), n, asm.coordinate_owners())
+        plan = asm.factor_plan()
         self.lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
         self.stopped: Exception | None = None
         # the velocity corrector (constraint_level): its own factorisation, the matrix pattern
         # to read Phi_q from, the equations it holds
         self.velocity = options.constraint_level == "position_velocity" and m > 0
         if self.velocity:
-            self.factor_v = BorderedBandedLU(asm.matrix, asm.border_indices()).factor
+            # the same plan: its matrix has the mass, not the stiffness (docs/design-notes.md,
+            # "One factorisation for every solver")
+            self.factor_v = BorderedBandedLU(asm.matrix, plan.border, plan.order).factor
             self.pattern = asm.matrix_pattern()
             self.velocity_rows = asm.velocity_rows()
         else:

@@ -88,6 +88,42 @@ class StepProblem(Protocol):
     def stiffness_scale(self) -> float: ...
 
 
+#: the message of a singular iteration matrix (every factorisation)
+SINGULAR = ("the iteration matrix is singular: the model has an unconstrained motion (a free "
+            "rigid-body mode in statics, a body without mass or inertia) or redundant "
+            "constraints")
+
+
+class Factorization(Protocol):
+    """A factorisation of the iteration matrix: :meth:`factorize` raises
+    :class:`~flexmbs.errors.ConvergenceError` if the matrix is singular."""
+
+    def factorize(self, A: sp.csc_matrix) -> None: ...
+    def solve(self, b: np.ndarray) -> np.ndarray: ...
+
+
+class SuperLUFactor:
+    """SuperLU (COLAMD), for a matrix of any pattern."""
+
+    def __init__(self) -> None:
+        self.lu: spla.SuperLU | None = None
+
+    def factorize(self, A: sp.csc_matrix) -> None:
+        with warnings.catch_warnings():
+            import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
+
+            warnings.simplefilter("error", spla.MatrixRankWarning)
+            try:
+                self.lu = spla.splu(A, permc_spec="COLAMD", options={"SymmetricMode": False})
+            except (RuntimeError, spla.MatrixRankWarning) as exc:
+                self.lu = None
+                raise ConvergenceError(f"{SINGULAR} ({exc})") from None
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        assert self.lu is not None
+        return self.lu.solve(b)
+
+
 @dataclass
 class NewtonStats:
     iterations: int = 0
@@ -115,10 +151,15 @@ def _too_slow(err: float, err_prev: float, o: NewtonOptions) -> bool:
 class Newton:
     """Newton solver with optional modified-Newton factorisation reuse and line search."""
 
-    def __init__(self, options: NewtonOptions, length_scale: float) -> None:
+    def __init__(self, options: NewtonOptions, length_scale: float,
+                 factorization: Factorization | None = None) -> None:
+        """``factorization``: the iteration matrix's factorisation
+        (:class:`flexmbs.solvers.factor.PlannedLU` on every path of the package; default
+        SuperLU, for problems without an assembly's pattern)."""
         self.options = options
         self.length_scale = length_scale
-        self.lu: spla.SuperLU | None = None
+        self.factorization = factorization if factorization is not None else SuperLUFactor()
+        self.lu: Factorization | None = None
         self.total = NewtonStats()
         self._rhs: np.ndarray | None = None
         self._cycle = [0, 0]         # solves and iterations since the last factorisation
@@ -149,18 +190,9 @@ class Newton:
         return float(ec), n + int(np.argmax(np.abs(r_lam)))
 
     def _factorize(self, A: sp.csc_matrix) -> None:
-        with warnings.catch_warnings():
-            import scipy.sparse.linalg as spla  # here: its import costs 0.2 s of every start-up
-
-            warnings.simplefilter("error", spla.MatrixRankWarning)
-            try:
-                self.lu = spla.splu(A, permc_spec="COLAMD", options={"SymmetricMode": False})
-            except (RuntimeError, spla.MatrixRankWarning) as exc:
-                self.lu = None
-                raise ConvergenceError(
-                    "the iteration matrix is singular: the model has an unconstrained motion "
-                    "(a free rigid-body mode in statics, a body without mass or inertia) or "
-                    f"redundant constraints ({exc})") from None
+        self.lu = None
+        self.factorization.factorize(A)     # ConvergenceError if singular
+        self.lu = self.factorization
         self.total.factorizations += 1
 
     def solve(self, problem: StepProblem, *, full: bool = False) -> NewtonStats:

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..assembly import Assembly
 from ..errors import ConvergenceError, FlexmbsError, ModelError
+from .factor import static_factorization
 from .newton import Newton, NewtonOptions
 
 
@@ -99,7 +100,7 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
     asm.begin(q)
     prob = _StaticStep(asm, q, lam, t)
     prob.stabilizer = o.stabilizer
-    newton = Newton(o.newton, asm.length_scale)
+    newton = Newton(o.newton, asm.length_scale, static_factorization(asm))
     factor, inc = 0.0, 1.0 / o.load_steps
     n_inc = 0
     while factor < 1.0:
