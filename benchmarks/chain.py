@@ -22,7 +22,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from exudyn_models import _quiet_settings, exudyn_available  # noqa: E402
+from exudyn_models import _quiet_settings, exudyn_available, solve_dynamic_timed  # noqa: E402
 
 import flexmbs as fm  # noqa: E402
 
@@ -91,28 +91,10 @@ def run_exudyn_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1) -> dict:
         last = node
     mbs.Assemble()
     s = _quiet_settings("EigenSparse")
-    n_steps = int(round(t_end / h))
-    ti = s.timeIntegration
-    ti.endTime = n_steps * h
-    ti.numberOfSteps = n_steps
-    ti.initialStepSize = h
-    ti.adaptiveStep = False
-    ti.automaticStepSize = False
-    ti.generalizedAlpha.spectralRadius = 0.8
-    ti.generalizedAlpha.useIndex2Constraints = False
-    ti.generalizedAlpha.useNewmark = False
-    ti.generalizedAlpha.computeInitialAccelerations = True
-    ti.newton.useModifiedNewton = True
-    ti.newton.relativeTolerance = 1e-8
-    ti.newton.residualMode = 1
-    ti.newton.absoluteTolerance = 1e-8
-    t0 = time.perf_counter()
-    ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha,
-                          storeSolver=True)
-    wall = time.perf_counter() - t0
-    if not ok:
-        raise RuntimeError("Exudyn SolveDynamic failed")
-    it = mbs.sys["dynamicSolver"].it
+    wall, solver, n_steps = solve_dynamic_timed(
+        mbs, s, h=h, t_end=t_end, rho_inf=0.8, modified_newton=True, relative_tolerance=1e-8,
+        residual_mode=1, absolute_tolerance=1e-8)
+    it = solver.it
     z = mbs.GetNodeOutput(last, exu.OutputVariableType.Position)[2]
     return dict(n=n, steps=n_steps, wall_time=wall, us_per_step=1e6 * wall / n_steps,
                 end_z=float(z), newton=int(it.newtonStepsCount), jac=int(it.newtonJacobiCount))

@@ -16,6 +16,7 @@ Run ``python benchmarks/exudyn_models.py`` for the table.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -184,37 +185,10 @@ def run_exudyn_cantilever(n_elem: int, *, h: float = 1e-3, t_end: float = 0.5, r
         solver = mbs.sys["staticSolver"]
         steps = 1
     else:
-        n_steps = int(round(t_end / h))
-        ti = s.timeIntegration
-        ti.startTime = 0.0
-        ti.endTime = n_steps * h
-        ti.numberOfSteps = n_steps
-        ti.initialStepSize = h
-        ti.adaptiveStep = False          # no step reduction
-        ti.automaticStepSize = False     # no error-controlled step size
-        ga = ti.generalizedAlpha
-        ga.spectralRadius = rho_inf
-        ga.useIndex2Constraints = False
-        ga.useNewmark = False
-        ga.computeInitialAccelerations = True
-        nw = ti.newton
-        nw.useModifiedNewton = bool(modified_newton)
-        nw.relativeTolerance = relative_tolerance
-        nw.residualMode = int(residual_mode)
-        if absolute_tolerance is None and residual_mode == 1:
-            absolute_tolerance = relative_tolerance
-        if absolute_tolerance is not None:
-            nw.absoluteTolerance = absolute_tolerance
-        t0 = time.perf_counter()
-        ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha,
-                              storeSolver=True)
-        wall = time.perf_counter() - t0
-        if not ok:
-            raise RuntimeError("Exudyn SolveDynamic failed")
-        solver = mbs.sys["dynamicSolver"]
-        steps = n_steps
-        if abs(solver.it.currentTime - ti.endTime) > 1e-9:
-            raise RuntimeError(f"unexpected end time t={solver.it.currentTime}")
+        wall, solver, steps = solve_dynamic_timed(
+            mbs, s, h=h, t_end=t_end, rho_inf=rho_inf, modified_newton=modified_newton,
+            relative_tolerance=relative_tolerance, residual_mode=residual_mode,
+            absolute_tolerance=absolute_tolerance)
 
     # solver statistics (SolverIterationData, cumulative over the whole solve)
     it = solver.it
@@ -233,6 +207,47 @@ def run_exudyn_cantilever(n_elem: int, *, h: float = 1e-3, t_end: float = 0.5, r
         reduced_integration_flag=REDUCED_INTEGRATION_FLAG if reduced_integration else 0,
         residual_mode=None if static else int(residual_mode),
     )
+
+
+def solve_dynamic_timed(mbs: Any, s: Any, *, h: float, t_end: float, rho_inf: float,
+                        modified_newton: bool, relative_tolerance: float, residual_mode: int,
+                        absolute_tolerance: float | None = None) -> tuple[float, Any, int]:
+    """Exudyn's generalized-α at the fixed step ``h`` to ``t_end`` (no step control, index 3,
+    initial accelerations computed) with the Newton settings of :func:`run_exudyn_cantilever`'s
+    docstring, timed around ``SolveDynamic`` alone. Returns (wall seconds, the stored solver,
+    steps)."""
+    exu = _require_exudyn()
+    n_steps = int(round(t_end / h))
+    ti = s.timeIntegration
+    ti.startTime = 0.0
+    ti.endTime = n_steps * h
+    ti.numberOfSteps = n_steps
+    ti.initialStepSize = h
+    ti.adaptiveStep = False          # no step reduction
+    ti.automaticStepSize = False     # no error-controlled step size
+    ga = ti.generalizedAlpha
+    ga.spectralRadius = rho_inf
+    ga.useIndex2Constraints = False
+    ga.useNewmark = False
+    ga.computeInitialAccelerations = True
+    nw = ti.newton
+    nw.useModifiedNewton = bool(modified_newton)
+    nw.relativeTolerance = relative_tolerance
+    nw.residualMode = int(residual_mode)
+    if absolute_tolerance is None and residual_mode == 1:
+        absolute_tolerance = relative_tolerance
+    if absolute_tolerance is not None:
+        nw.absoluteTolerance = absolute_tolerance
+    t0 = time.perf_counter()
+    ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha,
+                          storeSolver=True)
+    wall = time.perf_counter() - t0
+    if not ok:
+        raise RuntimeError("Exudyn SolveDynamic failed")
+    solver = mbs.sys["dynamicSolver"]
+    if abs(solver.it.currentTime - ti.endTime) > 1e-9:
+        raise RuntimeError(f"unexpected end time t={solver.it.currentTime}")
+    return wall, solver, n_steps
 
 
 def static_tip_closed_form() -> float:

@@ -30,6 +30,7 @@ from .geometry import closest_point_kernel, section_ellipse_at
 from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, TWIST_OFF, contact_force
 from .sections import (
     SHAPE_CIRCLE,
+    SHAPE_SAMPLES,
     circle_stationary_points,
     common_normal_points,
     section_boundary,
@@ -55,8 +56,6 @@ MATCH_ANGLE = 0.5
 MAX_CANDIDATES = 8
 #: crossings of one section plane by the beam kept at most (a beam looping back in a tube)
 MAX_CROSSINGS = 4
-#: samples of the common-normal residual in the generic (non-circular) detector
-SHAPE_SAMPLES = 128
 #: section slots of a joint past its bore's sections: one per end of the beam (first node,
 #: last node), the tip sections of an open bore (:func:`place_tips`)
 N_TIPS = 2

@@ -26,6 +26,7 @@ from .roots import quartic_real_roots, trig_quadratic_roots
 from .shapes import (
     HOLE_SECTIONS,
     SHAPE_CIRCLE,
+    SHAPE_SAMPLES,
     SHAPE_SUPERELLIPSE,
     Candidate,
     CircleSection,
@@ -48,6 +49,7 @@ __all__ = [
     "HOLE_SECTIONS",
     "SECTION_TYPES",
     "SHAPE_CIRCLE",
+    "SHAPE_SAMPLES",
     "SHAPE_SUPERELLIPSE",
     "circle_boundary",
     "superellipse_boundary",

@@ -9,7 +9,7 @@ numba needs the calls spelt out.
 from __future__ import annotations
 
 from ..._jit import njit
-from .base import HOLE_SECTIONS, Candidate, Ellipse2D, HoleSection
+from .base import HOLE_SECTIONS, SHAPE_SAMPLES, Candidate, Ellipse2D, HoleSection
 from .circle import (
     SHAPE_CIRCLE,
     CircleSection,
@@ -31,7 +31,8 @@ from .superellipse import (
     superellipse_section_boundary,
 )
 
-__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_RECTANGLE", "SHAPE_SUPERELLIPSE",
+__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_RECTANGLE", "SHAPE_SAMPLES",
+           "SHAPE_SUPERELLIPSE",
            "Candidate", "CircleSection", "Ellipse2D", "HoleSection", "RoundedRectangleSection",
            "SuperellipseSection", "circle_boundary",
            "circle_stationary_points", "section_boundary", "section_contains",

@@ -14,7 +14,12 @@ import numpy as np
 from ...errors import ModelError
 from ...registry import Registry
 
-__all__ = ["Candidate", "Ellipse2D", "HOLE_SECTIONS", "HoleSection"]
+__all__ = ["Candidate", "Ellipse2D", "HOLE_SECTIONS", "HoleSection", "SHAPE_SAMPLES"]
+
+#: wall samples of the compiled generic detector per section (``_detect.detect_section``: the
+#: common-normal residual and the line-model seeds); what a shape's features must span (each
+#: shape checks its own: the superellipse's exponent, the rounded rectangle's corner radius)
+SHAPE_SAMPLES = 128
 
 
 @dataclass(frozen=True)

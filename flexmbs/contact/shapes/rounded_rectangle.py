@@ -14,7 +14,7 @@ import numpy as np
 
 from ..._jit import njit
 from ...errors import ModelError
-from .base import HOLE_SECTIONS, HoleSection
+from .base import HOLE_SECTIONS, SHAPE_SAMPLES, HoleSection
 
 __all__ = ["SHAPE_ROUNDED_RECTANGLE", "RoundedRectangleSection", "rounded_rectangle_boundary",
            "rounded_rectangle_contains"]
@@ -124,8 +124,6 @@ class RoundedRectangleSection(HoleSection):
         if int(self.samples) < 64:
             raise ModelError(f"RoundedRectangleSection: samples must be >= 64 (got "
                              f"{self.samples!r})")
-        from .._detect import SHAPE_SAMPLES  # the compiled detector's wall samples
-
         straight = 4.0 * (self.w + self.h - 2.0 * self.r)
         # a corner spans two samples: π r / 2 ≥ 2 (straight + 2π r) / SHAPE_SAMPLES
         r_min = 4.0 * straight / (math.pi * (SHAPE_SAMPLES - 8))

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 
 from ...errors import ModelError
+from .base import SHAPE_SAMPLES
 
 __all__ = ["POWER_BUDGET", "check_exponent", "exponent_limit"]
 
@@ -46,8 +47,6 @@ def exponent_limit(a: float, b: float, samples: int | None = None) -> float:
     ``samples`` samples per section (default: the detector's ``SHAPE_SAMPLES``): its corner
     spans one sample interval, and its powers stay finite (module docstring)."""
     if samples is None:
-        from .._detect import SHAPE_SAMPLES
-
         samples = SHAPE_SAMPLES
     r = min(a, b) / max(a, b)
     h = 2.0 * math.pi / samples
@@ -67,8 +66,6 @@ def exponent_limit(a: float, b: float, samples: int | None = None) -> float:
 def check_exponent(a: float, b: float, exponent: float, *, key: str = "exponent") -> None:
     """Raise :class:`ModelError` naming ``key`` and the limit when ``exponent`` is beyond
     :func:`exponent_limit` of the compiled detector."""
-    from .._detect import SHAPE_SAMPLES
-
     samples = SHAPE_SAMPLES
     limit = exponent_limit(a, b, samples)
     if exponent > limit:
