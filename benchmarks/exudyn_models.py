@@ -209,14 +209,12 @@ def run_exudyn_cantilever(n_elem: int, *, h: float = 1e-3, t_end: float = 0.5, r
     )
 
 
-def solve_dynamic_timed(mbs: Any, s: Any, *, h: float, t_end: float, rho_inf: float,
-                        modified_newton: bool, relative_tolerance: float, residual_mode: int,
-                        absolute_tolerance: float | None = None) -> tuple[float, Any, int]:
-    """Exudyn's generalized-α at the fixed step ``h`` to ``t_end`` (no step control, index 3,
-    initial accelerations computed) with the Newton settings of :func:`run_exudyn_cantilever`'s
-    docstring, timed around ``SolveDynamic`` alone. Returns (wall seconds, the stored solver,
-    steps)."""
-    exu = _require_exudyn()
+def alpha_settings(s: Any, *, h: float, t_end: float, rho_inf: float, modified_newton: bool,
+                   relative_tolerance: float, residual_mode: int,
+                   absolute_tolerance: float | None = None) -> int:
+    """Exudyn's generalized-α settings of every comparison: the fixed step ``h`` to ``t_end``
+    (no step control), index 3, initial accelerations computed, the Newton settings of
+    :func:`run_exudyn_cantilever`'s docstring. Returns the number of steps."""
     n_steps = int(round(t_end / h))
     ti = s.timeIntegration
     ti.startTime = 0.0
@@ -238,6 +236,14 @@ def solve_dynamic_timed(mbs: Any, s: Any, *, h: float, t_end: float, rho_inf: fl
         absolute_tolerance = relative_tolerance
     if absolute_tolerance is not None:
         nw.absoluteTolerance = absolute_tolerance
+    return n_steps
+
+
+def solve_dynamic_timed(mbs: Any, s: Any, **alpha: Any) -> tuple[float, Any, int]:
+    """:func:`alpha_settings` (keyword arguments ``alpha``), then ``SolveDynamic`` timed alone.
+    Returns (wall seconds, the stored solver, steps)."""
+    exu = _require_exudyn()
+    n_steps = alpha_settings(s, **alpha)
     t0 = time.perf_counter()
     ok = exu.SolveDynamic(mbs, s, solverType=exu.DynamicSolverType.GeneralizedAlpha,
                           storeSolver=True)
@@ -245,7 +251,7 @@ def solve_dynamic_timed(mbs: Any, s: Any, *, h: float, t_end: float, rho_inf: fl
     if not ok:
         raise RuntimeError("Exudyn SolveDynamic failed")
     solver = mbs.sys["dynamicSolver"]
-    if abs(solver.it.currentTime - ti.endTime) > 1e-9:
+    if abs(solver.it.currentTime - s.timeIntegration.endTime) > 1e-9:
         raise RuntimeError(f"unexpected end time t={solver.it.currentTime}")
     return wall, solver, n_steps
 

@@ -34,7 +34,7 @@ from scipy.special import ellipk
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from exudyn_models import _quiet_settings, exudyn_available  # noqa: E402
+from exudyn_models import _quiet_settings, alpha_settings, exudyn_available  # noqa: E402
 
 import flexmbs as fm  # noqa: E402
 
@@ -212,21 +212,8 @@ def exudyn_settings(h: float, t_end: float, record: bool, tol: float,
     s = _quiet_settings("EigenSparse")
     s.solution.sensors.active = bool(record)
     s.solution.sensors.writePeriod = 1e-3
-    n_steps = int(round(t_end / h))
-    ti = s.timeIntegration
-    ti.startTime, ti.endTime, ti.numberOfSteps, ti.initialStepSize = 0.0, n_steps * h, n_steps, h
-    ti.adaptiveStep = False
-    ti.automaticStepSize = False
-    ga = ti.generalizedAlpha
-    ga.spectralRadius = 0.8
-    ga.useIndex2Constraints = False
-    ga.useNewmark = False
-    ga.computeInitialAccelerations = True
-    nw = ti.newton
-    nw.useModifiedNewton = bool(modified_newton)
-    nw.relativeTolerance = tol
-    nw.absoluteTolerance = tol    # residualMode=1: increment test, absTol = relTol
-    nw.residualMode = 1
+    n_steps = alpha_settings(s, h=h, t_end=t_end, rho_inf=0.8, modified_newton=modified_newton,
+                             relative_tolerance=tol, residual_mode=1)   # absTol = relTol
     return s, n_steps
 
 
