@@ -89,17 +89,36 @@ def reset_crossings(elem_out, out_list):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _add_crossing(k, s, ne, cross_n, cross_e, cross_xi, touched, n_touched):  # noqa: ANN001, ANN202
-    """Record the crossing ``s = e + ξ`` of section k (up to :data:`MAX_CROSSINGS`); a section
-    crossed for the first time joins ``touched``. Returns the new count of touched sections."""
-    if cross_n[k] == 0:
-        touched[n_touched] = k
-        n_touched += 1
-    if cross_n[k] < MAX_CROSSINGS:
-        ee = min(int(math.floor(s)), ne - 1)
-        cross_e[k, cross_n[k]] = ee
-        cross_xi[k, cross_n[k]] = s - ee
-        cross_n[k] += 1
+def _to_body(x, r_H, A, out):  # noqa: ANN001, ANN202
+    """Body coordinates ``Aᵀ(x − r_H)`` of the point x (A homogeneous in p: divided by |p|⁴)."""
+    scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]
+    for c in range(3):
+        out[c] = ((x[0] - r_H[0]) * A[0, c] + (x[1] - r_H[1]) * A[1, c]
+                  + (x[2] - r_H[2]) * A[2, c]) / scale
+
+
+@njit(inline="always")
+def _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots, cross_n, cross_e,  # noqa: ANN001, ANN202, PLR0913
+                   cross_xi, touched, n_touched):
+    """The crossings of element e with the plane of section k (none unless its control points
+    straddle the plane; warm-started at the last step's crossing), recorded up to
+    :data:`MAX_CROSSINGS`; a section crossed for the first time joins ``touched``. Returns the
+    new count of touched sections."""
+    lo, hi = element_plane_range(qe[e], lengths[e], origin, n)
+    if lo > 0.0 or hi < 0.0:
+        return n_touched
+    xi0 = xi_ws[k] if elem_ws[k] == e else -1.0     # the last step's crossing
+    nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), xi0, roots)
+    ne = qe.shape[0]
+    for j in range(nr):
+        if cross_n[k] == 0:
+            touched[n_touched] = k
+            n_touched += 1
+        if cross_n[k] < MAX_CROSSINGS:
+            ee = min(int(math.floor(roots[j])), ne - 1)
+            cross_e[k, cross_n[k]] = ee
+            cross_xi[k, cross_n[k]] = roots[j] - ee
+            cross_n[k] += 1
     return n_touched
 
 
@@ -196,26 +215,17 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     stack = work[:64]
     near = work[64:]
     # ---- broad phase: the sections each element comes near, and its crossings with them
-    scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]   # |p|^4 (homogeneous A)
     n_touched = 0
     for e in range(ne):
         rho = element_bounding_sphere(qe[e], lengths[e], centre)
-        for c in range(3):
-            xb[c] = ((centre[0] - r_H[0]) * A[0, c] + (centre[1] - r_H[1]) * A[1, c]
-                     + (centre[2] - r_H[2]) * A[2, c]) / scale
+        _to_body(centre, r_H, A, xb)
         m = sections_near(tree_c, tree_r, tree_lo, tree_hi, xb, 1.01 * rho + 1e-12, stack,
                           near)
         for i in range(m):
             k = near[i]
             _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
-            lo, hi = element_plane_range(qe[e], lengths[e], origin, n)
-            if lo > 0.0 or hi < 0.0:
-                continue
-            xi0 = xi_ws[k] if elem_ws[k] == e else -1.0     # the last step's crossing
-            nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), xi0, roots)
-            for j in range(nr):
-                n_touched = _add_crossing(k, roots[j], ne, cross_n, cross_e, cross_xi, touched,
-                                          n_touched)
+            n_touched = _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots,
+                                       cross_n, cross_e, cross_xi, touched, n_touched)
     # the tip sections: crossed by the elements at their end of the beam
     for t in range(tip_on.shape[0]):
         if not tip_on[t]:
@@ -224,14 +234,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
         _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
         e_end = 0 if t == 0 else ne - 1
         for e in range(max(0, e_end - 1), min(ne, e_end + 2)):
-            lo, hi = element_plane_range(qe[e], lengths[e], origin, n)
-            if lo > 0.0 or hi < 0.0:
-                continue
-            xi0 = xi_ws[k] if elem_ws[k] == e else -1.0
-            nr = element_crossings(qe, lengths, e, origin, n, 1e-12, np.int64(30), xi0, roots)
-            for j in range(nr):
-                n_touched = _add_crossing(k, roots[j], ne, cross_n, cross_e, cross_xi, touched,
-                                          n_touched)
+            n_touched = _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots,
+                                       cross_n, cross_e, cross_xi, touched, n_touched)
     reset_crossings(elem_out, out_list)    # crossed inside the bore in this evaluation: below
     # sections in order (deterministic rows, as the sections lie along the bore)
     for i in range(1, n_touched):
@@ -393,7 +397,6 @@ def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, t
     n_tips = tip_on.shape[0]
     n_reg = origins.shape[0] - n_tips
     ne = qe.shape[0]
-    scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]   # |p|^4 (homogeneous A)
     u = np.empty(3)
     origin = np.empty(3)
     n = np.empty(3)
@@ -410,9 +413,7 @@ def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, t
         back = min(TIP_SETBACK * r_b / lengths[e_end], 1.0)
         xi = back if t == 0 else 1.0 - back
         X, _, _ = beam_point(qe, lengths, e_end, xi)
-        for c in range(3):
-            u[c] = ((X[0] - r_H[0]) * A[0, c] + (X[1] - r_H[1]) * A[1, c]
-                    + (X[2] - r_H[2]) * A[2, c]) / scale
+        _to_body(X, r_H, A, u)
         m = sections_near(tree_c, tree_r, tree_lo, tree_hi, u, tip_reach, stack, near)
         best = -1
         best_lam = 0.0
