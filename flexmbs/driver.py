@@ -22,7 +22,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._jit import njit
+from ._jit import FLAG, njit
 from .constraints.drivers import DriverPart, drivers_jacobian, drivers_residual
 from .constraints.joints import (
     NormPart,
@@ -45,11 +45,9 @@ from .constraints.sliding import (
 from .contact._detect import (
     ERR_LEFT_BORE,
     ClearancePart,
-    clearance_jacobian,
     clearance_post_step_all,
-    clearance_residual,
-    clearance_restart,
     clearance_set_bases,
+    clearance_terms,
 )
 from .contact.joint import CLEARANCE
 from .elements.group import (
@@ -110,9 +108,14 @@ class SystemPart(NamedTuple):
     bases: np.ndarray                # (nodes with a twist, 7) re-based nodes' records (§2.4)
 
     def without_absent(self, present: dict[str, bool]) -> SystemPart:
-        """This system with ``None`` for every optional kind that ``present`` marks absent
-        (the same arrays otherwise: in-place updates are seen by both)."""
+        """This system with ``None`` for every optional kind that ``present`` marks absent,
+        and the present interaction kinds' parts as they declare them for the kernel (their
+        ``compiled_view``: features no interaction uses are ``None`` too); the same arrays
+        otherwise: in-place updates are seen by both."""
         absent: dict[str, Any] = {k: None for k in OPTIONAL_KINDS if not present[k]}
+        for kind in INTERACTION_KINDS:
+            if present[kind.name] and kind.compiled_view is not None:
+                absent[kind.name] = kind.compiled_view(getattr(self, kind.name))
         return self._replace(**absent)
 
 
@@ -138,7 +141,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     terms_residual(sy.terms, n, q, lam, r)
     drivers_residual(sy.drivers, n, q, lam, fv, mode, r)
     scale = max(scale, sliding_residual(sy.sliding, n, q, v, lam, fv, r))
-    sc, code = clearance_residual(sy.clearance, q, v, r, sy.error)
+    sc, code = clearance_terms(sy.clearance, q, v, FLAG[0], 0.0, 0.0, r, r, sy.error)
     return max(scale, sc), code
 
 
@@ -158,7 +161,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     terms_jacobian(sy.terms, q, lam, cK, data)
     drivers_jacobian(sy.drivers, q, lam, fv, mode, cK, data)
     sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data)
-    code = clearance_jacobian(sy.clearance, q, v, cC, cK, data, sy.error)
+    _, code = clearance_terms(sy.clearance, q, v, FLAG[1], cC, cK, data, data, sy.error)
     return kscale, code
 
 
@@ -187,8 +190,7 @@ def rebase(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     holding those nodes then read. Returns the number of re-based nodes."""
     count = groups_rebase(sy.beams, q, v, qdd, acc, sy.bases)
     if count > 0:
-        set_bases(sy, sy.bases, count, False)
-        clearance_restart(sy.clearance, q)     # the friction's step start, re-based too
+        set_bases(sy, sy.bases, count, False, q)   # q: the friction's step start, re-based
     return count
 
 
@@ -211,15 +213,16 @@ def rebase_static(sy, q):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def set_bases(sy, log, stop, elements):  # noqa: ANN001, ANN201
+def set_bases(sy, log, stop, elements, q):  # noqa: ANN001, ANN201
     """Every holder of a node listed in ``log[:stop]`` (records ``[twist coordinate, t̄, D̄]``)
     takes its base: joints and node moments, and with ``elements`` the element groups too (a
-    resumed run; after :func:`rebase` they have them already)."""
+    resumed run; after :func:`rebase` they have them already). ``q``: the re-based start of the
+    next step (empty for a resumed run, whose start :meth:`Assembly.begin` sets)."""
     if elements:
         groups_set_bases(sy.beams, log, stop)
     terms_set_bases(sy.terms, log, stop)
     loads_set_bases(sy.loads, log, stop)
-    clearance_set_bases(sy.clearance, log, stop)
+    clearance_set_bases(sy.clearance, log, stop, q)
 
 
 @njit

@@ -69,7 +69,7 @@ def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: A
         count, code = rebase_static(system, q)
         return float(count), code
     if op == OP_SET_BASES:
-        set_bases(system, system.bases, int(coef[0]), True)
+        set_bases(system, system.bases, int(coef[0]), True, q[:0])
         return 0.0, 0
     return float(alpha_run(system, q, v, qdd, lam, fv, mode, r, data, run)), 0
 

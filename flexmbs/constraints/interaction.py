@@ -39,6 +39,10 @@ class InteractionKind:
     (:class:`~flexmbs.errors.SimulationStopped`, e.g. a slide reaching the beam's end) instead
     of the step failing and being cut.
 
+    ``compiled_view(part)``: the part as the compiled kernel receives it, with ``None`` for the
+    kind's features no interaction of the model uses (their code is then not compiled for it:
+    :meth:`~flexmbs.driver.SystemPart.without_absent`; the same arrays otherwise).
+
     ``begin(part, q)``: ``q`` is where the next step starts (a kind whose forces depend on the
     step's start: the clearance joint's sticking friction); ``energy``: the name of a stored
     energy of the kind's interactions in :meth:`~flexmbs.assembly.Assembly.energies` and the
@@ -58,6 +62,7 @@ class InteractionKind:
     stops: tuple[int, ...] = ()
     enable: Callable[[Any, int, bool], None] | None = None
     begin: Callable[[Any, np.ndarray], None] | None = None
+    compiled_view: Callable[[Any], Any] | None = None
     energy: tuple[str, Callable[[Any, np.ndarray, np.ndarray], float]] | None = None
 
 

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import FLAG, njit
+from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.centerline import (
     beam_point,
@@ -27,7 +27,7 @@ from ..elements.centerline import (
 from ..elements.rigid_body import rotation
 from .bores import section_between, sections_near
 from .geometry import closest_point_kernel, section_ellipse_at
-from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, TWIST_OFF, contact_force
+from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_TWIST, TWIST_OFF, contact_force
 from .sections import (
     SHAPE_CIRCLE,
     SHAPE_SAMPLES,
@@ -161,7 +161,8 @@ def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list
 @njit
 def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
                    open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
-                   elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, out):
+                   elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, paper,
+                   out):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
@@ -173,6 +174,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     generic common-normal detector (§6); with ``consistent`` each point is instead a stationary
     pair of the wall and the beam axis (§4b, :mod:`flexmbs.contact.stationary`), seeded by the
     line model, and its row's ``depth`` is the penetration ``r_b − |x − Y|`` (``phi`` = ψ).
+    ``paper`` None: no joint of the model uses the paper's detection (:func:`_paper_candidates`
+    compiled out; ``consistent`` is then always set).
 
     The crossings (issue 30, "many sections, cheap"): every element's bounding sphere is put
     to the bore's section tree (:func:`~flexmbs.contact.bores.sections_near`, body
@@ -314,54 +317,9 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
                     row[CROSSING_COL + 1] = xi
                     count += 1
                 continue
-            if shape == SHAPE_CIRCLE:
-                R = params[0]
-                cphi, ckind = circle_stationary_points(cy, cz, eax, eay, a, b, R)
-                m = 0
-                for j in range(min(cphi.size, MAX_CANDIDATES)):
-                    ca = math.cos(cphi[j])
-                    sa = math.sin(cphi[j])
-                    x = cy + a * ca * eax - b * sa * eay
-                    y = cz + a * ca * eay + b * sa * eax
-                    rho = math.hypot(x, y)
-                    if rho == 0.0:
-                        continue
-                    psis[m] = math.atan2(y, x)
-                    phis[m] = cphi[j]
-                    kinds[m] = ckind[j]
-                    depths[m] = rho - R
-                    m += 1
-            else:
-                m = common_normal_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
-                                         psis, phis, kinds, depths)
-            for j in range(m):
-                if depths[j] <= 0.0 or count >= out.shape[0]:
-                    continue
-                section_boundary(shape, params, psis[j], Y, Yp, Ypp)
-                Q = np.empty(3)
-                for c in range(3):
-                    Q[c] = origin[c] + Y[0] * ey[c] + Y[1] * ez[c]
-                eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13,
-                                                np.int64(30))
-                row = out[count]
-                row[0] = k
-                row[1] = j
-                row[2] = kinds[j]
-                row[3] = eP
-                row[4] = xiP
-                row[5] = Q[0]
-                row[6] = Q[1]
-                row[7] = Q[2]
-                row[8] = a
-                row[9] = b
-                row[10] = depths[j]
-                row[11] = psis[j]
-                row[12] = 0.0
-                row[13] = 0.0
-                row[14] = phis[j]
-                row[CROSSING_COL] = e
-                row[CROSSING_COL + 1] = xi
-                count += 1
+            count = _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b,
+                                      origin, ey, ez, shape, params, psis, phis, kinds, depths,
+                                      Y, Yp, Ypp, out, count)
 
         if status != 0:
             break
@@ -377,6 +335,66 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
         cross_n[touched[t]] = 0
     if status != 0:
         return status
+    return count
+
+
+@njit
+def _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b, origin, ey, ez,  # noqa: ANN001, ANN202, PLR0913
+                      shape, params, psis, phis, kinds, depths, Y, Yp, Ypp, out, count):
+    """The paper's detection of the section-k ellipse crossed by element e at ξ (FORMULATION
+    II §6: common normals of ellipse and bore, then the closest point of the wall point on the
+    axis) appended to ``out`` from row ``count``; returns the new count. ``paper`` None: no
+    joint of the model uses this detection (its code is compiled out, _compiled_view)."""
+    if paper is None:
+        return count
+    if shape == SHAPE_CIRCLE:
+        R = params[0]
+        cphi, ckind = circle_stationary_points(cy, cz, eax, eay, a, b, R)
+        m = 0
+        for j in range(min(cphi.size, MAX_CANDIDATES)):
+            ca = math.cos(cphi[j])
+            sa = math.sin(cphi[j])
+            x = cy + a * ca * eax - b * sa * eay
+            y = cz + a * ca * eay + b * sa * eax
+            rho = math.hypot(x, y)
+            if rho == 0.0:
+                continue
+            psis[m] = math.atan2(y, x)
+            phis[m] = cphi[j]
+            kinds[m] = ckind[j]
+            depths[m] = rho - R
+            m += 1
+    else:
+        m = common_normal_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
+                                 psis, phis, kinds, depths)
+    for j in range(m):
+        if depths[j] <= 0.0 or count >= out.shape[0]:
+            continue
+        section_boundary(shape, params, psis[j], Y, Yp, Ypp)
+        Q = np.empty(3)
+        for c in range(3):
+            Q[c] = origin[c] + Y[0] * ey[c] + Y[1] * ez[c]
+        eP, xiP, _, _, _ = closest_point_kernel(qe, lengths, Q, e, xi, 1e-13,
+                                        np.int64(30))
+        row = out[count]
+        row[0] = k
+        row[1] = j
+        row[2] = kinds[j]
+        row[3] = eP
+        row[4] = xiP
+        row[5] = Q[0]
+        row[6] = Q[1]
+        row[7] = Q[2]
+        row[8] = a
+        row[9] = b
+        row[10] = depths[j]
+        row[11] = psis[j]
+        row[12] = 0.0
+        row[13] = 0.0
+        row[14] = phis[j]
+        row[CROSSING_COL] = e
+        row[CROSSING_COL + 1] = xi
+        count += 1
     return count
 
 
@@ -507,7 +525,10 @@ def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, twist
 def element_spin(q, v, twist_dofs, t_bar, spin):  # noqa: ANN001, ANN201
     """The spin data (pair.N_SPIN) of a contact element: its nodes' twists, their rates and
     their charts' base tangents ``t_bar`` (2, 3); ``spin[0] = 0`` for an element without twist
-    (``twist_dofs`` −1, a cable)."""
+    (``twist_dofs`` −1, a cable). ``spin`` None: no joint of the model holds a beam with
+    twist (the rod's spin is compiled out of the contact, _compiled_view)."""
+    if spin is None:
+        return
     spin[0] = 1.0 if twist_dofs[0] >= 0 else 0.0
     for a in range(N_TWIST):
         spin[1 + a] = q[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
@@ -621,11 +642,11 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
 
 
 @njit
-def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      tree_c, tree_r, tree_lo,
                      tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
-                     consistent, law, fric,
+                     consistent, paper, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
                      exact, r_q, K_out, C_out, elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
@@ -638,8 +659,9 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, ori
     e_P] of :mod:`flexmbs.contact.tangent`) and ``C_out`` (N_LOCAL × N_LOCAL), the elements of
     the contact point and of the section crossing to ``elem_k`` and ``elem_i``: the exact
     linearisation (``exact``) or Gauss–Newton ``k BᵀB`` (frozen hole point, no e_I columns).
-    Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left the bore at
-    section k."""
+    ``spin`` (pair.N_SPIN) work for the contact element's spin, ``paper`` as in
+    :func:`detect_section` (None: compiled out). Returns ``(rows, contacts, scale)``;
+    ``rows = −1 − k`` if the beam axis left the bore at section k."""
     qb, A = _frame(q, body_dofs)
     vb = np.empty(7)
     for i in range(7):
@@ -651,7 +673,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, ori
     m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
                        tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                        xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
-                       consistent, rows)
+                       consistent, paper, rows)
     if m < 0:
         return m, 0, 0.0
     Qc = np.empty(N_LOCAL)
@@ -664,7 +686,6 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, ori
     Ypp = np.empty(2)
     geo = np.empty(N_GEO)
     hist = np.empty(N_HISTORY)
-    spin = np.empty(N_SPIN)
     ve = np.empty(CENTERLINE_SIZE)
     u_Q = np.empty(3)
     count = 0
@@ -710,7 +731,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, lengths, ori
             contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI],
                             row[CROSSING_COL + 1],
                             qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
-                            fric, hist, v_app, consistent, Qx, KX, C)
+                            fric, hist, v_app, consistent, paper, Qx, KX, C)
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]
@@ -815,6 +836,10 @@ class ClearancePart(NamedTuple):
     tip_station: np.ndarray          # (nj, N_TIPS)   slot n_sec − N_TIPS + t), its station
     tip_reach: np.ndarray            # (nj,) largest distance of neighbouring sections
     tips_due: np.ndarray             # (nj,) state: place the tip sections at q_start first
+    spin: np.ndarray                 # work (N_SPIN,) a contact element's spin (element_spin)
+    paper: np.ndarray                # (nj,) the paper's detection (not ``consistent``)
+    # (the last three are None in the kernel's copy when no joint of the model uses them:
+    # contact.joint._compiled_view, their code is then not compiled)
 
 
 def contact_capacity(max_sections: int) -> int:
@@ -828,17 +853,18 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
     ne_j = cl.n_elem[j]
     ns = cl.n_sec[j]
-    if cl.tips_due[j]:     # the step's first evaluation: its tip sections, at its start
-        cl.tips_due[j] = False
-        joint_place_tips(cl, j, cl.q_start)
+    place_due_tips(cl.tips_due, j, cl.q_start, cl.qe, cl.n_elem[j], cl.n_sec[j], cl.elem_dofs[j],
+                   cl.body[j], cl.lengths[j], cl.origins[j], cl.frames[j], cl.stations[j],
+                   cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], cl.tip_reach[j],
+                   cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j], cl.tip_station[j], cl.work)
     m, cnt, sc = clearance_forces(
-        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j],
+        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j], cl.spin,
         cl.lengths[j, :ne_j], cl.origins[j, :ns],
         cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
         cl.open_ends[j], cl.tip_on[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
         cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
-        cl.consistent[j], cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
+        cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
         want_tangent, cl.exact[j], r, K, C, elem, elem_i)
     if m == _OVERFLOW:
@@ -856,42 +882,36 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
 
 
 @njit
-def clearance_residual(cl, q, v, r, error):  # noqa: ANN001, ANN201
-    """Contact forces of every (enabled) clearance joint subtracted from ``r_q``; returns
-    ``(scale, error code)``."""
+def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: ANN001, ANN201, C901
+    """Contact forces of every (enabled) clearance joint subtracted from ``r_q`` (``r``), or
+    with ``want_tangent`` their tangent ``cK K + cC C`` into ``data`` (exact or Gauss–Newton,
+    per joint; the residual then goes to ``cl.scratch``); one compiled function for both (its
+    callees are optimised and compiled once). Returns ``(scale, error code)``.
+
+    The tangent's columns of the crossing element e_I go to the (body, e_I) block for the
+    body's rows and, for the element's rows, to the entries of a neighbouring e_I that the
+    pattern holds (the shared node; the others, of order ξ² where the contact and the crossing
+    straddle a node, and a crossing two or more elements away, are dropped: the tangent is
+    exact whenever the section plane crosses the contact point's element)."""
     if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0.0, 0
+    ne = CENTERLINE_SIZE
     scale = 0.0
+    rr = cl.scratch if want_tangent else r
+    K = cl.K if want_tangent else cl.no_K
+    C = cl.C if want_tangent else cl.no_C
+    kelem = cl.kelem if want_tangent else cl.no_elem
+    kelem_i = cl.kelem_i if want_tangent else cl.no_elem
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
             continue
-        m, _, sc = _joint_forces(cl, j, q, v, FLAG[0], r, cl.no_K, cl.no_C, cl.no_elem,
-                                 cl.no_elem, error)
+        m, cnt, sc = _joint_forces(cl, j, q, v, want_tangent, rr, K, C, kelem, kelem_i, error)
         if m < 0:
-            return scale, ERR_LEFT_BORE
+            return scale, error[0]
         if sc > scale:
             scale = sc
-    return scale, 0
-
-
-@njit
-def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, C901
-    """Contact tangent ``cK K + cC C`` of every (enabled) clearance joint (exact or
-    Gauss–Newton, per joint). The columns of the crossing element e_I go to the (body, e_I) block
-    for the body's rows and, for the element's rows, to the entries of a neighbouring e_I that
-    the pattern holds (the shared node; the others, of order ξ² where the contact and the
-    crossing straddle a node, and a crossing two or more elements away, are dropped: the
-    tangent is exact whenever the section plane crosses the contact point's element)."""
-    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
-        return 0
-    ne = CENTERLINE_SIZE
-    for j in range(cl.r_b.size):
-        if not cl.enabled[j]:
+        if not want_tangent:
             continue
-        m, cnt, _ = _joint_forces(cl, j, q, v, FLAG[1], cl.scratch, cl.K, cl.C, cl.kelem,
-                                  cl.kelem_i, error)
-        if m < 0:
-            return error[0]
         for i in range(cnt):
             eP = cl.kelem[i]
             eI = cl.kelem_i[i]
@@ -924,13 +944,15 @@ def clearance_jacobian(cl, q, v, cC, cK, data, error):  # noqa: ANN001, ANN201, 
                     at = cross[ne * a + c]
                     if at >= 0:     # the shared node's entries (see clearance_pattern)
                         data[at] += cK * cl.K[i, 7 + a, I_OFF + c]
-    return 0
+    return scale, 0
 
 
 @njit
-def clearance_set_bases(cl, log, stop):  # noqa: ANN001, ANN201
+def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION I
-    §2.4): the contact elements holding them read the new base tangent."""
+    §2.4): the contact elements holding them read the new base tangent; ``q`` (its twists
+    changed), unless empty (a resumed run: :func:`~flexmbs.contact.joint._begin_clearance`),
+    is the start of the next step, the friction's reference."""
     if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
     for j in range(cl.r_b.size):
@@ -943,15 +965,9 @@ def clearance_set_bases(cl, log, stop):  # noqa: ANN001, ANN201
                     if np.int64(log[i, 0]) == dof:
                         for c in range(3):
                             cl.t_bar[j, e, a, c] = log[i, 1 + c]
-
-
-@njit
-def clearance_restart(cl, q):  # noqa: ANN001, ANN201
-    """``q`` (re-based: its twists changed) is the start of the next step."""
-    if cl is None:
-        return
-    for i in range(cl.q_start.size):
-        cl.q_start[i] = q[i]
+    if q.size > 0:
+        for i in range(cl.q_start.size):
+            cl.q_start[i] = q[i]
 
 
 @njit
@@ -980,19 +996,33 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
             cl.xi_ws[j, k] = cl.xi_out[j, k]
             ws_list[1 + i] = k
         ws_list[0] = out_list[0]
-        cl.tips_due[j] = cl.open_ends[j]
+        _mark_tips_due(cl.tips_due, j, cl.open_ends[j])
 
 
 @njit
-def joint_place_tips(cl, j, q):  # noqa: ANN001, ANN201
-    """:func:`place_tips` of clearance joint j at ``q`` (the start of a step)."""
-    ne = cl.n_elem[j]
-    ns = cl.n_sec[j]
+def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, frames, stations,  # noqa: ANN001, ANN201, PLR0913
+                   tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
+                   tip_station, work):
+    """At the step's first evaluation (``due[j]``): :func:`place_tips` of clearance joint j at
+    ``q``, the step's start; ``qe`` work (n_elem, CENTERLINE_SIZE). ``due`` None: no joint of
+    the model has an open bore (the tip sections' code is compiled out, _compiled_view)."""
+    if due is None:
+        return
+    if not due[j]:
+        return
+    due[j] = False
     for e in range(ne):
         for c in range(CENTERLINE_SIZE):
-            cl.qe[e, c] = q[cl.elem_dofs[j, e, c]]
-    qb, A = _frame(q, cl.body[j])
-    place_tips(cl.qe[:ne], cl.lengths[j, :ne], qb[:3], A, cl.origins[j, :ns], cl.frames[j, :ns],
-               cl.stations[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
-               cl.tip_reach[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j],
-               cl.tip_station[j], cl.work)
+            qe[e, c] = q[elem_dofs[e, c]]
+    qb, A = _frame(q, body)
+    place_tips(qe[:ne], lengths[:ne], qb[:3], A, origins[:ns], frames[:ns], stations[:ns],
+               tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
+               tip_station, work)
+
+
+@njit
+def _mark_tips_due(due, j, open_end):  # noqa: ANN001, ANN202
+    """The next step's first evaluation places joint j's tip sections (an open bore)."""
+    if due is None:
+        return
+    due[j] = open_end

@@ -451,7 +451,9 @@ class SlidingClearanceJoint(Interaction):
                            self.state.elem, self.state.xi, unknown, e_out, x_out, out_list,
                            self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
-                           self.detection == "consistent", self._rows)
+                           self.detection == "consistent",
+                           None if self.detection == "consistent" else np.ones(1, np.bool_),
+                           self._rows)
         return int(m)
 
     def _contacts_compiled(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
@@ -507,7 +509,7 @@ class SlidingClearanceJoint(Interaction):
             raise ModelError(f"joint '{self.name}': the rest direction is along the hole axis; "
                              "give one across it")
         d = d / np.linalg.norm(d)
-        L = np.asarray(self.beam.centerline.lengths, dtype=float)
+        L = np.array(self.beam.centerline.lengths, dtype=float)   # writable: one compiled form
         qe = self._reference_elements()
         section = self.hole.section
         R_out = section.bounding_radius()
@@ -873,10 +875,21 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j._stations for j in joints], (), 0.0, float),
         pad_stack([j.state.tip_on for j in joints], (), False, np.bool_),
         pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
-        np.array([j._tip_reach for j in joints], float), np.zeros(nj, np.bool_))
+        np.array([j._tip_reach for j in joints], float), np.zeros(nj, np.bool_),
+        np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j._lengths))
     return part
+
+
+def _compiled_view(part: ClearancePart) -> ClearancePart:
+    """What the compiled kernel receives: the features no clearance joint of the model uses are
+    None, so that their code is not compiled for it (docs/design-notes.md, "Compile time"):
+    the tip sections of open bores, a rod's spin in the contact, the paper's detection."""
+    unused = {"tips_due": not part.open_ends.any(), "spin": not (part.twist_dofs >= 0).any(),
+              "paper": not part.paper.any()}
+    none: dict[str, Any] = {name: None for name, off in unused.items() if off}
+    return part._replace(**none)
 
 
 def _enable_clearance(part: ClearancePart, i: int, on: bool) -> None:
@@ -909,5 +922,5 @@ def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
 CLEARANCE = InteractionKind(
     name="clearance", pattern=clearance_pattern, pack=pack_clearance,
     errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS),
-    enable=_enable_clearance, begin=_begin_clearance,
+    enable=_enable_clearance, begin=_begin_clearance, compiled_view=_compiled_view,
     energy=("contact", SlidingClearanceJoint.contact_energy))

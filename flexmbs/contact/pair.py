@@ -309,7 +309,8 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
     and ``hist`` (:data:`N_HISTORY`) the contact's history, for
     :func:`~flexmbs.contact.laws.tangential_force`; ``spin`` (:data:`N_SPIN`) the element's
-    twists: on a rod the friction acts at the turning surface (:func:`spin_map`). Writes ``Qc``
+    twists: on a rod the friction acts at the turning surface (:func:`spin_map`); None where no
+    joint of the model holds a beam with twist (that code is compiled out). Writes ``Qc``
     (N_LOCAL,) = ``W_fᵀ F_H`` (external generalized force on [r_H, p, e_k, φ_k]; W_f = W with
     the surface's turn), with ``want_tangent`` ``K = k_t BᵀB`` plus
     the friction terms at frozen n, u_Q, ξ_P and ``C = c_t BᵀB`` plus friction (N_LOCAL,
@@ -328,7 +329,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     Wf = W                 # the friction map: W and, on a rod, the surface's turn
     if friction:
         turn = np.zeros(3)
-        if spin[0] != 0.0:
+        if spin is not None and spin[0] != 0.0:
             Wf = W.copy()
             b = np.empty((2, 3))
             _, rx, _ = element_point(q_elem, length, xi)
@@ -346,8 +347,9 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
                 acc += Wf[c, j] * v_body[j]
             for j in range(CENTERLINE_SIZE):
                 acc += Wf[c, 7 + j] * v_elem[j]
-            for a in range(N_TWIST):
-                acc += Wf[c, TWIST_OFF + a] * spin[3 + a]
+            if spin is not None:
+                for a in range(N_TWIST):
+                    acc += Wf[c, TWIST_OFF + a] * spin[3 + a]
             vrel[c] = acc
         vn = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
         vt = vrel - vn * n
@@ -422,14 +424,21 @@ def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.
         sp[1:3] = q_c[TWIST_OFF:]
         sp[3:5] = v_c[TWIST_OFF:]
     out = []
+    spin_arg = _spin_argument(sp)
     for fr in (fric, no_friction()):
         Qc = np.empty(N_LOCAL)
         contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:TWIST_OFF].copy(),
-                      v_c[7:TWIST_OFF].copy(), sp, float(length), float(xi), float(r_b), law, fr,
+                      v_c[7:TWIST_OFF].copy(), spin_arg, float(length), float(xi), float(r_b), law, fr,
                       hist, approach_velocity, False, Qc, np.empty((0, 0)), np.empty((0, 0)),
                       np.empty(N_GEO))
         out.append(Qc)
     return out[0] - out[1]
+
+
+def _spin_argument(spin: np.ndarray) -> np.ndarray | None:
+    """The ``spin`` a Python caller passes to :func:`contact_force`: None for an element
+    without twist, as the compiled kernel of a cable model passes it (one compiled form)."""
+    return spin if spin[0] != 0.0 else None
 
 
 def friction_vector(friction: Friction | RegularizedCoulomb | None,
@@ -478,7 +487,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
             else np.ascontiguousarray(history, dtype=float))
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
     geo = np.empty(N_GEO)
-    g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, sp, float(length),
+    spin_arg = _spin_argument(sp)
+    g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length),
                                      float(xi), float(r_b), law_p, fric, hist,
                                      float(approach_velocity), True, Qc, K, C, geo)
     n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
@@ -495,10 +505,10 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
             Qf = np.empty(N_LOCAL)
             Kf, Cf = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
             Kn, Cn = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
-            contact_force(q_body, v_body, u_Q, q_elem, v_elem, sp, float(length), float(xi),
+            contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, fric, hist, float(approach_velocity), True, Qf, Kf,
                           Cf, np.empty(N_GEO))
-            contact_force(q_body, v_body, u_Q, q_elem, v_elem, sp, float(length), float(xi),
+            contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, no_friction(), hist, float(approach_velocity), True,
                           Qf, Kn, Cn, np.empty(N_GEO))
             K -= Kf - Kn

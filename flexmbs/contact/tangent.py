@@ -81,11 +81,14 @@ def _d_dot(a, Da, b, Db, out):  # noqa: ANN001, ANN202
 
 
 @njit
-def _paper_hole_point(qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y, Yp, Ypp):  # noqa: ANN001, ANN202, PLR0913, PLR0915
+def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y, Yp,  # noqa: ANN001, ANN202, PLR0913, PLR0915
+                      Ypp):
     """Wall point ``Q = o + Y(ψ)`` of the paper's detection and its derivative (3, N_EXT): the
     crossing ξ_I, the section ellipse and the 2-D common normal differentiated implicitly
-    (FORMULATION II §2–§3)."""
+    (FORMULATION II §2–§3). ``paper`` None: not used by the model (compiled out; not called)."""
     NX = N_EXT
+    if paper is None:
+        return np.zeros(3), np.zeros((3, NX))
     # ---- crossing: h(ξ_I) = n·(r_I − o) = 0
     SI, dSI, _ = shape_xi(xiI, LI)
     rI, rxI, rxxI = element_point(qI, LI, xiI)
@@ -257,7 +260,7 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
 
 @njit
 def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                    r_b, law, fric, hist, approach_velocity, consistent, Qc, K, C):
+                    r_b, law, fric, hist, approach_velocity, consistent, paper, Qc, K, C):
     """Force and exact tangent of one detected contact.
 
     ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin;
@@ -266,7 +269,8 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     (12), ``LI``, ``xiI``: crossing element, its length and the crossing; ``qP``, ``vP``,
     ``LP``, ``xiP``: the element of the closest point and ξ_P (converged), ``spin``
     (:data:`~flexmbs.contact.pair.N_SPIN`) its twists (a rod's surface turns under the
-    friction, :func:`~flexmbs.contact.pair.spin_map`); ``phi``: the
+    friction, :func:`~flexmbs.contact.pair.spin_map`; None: no twisted beam in the model, that
+    code compiled out); ``phi``: the
     ellipse parameter of the contact; ``Y``, ``Yp``, ``Ypp`` (2): the wall point of the hole
     section at the contact's ψ and its first and second ψ-derivatives (section coordinates, from
     the hole shape's boundary kernel, e.g. :func:`flexmbs.contact.sections.circle_boundary`);
@@ -275,9 +279,11 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     :func:`~flexmbs.contact.pair.stick_trial` differentiated here too); ``consistent``: the
     contact is a stationary pair
     of FORMULATION II §4b (:mod:`flexmbs.contact.stationary`; ``qI``, ``xiI``, ``phi`` unused,
-    the e_I columns zero), else the paper's 2-D common normal. Writes ``Qc`` (N_LOCAL) on
-    ``[r_H, p, e_P, φ_P]``, ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I, e_P, φ_P] and ``C``
-    (N_LOCAL, N_LOCAL) = −∂Q_c/∂[ṙ_H, ṗ, ė_P, φ̇_P]. Returns ``(g, ġ, f_N)``.
+    the e_I columns zero), else the paper's 2-D common normal; ``paper`` None: no contact of
+    the model uses the paper's (its code compiled out, ``consistent`` then always set). Writes
+    ``Qc`` (N_LOCAL) on ``[r_H, p, e_P, φ_P]``, ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I,
+    e_P, φ_P] and ``C`` (N_LOCAL, N_LOCAL) = −∂Q_c/∂[ṙ_H, ṗ, ė_P, φ̇_P]. Returns
+    ``(g, ġ, f_N)``.
     """
     NX = N_EXT
     p = qb[3:7]
@@ -331,7 +337,7 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     if consistent:
         Qd, DQd = _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp)
     else:
-        Qd, DQd = _paper_hole_point(qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y,
+        Qd, DQd = _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y,
                                     Yp, Ypp)
     # ---- body coordinates u_Q = Aᵀ(Q − r_H) and the body point Q = r_H + A u_Q it acts at
     w = Qd - qb[0:3]
@@ -441,14 +447,16 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
         for j in range(N_LOCAL):
             dFv[c, j] = -ct * Bn[j] * nc[c]
     Wf = W                 # the friction map: W and, on a rod, the surface's turn
-    on = fric[0] != FRICTION_NONE and f > 0.0 and spin[0] != 0.0
+    on = False
+    if spin is not None:    # None: no twisted beam in the model (compiled out)
+        on = fric[0] != FRICTION_NONE and f > 0.0 and spin[0] != 0.0
     b = np.zeros((2, 3))
     db = np.zeros((2, 3, 3))
     sv = np.zeros(3)
     Ds = np.zeros((3, NX))
     DN = np.zeros((2, NX))
     Na = np.array([1.0 - xiP, xiP])
-    if on:
+    if spin is not None and on:
         # s = t × n, ω = Σ N_a (φ̇_a + w_a) and their derivatives (pair.spin_map)
         Wf = W.copy()
         w_s = np.empty(2)
@@ -504,7 +512,7 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
             # D turn = −r_b (Ds Δψ + s DΔψ) (pair.twist_increment)
             turn = np.zeros(3)
             Dturn = np.zeros((3, NX))
-            if on:
+            if spin is not None and on:
                 bbar = np.empty((2, 3))
                 dg = np.empty((2, 3))
                 dpsi = twist_increment(spin, hist, qP, xiP, b, bbar, dg)

@@ -71,7 +71,7 @@ def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in
                        np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, False, np.zeros(0, np.bool_),
                        *work, ws_e,
                        ws_x, np.full(1, -1, np.int64), ws_e.copy(), ws_x.copy(),
-                       np.full(2, -1, np.int64), r_b, shape, params, R_out, R_in, True, rows)
+                       np.full(2, -1, np.int64), r_b, shape, params, R_out, R_in, True, None, rows)
     if m < 0:
         return None
     return [(float(r[11]), float(r[10])) for r in rows[:m] if r[2] > 0]

@@ -78,8 +78,8 @@ def _reference(x: np.ndarray, vel: np.ndarray, sec: tuple, law: np.ndarray, fric
     circle_boundary(R_BORE, psi, Y, Yp, Ypp)
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
     g, _, f = contact_tangent(qb, vel[:7], u_o, frame, qI, L_ELEM, xi, qP, vel[7:TWIST_OFF], spin,
-                              L_ELEM, xp, phi, Y, Yp, Ypp, R_BEAM, law, fric, hist, 0.3, False, Qc,
-                              K, C)
+                              L_ELEM, xp, phi, Y, Yp, Ypp, R_BEAM, law, fric, hist, 0.3, False,
+                              np.ones(1, np.bool_), Qc, K, C)
     return Qc, (K, C, xi, phi, xp, g, f)
 
 
