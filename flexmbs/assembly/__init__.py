@@ -20,10 +20,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import driver
-from .constraints.base import Attachment, Constraint
-from .constraints.drivers import JointDriver, pack_drivers
-from .constraints.joints import (
+from .. import driver
+from ..constraints.base import Attachment, Constraint
+from ..constraints.drivers import JointDriver, pack_drivers
+from ..constraints.joints import (
     BeamNodeRigid,
     EulerParameterNormalization,
     GenericJoint,
@@ -31,17 +31,17 @@ from .constraints.joints import (
     pack_norms,
     pack_terms,
 )
-from .constraints.linear import linear_pattern, pack_linear
-from .elements import rigid_body as rb
-from .elements.group import MAX_GROUPS
-from .elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
-from .errors import FlexmbsError, ModelError, RedundantConstraintError
-from .kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
-from .loads import Constant, TimeFunction, moments_pattern, pack_loads
-from .model import Beam, Ground, Model, Node, RigidBody
-from .solvers._compiled import idle_run
-from .springs import pack_springs, spring_energy, springs_pattern
-from .terms import FunctionTable, dynamic_mode, static_mode
+from ..constraints.linear import linear_pattern, pack_linear
+from ..elements import rigid_body as rb
+from ..elements.group import MAX_GROUPS
+from ..elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
+from ..errors import FlexmbsError, ModelError, RedundantConstraintError
+from ..kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
+from ..loads import Constant, TimeFunction, moments_pattern, pack_loads
+from ..model import Beam, Ground, Model, Node, RigidBody
+from ..solvers._compiled import idle_run
+from ..springs import pack_springs, spring_energy, springs_pattern
+from ..terms import FunctionTable, dynamic_mode, static_mode
 
 
 @dataclass
@@ -829,7 +829,7 @@ class Assembly:
         body's coordinates (the band order keeps them together), ``_ordering.MASSLESS`` for the
         interactions' coordinates (a slide coordinate has no mass: never in the band beside a
         border), −1 otherwise (:func:`flexmbs.solvers._ordering.close_border`)."""
-        from .solvers._ordering import MASSLESS
+        from ..solvers._ordering import MASSLESS
 
         owner = np.full(self.n_total, -1, np.int64)
         table = self.body_dof_table
@@ -846,7 +846,7 @@ class Assembly:
         initial accelerations); without (statics, stiffness only) every coordinate is labelled
         massless, which closes every nonempty border over the whole matrix (docs/design-notes.md,
         "One factorisation for every solver")."""
-        from .solvers._ordering import MASSLESS, plan_factorization
+        from ..solvers._ordering import MASSLESS, plan_factorization
 
         if mass not in self._plans:
             owner = self.coordinate_owners()
