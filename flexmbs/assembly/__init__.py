@@ -1,4 +1,4 @@
-"""Global assembly: DOF map, residual, sparse iteration matrix (pattern built once), energies.
+"""Global assembly: the unknowns and the evaluation of the equations of motion of a model.
 
 Unknowns: coordinates ``q`` (beams: per node the coordinates of its element layout, for the
 cable [r, r']; rigid bodies: [r, p], 7 each) and Lagrange multipliers ``lam`` (one per
@@ -10,92 +10,78 @@ constraint equation). The dynamic residual follows the convention of FORMULATION
 The iteration matrix ``[[cM M + cC C + cK K, Phi_q^T], [Phi_q, 0]]`` (``K`` includes the
 constraint Hessian contracted with ``lam``) is stored in CSC form with a fixed pattern; every
 refill writes ``data`` in place through precomputed position maps.
+
+:class:`Assembly` holds the parts, each with one job: :mod:`.numbering` (the coordinates and
+the reference configuration), :mod:`.rows` (the constraint equations as multiplier rows, the
+redundancy check), :mod:`.external_loads` (the loads sorted for their owners), :mod:`.pattern`
+(the sparsity pattern and data positions) and :mod:`.packing` (every owner of terms listed
+once with its blocks and its packer); it evaluates the packed system through the driver.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from .. import driver
-from ..constraints.base import Attachment, Constraint
-from ..constraints.drivers import JointDriver, pack_drivers
-from ..constraints.joints import (
-    BeamNodeRigid,
-    EulerParameterNormalization,
-    GenericJoint,
-    joint_pattern,
-    pack_norms,
-    pack_terms,
-)
-from ..constraints.linear import linear_pattern, pack_linear
+from ..constraints.drivers import JointDriver
 from ..elements import rigid_body as rb
-from ..elements.group import MAX_GROUPS
-from ..elements.layout import BASE_RECORD, ELEMENT_TYPES, ElementType
-from ..errors import FlexmbsError, ModelError, RedundantConstraintError
+from ..elements.layout import BASE_RECORD, ElementType
+from ..errors import FlexmbsError, ModelError
 from ..kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
-from ..loads import Constant, TimeFunction, moments_pattern, pack_loads
-from ..model import Beam, Ground, Model, Node, RigidBody
+from ..model import Beam, Model, Node, RigidBody
 from ..solvers._compiled import idle_run
-from ..springs import pack_springs, spring_energy, springs_pattern
+from ..springs import spring_energy
 from ..terms import FunctionTable, dynamic_mode, static_mode
+from .external_loads import collect_loads
+from .numbering import Numbering, length_scale
+from .packing import BeamGroup, pack_system, term_owners
+from .pattern import SparsePattern
+from .rows import ConstraintRows, NonlinearRows
 
-
-@dataclass
-class BeamGroup:
-    """Beams sharing an element type and its options: one packed part, one kernel call."""
-
-    element_type: ElementType
-    options: Any                     # the element's options (CableOptions for the cable)
-    beams: list[Beam]
-    part: Any                        # the element's packed part (flexmbs.elements.group)
-
-    @property
-    def dofs(self) -> np.ndarray:
-        return np.asarray(self.part.dofs)
-
-    @property
-    def props(self) -> Any:
-        return self.part.props
-
-    @property
-    def rest(self) -> Any:
-        return self.part.rest
-
-    @property
-    def mass(self) -> np.ndarray:
-        return self.part.mass
-
-
-@dataclass
-class _NonlinearRows:
-    constraint: Constraint
-    coords: np.ndarray          # (nc,) global coordinate indices
-    keep: np.ndarray            # equation indices kept (redundant ones dropped)
-    rows: np.ndarray            # multiplier indices of kept equations (len(keep),)
-
-
-#: the term kinds of interactions: (pattern, packer) of the owning module
+__all__ = ["Assembly", "BeamGroup", "NonlinearRows"]
 
 
 class Assembly:
-    """Numbering and global evaluation of a :class:`~flexmbs.model.Model`."""
+    """Numbering and global evaluation of a :class:`~flexmbs.model.Model`: holds its parts
+    (:attr:`numbering`, :attr:`rows`, :attr:`loads`, :attr:`pattern`, the packed system) and is
+    the :class:`~flexmbs.terms.PackContext` its owners of terms read."""
 
     def __init__(self, model: Model, *, redundant_constraints: str = "error",
                  rank_tolerance: float = 1e-9) -> None:
         if redundant_constraints not in ("error", "drop"):
             raise ModelError("redundant_constraints must be 'error' or 'drop'")
         self.model = model
-        self._number_coordinates()
-        self._group_specs = self._beam_groups()
-        self._build_constraints(redundant_constraints, rank_tolerance)
-        self._build_loads()
-        self._build_pattern()
-        self._pack()
-        self.length_scale = self._length_scale()
+        self.numbering = numbering = Numbering(model)
+        self.n_coords = numbering.n_coords
+        self.q_ref, self.v_init = numbering.q_ref, numbering.v_init
+        self.beam_slices = numbering.beam_slices
+        numbering.bind_interactions(self)
+        self.length_scale = length_scale(model)
+        self.rows = rows = ConstraintRows(model, numbering, redundant_constraints=redundant_constraints,
+                                          rank_tolerance=rank_tolerance, length_scale=self.length_scale)
+        self.n_mult = rows.n_mult
+        self.n_total = self.n_coords + self.n_mult
+        # the rows under the names the solvers, io and tests read
+        self.m_lin, self.lin_matrix, self.lin_matrix_T = rows.m_lin, rows.lin_matrix, rows.lin_matrix_T
+        self.lin_rhs0, self.lin_functions, self.nonlinear = rows.lin_rhs0, rows.lin_functions, rows.nonlinear
+        self.multiplier_labels, self.multiplier_owner = rows.multiplier_labels, rows.multiplier_owner
+        self.dropped_equations = rows.dropped_equations
+        self.loads = loads = collect_loads(model, numbering)
+        self.gravity_vector, self.f_const = loads.gravity_vector, loads.f_const
+        self.functions = FunctionTable()
+        owners = term_owners(model, numbering, rows, loads, self)
+        self.pattern = SparsePattern(self.n_total, (b for owner in owners for b in owner.blocks))
+        self.matrix, self.nnz = self.pattern.matrix, self.pattern.nnz
+        self._data = self.matrix.data  # the array the matrix really holds
+        packed = pack_system(owners, model, self)
+        self.groups, self.system, self.kernel_system = packed.groups, packed.system, packed.kernel_system
+        self.joint_lists = packed.joint_lists
+        self._python_terms = [obj for obj in model.interactions if obj.term_kind == ""]
+        self.body_dof_table = self.system.bodies.dofs
+        self._r = np.zeros(self.n_total)
         self.stiffness_scale = 0.0
         self._idle_run = idle_run()
         self._kernel_ready = False
@@ -104,74 +90,21 @@ class Assembly:
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
 
-    # ================================================================== numbering
-    def _number_coordinates(self) -> None:
-        m = self.model
-        off = 0
-        self.beam_offset: dict[int, int] = {}
-        labels: list[tuple[str, str]] = []
-        for beam in m.beams:
-            self.beam_offset[id(beam)] = off
-            comp = beam.layout.node_coordinates
-            for i in range(beam.n_nodes):
-                labels.extend((f"beam '{beam.name}' node {i}", c) for c in comp)
-            off += len(comp) * beam.n_nodes
-        self.body_offset: dict[int, int] = {}
-        for body in m.bodies:
-            self.body_offset[id(body)] = off
-            labels.extend((f"body '{body.name}'", c) for c in ("x", "y", "z", "e0", "e1", "e2", "e3"))
-            off += 7
-        self._extra_dofs: dict[int, np.ndarray] = {}
-        for obj in m.interactions:
-            names = obj.extra_labels()
-            self._extra_dofs[id(obj)] = np.arange(off, off + len(names), dtype=np.int64)
-            labels.extend((f"joint '{obj.name}'", c) for c in names)
-            off += len(names)
-        self.n_coords = off
-        if off == 0:
-            raise ModelError("the model is empty: add a beam (add_beam) or a rigid body "
-                             "(add_rigid_body) before solving")
-        self._coord_labels = labels
-        q0 = np.zeros(off)
-        v0 = np.zeros(off)
-        for beam in m.beams:
-            o = self.beam_offset[id(beam)]
-            nodal = beam.element_type.reference_nodal_coordinates(beam.centerline.points,
-                                                                  beam.centerline.tangents)
-            q0[o:o + nodal.size] = nodal.ravel()
-        for body in m.bodies:
-            o = self.body_offset[id(body)]
-            p = body.pose.quaternion
-            q0[o:o + 3] = body.pose.position
-            q0[o + 3:o + 7] = p
-            v0[o:o + 3] = body.velocity
-            v0[o + 3:o + 7] = rb.pdot_from_omega_global(p, body.angular_velocity)
-        for obj in m.interactions:
-            d = self._extra_dofs[id(obj)]
-            obj.bind(self, d)
-            q0[d] = obj.initial_extra(q0)
-        self.q_ref = q0
-        self.v_init = v0
-
+    # ================================================================== numbering (DofMap)
     def node_dofs(self, node: Node) -> np.ndarray:
-        k = node.beam.layout.node_size
-        o = self.beam_offset[id(node.beam)] + k * node.index
-        return np.arange(o, o + k)
+        return self.numbering.node_dofs(node)
 
     def body_dofs(self, body: RigidBody) -> np.ndarray:
-        o = self.body_offset[id(body)]
-        return np.arange(o, o + 7)
+        return self.numbering.body_dofs(body)
 
     def beam_dofs(self, beam: Beam) -> np.ndarray:
-        o = self.beam_offset[id(beam)]
-        return np.arange(o, o + beam.layout.node_size * beam.n_nodes)
+        return self.numbering.beam_dofs(beam)
 
     def element_dofs(self, beam: Beam) -> np.ndarray:
-        o = self.beam_offset[id(beam)]
-        conn = beam.connectivity
-        lay = beam.layout
-        k = lay.node_size
-        return (o + k * conn[:, :, None] + np.arange(k)[None, None, :]).reshape(-1, lay.element_size)
+        return self.numbering.element_dofs(beam)
+
+    def extra_dofs(self, owner: object) -> np.ndarray:
+        return self.numbering.extra_dofs(owner)
 
     def centerline_dofs(self, beam: Beam) -> np.ndarray:
         """(n_elem, 12) coordinates of the Hermite centreline ``[r0, r0′, r1, r1′]`` of every
@@ -193,422 +126,33 @@ class Assembly:
                   for f, v in rest._asdict().items()}
         return grp.element_type, type(rest)(**sliced), grp.options
 
-    def extra_dofs(self, owner: object) -> np.ndarray:
-        return self._extra_dofs[id(owner)]
-
     def describe_coordinate(self, i: int) -> str:
         if i < self.n_coords:
-            obj, c = self._coord_labels[i]
-            return f"{obj}, coordinate {c}"
+            return self.numbering.coordinate_label(i)
         j = i - self.n_coords
         return self.multiplier_labels[j] if j < len(self.multiplier_labels) else f"equation {i}"
 
-    # ================================================================== beams
-    def _beam_groups(self) -> list[tuple[ElementType, Any, list[Beam], np.ndarray, Any]]:
-        """(element type, options, beams, element dofs, section properties per element) per
-        group of beams sharing an element type and its options: one kernel call each."""
-        groups: dict[tuple[str, Any], list[Beam]] = {}
-        for beam in self.model.beams:
-            groups.setdefault((beam.element, beam.options), []).append(beam)
-        out = []
-        self.beam_slices: dict[int, tuple[int, slice]] = {}
-        for gi, ((_, opts), beams) in enumerate(groups.items()):
-            etype = beams[0].element_type
-            start = 0
-            for beam in beams:
-                self.beam_slices[id(beam)] = (gi, slice(start, start + beam.n_elem))
-                start += beam.n_elem
-            dofs = np.vstack([self.element_dofs(beam) for beam in beams])
-            out.append((etype, opts, beams, np.ascontiguousarray(dofs, dtype=np.int64),
-                        etype.section_properties(beams)))
-        return out
+    def multiplier_rows(self, constraint: object) -> np.ndarray:
+        """Multiplier indices (into lam) of the equations of ``constraint``, −1 if dropped."""
+        return self.rows.multiplier_rows(constraint)
 
-    # ================================================================== constraints
-    def _attachment(self, obj: object, point: np.ndarray | None, frame: np.ndarray | None) -> Attachment:
-        if isinstance(obj, RigidBody):
-            return Attachment.rigid_body(self.body_dofs(obj),
-                                         np.zeros(3) if point is None else point, frame)
-        if isinstance(obj, Node):
-            d = self.node_dofs(obj)
-            lay = obj.beam.layout
-            cols = [*lay.position, *lay.slope] + ([] if lay.twist is None else [lay.twist])
-            return Attachment.beam_node(d[cols], twist=lay.twist is not None)
-        if isinstance(obj, Ground):
-            return Attachment.ground(point if point is not None else np.zeros(3),
-                                     frame if frame is not None else np.eye(3))
-        raise ModelError(f"cannot attach a constraint to {obj!r}")
+    # ================================================================== pattern (MatrixSink)
+    def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """CSC data positions of the (rows[i], cols[j]) block (must be in the pattern)."""
+        return self.pattern.positions(rows, cols)
 
-    def _check_prescribed_twists(self) -> None:
-        """A rod node's twist is prescribed only with its slope held (clamped, or its three
-        slope components prescribed without motion): the twist is the section's turn relative
-        to the node's chart, which is re-based when the tangent turns far (FORMULATION §2.4),
-        and a prescribed value cannot follow that."""
-        held: set[tuple[int, int, int]] = set()
-        turned: list[Any] = []
-        for spec in self.model.constraints:
-            node = spec.a
-            if not isinstance(node, Node):
-                continue
-            key = (id(node.beam), node.index)
-            if spec.kind == "clamp":
-                held.update((*key, c) for c in node.beam.layout.slope)
-            elif spec.kind == "prescribed":
-                if node.beam.layout.twist in spec.components:
-                    turned.append(spec)
-                fn = spec.function
-                if isinstance(fn, Constant) and fn.value == 0.0:
-                    held.update((*key, c) for c in spec.components)
-        for spec in turned:
-            node = spec.a
-            if not all((id(node.beam), node.index, c) in held for c in node.beam.layout.slope):
-                raise ModelError(
-                    f"prescribed '{spec.name}': the twist of node {node.index} of beam "
-                    f"'{node.beam.name}' is prescribed but its slope is free; hold the slope "
-                    "too (prescribe components 3, 4, 5 without a function, or clamp the node)")
+    def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """As :meth:`positions`, with −1 for the entries outside the pattern."""
+        return self.pattern.positions_present(rows, cols)
 
-    def _build_constraints(self, policy: str, rank_tol: float) -> None:
-        lin_rows: list[tuple[np.ndarray, np.ndarray]] = []   # (cols, vals) per row
-        lin_rhs: list[float] = []
-        lin_fun: list[TimeFunction | None] = []
-        lin_labels: list[str] = []
-        lin_owner: list[str] = []       # the constraint (spec name) of each linear row
-        nonlinear: list[Constraint] = []
-        q0 = self.q_ref
-        self._check_prescribed_twists()
-        for spec in self.model.constraints:
-            k = spec.kind
-            if k in ("clamp", "pin"):
-                node: Node = spec.a  # type: ignore[assignment]
-                d = self.node_dofs(node)
-                for c in range(3):
-                    lin_rows.append((d[c:c + 1], np.ones(1)))
-                    lin_rhs.append(q0[d[c]])
-                    lin_fun.append(None)
-                    lin_labels.append(f"{k} '{spec.name}' ({node.name}) position {'xyz'[c]}")
-                    lin_owner.append(spec.name)
-                if k == "clamp":
-                    slope = d[list(node.beam.layout.slope)]
-                    t = q0[slope] / np.linalg.norm(q0[slope])
-                    # two unit normals to the reference tangent: axis-aligned when possible so that
-                    # the rows stay coordinate constraints for beams along global axes
-                    order = np.argsort(np.abs(t))
-                    n1 = np.zeros(3)
-                    n1[order[0]] = 1.0
-                    n1 -= np.dot(n1, t) * t
-                    n1 /= np.linalg.norm(n1)
-                    n2 = np.cross(t, n1)
-                    for j, normal in enumerate((n1, n2)):
-                        nz = np.abs(normal) > 1e-14
-                        lin_rows.append((slope[nz], normal[nz]))
-                        lin_rhs.append(0.0)
-                        lin_fun.append(None)
-                        lin_labels.append(f"clamp '{spec.name}' ({node.name}) slope normal {j + 1}")
-                        lin_owner.append(spec.name)
-                    tw = node.beam.layout.twist
-                    if tw is not None:      # the section's turn about the tangent (§2.3)
-                        lin_rows.append((d[tw:tw + 1], np.ones(1)))
-                        lin_rhs.append(q0[d[tw]])
-                        lin_fun.append(None)
-                        lin_labels.append(f"clamp '{spec.name}' ({node.name}) twist")
-                        lin_owner.append(spec.name)
-            elif k == "prescribed":
-                tgt = spec.a
-                d = self.node_dofs(tgt) if isinstance(tgt, Node) else self.body_dofs(tgt)  # type: ignore[arg-type]
-                for c in spec.components:
-                    lin_rows.append((d[c:c + 1], np.ones(1)))
-                    lin_rhs.append(q0[d[c]])
-                    lin_fun.append(spec.function)
-                    lin_labels.append(f"prescribed '{spec.name}' component {c}")
-                    lin_owner.append(spec.name)
-            elif k == "rigid":
-                node = spec.a  # type: ignore[assignment]
-                body_att = self._attachment(spec.b, None, None)
-                node_att = self._attachment(node, None, None)
-                q_body = q0[self.body_dofs(spec.b)] if isinstance(spec.b, RigidBody) else None
-                et = node.beam.element_type
-                node_base = (None if et.node_base is None
-                             else et.node_base(self.element_dofs(node.beam), q0, node.index))
-                nonlinear.append(BeamNodeRigid.from_configuration(
-                    spec.name, node_att, body_att, q0[node_att.dofs], q_body, base=node_base))
-            elif k == "driver":
-                a = self._attachment(spec.a, spec.point_a, spec.frame_a)
-                b = self._attachment(spec.b, spec.point_b, spec.frame_b)
-                assert spec.function is not None  # Model.add_driver sets it
-                nonlinear.append(JointDriver(spec.name, a, b, spec.motion, spec.function, q0))
-            else:  # generic joints and presets
-                a = self._attachment(spec.a, spec.point_a, spec.frame_a)
-                b = self._attachment(spec.b, spec.point_b, spec.frame_b)
-                nonlinear.append(GenericJoint(spec.name, a, b, translation=spec.translation,
-                                              rotation=spec.rotation))
-        for body in self.model.bodies:
-            nonlinear.append(EulerParameterNormalization(f"{body.name}.normalization",
-                                                         self.body_dofs(body)))
-        for obj in self.model.interactions:
-            for con in obj.constraints():
-                phi, _ = con.evaluate(q0[con.coordinates()], 0.0)
-                if np.abs(phi).max(initial=0.0) > 1e-6 * max(self._length_scale(), 1e-3):
-                    raise ModelError(
-                        f"joint '{obj.name}' is violated by {np.abs(phi).max():.3g} in the initial "
-                        "configuration: place the body on the beam (e.g. pose = beam.frame_at(s), "
-                        "scenario pose = {on_beam, s}) with its hole axis along the tangent")
-                nonlinear.append(con)
+    def add_to_matrix(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
+        """Add a dense block to the iteration matrix being assembled (rows/cols global)."""
+        np.add.at(self._data, self.positions(rows, cols), np.asarray(block, float).ravel())
 
-        # ---- redundancy check on the full Jacobian at the initial configuration
-        n = self.n_coords
-        m_lin = len(lin_rows)
-        labels = list(lin_labels)
-        J = np.zeros((m_lin + sum(con.n_equations for con in nonlinear), n))
-        for i, (cols, vals) in enumerate(lin_rows):
-            J[i, cols] = vals
-        r = m_lin
-        for con in nonlinear:
-            idx = con.coordinates()
-            _, jac = con.evaluate(q0[idx], 0.0)
-            J[r:r + con.n_equations][:, idx] = jac
-            labels.extend(f"{type(con).__name__} '{con.name}' equation {lab}" for lab in con.equation_labels)
-            r += con.n_equations
-        keep_rows = np.arange(J.shape[0])
-        if J.shape[0] > 0:
-            norms = np.linalg.norm(J, axis=1)
-            zero = norms == 0
-            if np.any(zero):
-                raise ModelError("constraint equations with an all-zero Jacobian at the initial "
-                                 f"configuration: {[labels[i] for i in np.flatnonzero(zero)]}")
-            Jn = J / norms[:, None]
-            import scipy.linalg  # here: its import costs 0.2 s of every start-up
-
-            _, R, perm = scipy.linalg.qr(Jn.T, mode="economic", pivoting=True)
-            diag = np.abs(np.diag(R))
-            rank = int(np.sum(diag > rank_tol * max(diag[0], 1e-300)))
-            if rank < J.shape[0]:
-                dependent = np.sort(perm[rank:])
-                names = [labels[i] for i in dependent]
-                if policy == "error":
-                    raise RedundantConstraintError(
-                        f"{len(dependent)} redundant constraint equation(s) (closed loop or double "
-                        f"fixation): {names}. Remove them from the model, or pass "
-                        "redundant_constraints='drop' to drop them with a warning.")
-                import warnings
-
-                warnings.warn(f"dropping {len(dependent)} redundant constraint equation(s): {names}",
-                              stacklevel=3)
-                keep_rows = np.sort(perm[:rank])
-        self.dropped_equations = [labels[i] for i in sorted(set(range(J.shape[0])) - set(keep_rows))]
-        keep_set = {int(i) for i in keep_rows}
-
-        # ---- linear rows kept
-        lin_keep = [i for i in range(m_lin) if i in keep_set]
-        rows_i, cols_i, vals_i = [], [], []
-        for new, i in enumerate(lin_keep):
-            cols, vals = lin_rows[i]
-            rows_i.extend([new] * len(cols))
-            cols_i.extend(cols.tolist())
-            vals_i.extend(vals.tolist())
-        self.m_lin = len(lin_keep)
-        self.lin_matrix = sp.csr_matrix((vals_i, (rows_i, cols_i)), shape=(self.m_lin, n))
-        self.lin_matrix_T = self.lin_matrix.T.tocsr()
-        self.lin_rhs0 = np.array([lin_rhs[i] for i in lin_keep], float)
-        self.lin_functions: list[tuple[int, TimeFunction]] = [
-            (new, fn) for new, i in enumerate(lin_keep) if (fn := lin_fun[i]) is not None]
-        self._lin_coo = (np.array(rows_i, np.int64), np.array(cols_i, np.int64), np.array(vals_i, float))
-        multiplier_labels = [lin_labels[i] for i in lin_keep]
-        owners = [lin_owner[i] for i in lin_keep]
-
-        # ---- nonlinear rows kept
-        self.nonlinear: list[_NonlinearRows] = []
-        row = self.m_lin
-        base = m_lin
-        for con in nonlinear:
-            keep = np.array([j for j in range(con.n_equations) if base + j in keep_set], np.int64)
-            base += con.n_equations
-            if keep.size == 0:
-                continue
-            rows = np.arange(row, row + keep.size)
-            row += keep.size
-            self.nonlinear.append(_NonlinearRows(con, np.asarray(con.coordinates(), np.int64), keep, rows))
-            multiplier_labels.extend(f"{type(con).__name__} '{con.name}' equation {con.equation_labels[j]}"
-                                     for j in keep)
-            owners.extend([con.name] * keep.size)
-        self.n_mult = row
-        self.multiplier_labels = multiplier_labels
-        #: the constraint or joint (by name) that owns each multiplier (reactions)
-        self.multiplier_owner = owners
-        self.n_total = self.n_coords + self.n_mult
-        self._rows_of = {id(nl.constraint): nl for nl in self.nonlinear}
-        self._interaction_constraints = {id(c) for obj in self.model.interactions
-                                         for c in obj.constraints()}
-
-    # ================================================================== loads
-    def _build_loads(self) -> None:
-        n = self.n_coords
-        g = self.model.gravity
-        f_const = np.zeros(n)
-        self.gravity_vector = np.zeros(n)
-        for etype, _, _, gdofs, gprops in self._group_specs:
-            np.add.at(self.gravity_vector, gdofs, etype.gravity_force(gprops, g))
-        for body in self.model.bodies:
-            d = self.body_dofs(body)
-            self.gravity_vector[d[:3]] += body.mass * g
-        f_const += self.gravity_vector
-        timed: list[tuple[np.ndarray, np.ndarray, TimeFunction]] = []
-        body_loads: list[tuple[RigidBody, np.ndarray | None, np.ndarray, np.ndarray | None,
-                               TimeFunction]] = []
-        moments: list[tuple[np.ndarray, int, np.ndarray, np.ndarray, TimeFunction]] = []
-        for load in self.model.loads:
-            idx: np.ndarray
-            vals: np.ndarray
-            if load.kind == "distributed":
-                beam: Beam = load.target  # type: ignore[assignment]
-                gi, sl = self.beam_slices[id(beam)]
-                etype, _, _, gdofs, gprops = self._group_specs[gi]
-                props = type(gprops)(*[np.asarray(a)[sl] for a in gprops])
-                Q = etype.distributed_force(props, load.force)
-                idx, vals = gdofs[sl].ravel(), Q.ravel()
-            elif isinstance(load.target, RigidBody):
-                body_loads.append((load.target, load.point, load.force, load.moment,
-                                   load.function))
-                continue
-            else:
-                if isinstance(load.target, Node):
-                    node = load.target
-                    beam, s = node.beam, None
-                else:
-                    beam, s = load.target  # type: ignore[misc]
-                if s is None:
-                    d = self.node_dofs(node)
-                    lay = node.beam.layout
-                    idx, vals = d[list(lay.position)], load.force.copy()
-                    if load.moment is not None:
-                        # a moment on a node works through its current slope (and twist):
-                        # loads.node_moment (FORMULATION §1.2, §2.3); the base tangent t̄ of
-                        # the twist is the node's reference tangent
-                        slope = d[list(lay.slope)]
-                        t = self.q_ref[slope] / np.linalg.norm(self.q_ref[slope])
-                        moments.append((slope, -1 if lay.twist is None else d[lay.twist],
-                                        load.moment, t, load.function))
-                else:
-                    e, xi = beam.locate(float(s))
-                    dofs = self.element_dofs(beam)[e]
-                    L = np.array([beam.centerline.lengths[e]])
-                    Q = beam.element_type.point_force(np.array([xi]), L, load.force[None, :])[0]
-                    if load.moment is not None:
-                        raise ModelError(f"load '{load.name}': moments are supported at nodes only")
-                    idx, vals = dofs, Q
-            fn = load.function
-            if isinstance(fn, Constant) and fn.value == 1.0:
-                np.add.at(f_const, idx, vals)
-            else:
-                timed.append((idx, vals, fn))
-        self.f_const = f_const
-        self.f_timed = timed
-        self.body_loads = body_loads
-        self.node_moments = moments
-
-    # ================================================================== pattern and packing
-    def _interactions_of(self, kind: str) -> list[Any]:
-        return [obj for obj in self.model.interactions if obj.term_kind == kind]
-
-    def _build_pattern(self) -> None:
-        """CSC pattern: the union of the blocks every term kind reserves (built once)."""
-        N = self.n_total
-        n = self.n_coords
-        blocks: list[tuple[np.ndarray, np.ndarray]] = []
-        for *_, gdofs, _ in self._group_specs:
-            blocks += [(d, d) for d in gdofs]        # the block of every element
-        blocks += rb.bodies_pattern(self.model.bodies, self)
-        blocks += linear_pattern(self.lin_matrix, n)
-        for nl in self.nonlinear:
-            if id(nl.constraint) in self._interaction_constraints:
-                continue
-            blocks += joint_pattern(nl.coords, self.multiplier_rows(nl.constraint), n)
-        for kind in driver.INTERACTION_KINDS:
-            for obj in self._interactions_of(kind.name):
-                blocks += kind.pattern(obj, self)
-        blocks += springs_pattern(self.model.springs, self)
-        blocks += moments_pattern(self.node_moments)
-        keys = [np.arange(N, dtype=np.int64) * (N + 1)]   # the full diagonal
-        for rows, cols in blocks:
-            r = np.asarray(rows, np.int64)
-            c = np.asarray(cols, np.int64)
-            keys.append((c[None, :] * N + r[:, None]).ravel())
-        ukeys = np.unique(np.concatenate(keys))
-        self._ukeys = ukeys
-        cols = ukeys // N
-        rows = ukeys % N
-        indptr = np.zeros(N + 1, np.int64)
-        np.add.at(indptr, cols + 1, 1)
-        indptr = np.cumsum(indptr)
-        self.matrix = sp.csc_matrix((np.zeros(ukeys.size), rows.astype(np.int32),
-                                     indptr.astype(np.int32)), shape=(N, N))
-        self._data = self.matrix.data  # the array the matrix really holds
-        self.nnz = ukeys.size
-
-    def _pack(self) -> None:
-        """Every term kind packs itself (:mod:`flexmbs.terms`) into the system the driver sums."""
-        fns = FunctionTable()
-        self.functions = fns
-        self.groups: list[BeamGroup] = []
-        for etype, opts, beams, gdofs, props in self._group_specs:
-            pos = np.array([self.positions(d, d).reshape(-1) for d in gdofs], np.int64)
-            self.groups.append(BeamGroup(etype, opts, beams,
-                                         etype.pack(gdofs, props, opts, self.q_ref, pos)))
-        # the parts in registration order: the default element (the first registered, the
-        # cable) always has one (empty if the model has none of its elements), the others only
-        # when used: a cable-only model compiles no rod code (measured: its first run 177 s ->
-        # 116 s cold), and a model with rods compiles one signature, with or without cables
-        parts = []
-        for k, name in enumerate(ELEMENT_TYPES):
-            et = ELEMENT_TYPES.get(name)
-            mine = [g.part for g in self.groups if g.element_type is et]
-            if not mine and k > 0:
-                continue
-            if not mine:
-                size = et.layout.element_size
-                mine = [et.pack(np.zeros((0, size), np.int64), et.section_properties([]),
-                                et.default_options, self.q_ref, np.zeros((0, size * size), np.int64))]
-            parts += mine
-        if len(parts) > MAX_GROUPS:
-            raise ModelError(f"{len(parts)} groups of beams (element type and options): at most "
-                             f"{MAX_GROUPS}; give beams of one element type the same options")
-        norms = [nl.constraint for nl in self.nonlinear
-                 if isinstance(nl.constraint, EulerParameterNormalization)]
-        terms = [nl.constraint for nl in self.nonlinear if hasattr(nl.constraint, "table")]
-        drivers = [nl.constraint for nl in self.nonlinear if isinstance(nl.constraint, JointDriver)]
-        self.joint_lists = {k.name: self._interactions_of(k.name) for k in driver.INTERACTION_KINDS}
-        fn_rows = [row for row, _ in self.lin_functions]
-        fn_idx = [fns(fn) for _, fn in self.lin_functions]
-        bodies = rb.pack_bodies(self.model.bodies, self.body_loads, self, fns)
-        loads = pack_loads(self.f_const, self.f_timed, self.node_moments, fns, self)
-        linear = pack_linear(self.lin_matrix, self.lin_rhs0, fn_rows, fn_idx, self)
-        norms_part, terms_part = pack_norms(norms, self), pack_terms(terms, self)
-        kinds = {k.name: k.pack(self.joint_lists[k.name], self) for k in driver.INTERACTION_KINDS}
-        self.system = driver.SystemPart(
-            n=self.n_coords, m=self.n_mult, beams=tuple(parts), bodies=bodies, loads=loads,
-            linear=linear, norms=norms_part, terms=terms_part, **kinds,
-            springs=pack_springs(self.model.springs, self),
-            drivers=pack_drivers(drivers, self, fns),
-            error=np.zeros(3, np.int64),
-            bases=np.zeros((sum(2 * g.dofs.shape[0] for g in self.groups
-                                if g.element_type.rebase is not None), BASE_RECORD)))
-        #: what the compiled kernel receives: the kinds this model lacks are None, so that
-        #: their code is not compiled for it (driver.OPTIONAL_KINDS)
-        self.kernel_system = self.system.without_absent(dict(
-            bodies=bool(self.model.bodies), norms=bool(norms), terms=bool(terms),
-            springs=bool(self.model.springs), drivers=bool(drivers),
-            **{k: bool(objs) for k, objs in self.joint_lists.items()}))
-        self._python_terms = [obj for obj in self.model.interactions if obj.term_kind == ""]
-        self.body_dof_table = self.system.bodies.dofs
-        self._r = np.zeros(self.n_total)
-
-    def _length_scale(self) -> float:
-        pts = [b.centerline.points for b in self.model.beams] + [
-            b.pose.position[None, :] for b in self.model.bodies]
-        if not pts:
-            return 1.0
-        P = np.vstack(pts)
-        ext = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
-        lengths = [b.length for b in self.model.beams]
-        return max(ext, max(lengths, default=0.0), 1e-3 if ext == 0 else 0.0) or 1.0
+    def matrix_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """CSC ``(indptr, indices)`` of the iteration matrix as int64 (what compiled code that
+        reads ``data`` by column needs, e.g. :func:`flexmbs.driver.constraint_velocity`)."""
+        return self.pattern.matrix_pattern()
 
     # ================================================================== evaluation
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -617,24 +161,23 @@ class Assembly:
     def python_interactions(self) -> list[Any]:
         """Interactions evaluated by their Python path now: those of no compiled kind, and
         those of a switchable kind without a compiled form at the moment
-        (:meth:`Interaction.compiled_form`). A query: :meth:`_switch_compiled_forms` acts on
-        it."""
+        (:meth:`Interaction.compiled_form`). A query: :meth:`_sync_compiled_forms` is the
+        command that switches the packed system to match it."""
         out = list(self._python_terms)
         for kind in driver.INTERACTION_KINDS:
             if kind.enable is not None:
                 out += [obj for obj in self.joint_lists[kind.name] if not obj.compiled_form()]
         return out
 
-    def _switch_compiled_forms(self) -> list[Any]:
+    def _sync_compiled_forms(self) -> None:
         """Switch every interaction of a switchable kind on or off in the packed system as it
-        has a compiled form now (a test may freeze a joint's detection between two calls);
-        returns :meth:`python_interactions`. Every evaluation starts with it."""
+        has a compiled form now (a test may freeze a joint's detection between two calls).
+        Every evaluation through the driver starts with it."""
         for kind in driver.INTERACTION_KINDS:
             if kind.enable is not None:
                 part = getattr(self.system, kind.name)
                 for i, obj in enumerate(self.joint_lists[kind.name]):
                     kind.enable(part, i, obj.compiled_form())
-        return self.python_interactions()
 
     def compiled_reason(self) -> str:
         """Why the compiled Newton loop cannot run this model now ("" if it can)."""
@@ -682,7 +225,8 @@ class Assembly:
             mode[0] = load_factor
             mode[2] = 1.0 if with_damping else 0.0
             acc = qdd
-        python = self._switch_compiled_forms()
+        self._sync_compiled_forms()
+        python = self.python_interactions()
         fv = self.functions.values(t)
         q = np.ascontiguousarray(q, dtype=float)
         v = np.ascontiguousarray(v, dtype=float)
@@ -726,7 +270,8 @@ class Assembly:
         twist entries of ``q, v`` and of ``qdd, acc`` (when given) in place. ``lam``: the
         step's multipliers (the sliding joint's friction cone needs its normal reaction;
         default zero)."""
-        python = self._switch_compiled_forms()
+        self._sync_compiled_forms()
+        python = self.python_interactions()
         for name, arr in (("q", q), ("v", v), ("qdd", qdd), ("acc", acc)):
             if arr is not None and not (isinstance(arr, np.ndarray) and arr.dtype == float
                                         and arr.flags.c_contiguous and arr.shape == (self.n_coords,)):
@@ -753,7 +298,8 @@ class Assembly:
         then the nodal frames re-based where tangents turned far (FORMULATION §2.4; ``q``
         changed in place). Returns the number of re-based nodes; raises
         :class:`FlexmbsError` if a node turned past the frames' limit."""
-        python = self._switch_compiled_forms()
+        self._sync_compiled_forms()
+        python = self.python_interactions()
         fv, mode = self.functions.values(t), static_mode(load_factor, damping=False)
         zeros = np.zeros_like(q)
         lam = np.ascontiguousarray(lam, dtype=float)
@@ -776,7 +322,7 @@ class Assembly:
         for kind in driver.INTERACTION_KINDS:
             if kind.begin is not None:
                 kind.begin(getattr(self.system, kind.name), q)
-        self._switch_compiled_forms()
+        self._sync_compiled_forms()
 
     def node_bases(self) -> np.ndarray:
         """Every twisting node's current base: records ``[twist coordinate, t̄ (3), D̄ (3)]``
@@ -797,16 +343,7 @@ class Assembly:
                      np.zeros(self.n_mult), self.functions.values(0.0), static_mode(1.0), self._r,
                      (float(records.shape[0]), 0.0, 0.0))
 
-    # ---------------------------------------------------------------- DofMap / MatrixSink
-    def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """CSC data positions of the (rows[i], cols[j]) block (must be in the pattern)."""
-        N = self.n_total
-        k = (np.asarray(cols, np.int64)[None, :] * N + np.asarray(rows, np.int64)[:, None]).ravel()
-        pos = np.searchsorted(self._ukeys, k)
-        if np.any(pos >= self._ukeys.size) or np.any(self._ukeys[np.minimum(pos, self._ukeys.size - 1)] != k):
-            raise ModelError("internal: matrix entry outside the reserved sparsity pattern")
-        return pos
-
+    # ================================================================== factorisation
     def border_indices(self) -> np.ndarray:
         """Unknowns of the bordered banded LU's dense border (:mod:`flexmbs.solvers._bordered`):
         rigid-body and interaction coordinates, nonlinear multipliers, and linear multipliers
@@ -856,33 +393,13 @@ class Assembly:
                                                    self.n_coords, owner)
         return self._plans[mass]
 
-    def positions_present(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """As :meth:`positions`, with −1 for the entries outside the pattern."""
-        N = self.n_total
-        k = (np.asarray(cols, np.int64)[None, :] * N + np.asarray(rows, np.int64)[:, None]).ravel()
-        pos = np.minimum(np.searchsorted(self._ukeys, k), self._ukeys.size - 1)
-        return np.where(self._ukeys[pos] == k, pos, -1)
-
-    def add_to_matrix(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
-        """Add a dense block to the iteration matrix being assembled (rows/cols global)."""
-        np.add.at(self._data, self.positions(rows, cols), np.asarray(block, float).ravel())
-
-    def multiplier_rows(self, constraint: object) -> np.ndarray:
-        """Multiplier indices (into lam) of the equations of ``constraint``, −1 if dropped."""
-        nl = self._rows_of.get(id(constraint))
-        if nl is None:
-            return np.full(getattr(constraint, "n_equations", 0), -1, np.int64)
-        out = np.full(nl.constraint.n_equations, -1, np.int64)
-        out[nl.keep] = nl.rows
-        return out
-
     def _matrix_at(self, q: np.ndarray, t: float, cM: float) -> sp.csc_matrix:
         """The iteration matrix with ``cM`` M and no stiffness (Φ_q in its borders)."""
         n = self.n_coords
         data = np.zeros_like(self._data)
         q = np.ascontiguousarray(q, dtype=float)
         zeros = np.zeros(n)
-        self._switch_compiled_forms()
+        self._sync_compiled_forms()
         self._kernel(OP_JACOBIAN, q, zeros, zeros, np.zeros(self.n_mult),
                      self.functions.values(t), dynamic_mode(), data, (cM, 0.0, 0.0))
         return sp.csc_matrix((data, self.matrix.indices, self.matrix.indptr), shape=self.matrix.shape)
@@ -897,7 +414,7 @@ class Assembly:
         n = self.n_coords
         q = np.ascontiguousarray(q, dtype=float)
         zeros = np.zeros(n)
-        self._switch_compiled_forms()
+        self._sync_compiled_forms()
         r = np.zeros(self.n_total)
         self._kernel(OP_RESIDUAL, q, zeros, zeros, np.zeros(self.n_mult),
                      self.functions.values(t), dynamic_mode(), r)
@@ -906,35 +423,17 @@ class Assembly:
     def constraint_velocity_terms(self, q: np.ndarray, t: float) -> np.ndarray:
         """Right-hand side ``−Phi_t`` of the velocity-level constraints ``Phi_q v = −Phi_t``
         (nonzero only for prescribed motion and drivers)."""
-        out = np.zeros(self.n_mult)
-        for row, fn in self.lin_functions:
-            out[row] += fn.d1(t)
-        for nl in self.nonlinear:
-            if isinstance(nl.constraint, JointDriver):
-                out[nl.rows] += nl.constraint.velocity_rhs(q[nl.coords], t)
-        return out
+        return self.rows.velocity_terms(q, t)
 
     def velocity_rows(self) -> np.ndarray:
         """(n_mult,) 1.0 for the equations whose velocity form is ``Phi_q v = 0`` (no time in
         Phi), 0.0 for prescribed coordinates with a time function and drivers (``Phi_t != 0``,
         which the velocity corrector leaves as they are)."""
-        out = np.ones(self.n_mult)
-        for row, _ in self.lin_functions:
-            out[row] = 0.0
-        for nl in self.nonlinear:
-            if isinstance(nl.constraint, JointDriver):
-                out[nl.rows] = 0.0
-        return out
+        return self.rows.velocity_rows()
 
     def has_nonlinear_constraints(self) -> bool:
         """Whether some kept equation is nonlinear in q (joints, Euler parameters, sliding)."""
         return bool(self.nonlinear)
-
-    def matrix_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """CSC ``(indptr, indices)`` of the iteration matrix as int64 (what compiled code that
-        reads ``data`` by column needs, e.g. :func:`flexmbs.driver.constraint_velocity`)."""
-        return (np.ascontiguousarray(self.matrix.indptr, dtype=np.int64),
-                np.ascontiguousarray(self.matrix.indices, dtype=np.int64))
 
     def constraint_time_terms(self, q: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
         """Right-hand side of the acceleration-level constraints,
