@@ -282,7 +282,7 @@ def _moment_of(ld, k, q, g, Q, dQ):  # noqa: ANN001, ANN202
     node_moment(g, ld.m_torque[k], ld.m_base[k], ld.m_twist[k] >= 0, Q, dQ)
 
 
-@njit
+@njit(internal=True)
 def loads_set_bases(ld, log, stop):  # noqa: ANN001, ANN201
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
     moments on them read the new base tangent."""
@@ -293,7 +293,7 @@ def loads_set_bases(ld, log, stop):  # noqa: ANN001, ANN201
                     ld.m_base[k, c] = log[j, 1 + c]
 
 
-@njit
+@njit(internal=True)
 def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
     """Initialises ``r_q = −λ Q_ext(q, t)`` (λ: load factor); returns max |r_q|."""
     lf = mode[LOAD_FACTOR]
@@ -320,7 +320,7 @@ def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
     return scale
 
 
-@njit
+@njit(internal=True)
 def loads_jacobian(ld, q, fv, mode, cK, data):  # noqa: ANN001, ANN201
     """``−cK λ ∂Q_ext/∂q`` of the node moments into ``data``."""
     if ld.m_fn.size == 0:

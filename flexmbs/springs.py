@@ -309,7 +309,7 @@ def _force(sp, i, q, v, mode):  # noqa: ANN001, ANN202
     return value, f, kt, rate
 
 
-@njit
+@njit(internal=True)
 def springs_residual(sp, q, v, mode, r):  # noqa: ANN001, ANN201
     """``r_q += f g`` for every spring-damper; returns the largest of its parts (elastic,
     preload, damping), the force scale of the convergence test (a preloaded spring in
@@ -373,7 +373,7 @@ def _second_derivative(sp, i, q):  # noqa: ANN001, ANN202
                 H[base + j, base + m] += sign * 2.0 * s
 
 
-@njit
+@njit(internal=True)
 def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
     """``cK K + cC C`` of every spring-damper into ``data`` (module docstring); returns the
     largest tangent stiffness k_t (the round-off floor of the convergence test)."""
@@ -405,7 +405,7 @@ def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
     return kscale
 
 
-@njit
+@njit(internal=True)
 def springs_post_step(sp, q):  # noqa: ANN001, ANN201
     """After a converged step: every rotational spring's angle becomes the centre of its next
     branch (``theta_ref``), so that θ follows the joint through whole turns."""

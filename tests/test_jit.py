@@ -156,3 +156,24 @@ def test_reference_counting_is_stated_and_kept_where_arrays_are_returned():
 
     planted(np.ones(3))
     assert len(_arrays_returned_without_refcount([planted])) == 1
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="compiled kernels only")
+def test_internal_kernel_serves_compiled_callers_and_refuses_python():
+    """A kernel compiled without a Python entry (``internal=True``) is called by compiled code
+    as any other, and a call from Python raises a TypeError naming it instead of crashing."""
+    import numpy as np
+
+    from flexmbs._jit import njit
+
+    @njit(internal=True, cache=False)
+    def doubled(a):  # noqa: ANN001, ANN202
+        return 2.0 * a[0]
+
+    @njit(cache=False)
+    def caller(a):  # noqa: ANN001, ANN202
+        return doubled(a) + 1.0
+
+    assert caller(np.array([3.0])) == 7.0
+    with pytest.raises(TypeError, match="doubled is compiled for compiled callers only"):
+        doubled(np.array([3.0]))

@@ -240,7 +240,7 @@ def _driver(dr, d, q, fv, mode):  # noqa: ANN001, ANN202
     return phi, c0, nloc, target
 
 
-@njit
+@njit(internal=True)
 def drivers_residual(dr, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every driver."""
     if dr is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -255,7 +255,7 @@ def drivers_residual(dr, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
             r[dr.coords[c0 + k]] += dr.jac[k] * lam[row]
 
 
-@njit
+@njit(internal=True)
 def drivers_jacobian(dr, q, lam, fv, mode, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ and ``cK λ ∂²Φ/∂q²`` of every driver."""
     if dr is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)

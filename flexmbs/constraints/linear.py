@@ -58,7 +58,7 @@ def pack_linear(matrix: sp.csr_matrix, rhs0: np.ndarray, fn_rows: list[int], fn_
                       np.array(fn_rows, dtype=i64), np.array(fn_idx, dtype=i64), pos, posT)
 
 
-@njit
+@njit(internal=True)
 def linear_residual(li, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
     """``r_λ = A q − b − λ_load f(t)``, ``r_q += Aᵀλ``."""
     for row in range(li.rhs0.size):
@@ -73,7 +73,7 @@ def linear_residual(li, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
         r[n + li.fn_row[k]] -= mode[LOAD_FACTOR] * fv[li.fn_idx[k]]
 
 
-@njit
+@njit(internal=True)
 def linear_jacobian(li, data):  # noqa: ANN001, ANN201
     """The constant entries ``A`` and ``Aᵀ`` of the iteration matrix."""
     for k in range(li.data.size):

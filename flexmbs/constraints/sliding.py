@@ -627,7 +627,7 @@ def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
                                sl.friction[j], sl.anchor[j], sl.stuck[j], f_ax)
 
 
-@njit
+@njit(internal=True)
 def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ``, ``r_s −= Q_s`` of every sliding joint; keeps the stick
     law's anchor and stick flag of this state for :func:`sliding_post_step`; returns max |Q_s|."""
@@ -657,7 +657,7 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
     return scale
 
 
-@njit
+@njit(internal=True)
 def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the exact derivatives of −Q_s in the element
     coordinates, s, ṡ and λ_pos (:func:`sliding_axial_force`)."""
@@ -687,7 +687,7 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
                     data[sl.pos_s_lam[j, a]] -= dQ_dlam[a]
 
 
-@njit
+@njit(internal=True)
 def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
     """After a converged step (and a :func:`sliding_residual` at its state): the current
     element of every slide coordinate, and the stick law's anchor and stick flag of that

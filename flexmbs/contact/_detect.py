@@ -122,7 +122,7 @@ def _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots, cross_n,
     return n_touched
 
 
-@njit
+@njit(internal=True)
 def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list, elem_out, r_b,  # noqa: ANN001, ANN202, PLR0913
                    shape, params, R_out, origin, n, ey, ez, roots):
     """An open bore: a section crossed inside the bore at the step's start (``elem_ws[k] ≥ 0``)
@@ -338,7 +338,7 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     return count
 
 
-@njit
+@njit(internal=True)
 def _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b, origin, ey, ez,  # noqa: ANN001, ANN202, PLR0913
                       shape, params, psis, phis, kinds, depths, Y, Yp, Ypp, out, count):
     """The paper's detection of the section-k ellipse crossed by element e at ξ (FORMULATION
@@ -641,7 +641,7 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
     return qb, rotation(qb[3:7])
 
 
-@njit
+@njit(internal=True)
 def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      tree_c, tree_r, tree_lo,
                      tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
@@ -881,7 +881,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     return m, cnt, sc
 
 
-@njit
+@njit(internal=True)
 def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: ANN001, ANN201, C901
     """Contact forces of every (enabled) clearance joint subtracted from ``r_q`` (``r``), or
     with ``want_tangent`` their tangent ``cK K + cC C`` into ``data`` (exact or Gauss–Newton,
@@ -947,7 +947,7 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
     return scale, 0
 
 
-@njit
+@njit(internal=True)
 def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION I
     §2.4): the contact elements holding them read the new base tangent; ``q`` (its twists
@@ -970,7 +970,7 @@ def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
             cl.q_start[i] = q[i]
 
 
-@njit
+@njit(internal=True)
 def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
     """After a converged step (following a residual at that state, whose detection it reuses):
     warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`),
@@ -999,7 +999,7 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
         _mark_tips_due(cl.tips_due, j, cl.open_ends[j])
 
 
-@njit
+@njit(internal=True)
 def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, frames, stations,  # noqa: ANN001, ANN201, PLR0913
                    tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
                    tip_station, work):

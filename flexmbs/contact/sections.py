@@ -85,7 +85,7 @@ def _support(cy, cz, eax, eay, a, b, N0, N1):  # noqa: ANN001, ANN202
     return X0, X1, rho, xa / a, xb / b
 
 
-@njit
+@njit(internal=True)
 def _common_normal_f(kind, params, cy, cz, eax, eay, a, b, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """``F(ψ) = T·(X(N(ψ)) − Y(ψ))``, ``F′``, ``d = N·(X − Y)`` and the ellipse angle of X."""
     section_boundary(kind, params, psi, Y, Yp, Ypp)

@@ -68,7 +68,7 @@ def _line_distance2(w0, w1, eax, eay, s2):  # noqa: ANN001, ANN202
     return w0 * w0 + w1 * w1 - s2 * wa * wa
 
 
-@njit
+@njit(internal=True)
 def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """``f = ½ dℓ²/dψ``, ``f′`` and ``ℓ²`` of the line model at ψ (section coordinates)."""
     section_boundary(kind, params, psi, Y, Yp, Ypp)
@@ -148,7 +148,7 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
     return count
 
 
-@njit
+@njit(internal=True)
 def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """Wall point at ψ, its closest axis point and the reduced ``D′(ψ)``, ``D″(ψ)``."""
     section_boundary(shape, params, psi, Y, Yp, Ypp)
@@ -180,7 +180,7 @@ def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp
     return e, x, d1, d2, ell, speed, w0, w1, w2
 
 
-@njit
+@njit(internal=True)
 def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """Newton on both unknowns of ``∇D(ξ, ψ) = 0`` at once (one axis point and one wall point
     per iteration, no inner projection), from ξ one projection step off the seed. Returns

@@ -80,7 +80,7 @@ def _d_dot(a, Da, b, Db, out):  # noqa: ANN001, ANN202
                   + a[0] * Db[0, j] + a[1] * Db[1, j] + a[2] * Db[2, j])
 
 
-@njit
+@njit(internal=True)
 def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y, Yp,  # noqa: ANN001, ANN202, PLR0913, PLR0915
                       Ypp):
     """Wall point ``Q = o + Y(ψ)`` of the paper's detection and its derivative (3, N_EXT): the
@@ -193,7 +193,7 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
     return Qd, DQd
 
 
-@njit
+@njit(internal=True)
 def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """Wall point ``Q = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` of the consistent pair (FORMULATION II §4b)
     and its derivative (3, N_EXT): ψ moves with the coordinates by the implicit-function theorem

@@ -289,7 +289,7 @@ _n0, _n1, _n2, _n3, _n4, _n5, _n6, _n7 = _nth
 # kernel 10.9 -> 18.2 s of function passes).
 
 
-@njit
+@njit(internal=True)
 def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r_q += Q_int + M q̈`` of every element group; the largest single force."""
     s = _residual(_n0(parts), q, v, qdd, mode, r)
@@ -302,7 +302,7 @@ def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     return max(s, _residual(_n7(parts), q, v, qdd, mode, r))
 
 
-@njit
+@njit(internal=True)
 def groups_jacobian(parts, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """The matrix blocks of every element group; the largest diagonal stiffness."""
     s = _jacobian(_n0(parts), q, v, qdd, mode, cM, cC, cK, data)
@@ -327,7 +327,7 @@ def _check(part, q, error, k, found):  # noqa: ANN001, ANN202
     return code
 
 
-@njit
+@njit(internal=True)
 def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
     """The element groups' checks after a converged step: the first error code (``error[1]`` =
     the part's position in ``parts``), or 0."""
@@ -341,7 +341,7 @@ def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
     return _check(_n7(parts), q, error, 7, found)
 
 
-@njit
+@njit(internal=True)
 def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
     """Re-base the nodal frames of every element group that has charts (FORMULATION §2.4) after
     a converged step; returns the number of records written to ``log``."""
@@ -355,7 +355,7 @@ def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
     return _rebase(_n7(parts), q, v, qdd, acc, log, count)
 
 
-@njit
+@njit(internal=True)
 def groups_set_bases(parts, log, stop):  # noqa: ANN001, ANN201
     """Give every listed node (``log[:stop]``) its base, in whichever group holds it."""
     _set_bases(_n0(parts), log, 0, stop)
