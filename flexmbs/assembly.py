@@ -520,7 +520,7 @@ class Assembly:
         for nl in self.nonlinear:
             if id(nl.constraint) in self._interaction_constraints:
                 continue
-            blocks += joint_pattern(nl.coords, self.multiplier_rows(nl.constraint), n)
+            blocks += joint_pattern(nl.coords, self.multiplier_rows(nl.constraint), n, nl.constraint)
         for kind in driver.INTERACTION_KINDS:
             for obj in self._interactions_of(kind.name):
                 blocks += kind.pattern(obj, self)

@@ -49,6 +49,7 @@ __all__ = [
     "TermTable",
     "term_values",
     "term_hessian",
+    "hessian_pattern",
     "TermWork",
     "term_work",
     "concatenate_tables",
@@ -198,6 +199,22 @@ def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):  # 
 
 # ---------------------------------------------------------------------------------------------
 # kernels
+@njit(refcount=False)
+def _columns(kind: int, o: int) -> tuple[int, int]:
+    """First column and count of the ``q_local`` columns a vector row of ``kind`` at offset o
+    depends on (the columns of its ∂v/∂q): a body point all 7, a body direction its p, a beam
+    node's position or slope 3, a node director (g, φ), a constant none."""
+    if kind == BODY_POINT:
+        return o, 7
+    if kind == BODY_DIR or kind == NODE_DIRECTOR:  # noqa: SIM109 - compiled: no tuple search
+        return o + 3, 4
+    if kind == NODE_POS:
+        return o, 3
+    if kind == NODE_SLOPE:
+        return o + 3, 3
+    return 0, 0
+
+
 class TermWork(NamedTuple):
     """Scratch of :func:`term_values` / :func:`term_hessian`, allocated once (:func:`term_work`):
     the four vector slots of an equation (values, weights, ∂v/∂q columns) and a node director."""
@@ -232,20 +249,19 @@ def _load(table: TermTable, i: int, q: np.ndarray, w: TermWork) -> None:
         if v >= 0 and held[s] == v:
             continue
         held[s] = v
-        col[s] = 0
-        ncol[s] = 0
         if v < 0:
+            col[s] = 0
+            ncol[s] = 0
             for k in range(3):
                 val[s, k] = 0.0
             continue
         kind = table.vec_kind[v]
         o = table.vec_off[v]
+        col[s], ncol[s] = _columns(kind, o)
         if kind == CONST:
             for k in range(3):
                 val[s, k] = table.vec_c[v, k]
         elif kind == NODE_DIRECTOR:
-            col[s] = o + 3
-            ncol[s] = 4
             _node_director(table.directors, q[o:o + 7], table.vec_c[v], table.vec_d[v], w.d2, w.jd,
                            w.hd, FLAG[0])
             for k in range(3):
@@ -253,17 +269,12 @@ def _load(table: TermTable, i: int, q: np.ndarray, w: TermWork) -> None:
                 for j in range(4):
                     G[s, k, j] = w.jd[k, j]
         elif kind == NODE_POS or kind == NODE_SLOPE:  # noqa: SIM109 - compiled: no tuple search
-            c0 = o if kind == NODE_POS else o + 3
-            col[s] = c0
-            ncol[s] = 3
             for k in range(3):
-                val[s, k] = q[c0 + k]
+                val[s, k] = q[col[s] + k]
                 for j in range(3):
                     G[s, k, j] = 1.0 if j == k else 0.0
         else:  # BODY_POINT r + A(p)s′ or BODY_DIR A(p)f′: (A c)_k = pᵀT_k p, ∂/∂p = 2T_k p
             jp = 3 if kind == BODY_POINT else 0
-            col[s] = o + 3 - jp
-            ncol[s] = jp + 4
             for k in range(3):
                 for j in range(jp):
                     G[s, k, j] = 1.0 if j == k else 0.0
@@ -379,6 +390,31 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
             h = 0.5 * (H[a, b] + H[b, a])
             H[a, b] = h
             H[b, a] = h
+
+
+def hessian_pattern(table: TermTable, e0: int, e1: int, n: int) -> np.ndarray:
+    """Where :func:`term_hessian` of equations e0 ≤ i < e1 can be nonzero, (n, n) bool: the
+    second derivative of each nonlinear vector (a body's p block, a node director's (g, φ))
+    and, for DOT, ``u_qᵀw_q + w_qᵀu_q`` on the columns of u × those of w (:func:`_columns`).
+    A spherical joint's has no block between its two bodies: the assembler reserves only
+    these entries (the chain's band is then 10 wide, not 21)."""
+    mask = np.zeros((n, n), bool)
+    for i in range(e0, e1):
+        cols: list[np.ndarray] = []
+        for s in range(4):
+            v = int(table.eq_vec[i, s])
+            kind = int(table.vec_kind[v]) if v >= 0 else CONST
+            o = int(table.vec_off[v]) if v >= 0 else 0
+            c0, nc = _columns(kind, o)
+            cols.append(np.arange(c0, c0 + nc))
+            if kind in (BODY_POINT, BODY_DIR, NODE_DIRECTOR):
+                mask[o + 3:o + 7, o + 3:o + 7] = True
+        if table.eq_kind[i] == DOT:
+            for u in cols[:2]:
+                for w in cols[2:]:
+                    mask[np.ix_(u, w)] = True
+                    mask[np.ix_(w, u)] = True
+    return mask
 
 
 def _n_used(att: Attachment) -> int:
@@ -722,7 +758,9 @@ class TermPart(NamedTuple):
     jptr: np.ndarray                 # (nc + 1,) into pos_jac / pos_jacT (kept rows × coords)
     pos_jac: np.ndarray
     pos_jacT: np.ndarray
-    hptr: np.ndarray                 # (nc + 1,) into pos_hess (coords × coords)
+    hptr: np.ndarray                 # (nc + 1,) into hess_a, hess_b, pos_hess: the entries
+    hess_a: np.ndarray               # (local row, column) of :func:`hessian_pattern` and
+    hess_b: np.ndarray               # their matrix positions
     pos_hess: np.ndarray
     ql: np.ndarray                   # work
     phi: np.ndarray
@@ -732,18 +770,27 @@ class TermPart(NamedTuple):
     work: TermWork
 
 
-def joint_pattern(coords: np.ndarray, rows: np.ndarray, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Φ_q (kept rows × coordinates), its transpose, and the Hessian block."""
+def joint_pattern(coords: np.ndarray, rows: np.ndarray, n: int,
+                  constraint: object = None) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Φ_q (kept rows × coordinates), its transpose, and the Hessian: the whole block, or for
+    a joint of a term table (``constraint.table``) the entries of :func:`hessian_pattern`."""
     kept = n + rows[rows >= 0]
-    return [(kept, coords), (coords, kept), (coords, coords)]
+    blocks = [(kept, coords), (coords, kept)]
+    table = getattr(constraint, "table", None)
+    if not isinstance(table, TermTable):
+        return blocks + [(coords, coords)]
+    mask = hessian_pattern(table, 0, table.eq_kind.size, coords.size)
+    return blocks + [(coords[a:a + 1], coords[mask[a]]) for a in range(coords.size)
+                     if mask[a].any()]
 
 
 def _kept_positions(dofs: DofMap, coords: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Positions of Φ_q (kept rows × coordinates) and of its transpose, row by row."""
     n = dofs.n_coords
     kept = n + rows[rows >= 0]
     jac = dofs.positions(kept, coords)
     jacT = dofs.positions(coords, kept).reshape(coords.size, kept.size).T.ravel()
-    return jac, jacT, dofs.positions(coords, coords)
+    return jac, jacT
 
 
 def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> NormPart:
@@ -752,7 +799,8 @@ def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> 
     rows = np.array([dofs.multiplier_rows(c)[0] for c in constraints], dtype=np.int64)
     pj, pt, ph = [], [], []
     for c, r in zip(coords, rows, strict=True):
-        j, t, h = _kept_positions(dofs, c, np.array([r]))
+        j, t = _kept_positions(dofs, c, np.array([r]))
+        h = dofs.positions(c, c)
         pj.append(j)
         pt.append(t)
         ph.append(h.reshape(4, 4).diagonal().copy())
@@ -771,24 +819,29 @@ def pack_terms(constraints: list, dofs: DofMap) -> TermPart:
     cptr[1:] = np.cumsum([c.size for c in coords])
     jptr = np.zeros(nc + 1, np.int64)
     hptr = np.zeros(nc + 1, np.int64)
-    pj, pt, ph = [], [], []
-    for i, (c, r) in enumerate(zip(coords, rows, strict=True)):
-        j, t, h = _kept_positions(dofs, c, r)
+    pj, pt, ha, hb, ph = [], [], [], [], []
+    for i, (con, c, r) in enumerate(zip(constraints, coords, rows, strict=True)):
+        j, t = _kept_positions(dofs, c, r)
+        a, b = np.nonzero(hessian_pattern(con.table, 0, con.table.eq_kind.size, c.size))
+        h = dofs.positions_present(c, c).reshape(c.size, c.size)[a, b]
+        if (h < 0).any():
+            raise ModelError(f"internal: '{con.name}': Hessian entry outside the pattern")
         pj.append(j)
         pt.append(t)
+        ha.append(a)
+        hb.append(b)
         ph.append(h)
         jptr[i + 1] = jptr[i] + j.size
         hptr[i + 1] = hptr[i] + h.size
     max_nl = max((c.size for c in coords), default=0)
     max_ne = int(np.max(np.diff(eq_ptr), initial=0))
-    cat = np.concatenate
     i64 = np.int64
-    return TermPart(table, np.ascontiguousarray(eq_ptr, i64), cptr,
-                    cat(coords) if coords else np.zeros(0, i64),
-                    cat(rows) if rows else np.zeros(0, i64), jptr,
-                    cat(pj).astype(i64) if pj else np.zeros(0, i64),
-                    cat(pt).astype(i64) if pt else np.zeros(0, i64), hptr,
-                    cat(ph).astype(i64) if ph else np.zeros(0, i64), np.zeros(max_nl),
+
+    def cat(parts: list[np.ndarray]) -> np.ndarray:
+        return np.concatenate(parts).astype(i64) if parts else np.zeros(0, i64)
+
+    return TermPart(table, np.ascontiguousarray(eq_ptr, i64), cptr, cat(coords), cat(rows), jptr,
+                    cat(pj), cat(pt), hptr, cat(ha), cat(hb), cat(ph), np.zeros(max_nl),
                     np.zeros(max_ne), np.zeros((max_ne, max_nl)), np.zeros((max_nl, max_nl)),
                     np.zeros(max_ne), term_work())
 
@@ -892,7 +945,5 @@ def terms_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
                 w += 1
         H = tm.H[:nloc, :nloc]
         term_hessian(tm.table, e0, e1, tm.ql[:nloc], tm.lam, H, tm.work)
-        h0 = tm.hptr[c]
-        for a in range(nloc):
-            for k in range(nloc):
-                data[tm.pos_hess[h0 + a * nloc + k]] += cK * H[a, k]
+        for k in range(tm.hptr[c], tm.hptr[c + 1]):     # the entries of hessian_pattern
+            data[tm.pos_hess[k]] += cK * H[tm.hess_a[k], tm.hess_b[k]]

@@ -32,6 +32,7 @@ from flexmbs.constraints.joints import (
     TermTable,
     _TableBuilder,
     concatenate_tables,
+    hessian_pattern,
     revolute,
     spherical,
     term_hessian,
@@ -178,6 +179,21 @@ def _mixed_constraints(rng: np.random.Generator) -> list:
     names = ["generic_bb_111011", "generic_bg_011111", "generic_gb_111111", "generic_ng_111000",
              "generic_nb_011000", "node_rigid_body", "node_rigid_ground", "node_spherical_body"]
     return [VARIANTS[k](rng) for k in names]
+
+
+@pytest.mark.parametrize("name", sorted(VARIANTS))
+def test_hessian_is_zero_outside_its_pattern(name):
+    """The assembler reserves only hessian_pattern's entries of a joint's Hessian (a spherical
+    joint's has no block between its two bodies): the kernel's Hessian is exactly zero
+    elsewhere, at random q and λ, and the pattern is symmetric."""
+    rng = np.random.default_rng(4)
+    c = VARIANTS[name](rng)
+    n = c.coordinates().size
+    mask = hessian_pattern(c.table, 0, c.n_equations, n)
+    assert np.array_equal(mask, mask.T)
+    for _ in range(3):
+        H = c.hessian_lambda(rng.normal(size=n), rng.normal(size=c.n_equations), 0.0)
+        assert np.all(H[~mask] == 0.0)
 
 
 def test_concatenate_tables():
