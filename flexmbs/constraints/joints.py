@@ -396,24 +396,24 @@ def hessian_pattern(table: TermTable, e0: int, e1: int, n: int) -> np.ndarray:
     """Where :func:`term_hessian` of equations e0 ≤ i < e1 can be nonzero, (n, n) bool: the
     second derivative of each nonlinear vector (a body's p block, a node director's (g, φ))
     and, for DOT, ``u_qᵀw_q + w_qᵀu_q`` on the columns of u × those of w (:func:`_columns`).
-    A spherical joint's has no block between its two bodies: the assembler reserves only
-    these entries (the chain's band is then 10 wide, not 21)."""
+    The assembler reserves only these entries: a joint of LIN rows (global components) has
+    no block between its two bodies, a DOT row only u's columns × w's."""
     mask = np.zeros((n, n), bool)
     for i in range(e0, e1):
-        cols: list[np.ndarray] = []
+        cols: list[slice] = []
         for s in range(4):
             v = int(table.eq_vec[i, s])
             kind = int(table.vec_kind[v]) if v >= 0 else CONST
             o = int(table.vec_off[v]) if v >= 0 else 0
             c0, nc = _columns(kind, o)
-            cols.append(np.arange(c0, c0 + nc))
+            cols.append(slice(c0, c0 + nc))
             if kind in (BODY_POINT, BODY_DIR, NODE_DIRECTOR):
                 mask[o + 3:o + 7, o + 3:o + 7] = True
         if table.eq_kind[i] == DOT:
             for u in cols[:2]:
                 for w in cols[2:]:
-                    mask[np.ix_(u, w)] = True
-                    mask[np.ix_(w, u)] = True
+                    mask[u, w] = True
+                    mask[w, u] = True
     return mask
 
 
