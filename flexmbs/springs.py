@@ -46,7 +46,15 @@ import numpy as np
 
 from ._jit import njit
 from .constraints.base import Attachment
-from .constraints.joints import TermTable, concatenate_tables, relative_angle_table, term_hessian, term_values
+from .constraints.joints import (
+    TermTable,
+    TermWork,
+    concatenate_tables,
+    relative_angle_table,
+    term_hessian,
+    term_values,
+    term_work,
+)
 from .elements.rigid_body import point_jacobian_of, point_tensor_of
 from .errors import ModelError
 from .terms import WITH_DAMPING
@@ -138,6 +146,7 @@ class SpringPart(NamedTuple):
     dcs: np.ndarray          # work (2, 2*END)
     lam2: np.ndarray         # work (2,)
     theta_ref: np.ndarray    # (n,) state: the rotational springs' last converged angle (turns)
+    work: TermWork           # work of the term kernels
 
 
 def _end_coords(obj: Any, dofs: DofMap) -> tuple[int, np.ndarray]:
@@ -190,7 +199,7 @@ def pack_springs(springs: Sequence[SpringDamper], dofs: DofMap) -> SpringPart:
                       np.array([s.preload for s in springs], float), tab, tab_n, pos, table,
                       eq_ptr, np.zeros((3, w)), np.zeros(w), np.zeros((w, w)), np.zeros((2, 3)),
                       np.zeros(w), np.zeros(2), np.zeros((2, w)), np.zeros(2),
-                      np.array([s.rest_length for s in springs], float))
+                      np.array([s.rest_length for s in springs], float), term_work())
 
 
 def _attachment(obj: Any, frame: np.ndarray | None) -> Attachment:
@@ -269,7 +278,7 @@ def _angle(sp, i, q):  # noqa: ANN001, ANN202
     w = sp.g.size
     for a in range(w):
         sp.ql[a] = q[sp.idx[i, a]] if sp.idx[i, a] >= 0 else 0.0
-    term_values(sp.table, sp.eq_ptr[i], sp.eq_ptr[i + 1], sp.ql, sp.cs, sp.dcs)
+    term_values(sp.table, sp.eq_ptr[i], sp.eq_ptr[i + 1], sp.ql, sp.cs, sp.dcs, sp.work)
     c, s = sp.cs[0], sp.cs[1]
     rho2 = c * c + s * s
     for a in range(w):
@@ -336,7 +345,7 @@ def _second_derivative(sp, i, q):  # noqa: ANN001, ANN202
         rho2 = c * c + s * s
         sp.lam2[0] = -s / rho2
         sp.lam2[1] = c / rho2
-        term_hessian(sp.table, sp.eq_ptr[i], sp.eq_ptr[i + 1], sp.ql, sp.lam2, H)
+        term_hessian(sp.table, sp.eq_ptr[i], sp.eq_ptr[i + 1], sp.ql, sp.lam2, H, sp.work)
         for a in range(w):
             for b in range(w):
                 dc_a, ds_a = sp.dcs[0, a], sp.dcs[1, a]

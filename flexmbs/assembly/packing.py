@@ -98,7 +98,7 @@ def term_owners(model: Model, numbering: Numbering, rows: ConstraintRows, loads:
         raise ModelError("internal: a constraint that no term kind packs")
 
     def joint_blocks(kept: Sequence[Constraint]) -> Blocks:
-        return [b for c in kept for b in joint_pattern(coords[id(c)], rows.multiplier_rows(c), n)]
+        return [b for c in kept for b in joint_pattern(coords[id(c)], rows.multiplier_rows(c), n, c)]
 
     def pack_linear_rows(ctx: PackContext) -> Any:
         fn_rows = [row for row, _ in rows.lin_functions]

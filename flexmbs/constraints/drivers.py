@@ -29,11 +29,13 @@ from ..terms import LOAD_FACTOR
 from .base import Attachment, Constraint
 from .joints import (
     TermTable,
+    TermWork,
     concatenate_tables,
     relative_angle_table,
     slide_table,
     term_hessian,
     term_values,
+    term_work,
 )
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -60,9 +62,10 @@ def driver_weights(motion, target, w):  # noqa: ANN001, ANN201
 
 
 @njit
-def driver_values(table, e0, e1, motion, target, q_local, phi_k, jac_k, w, jac):  # noqa: ANN001, ANN201
-    """Φ of one driver (returned) and ``Φ_q`` into ``jac`` (module docstring)."""
-    term_values(table, e0, e1, q_local, phi_k, jac_k)
+def driver_values(table, e0, e1, motion, target, q_local, phi_k, jac_k, w, jac, work):  # noqa: ANN001, ANN201
+    """Φ of one driver (returned) and ``Φ_q`` into ``jac`` (module docstring; ``work``: the term
+    kernels' scratch)."""
+    term_values(table, e0, e1, q_local, phi_k, jac_k, work)
     b = driver_weights(motion, target, w)
     phi = -b
     for k in range(e1 - e0):
@@ -76,12 +79,12 @@ def driver_values(table, e0, e1, motion, target, q_local, phi_k, jac_k, w, jac):
 
 
 @njit
-def driver_hessian(table, e0, e1, motion, target, q_local, lam, w, lam_k, H):  # noqa: ANN001, ANN201
+def driver_hessian(table, e0, e1, motion, target, q_local, lam, w, lam_k, H, work):  # noqa: ANN001, ANN201
     """``λ ∂²Φ/∂q²`` of one driver into ``H``."""
     driver_weights(motion, target, w)
     for k in range(e1 - e0):
         lam_k[k] = lam * w[k]
-    term_hessian(table, e0, e1, q_local, lam_k[:e1 - e0], H)
+    term_hessian(table, e0, e1, q_local, lam_k[:e1 - e0], H, work)
 
 
 def _n_used(att: Attachment) -> int:
@@ -120,7 +123,7 @@ class JointDriver(Constraint):
         ne = self.equations.eq_kind.size
         phi = np.empty(ne)
         term_values(self.equations, 0, ne, np.ascontiguousarray(q_local, float), phi,
-                    np.empty((ne, self._n)))
+                    np.empty((ne, self._n)), term_work())
         return float(math.atan2(phi[1], phi[0])) if self.motion == ROTATION else float(phi[0])
 
     def target(self, t: float) -> float:
@@ -131,7 +134,7 @@ class JointDriver(Constraint):
         jac = np.empty(self._n)
         phi = driver_values(self.equations, 0, ne, self.motion, self.target(t),
                             np.ascontiguousarray(q_local, float), np.empty(ne),
-                            np.empty((ne, self._n)), self._w, jac)
+                            np.empty((ne, self._n)), self._w, jac, term_work())
         return np.array([phi]), jac[None, :]
 
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
@@ -139,7 +142,7 @@ class JointDriver(Constraint):
         H = np.empty((self._n, self._n))
         driver_hessian(self.equations, 0, ne, self.motion, self.target(t),
                        np.ascontiguousarray(q_local, float), float(np.asarray(lam).reshape(-1)[0]),
-                       self._w, np.empty(2), H)
+                       self._w, np.empty(2), H, term_work())
         return H
 
     def velocity_rhs(self, q_local: np.ndarray, t: float) -> float:
@@ -150,7 +153,7 @@ class JointDriver(Constraint):
         ne = self.equations.eq_kind.size
         phi = np.empty(ne)
         term_values(self.equations, 0, ne, np.ascontiguousarray(q_local, float), phi,
-                    np.empty((ne, self._n)))
+                    np.empty((ne, self._n)), term_work())
         d = self.target(t)
         return d1 * (phi[1] * math.sin(d) + phi[0] * math.cos(d))
 
@@ -163,7 +166,8 @@ class JointDriver(Constraint):
         ne = self.equations.eq_kind.size
         phi = np.empty(ne)
         jac = np.empty((ne, self._n))
-        term_values(self.equations, 0, ne, np.ascontiguousarray(q_local, float), phi, jac)
+        term_values(self.equations, 0, ne, np.ascontiguousarray(q_local, float), phi, jac,
+                    term_work())
         c, s = phi
         dc, ds = jac @ np.asarray(v_local, float)
         # Φ_t = −d'(s sin d + c cos d), Φ_tt = −d''(s sin d + c cos d) − d'^2 Φ
@@ -194,6 +198,7 @@ class DriverPart(NamedTuple):
     w: np.ndarray
     lam_k: np.ndarray
     H: np.ndarray
+    work: TermWork                   # work of the term kernels
 
 
 def pack_drivers(drivers: list[JointDriver], dofs: DofMap, functions: FunctionTable) -> DriverPart:
@@ -223,7 +228,7 @@ def pack_drivers(drivers: list[JointDriver], dofs: DofMap, functions: FunctionTa
                       cat(pt).astype(i64) if pt else np.zeros(0, i64), hptr,
                       cat(ph).astype(i64) if ph else np.zeros(0, i64),
                       np.zeros(nl), np.zeros(2), np.zeros((2, nl)), np.zeros(nl), np.zeros(2),
-                      np.zeros(2), np.zeros((nl, nl)))
+                      np.zeros(2), np.zeros((nl, nl)), term_work())
 
 
 @njit(inline="always")
@@ -236,7 +241,7 @@ def _driver(dr, d, q, fv, mode):  # noqa: ANN001, ANN202
     target = dr.value0[d] + mode[LOAD_FACTOR] * fv[dr.fn[d]]
     e0, e1 = dr.eq_ptr[d], dr.eq_ptr[d + 1]
     phi = driver_values(dr.table, e0, e1, dr.motion[d], target, dr.ql[:nloc], dr.phi_k,
-                        dr.jac_k[:, :nloc], dr.w, dr.jac[:nloc])
+                        dr.jac_k[:, :nloc], dr.w, dr.jac[:nloc], dr.work)
     return phi, c0, nloc, target
 
 
@@ -270,7 +275,7 @@ def drivers_jacobian(dr, q, lam, fv, mode, cK, data):  # noqa: ANN001, ANN201
             data[dr.pos_jacT[c0 + k]] += dr.jac[k]
         H = dr.H[:nloc, :nloc]
         driver_hessian(dr.table, dr.eq_ptr[d], dr.eq_ptr[d + 1], dr.motion[d], target,
-                       dr.ql[:nloc], lam[row], dr.w, dr.lam_k, H)
+                       dr.ql[:nloc], lam[row], dr.w, dr.lam_k, H, dr.work)
         h0 = dr.hptr[d]
         for a in range(nloc):
             for k in range(nloc):

@@ -49,6 +49,9 @@ __all__ = [
     "TermTable",
     "term_values",
     "term_hessian",
+    "hessian_pattern",
+    "TermWork",
+    "term_work",
     "concatenate_tables",
     "CONST",
     "BODY_POINT",
@@ -185,7 +188,7 @@ def concatenate_tables(tables: list[TermTable]) -> tuple[TermTable, np.ndarray]:
     return TermTable(**fields, directors=_director_rows(fields["vec_kind"])), eq_ptr
 
 
-@njit
+@njit(refcount=False)
 def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):  # noqa: ANN001, ANN202
     """:func:`flexmbs.elements.ancf_rod.node_director` for a table that has node directors. For
     one without (``directors`` None) numba prunes the call by the argument's type, so models
@@ -196,52 +199,82 @@ def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):  # 
 
 # ---------------------------------------------------------------------------------------------
 # kernels
-@njit
-def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarray,
-          col: np.ndarray, ncol: np.ndarray, held: np.ndarray) -> None:
+@njit(refcount=False)
+def _columns(kind: int, o: int) -> tuple[int, int]:
+    """First column and count of the ``q_local`` columns a vector row of ``kind`` at offset o
+    depends on (the columns of its ∂v/∂q): a body point all 7, a body direction its p, a beam
+    node's position or slope 3, a node director (g, φ), a constant none."""
+    if kind == BODY_POINT:
+        return o, 7
+    if kind == BODY_DIR or kind == NODE_DIRECTOR:  # noqa: SIM109 - compiled: no tuple search
+        return o + 3, 4
+    if kind == NODE_POS:
+        return o, 3
+    if kind == NODE_SLOPE:
+        return o + 3, 3
+    return 0, 0
+
+
+class TermWork(NamedTuple):
+    """Scratch of :func:`term_values` / :func:`term_hessian`, allocated once (:func:`term_work`):
+    the four vector slots of an equation (values, weights, ∂v/∂q columns) and a node director."""
+
+    val: np.ndarray      # (4, 3)
+    wt: np.ndarray       # (4, 3)
+    G: np.ndarray        # (4, 3, 7)
+    col: np.ndarray      # int64 (4,)
+    ncol: np.ndarray     # int64 (4,)
+    held: np.ndarray     # int64 (4,)
+    d2: np.ndarray       # (3,)
+    jd: np.ndarray       # (3, 4)
+    hd: np.ndarray       # (3, 4, 4)
+
+
+def term_work() -> TermWork:
+    """A :class:`TermWork` (packed parts hold one; the Python paths make one per call)."""
+    return TermWork(np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((4, 3, 7)),
+                    np.zeros(4, np.int64), np.zeros(4, np.int64), np.zeros(4, np.int64),
+                    np.zeros(3), np.zeros((3, 4)), np.zeros((3, 4, 4)))
+
+
+@njit(refcount=False)
+def _load(table: TermTable, i: int, q: np.ndarray, w: TermWork) -> None:
     """Slots s = (u1, u2, w1, w2) of equation i: ``val[s] = v(q)``, ``∂v/∂q[:, col[s] + j] = G[s, :, j]``.
     ``held[s]``: the vector row slot s holds from the previous equation (−1: none), kept
     as it is (a joint's equations share their vectors: a spherical joint's three rows load
     each body point once, not three times)."""
+    val, G, col, ncol, held = w.val, w.G, w.col, w.ncol, w.held
     for s in range(4):
         v = table.eq_vec[i, s]
         if v >= 0 and held[s] == v:
             continue
         held[s] = v
-        col[s] = 0
-        ncol[s] = 0
         if v < 0:
+            col[s] = 0
+            ncol[s] = 0
             for k in range(3):
                 val[s, k] = 0.0
             continue
         kind = table.vec_kind[v]
         o = table.vec_off[v]
+        col[s], ncol[s] = _columns(kind, o)
         if kind == CONST:
             for k in range(3):
                 val[s, k] = table.vec_c[v, k]
         elif kind == NODE_DIRECTOR:
-            col[s] = o + 3
-            ncol[s] = 4
-            d2 = np.empty(3)
-            jd = np.empty((3, 4))
-            _node_director(table.directors, q[o:o + 7], table.vec_c[v], table.vec_d[v], d2, jd,
-                           np.empty((3, 4, 4)), FLAG[0])
+            _node_director(table.directors, q[o:o + 7], table.vec_c[v], table.vec_d[v], w.d2, w.jd,
+                           w.hd, FLAG[0])
             for k in range(3):
-                val[s, k] = d2[k]
+                val[s, k] = w.d2[k]
                 for j in range(4):
-                    G[s, k, j] = jd[k, j]
+                    G[s, k, j] = w.jd[k, j]
         elif kind == NODE_POS or kind == NODE_SLOPE:  # noqa: SIM109 - compiled: no tuple search
-            c0 = o if kind == NODE_POS else o + 3
-            col[s] = c0
-            ncol[s] = 3
             for k in range(3):
-                val[s, k] = q[c0 + k]
+                val[s, k] = q[col[s] + k]
                 for j in range(3):
                     G[s, k, j] = 1.0 if j == k else 0.0
         else:  # BODY_POINT r + A(p)s′ or BODY_DIR A(p)f′: (A c)_k = pᵀT_k p, ∂/∂p = 2T_k p
             jp = 3 if kind == BODY_POINT else 0
-            col[s] = o + 3 - jp
-            ncol[s] = jp + 4
             for k in range(3):
                 for j in range(jp):
                     G[s, k, j] = 1.0 if j == k else 0.0
@@ -252,7 +285,7 @@ def _load(table: TermTable, i: int, q: np.ndarray, val: np.ndarray, G: np.ndarra
                     val[s, k] += q[o + k]
 
 
-@njit
+@njit(refcount=False)
 def _weights(table: TermTable, i: int, val: np.ndarray, wt: np.ndarray) -> float:
     """Φ_i, and wt with ``∂Φ_i/∂q = Σ_s wt[s]·∂v_s/∂q`` (LIN: ±P; DOT: ±(w1 − w2), ±(u1 − u2))."""
     phi = 0.0
@@ -276,20 +309,17 @@ def _weights(table: TermTable, i: int, val: np.ndarray, wt: np.ndarray) -> float
     return phi
 
 
-@njit
+@njit(refcount=False)
 def term_values(table: TermTable, e0: int, e1: int, q_local: np.ndarray, phi: np.ndarray,
-                jac: np.ndarray) -> None:
-    """Haug 1989 dot-1/point constraints: ``phi[i−e0] = Φ_i``, ``jac[i−e0] = ∂Φ_i/∂q`` for e0 ≤ i < e1."""
-    val = np.empty((4, 3))
-    wt = np.empty((4, 3))
-    G = np.empty((4, 3, 7))
-    col = np.empty(4, dtype=np.int64)
-    ncol = np.empty(4, dtype=np.int64)
-    held = np.full(4, -1, dtype=np.int64)
+                jac: np.ndarray, w: TermWork) -> None:
+    """Haug 1989 dot-1/point constraints: ``phi[i−e0] = Φ_i``, ``jac[i−e0] = ∂Φ_i/∂q`` for e0 ≤ i < e1
+    (``w``: scratch, :func:`term_work`)."""
+    val, wt, G, col, ncol = w.val, w.wt, w.G, w.col, w.ncol
+    w.held[:] = -1
     n = jac.shape[1]
     for i in range(e0, e1):
         r = i - e0
-        _load(table, i, q_local, val, G, col, ncol, held)
+        _load(table, i, q_local, w)
         phi[r] = _weights(table, i, val, wt)
         for j in range(n):
             jac[r, j] = 0.0
@@ -301,16 +331,13 @@ def term_values(table: TermTable, e0: int, e1: int, q_local: np.ndarray, phi: np
                 jac[r, col[s] + j] += acc
 
 
-@njit
+@njit(refcount=False)
 def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: np.ndarray,
-                 H: np.ndarray) -> None:
-    """Haug 1989 dot-1/point constraints: ``H = Σ_i lam[i−e0] ∂²Φ_i/∂q²`` (exactly symmetric)."""
-    val = np.empty((4, 3))
-    wt = np.empty((4, 3))
-    G = np.empty((4, 3, 7))
-    col = np.empty(4, dtype=np.int64)
-    ncol = np.empty(4, dtype=np.int64)
-    held = np.full(4, -1, dtype=np.int64)
+                 H: np.ndarray, w: TermWork) -> None:
+    """Haug 1989 dot-1/point constraints: ``H = Σ_i lam[i−e0] ∂²Φ_i/∂q²`` (exactly symmetric;
+    ``w``: scratch, :func:`term_work`)."""
+    val, wt, G, col, ncol = w.val, w.wt, w.G, w.col, w.ncol
+    w.held[:] = -1
     n = H.shape[0]
     for a in range(n):
         for b in range(n):
@@ -319,7 +346,7 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
         li = lam[i - e0]
         if li == 0.0:
             continue
-        _load(table, i, q_local, val, G, col, ncol, held)
+        _load(table, i, q_local, w)
         _weights(table, i, val, wt)
         for s in range(4):  # Σ_k wt_k ∂²v_k/∂p² = 2 Σ_k wt_k T_k on the body's p block
             v = table.eq_vec[i, s]
@@ -327,11 +354,9 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
                 continue
             if table.vec_kind[v] == NODE_DIRECTOR:   # Σ_k wt_k ∂²d2_k/∂(g, φ)²
                 o = table.vec_off[v]
-                d2 = np.empty(3)
-                jd = np.empty((3, 4))
-                hd = np.empty((3, 4, 4))
+                hd = w.hd
                 _node_director(table.directors, q_local[o:o + 7], table.vec_c[v], table.vec_d[v],
-                               d2, jd, hd, FLAG[1])
+                               w.d2, w.jd, hd, FLAG[1])
                 for a in range(4):
                     for b in range(4):
                         acc = 0.0
@@ -367,6 +392,31 @@ def term_hessian(table: TermTable, e0: int, e1: int, q_local: np.ndarray, lam: n
             H[b, a] = h
 
 
+def hessian_pattern(table: TermTable, e0: int, e1: int, n: int) -> np.ndarray:
+    """Where :func:`term_hessian` of equations e0 ≤ i < e1 can be nonzero, (n, n) bool: the
+    second derivative of each nonlinear vector (a body's p block, a node director's (g, φ))
+    and, for DOT, ``u_qᵀw_q + w_qᵀu_q`` on the columns of u × those of w (:func:`_columns`).
+    The assembler reserves only these entries: a joint of LIN rows (global components) has
+    no block between its two bodies, a DOT row only u's columns × w's."""
+    mask = np.zeros((n, n), bool)
+    for i in range(e0, e1):
+        cols: list[slice] = []
+        for s in range(4):
+            v = int(table.eq_vec[i, s])
+            kind = int(table.vec_kind[v]) if v >= 0 else CONST
+            o = int(table.vec_off[v]) if v >= 0 else 0
+            c0, nc = _columns(kind, o)
+            cols.append(slice(c0, c0 + nc))
+            if kind in (BODY_POINT, BODY_DIR, NODE_DIRECTOR):
+                mask[o + 3:o + 7, o + 3:o + 7] = True
+        if table.eq_kind[i] == DOT:
+            for u in cols[:2]:
+                for w in cols[2:]:
+                    mask[u, w] = True
+                    mask[w, u] = True
+    return mask
+
+
 def _n_used(att: Attachment) -> int:
     """Local coordinates a point/direction of the attachment reads (body [r, p], node r, ground)."""
     return {"rigid_body": 7, "beam_node": 3}.get(att.kind, 0)
@@ -392,7 +442,7 @@ class _TermConstraint(Constraint):
         m = self.n_equations
         phi = np.empty(m)
         jac = np.empty((m, self._n))
-        term_values(self.table, 0, m, self._q(q_local), phi, jac)
+        term_values(self.table, 0, m, self._q(q_local), phi, jac, term_work())
         return phi, jac
 
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
@@ -401,7 +451,7 @@ class _TermConstraint(Constraint):
         if lam.shape != (m,):
             raise ValueError(f"{self.name}: lam needs shape ({m},) (got {lam.shape})")
         H = np.empty((self._n, self._n))
-        term_hessian(self.table, 0, m, self._q(q_local), lam, H)
+        term_hessian(self.table, 0, m, self._q(q_local), lam, H, term_work())
         return H
 
 
@@ -680,7 +730,7 @@ class BeamNodeRigid(_TermConstraint):
 
 # ---------------------------------------------------------------------------------------------
 # the joint terms of the assembler (flexmbs.terms)
-@njit
+@njit(refcount=False)
 def euler_norm(p):  # noqa: ANN001, ANN201
     """Haug 1989, FORMULATION I §5: ``Φ^p = pᵀp − 1`` (its gradient is ``2p``, its Hessian ``2I``)."""
     return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - 1.0
@@ -708,27 +758,39 @@ class TermPart(NamedTuple):
     jptr: np.ndarray                 # (nc + 1,) into pos_jac / pos_jacT (kept rows × coords)
     pos_jac: np.ndarray
     pos_jacT: np.ndarray
-    hptr: np.ndarray                 # (nc + 1,) into pos_hess (coords × coords)
+    hptr: np.ndarray                 # (nc + 1,) into hess_a, hess_b, pos_hess: the entries
+    hess_a: np.ndarray               # (local row, column) of :func:`hessian_pattern` and
+    hess_b: np.ndarray               # their matrix positions
     pos_hess: np.ndarray
     ql: np.ndarray                   # work
     phi: np.ndarray
     jac: np.ndarray
     H: np.ndarray
     lam: np.ndarray
+    work: TermWork
 
 
-def joint_pattern(coords: np.ndarray, rows: np.ndarray, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Φ_q (kept rows × coordinates), its transpose, and the Hessian block."""
+def joint_pattern(coords: np.ndarray, rows: np.ndarray, n: int,
+                  constraint: object = None) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Φ_q (kept rows × coordinates), its transpose, and the Hessian: the whole block, or for
+    a joint of a term table (``constraint.table``) the entries of :func:`hessian_pattern`."""
     kept = n + rows[rows >= 0]
-    return [(kept, coords), (coords, kept), (coords, coords)]
+    blocks = [(kept, coords), (coords, kept)]
+    table = getattr(constraint, "table", None)
+    if not isinstance(table, TermTable):
+        return blocks + [(coords, coords)]
+    mask = hessian_pattern(table, 0, table.eq_kind.size, coords.size)
+    return blocks + [(coords[a:a + 1], coords[mask[a]]) for a in range(coords.size)
+                     if mask[a].any()]
 
 
 def _kept_positions(dofs: DofMap, coords: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Positions of Φ_q (kept rows × coordinates) and of its transpose, row by row."""
     n = dofs.n_coords
     kept = n + rows[rows >= 0]
     jac = dofs.positions(kept, coords)
     jacT = dofs.positions(coords, kept).reshape(coords.size, kept.size).T.ravel()
-    return jac, jacT, dofs.positions(coords, coords)
+    return jac, jacT
 
 
 def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> NormPart:
@@ -737,7 +799,8 @@ def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> 
     rows = np.array([dofs.multiplier_rows(c)[0] for c in constraints], dtype=np.int64)
     pj, pt, ph = [], [], []
     for c, r in zip(coords, rows, strict=True):
-        j, t, h = _kept_positions(dofs, c, np.array([r]))
+        j, t = _kept_positions(dofs, c, np.array([r]))
+        h = dofs.positions(c, c)
         pj.append(j)
         pt.append(t)
         ph.append(h.reshape(4, 4).diagonal().copy())
@@ -756,29 +819,34 @@ def pack_terms(constraints: list, dofs: DofMap) -> TermPart:
     cptr[1:] = np.cumsum([c.size for c in coords])
     jptr = np.zeros(nc + 1, np.int64)
     hptr = np.zeros(nc + 1, np.int64)
-    pj, pt, ph = [], [], []
-    for i, (c, r) in enumerate(zip(coords, rows, strict=True)):
-        j, t, h = _kept_positions(dofs, c, r)
+    pj, pt, ha, hb, ph = [], [], [], [], []
+    for i, (con, c, r) in enumerate(zip(constraints, coords, rows, strict=True)):
+        j, t = _kept_positions(dofs, c, r)
+        a, b = np.nonzero(hessian_pattern(con.table, 0, con.table.eq_kind.size, c.size))
+        h = dofs.positions_present(c, c).reshape(c.size, c.size)[a, b]
+        if (h < 0).any():
+            raise ModelError(f"internal: '{con.name}': Hessian entry outside the pattern")
         pj.append(j)
         pt.append(t)
+        ha.append(a)
+        hb.append(b)
         ph.append(h)
         jptr[i + 1] = jptr[i] + j.size
         hptr[i + 1] = hptr[i] + h.size
     max_nl = max((c.size for c in coords), default=0)
     max_ne = int(np.max(np.diff(eq_ptr), initial=0))
-    cat = np.concatenate
     i64 = np.int64
-    return TermPart(table, np.ascontiguousarray(eq_ptr, i64), cptr,
-                    cat(coords) if coords else np.zeros(0, i64),
-                    cat(rows) if rows else np.zeros(0, i64), jptr,
-                    cat(pj).astype(i64) if pj else np.zeros(0, i64),
-                    cat(pt).astype(i64) if pt else np.zeros(0, i64), hptr,
-                    cat(ph).astype(i64) if ph else np.zeros(0, i64), np.zeros(max_nl),
+
+    def cat(parts: list[np.ndarray]) -> np.ndarray:
+        return np.concatenate(parts).astype(i64) if parts else np.zeros(0, i64)
+
+    return TermPart(table, np.ascontiguousarray(eq_ptr, i64), cptr, cat(coords), cat(rows), jptr,
+                    cat(pj), cat(pt), hptr, cat(ha), cat(hb), cat(ph), np.zeros(max_nl),
                     np.zeros(max_ne), np.zeros((max_ne, max_nl)), np.zeros((max_nl, max_nl)),
-                    np.zeros(max_ne))
+                    np.zeros(max_ne), term_work())
 
 
-@njit
+@njit(refcount=False, internal=True)
 def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
     """``r_λ = pᵀp − 1``, ``r_p += 2p λ`` of every body."""
     if nm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -792,7 +860,7 @@ def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
             r[nm.coords[i, k]] += 2.0 * nm.p[k] * lam[row]
 
 
-@njit
+@njit(refcount=False, internal=True)
 def norms_jacobian(nm, q, lam, cK, data):  # noqa: ANN001, ANN201
     if nm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
@@ -815,11 +883,11 @@ def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
         tm.ql[k] = q[tm.coords[c0 + k]]
     e0 = tm.eq_ptr[c]
     e1 = tm.eq_ptr[c + 1]
-    term_values(tm.table, e0, e1, tm.ql[:nloc], tm.phi, tm.jac[:, :nloc])
+    term_values(tm.table, e0, e1, tm.ql[:nloc], tm.phi, tm.jac[:, :nloc], tm.work)
     return c0, nloc, e0, e1
 
 
-@njit
+@njit(refcount=False, internal=True)
 def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every joint of the term tables."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -836,7 +904,7 @@ def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
                 r[tm.coords[c0 + k]] += tm.jac[i - e0, k] * lr
 
 
-@njit
+@njit(internal=True)
 def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
     the directors (NODE_DIRECTOR) of joints holding them read the new bases."""
@@ -858,7 +926,7 @@ def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
                             table.vec_d[v, k] = log[j, 4 + k]
 
 
-@njit
+@njit(refcount=False, internal=True)
 def terms_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ and ``cK Σ λ_i ∂²Φ_i/∂q²`` of every joint of the term tables."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -876,8 +944,6 @@ def terms_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
                 data[tm.pos_jacT[w]] += tm.jac[i - e0, k]
                 w += 1
         H = tm.H[:nloc, :nloc]
-        term_hessian(tm.table, e0, e1, tm.ql[:nloc], tm.lam, H)
-        h0 = tm.hptr[c]
-        for a in range(nloc):
-            for k in range(nloc):
-                data[tm.pos_hess[h0 + a * nloc + k]] += cK * H[a, k]
+        term_hessian(tm.table, e0, e1, tm.ql[:nloc], tm.lam, H, tm.work)
+        for k in range(tm.hptr[c], tm.hptr[c + 1]):     # the entries of hessian_pattern
+            data[tm.pos_hess[k]] += cK * H[tm.hess_a[k], tm.hess_b[k]]

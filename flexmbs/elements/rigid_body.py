@@ -52,6 +52,8 @@ __all__ = [
     "pdot_from_omega_body",
     "mass_matrix",
     "inertial_residual",
+    "inertial_force_p",
+    "inertial_derivatives",
     "kinetic_energy",
     "applied_force",
     "applied_torque_global",
@@ -204,7 +206,7 @@ def point_tensor_contract(s: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.einsum("...k,...kij->...ij", np.asarray(w, dtype=float), point_tensor(s))
 
 
-@njit
+@njit(refcount=False)
 def point_jacobian_of(T, p, B, Au):  # noqa: ANN001, ANN201
     """Haug's ``B(p, u) = ∂(A(p)u)/∂p = 2T(u)p`` (3, 4) into ``B`` and ``A(p)u = pᵀT(u)p``
     (3,) into ``Au``, from the point tensor ``T = T(u)`` of :func:`point_tensor_of`; with a rate
@@ -329,14 +331,26 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
 
     Writes (overwrites) ``out_r`` (nb,7), ``out_dq = ∂r/∂q`` (nb,7,7, only the p-p block is
     nonzero) and ``out_dv = ∂r/∂q̇`` (nb,7,7, p-p block). ``∂r/∂q̈`` is :func:`mass_matrix`.
-    Jacobians use the Ĝ identities of §5:
-    ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``, ``∂(8ĠᵀJ′Ġp)/∂p = 8ĠᵀJ′Ġ``,
-    ``∂(8ĠᵀJ′Ġp)/∂ṗ = 8[Ĝ(J′Ġp) − ĠᵀJ′G]``.
+    Batched wrapper of the kernels :func:`inertial_force_p` and :func:`inertial_derivatives`.
     """
-    _inertial_kernel(np.ascontiguousarray(mass, dtype=float),
-                     np.ascontiguousarray(inertia, dtype=float), np.ascontiguousarray(p, dtype=float),
-                     np.ascontiguousarray(pd, dtype=float), np.ascontiguousarray(qdd, dtype=float),
-                     out_r, out_dq, out_dv)
+    mass = np.asarray(mass, dtype=float)
+    inertia = np.ascontiguousarray(inertia, dtype=float)
+    p = np.ascontiguousarray(p, dtype=float)
+    pd = np.ascontiguousarray(pd, dtype=float)
+    qdd = np.ascontiguousarray(qdd, dtype=float)
+    Q = np.empty(4)
+    dq = np.empty((4, 4))
+    dv = np.empty((4, 4))
+    out_dq[...] = 0.0
+    out_dv[...] = 0.0
+    for b in range(mass.shape[0]):
+        pdd = np.ascontiguousarray(qdd[b, 3:])
+        inertial_force_p(inertia[b], p[b], pd[b], pdd, Q)
+        inertial_derivatives(inertia[b], p[b], pd[b], pdd, dq, dv)
+        out_r[b, :3] = mass[b] * qdd[b, :3]
+        out_r[b, 3:] = Q
+        out_dq[b, 3:, 3:] = dq
+        out_dv[b, 3:, 3:] = dv
 
 
 @njit
@@ -357,115 +371,68 @@ def rotation(p):  # noqa: ANN001, ANN201
     return A
 
 
-@njit
-def _g(p):  # noqa: ANN001, ANN202
-    """G(p) = [-e, -ẽ + e0 I] (3x4)."""
-    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
-    G = np.empty((3, 4))
-    G[0, 0] = -e1
-    G[0, 1] = e0
-    G[0, 2] = e3
-    G[0, 3] = -e2
-    G[1, 0] = -e2
-    G[1, 1] = -e3
-    G[1, 2] = e0
-    G[1, 3] = e1
-    G[2, 0] = -e3
-    G[2, 1] = e2
-    G[2, 2] = -e1
-    G[2, 3] = e0
-    return G
+@njit(refcount=False)
+def _g_times(p, x):  # noqa: ANN001, ANN202
+    """``G(p) x`` (a 3-tuple), ``G(p) = [−e, −ẽ + e0 I]``; p, x 4-vectors (arrays or tuples).
+    ``G(p) x = −G(x) p``."""
+    return (-p[1] * x[0] + p[0] * x[1] + p[3] * x[2] - p[2] * x[3],
+            -p[2] * x[0] - p[3] * x[1] + p[0] * x[2] + p[1] * x[3],
+            -p[3] * x[0] + p[2] * x[1] - p[1] * x[2] + p[0] * x[3])
 
 
-@njit
-def _ghat(y):  # noqa: ANN001, ANN202
-    """Ĝ(y) = [[0, -yᵀ], [y, -ỹ]] with G(p)ᵀ y = Ĝ(y) p."""
-    H = np.zeros((4, 4))
-    H[0, 1] = -y[0]
-    H[0, 2] = -y[1]
-    H[0, 3] = -y[2]
-    H[1, 0] = y[0]
-    H[2, 0] = y[1]
-    H[3, 0] = y[2]
-    H[1, 2] = y[2]
-    H[1, 3] = -y[1]
-    H[2, 1] = -y[2]
-    H[2, 3] = y[0]
-    H[3, 1] = y[1]
-    H[3, 2] = -y[0]
-    return H
+@njit(refcount=False)
+def _gt_times(p, y):  # noqa: ANN001, ANN202
+    """``G(p)ᵀ y = Ĝ(y) p`` (a 4-tuple), ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (FORMULATION I §5)."""
+    return (-p[1] * y[0] - p[2] * y[1] - p[3] * y[2],
+            p[0] * y[0] - p[3] * y[1] + p[2] * y[2],
+            p[3] * y[0] + p[0] * y[1] - p[1] * y[2],
+            -p[2] * y[0] + p[1] * y[1] + p[0] * y[2])
 
 
-@njit(inline="always")
-def _mm(A, B):  # noqa: ANN001, ANN202
-    """A B for small matrices (explicit loops: numba's ``@`` goes through BLAS wrappers)."""
-    out = np.zeros((A.shape[0], B.shape[1]))
-    for i in range(A.shape[0]):
-        for k in range(A.shape[1]):
-            a = A[i, k]
-            for j in range(B.shape[1]):
-                out[i, j] += a * B[k, j]
-    return out
+@njit(refcount=False)
+def _j_times(J, x):  # noqa: ANN001, ANN202
+    """``J x`` (a 3-tuple) for the 3 × 3 inertia J and a 3-vector (array or tuple)."""
+    return (J[0, 0] * x[0] + J[0, 1] * x[1] + J[0, 2] * x[2],
+            J[1, 0] * x[0] + J[1, 1] * x[1] + J[1, 2] * x[2],
+            J[2, 0] * x[0] + J[2, 1] * x[1] + J[2, 2] * x[2])
 
 
-@njit(inline="always")
-def _tmm(A, B):  # noqa: ANN001, ANN202
-    """Aᵀ B for small matrices."""
-    out = np.zeros((A.shape[1], B.shape[1]))
-    for k in range(A.shape[0]):
-        for i in range(A.shape[1]):
-            a = A[k, i]
-            for j in range(B.shape[1]):
-                out[i, j] += a * B[k, j]
-    return out
+@njit(refcount=False)
+def _unit(j):  # noqa: ANN001, ANN202
+    """The j-th unit 4-vector (a tuple): column j of a 4-column product."""
+    return (1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0,
+            1.0 if j == 3 else 0.0)
 
 
-@njit(inline="always")
-def _mv(A, x):  # noqa: ANN001, ANN202
-    out = np.zeros(A.shape[0])
-    for i in range(A.shape[0]):
-        for k in range(A.shape[1]):
-            out[i] += A[i, k] * x[k]
-    return out
+@njit(refcount=False)
+def inertial_force_p(J, p, pd, pdd, out):  # noqa: ANN001, ANN201
+    """FORMULATION I §5: the p rows of ``M q̈ − Q_v``, ``4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p`` (Ġ = G(ṗ)),
+    into ``out`` (4,); no scratch arrays."""
+    a = _gt_times(p, _j_times(J, _g_times(p, pdd)))
+    b = _gt_times(pd, _j_times(J, _g_times(pd, p)))
+    out[0] = 4.0 * a[0] - 8.0 * b[0]
+    out[1] = 4.0 * a[1] - 8.0 * b[1]
+    out[2] = 4.0 * a[2] - 8.0 * b[2]
+    out[3] = 4.0 * a[3] - 8.0 * b[3]
 
 
-@njit(inline="always")
-def _tmv(A, x):  # noqa: ANN001, ANN202
-    out = np.zeros(A.shape[1])
-    for k in range(A.shape[0]):
-        for i in range(A.shape[1]):
-            out[i] += A[k, i] * x[k]
-    return out
-
-
-@njit
-def _inertial_kernel(mass, inertia, p, pd, qdd, out_r, out_dq, out_dv):  # noqa: ANN001, ANN202
-    nb = mass.size
-    for bi in range(nb):
-        J = inertia[bi]
-        G = _g(p[bi])
-        Gd = _g(pd[bi])
-        pdd = qdd[bi, 3:]
-        Gpdd = _g(pdd)
-        JG = _mm(J, G)
-        GJG = _tmm(G, JG)
-        JGd = _mm(J, Gd)
-        GdJGd = _tmm(Gd, JGd)
-        JGpdd = _mv(JG, pdd)
-        Gd_p = _mv(Gd, p[bi])
-        JGd_p = _mv(J, Gd_p)
-        for c in range(3):
-            out_r[bi, c] = mass[bi] * qdd[bi, c]
-        rp = 4.0 * _mv(GJG, pdd) - 8.0 * _tmv(Gd, JGd_p)
-        dq = 4.0 * (_ghat(JGpdd) - _tmm(G, _mm(J, Gpdd))) - 8.0 * GdJGd
-        dv = -8.0 * (_ghat(JGd_p) - _tmm(Gd, JG))
-        out_dq[bi, :, :] = 0.0
-        out_dv[bi, :, :] = 0.0
+@njit(refcount=False)
+def inertial_derivatives(J, p, pd, pdd, dq, dv):  # noqa: ANN001, ANN201
+    """∂/∂p and ∂/∂ṗ (4, 4) of :func:`inertial_force_p` into ``dq``, ``dv``, by the Ĝ identities
+    of FORMULATION I §5: ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``,
+    ``∂(8ĠᵀJ′Ġp)/∂p = 8ĠᵀJ′Ġ``, ``∂(8ĠᵀJ′Ġp)/∂ṗ = 8[Ĝ(J′Ġp) − ĠᵀJ′G]``; column by column."""
+    y = _j_times(J, _g_times(p, pdd))
+    u = _j_times(J, _g_times(pd, p))
+    for j in range(4):
+        e = _unit(j)
+        gy = _gt_times(e, y)                                # Ĝ(y) e_j = G(e_j)ᵀ y
+        gu = _gt_times(e, u)
+        c1 = _gt_times(p, _j_times(J, _g_times(pdd, e)))    # GᵀJ′G(p̈) e_j
+        c2 = _gt_times(pd, _j_times(J, _g_times(pd, e)))    # ĠᵀJ′Ġ e_j
+        c3 = _gt_times(pd, _j_times(J, _g_times(p, e)))     # ĠᵀJ′G e_j
         for i in range(4):
-            out_r[bi, 3 + i] = rp[i]
-            for j in range(4):
-                out_dq[bi, 3 + i, 3 + j] = dq[i, j]
-                out_dv[bi, 3 + i, 3 + j] = dv[i, j]
+            dq[i, j] = 4.0 * (gy[i] - c1[i]) - 8.0 * c2[i]
+            dv[i, j] = -8.0 * (gu[i] - c3[i])
 
 
 def kinetic_energy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray,
@@ -536,20 +503,17 @@ def applied_torque_body(p: np.ndarray, n_body: np.ndarray) -> tuple[np.ndarray, 
 
 # ---------------------------------------------------------------------------------------------
 # kernels shared by every path (one statement of each equation)
-@njit
+@njit(refcount=False)
 def rotational_mass(J, p, out):  # noqa: ANN001, ANN201
-    """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (FORMULATION I §5)."""
-    G = _g(p)
-    JG = _mm(J, G)
-    for a in range(4):
-        for b in range(4):
-            acc = 0.0
-            for k in range(3):
-                acc += G[k, a] * JG[k, b]
-            out[a, b] = 4.0 * acc
+    """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (FORMULATION I §5),
+    column by column."""
+    for j in range(4):
+        c = _gt_times(p, _j_times(J, _g_times(p, _unit(j))))
+        for i in range(4):
+            out[i, j] = 4.0 * c[i]
 
 
-@njit
+@njit(refcount=False)
 def point_force_p(T, F, f, p, out):  # noqa: ANN001, ANN201
     """``Q_p = 2 f C(s′, F) p`` with ``C = Σ_k F_k T_k(s′)`` (FORMULATION I §5, applied force)."""
     for a in range(4):
@@ -562,7 +526,7 @@ def point_force_p(T, F, f, p, out):  # noqa: ANN001, ANN201
         out[a] = 2.0 * f * acc
 
 
-@njit
+@njit(refcount=False)
 def point_force_dp(T, F, f, out):  # noqa: ANN001, ANN201
     """``∂Q_p/∂p = 2 f C(s′, F)`` (4, 4) of :func:`point_force_p`."""
     for a in range(4):
@@ -573,7 +537,7 @@ def point_force_dp(T, F, f, out):  # noqa: ANN001, ANN201
             out[a, b] = 2.0 * f * cab
 
 
-@njit
+@njit(refcount=False)
 def torque_p(n, f, p, out):  # noqa: ANN001, ANN201
     """Global torque f·n: ``Q_p = 2 f Eᵀn = 2 f Ê(n)p``, ``Ê(n) = [[0, −nᵀ], [n, ñ]]`` (FORMULATION I §5)."""
     out[0] = -2.0 * f * (n[0] * p[1] + n[1] * p[2] + n[2] * p[3])
@@ -609,15 +573,14 @@ class BodiesPart(NamedTuple):
     load_force: np.ndarray           # (nl, 3) global force (per unit of its time function)
     load_moment: np.ndarray          # (nl, 3) global moment (zeros: none)
     load_fn: np.ndarray              # (nl,) time-function index
-    p: np.ndarray                    # work (nb, 4): p, ṗ, q̈, r, ∂r/∂q, ∂r/∂q̇, M_pp
+    p: np.ndarray                    # work (4,): one body's p, ṗ, p̈
     pd: np.ndarray
-    qdd: np.ndarray                  # (nb, 7)
-    res: np.ndarray                  # (nb, 7)
-    dq: np.ndarray                   # (nb, 7, 7)
+    pdd: np.ndarray
+    dq: np.ndarray                   # work (4, 4): ∂/∂p, ∂/∂ṗ of the inertial force, M_pp
     dv: np.ndarray
-    Mpp: np.ndarray                  # (4, 4)
-    Q: np.ndarray                    # (4,) generalized force on p (work)
-    Q2: np.ndarray                   # (4,)
+    Mpp: np.ndarray
+    Q: np.ndarray                    # work (4,): generalized force on p
+    Q2: np.ndarray
 
 
 def bodies_pattern(bodies: list, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -642,54 +605,54 @@ def pack_bodies(bodies: list, loads: list, dofs: DofMap, functions: FunctionTabl
         c(np.array([np.zeros(3) if m is None else m for _, _, _, m, _ in loads], float)
           .reshape(nl, 3)),
         np.array([functions(fn) for *_, fn in loads], dtype=np.int64),
-        np.zeros((nb, 4)), np.zeros((nb, 4)), np.zeros((nb, 7)), np.zeros((nb, 7)),
-        np.zeros((nb, 7, 7)), np.zeros((nb, 7, 7)), np.zeros((4, 4)), np.zeros(4), np.zeros(4))
+        np.zeros(4), np.zeros(4), np.zeros(4), np.zeros((4, 4)), np.zeros((4, 4)),
+        np.zeros((4, 4)), np.zeros(4), np.zeros(4))
 
 
 @njit(inline="always")
-def _gather_inertia(b, q, v, qdd):  # noqa: ANN001, ANN202
-    """Gather [p, ṗ, q̈] of every body and evaluate the inertial residual and its derivatives."""
-    for i in range(b.dofs.shape[0]):
-        for k in range(4):
-            b.p[i, k] = q[b.dofs[i, 3 + k]]
-            b.pd[i, k] = v[b.dofs[i, 3 + k]]
-        for k in range(7):
-            b.qdd[i, k] = qdd[b.dofs[i, k]]
-    _inertial_kernel(b.mass, b.inertia, b.p, b.pd, b.qdd, b.res, b.dq, b.dv)
+def _gather(b, i, q, v, qdd, rates):  # noqa: ANN001, ANN202
+    """Body i's p (and with ``rates`` ṗ, p̈) into the part's work vectors."""
+    for k in range(4):
+        j = b.dofs[i, 3 + k]
+        b.p[k] = q[j]
+        if rates:
+            b.pd[k] = v[j]
+            b.pdd[k] = qdd[j]
 
 
-@njit
+@njit(refcount=False, internal=True)
 def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
-    """``r_q += M q̈ − Q_v`` (with inertia) ``− Q_ext`` of the body loads (FORMULATION I §5);
-    returns the largest single force."""
+    """``r_q += M q̈ − Q_v`` (with inertia, :func:`inertial_force_p`) ``− Q_ext`` of the body
+    loads (FORMULATION I §5); returns the largest single force."""
     if b is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0.0
     scale = 0.0
-    nb = b.dofs.shape[0]
-    if nb == 0:
-        return scale
     if mode[WITH_INERTIA] != 0.0:
-        _gather_inertia(b, q, v, qdd)
-        for i in range(nb):
-            for k in range(7):
-                r[b.dofs[i, k]] += b.res[i, k]
-                if abs(b.res[i, k]) > scale:
-                    scale = abs(b.res[i, k])
-    p = np.empty(4)
+        for i in range(b.dofs.shape[0]):
+            for c in range(3):
+                j = b.dofs[i, c]
+                f = b.mass[i] * qdd[j]
+                r[j] += f
+                scale = max(scale, abs(f))
+            _gather(b, i, q, v, qdd, True)
+            inertial_force_p(b.inertia[i], b.p, b.pd, b.pdd, b.Q)
+            for k in range(4):
+                r[b.dofs[i, 3 + k]] += b.Q[k]
+                scale = max(scale, abs(b.Q[k]))
     for i in range(b.load_body.size):
         d = b.dofs[b.load_body[i]]
         f = mode[LOAD_FACTOR] * fv[b.load_fn[i]]
         for k in range(4):
-            p[k] = q[d[3 + k]]
+            b.p[k] = q[d[3 + k]]
         for c in range(3):
             F = f * b.load_force[i, c]
             r[d[c]] -= F
             if abs(F) > scale:
                 scale = abs(F)
-        point_force_p(b.load_T[i], b.load_force[i], f, p, b.Q)
+        point_force_p(b.load_T[i], b.load_force[i], f, b.p, b.Q)
         mo = b.load_moment[i]
         if mo[0] != 0.0 or mo[1] != 0.0 or mo[2] != 0.0:
-            torque_p(mo, f, p, b.Q2)
+            torque_p(mo, f, b.p, b.Q2)
             for k in range(4):
                 b.Q[k] += b.Q2[k]
         for k in range(4):
@@ -699,33 +662,30 @@ def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
     return scale
 
 
-@njit
+@njit(refcount=False, internal=True)
 def bodies_jacobian(b, q, v, qdd, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """``cM M + cC ∂r/∂q̇ + cK ∂r/∂q`` of :func:`bodies_residual` into the CSC ``data`` (without
-    inertia, e.g. in statics, only ``cM M``: the optional mass-proportional stabiliser)."""
+    inertia, e.g. in statics, only ``cM M``: the optional mass-proportional stabiliser); only
+    the nonzero entries (the r rows: ``cM m I``; the p-p block)."""
     if b is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
-    nb = b.dofs.shape[0]
-    if nb == 0:
-        return
     inertia = mode[WITH_INERTIA] != 0.0
-    if inertia:
-        _gather_inertia(b, q, v, qdd)
     if inertia or cM != 0.0:
-        for i in range(nb):
-            for k in range(4):
-                b.p[i, k] = q[b.dofs[i, 3 + k]]
-            rotational_mass(b.inertia[i], b.p[i], b.Mpp)
-            for r in range(7):
-                for c in range(7):
+        for i in range(b.dofs.shape[0]):
+            _gather(b, i, q, v, qdd, inertia)
+            rotational_mass(b.inertia[i], b.p, b.Mpp)
+            if inertia:
+                inertial_derivatives(b.inertia[i], b.p, b.pd, b.pdd, b.dq, b.dv)
+            pos = b.pos[i]
+            for c in range(3):
+                data[pos[8 * c]] += cM * b.mass[i]
+            for a in range(4):
+                for c in range(4):
                     val = 0.0
                     if inertia:
-                        val = cC * b.dv[i, r, c] + cK * b.dq[i, r, c]
-                    if r < 3 and r == c:
-                        val += cM * b.mass[i]
-                    elif r >= 3 and c >= 3:
-                        val += cM * b.Mpp[r - 3, c - 3]
-                    data[b.pos[i, 7 * r + c]] += val
+                        val = cC * b.dv[a, c] + cK * b.dq[a, c]
+                    val += cM * b.Mpp[a, c]
+                    data[pos[7 * (3 + a) + 3 + c]] += val
     for i in range(b.load_body.size):
         f = mode[LOAD_FACTOR] * fv[b.load_fn[i]]
         pos = b.pos[b.load_body[i]]

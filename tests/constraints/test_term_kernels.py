@@ -32,10 +32,12 @@ from flexmbs.constraints.joints import (
     TermTable,
     _TableBuilder,
     concatenate_tables,
+    hessian_pattern,
     revolute,
     spherical,
     term_hessian,
     term_values,
+    term_work,
 )
 from flexmbs.elements import rigid_body as rb
 
@@ -100,7 +102,7 @@ VARIANTS = _variants()
 def _values(table: TermTable, q: np.ndarray, n_eq: int) -> tuple[np.ndarray, np.ndarray]:
     phi = np.full(n_eq, np.nan)
     jac = np.full((n_eq, q.size), np.nan)   # the kernel must zero the rows itself
-    term_values(table, 0, n_eq, q, phi, jac)
+    term_values(table, 0, n_eq, q, phi, jac, term_work())
     return phi, jac
 
 
@@ -119,7 +121,7 @@ def _check_kernels(c, q: np.ndarray, lam: np.ndarray) -> None:
     fd = np.column_stack([_richardson(lambda x: _values(t, x, m)[0], q, j) for j in range(q.size)])
     assert np.abs(jac - fd).max() <= FD_REL * max(np.abs(jac).max(), np.abs(phi).max(), 1.0)
     H = np.full((q.size, q.size), np.nan)             # the kernel must zero H itself
-    term_hessian(t, 0, m, q, lam, H)
+    term_hessian(t, 0, m, q, lam, H, term_work())
     assert np.array_equal(H, H.T)
     fdh = np.column_stack([_richardson(lambda x: _values(t, x, m)[1].T @ lam, q, j)
                            for j in range(q.size)])
@@ -179,6 +181,21 @@ def _mixed_constraints(rng: np.random.Generator) -> list:
     return [VARIANTS[k](rng) for k in names]
 
 
+@pytest.mark.parametrize("name", sorted(VARIANTS))
+def test_hessian_is_zero_outside_its_pattern(name):
+    """The assembler reserves only hessian_pattern's entries of a joint's Hessian (a spherical
+    joint's has no block between its two bodies): the kernel's Hessian is exactly zero
+    elsewhere, at random q and λ, and the pattern is symmetric."""
+    rng = np.random.default_rng(4)
+    c = VARIANTS[name](rng)
+    n = c.coordinates().size
+    mask = hessian_pattern(c.table, 0, c.n_equations, n)
+    assert np.array_equal(mask, mask.T)
+    for _ in range(3):
+        H = c.hessian_lambda(rng.normal(size=n), rng.normal(size=c.n_equations), 0.0)
+        assert np.all(H[~mask] == 0.0)
+
+
 def test_concatenate_tables():
     cons = _mixed_constraints(np.random.default_rng(7))
     big, eq_ptr = concatenate_tables([c.table for c in cons])
@@ -198,14 +215,15 @@ def test_concatenate_tables():
 
 
 @njit(cache=False)
-def _all_joints(table, eq_ptr, q_all, q_ptr, lam, phi, jac, H):  # noqa: ANN001, ANN202
-    """What the compiled integrator does: every joint of a concatenated table in one loop."""
+def _all_joints(table, eq_ptr, q_all, q_ptr, lam, phi, jac, H, work):  # noqa: ANN001, ANN202
+    """What the compiled integrator does: every joint of a concatenated table in one loop, with
+    one scratch."""
     for k in range(eq_ptr.size - 1):
         e0, e1 = eq_ptr[k], eq_ptr[k + 1]
         q = q_all[q_ptr[k]:q_ptr[k + 1]]
         n = q.size
-        term_values(table, e0, e1, q, phi[e0:e1], jac[e0:e1, :n])
-        term_hessian(table, e0, e1, q, lam[e0:e1], H[k, :n, :n])
+        term_values(table, e0, e1, q, phi[e0:e1], jac[e0:e1, :n], work)
+        term_hessian(table, e0, e1, q, lam[e0:e1], H[k, :n, :n], work)
 
 
 def test_kernels_callable_from_numba():
@@ -219,7 +237,7 @@ def test_kernels_callable_from_numba():
     lam = rng.normal(size=m)
     phi, jac = np.full(m, np.nan), np.full((m, n_max), np.nan)
     H = np.full((len(cons), n_max, n_max), np.nan)
-    _all_joints(big, eq_ptr, np.concatenate(q_locals), q_ptr, lam, phi, jac, H)
+    _all_joints(big, eq_ptr, np.concatenate(q_locals), q_ptr, lam, phi, jac, H, term_work())
     for k, c in enumerate(cons):
         e0, e1, n = eq_ptr[k], eq_ptr[k + 1], q_locals[k].size
         p_ref, j_ref = c.evaluate(q_locals[k], 0.0)
