@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs.assembly import Assembly
     from flexmbs.contact._detect import _joint_forces
     from flexmbs.io.scenario import load_scenario
-    from flexmbs.solvers._bordered import (
+    from flexmbs.linalg.bordered import (
         BorderedBandedLU,
         bordered_factorize,
         bordered_solve,

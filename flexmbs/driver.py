@@ -7,7 +7,7 @@ and the iteration matrix ``[[cM M + cC C + cK K, Phi_q^T], [Phi_q, 0]]`` into th
 of the assembler's fixed pattern. Every term is stated once, in the module that owns its
 physics (:mod:`flexmbs.terms`); this module only calls them in order. The Python Newton loop
 (through :meth:`flexmbs.assembly.Assembly.evaluate`) and the compiled one
-(:mod:`flexmbs.solvers._compiled`) both call these functions, inlined into the one compiled
+(:mod:`flexmbs.steploop`) both call these functions, inlined into the one compiled
 entry :func:`flexmbs.kernel.kernel` (called from Python directly, e.g. by a test, each is
 compiled on its own).
 

@@ -6,7 +6,7 @@ post-step update (called from the Python Newton loop) and the generalized-α ste
 such entries, the code of every term was compiled twice, into the Python path's libraries and
 into the step loop's. As one entry, with those four inlined at numba's IR level, it is compiled
 once and loaded once (docs/design-notes.md, "Compile time"). The kernels themselves stay where
-their physics is: :mod:`flexmbs.driver` sums the owners' terms, :mod:`flexmbs.solvers._compiled`
+their physics is: :mod:`flexmbs.driver` sums the owners' terms, :mod:`flexmbs.steploop`
 holds the step loop.
 
 ``op`` selects the work:
@@ -29,7 +29,7 @@ The entry is compiled without numba's reference counting (``njit(refcount=False)
 passes the system's arrays on, and the counting of every array of every part at each of its
 calls made it the largest single compile cost (docs/design-notes.md, "Cost of compilation").
 
-Callers that only evaluate pass :func:`~flexmbs.solvers._compiled.idle_run` as ``run`` and a
+Callers that only evaluate pass :func:`~flexmbs.steploop.idle_run` as ``run`` and a
 one-row ``fv``, so that every call for a model has the same argument types (one signature, one
 library per kind of model: the optional kinds of terms a model lacks are ``None`` in the system
 it receives, :data:`flexmbs.driver.OPTIONAL_KINDS`, and are not compiled for it).
@@ -48,7 +48,7 @@ from typing import Any
 
 from ._jit import njit
 from .driver import jacobian, post_step, rebase_static, residual, set_bases
-from .solvers._compiled import alpha_run
+from .steploop import alpha_run
 
 __all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE", "OP_SET_BASES",
            "kernel", "kernels_cached", "prepare", "model_kind", "announce_compile"]

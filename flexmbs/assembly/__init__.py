@@ -32,8 +32,8 @@ from ..elements.layout import BASE_RECORD, ElementType
 from ..errors import FlexmbsError, ModelError
 from ..kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
 from ..model import Beam, Model, Node, RigidBody
-from ..solvers._compiled import idle_run
 from ..springs import spring_energy
+from ..steploop import idle_run
 from ..terms import FunctionTable, dynamic_mode, static_mode
 from .external_loads import collect_loads
 from .numbering import Numbering, length_scale
@@ -345,7 +345,7 @@ class Assembly:
 
     # ================================================================== factorisation
     def border_indices(self) -> np.ndarray:
-        """Unknowns of the bordered banded LU's dense border (:mod:`flexmbs.solvers._bordered`):
+        """Unknowns of the bordered banded LU's dense border (:mod:`flexmbs.linalg.bordered`):
         rigid-body and interaction coordinates, nonlinear multipliers, and linear multipliers
         touching a border coordinate (the beams' coordinates form the band)."""
         n = self.n_coords
@@ -363,10 +363,10 @@ class Assembly:
 
     def coordinate_owners(self) -> np.ndarray:
         """A label per unknown (coordinates and multipliers): the body index for a rigid
-        body's coordinates (the band order keeps them together), ``_ordering.MASSLESS`` for the
+        body's coordinates (the band order keeps them together), ``linalg.ordering.MASSLESS`` for the
         interactions' coordinates (a slide coordinate has no mass: never in the band beside a
-        border), −1 otherwise (:func:`flexmbs.solvers._ordering.close_border`)."""
-        from ..solvers._ordering import MASSLESS
+        border), −1 otherwise (:func:`flexmbs.linalg.ordering.close_border`)."""
+        from ..linalg.ordering import MASSLESS
 
         owner = np.full(self.n_total, -1, np.int64)
         table = self.body_dof_table
@@ -377,13 +377,13 @@ class Assembly:
 
     def factor_plan(self, *, mass: bool = True) -> Any:
         """The factorisation plan of the iteration matrix
-        (:func:`flexmbs.solvers._ordering.plan_factorization` of this pattern with
+        (:func:`flexmbs.linalg.ordering.plan_factorization` of this pattern with
         :meth:`border_indices` and :meth:`coordinate_owners`), computed once. ``mass``: the
         matrix has c_M M on every coordinate that has mass (dynamics, velocity corrector,
         initial accelerations); without (statics, stiffness only) every coordinate is labelled
         massless, which closes every nonempty border over the whole matrix (docs/design-notes.md,
         "One factorisation for every solver")."""
-        from ..solvers._ordering import MASSLESS, plan_factorization
+        from ..linalg.ordering import MASSLESS, plan_factorization
 
         if mass not in self._plans:
             owner = self.coordinate_owners()

@@ -254,7 +254,8 @@ class _SlidingConstraint(Constraint):
 
     def coordinates(self) -> np.ndarray:
         j = self.joint
-        return np.concatenate([j._body_dofs, j._elem_dofs[j.element], [j._s_dof]])
+        g = j.geometry
+        return np.concatenate([g.body_dofs, g.elem_dofs[j.element], [g.s_dof]])
 
     def evaluate(self, q_local: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
         j = self.joint
@@ -262,16 +263,16 @@ class _SlidingConstraint(Constraint):
         m = self.n_equations
         phi = np.empty(m)
         jac = np.empty((m, N_SLIDE))
-        sliding_values(np.ascontiguousarray(q_local, dtype=float), float(j._lengths[k]),
-                       float(j._starts[k]), j._T_all, m, phi, jac)
+        sliding_values(np.ascontiguousarray(q_local, dtype=float), float(j.geometry.lengths[k]),
+                       float(j.geometry.starts[k]), j.geometry.point_tensors, m, phi, jac)
         return phi, jac
 
     def hessian_lambda(self, q_local: np.ndarray, lam: np.ndarray, t: float) -> np.ndarray:
         j = self.joint
         k = j.element
         H = np.empty((N_SLIDE, N_SLIDE))
-        sliding_hessian(np.ascontiguousarray(q_local, dtype=float), float(j._lengths[k]),
-                        float(j._starts[k]), j._T_all, self.n_equations,
+        sliding_hessian(np.ascontiguousarray(q_local, dtype=float), float(j.geometry.lengths[k]),
+                        float(j.geometry.starts[k]), j.geometry.point_tensors, self.n_equations,
                         np.ascontiguousarray(lam, dtype=float), H)
         return H
 
@@ -282,6 +283,21 @@ class SlideFriction(NamedTuple):
     force: float          #: F [N] on the body along the beam tangent t = r′/|r′|
     sticking: bool        #: inside the cone (stick law)
     anchor: float         #: the anchor s_A after a step ending at this state
+
+
+class SlidingGeometry(NamedTuple):
+    """Where a sliding joint's coordinates are and its beam's arc length, built when the joint
+    is bound (:meth:`SlidingJoint.bind`); read by the joint, its constraint and its pack
+    (:func:`pack_sliding`)."""
+
+    body_dofs: np.ndarray     # (7,) the body's coordinates
+    elem_dofs: np.ndarray     # (n_elem, CENTERLINE_SIZE) every element's centreline coordinates
+    s_dof: int                # the slide coordinate s (arc length)
+    beam_dofs: np.ndarray     # every coordinate of the beam (the pattern)
+    lengths: np.ndarray       # (n_elem,) element lengths
+    starts: np.ndarray        # (n_elem,) arc length at each element's start
+    total: float              # the beam's length
+    point_tensors: np.ndarray  # (3, 3, 4, 4) T_k of the hole point, e_y, e_z (body coordinates)
 
 
 class SlidingState(NamedTuple):
@@ -382,25 +398,26 @@ class SlidingJoint(Interaction):
         return ["s"]
 
     def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
-        self._body_dofs = dofs.body_dofs(self.body)
-        # the Hermite centreline coordinates of every element (the element's declared layout)
-        self._elem_dofs = dofs.element_dofs(self.beam)[:, self.beam.layout.centerline]
-        self._s_dof = int(extra_dofs[0])
-        self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
-        self._starts = np.concatenate([[0.0], np.cumsum(self._lengths)[:-1]])
-        self._total = float(np.sum(self._lengths))
-        self._beam_dofs = dofs.beam_dofs(self.beam)
+        """Builds :attr:`geometry` (:class:`SlidingGeometry`)."""
+        lengths = np.array(self.beam.centerline.lengths, dtype=float)
+        self.geometry = SlidingGeometry(
+            body_dofs=dofs.body_dofs(self.body),
+            # the Hermite centreline coordinates of every element (the element's declared layout)
+            elem_dofs=dofs.element_dofs(self.beam)[:, self.beam.layout.centerline],
+            s_dof=int(extra_dofs[0]), beam_dofs=dofs.beam_dofs(self.beam), lengths=lengths,
+            starts=np.concatenate([[0.0], np.cumsum(lengths)[:-1]]),
+            total=float(np.sum(lengths)), point_tensors=self._T_all)
 
     def _hole_centre(self, q: np.ndarray) -> np.ndarray:
-        qb = q[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
         return qb[:3] + rotation_matrix(qb[3:7]) @ self.hole_point
 
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
         if self.s0 is not None:
             s = float(self.s0)
-            if not 0.0 <= s <= self._total:
+            if not 0.0 <= s <= self.geometry.total:
                 raise ModelError(f"joint '{self.name}': s0 = {s} is outside the beam "
-                                 f"(0 <= s <= {self._total:.6g})")
+                                 f"(0 <= s <= {self.geometry.total:.6g})")
         else:
             s = self._project(q0, self._hole_centre(q0))
         self.element = self._locate(s)
@@ -409,33 +426,35 @@ class SlidingJoint(Interaction):
         return np.array([s])
 
     def _locate(self, s: float) -> int:
-        return int(np.clip(np.searchsorted(self._starts, s, side="right") - 1, 0, len(self._lengths) - 1))
+        g = self.geometry
+        return int(np.clip(np.searchsorted(g.starts, s, side="right") - 1, 0, len(g.lengths) - 1))
 
     def _project(self, q: np.ndarray, x: np.ndarray) -> float:
         """Arc length of the point of the beam nearest to x: the best of 9 samples per element
         starts the closest-point projection (:func:`flexmbs.elements.centerline.closest_point`)."""
-        n = len(self._lengths)
+        g = self.geometry
+        n = len(g.lengths)
         xi = np.linspace(0.0, 1.0, 9)
         e_all = np.repeat(np.arange(n), xi.size)
-        pts = cable.centerline_points(q, self._elem_dofs, self._lengths, e_all, np.tile(xi, n))
+        pts = cable.centerline_points(q, g.elem_dofs, g.lengths, e_all, np.tile(xi, n))
         i = int(np.argmin(np.linalg.norm(pts - x, axis=1)))
-        qe = np.ascontiguousarray(q[self._elem_dofs])
-        e, xi_p, *_ = closest_point(qe, self._lengths, np.asarray(x, float), int(e_all[i]),
+        qe = np.ascontiguousarray(q[g.elem_dofs])
+        e, xi_p, *_ = closest_point(qe, g.lengths, np.asarray(x, float), int(e_all[i]),
                                     float(xi[i % xi.size]))
-        return float(np.clip(self._starts[e] + xi_p * self._lengths[e], 0.0, self._total))
+        return float(np.clip(g.starts[e] + xi_p * g.lengths[e], 0.0, g.total))
 
     def constraints(self) -> list[Constraint]:
         return [self._constraint]
 
     def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
         """The exception for an error code of :func:`sliding_post_step`."""
-        s = float(q[self._s_dof])
+        s = float(q[self.geometry.s_dof])
         return SimulationStopped(
             f"joint '{self.name}': body '{self.body.name}' reached the end of beam "
-            f"'{self.beam.name}' at t = {t:.6g} s (s = {s:.6g}, beam length {self._total:.6g})")
+            f"'{self.beam.name}' at t = {t:.6g} s (s = {s:.6g}, beam length {self.geometry.total:.6g})")
 
     def slide_coordinate(self, q: np.ndarray) -> float:
-        return float(q[self._s_dof])
+        return float(q[self.geometry.s_dof])
 
     def reaction_force(self, dofs: DofMap, lam: np.ndarray) -> np.ndarray:
         """Constraint force of the joint on the body at the hole centre (global components):
@@ -477,9 +496,10 @@ class SlidingJoint(Interaction):
         k = self.element
         rows = dofs.multiplier_rows(self._constraint)[:3]
         lp = np.where(rows >= 0, lam[np.maximum(rows, 0)], 0.0)
+        g = self.geometry
         out = sliding_axial_force(
-            np.ascontiguousarray(q[self._elem_dofs[k]], dtype=float), float(self._lengths[k]),
-            float(self._starts[k]), float(q[self._s_dof]), float(v[self._s_dof]),
+            np.ascontiguousarray(q[g.elem_dofs[k]], dtype=float), float(g.lengths[k]),
+            float(g.starts[k]), float(q[g.s_dof]), float(v[g.s_dof]),
             np.ascontiguousarray(lp, dtype=float), self.friction_parameters(), self.anchor,
             int(self.stuck), 0.0)
         return SlideFriction(float(out[5]), bool(out[6]), float(out[7]))
@@ -540,9 +560,9 @@ class SlidingPart(NamedTuple):
 def sliding_pattern(joint: SlidingJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
     """Body and s couple with every beam coordinate (the current element moves along the beam),
     both ways; the joint's multipliers with all of them."""
-    own = np.concatenate([joint._body_dofs, [joint._s_dof]])
-    cols = np.concatenate([own, joint._beam_dofs])
-    rows = dofs.multiplier_rows(joint._constraint)
+    own = np.concatenate([joint.geometry.body_dofs, [joint.geometry.s_dof]])
+    cols = np.concatenate([own, joint.geometry.beam_dofs])
+    rows = dofs.multiplier_rows(joint.constraints()[0])
     mult = dofs.n_coords + rows[rows >= 0]
     return [(own, cols), (cols, own), (mult, cols), (cols, mult)]
 
@@ -553,7 +573,7 @@ def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
     nj = len(joints)
     n = dofs.n_coords
     rows = np.full((nj, 5), -1, np.int64)
-    max_el = max((len(j._lengths) for j in joints), default=0)
+    max_el = max((len(j.geometry.lengths) for j in joints), default=0)
     pj = np.full((nj, max_el, 5, N_SLIDE), -1, np.int64)
     pt = np.full((nj, max_el, 5, N_SLIDE), -1, np.int64)
     ph = np.zeros((nj, max_el, N_SLIDE * N_SLIDE), np.int64)
@@ -561,31 +581,33 @@ def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
     pss = np.zeros(nj, np.int64)
     psl = np.zeros((nj, 3), np.int64)
     for i, j in enumerate(joints):
-        r = dofs.multiplier_rows(j._constraint)
+        constraint, = j.constraints()
+        r = dofs.multiplier_rows(constraint)
         rows[i, :r.size] = r
         kept = np.flatnonzero(r >= 0)
-        sd = np.array([j._s_dof])
-        for k in range(len(j._lengths)):
-            cc = np.concatenate([j._body_dofs, j._elem_dofs[k], sd])
+        sd = np.array([j.geometry.s_dof])
+        for k in range(len(j.geometry.lengths)):
+            cc = np.concatenate([j.geometry.body_dofs, j.geometry.elem_dofs[k], sd])
             if kept.size:
                 rr = n + r[kept]
                 pj[i, k, kept] = dofs.positions(rr, cc).reshape(kept.size, N_SLIDE)
                 pt[i, k, kept] = dofs.positions(cc, rr).reshape(N_SLIDE, kept.size).T
             ph[i, k] = dofs.positions(cc, cc)
-            pse[i, k] = dofs.positions(sd, j._elem_dofs[k])
+            pse[i, k] = dofs.positions(sd, j.geometry.elem_dofs[k])
         pss[i] = dofs.positions(sd, sd)[0]
         if (j.friction is not None or j.axial_force is not None) and np.all(r[:3] >= 0):
             psl[i] = dofs.positions(sd, n + r[:3])
     i64, c = np.int64, np.ascontiguousarray
     part = SlidingPart(
-        c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
-        pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
-        pad_stack([j._lengths for j in joints], (), 1.0, float),
-        pad_stack([j._starts for j in joints], (), 0.0, float),
-        np.array([len(j._lengths) for j in joints], i64),
-        np.array([j._total for j in joints], float), np.array([j._s_dof for j in joints], i64),
-        c(np.array([j._T_all for j in joints], float).reshape(nj, 3, 3, 4, 4)),
-        np.array([j._constraint.n_equations for j in joints], i64), rows,
+        c(np.array([j.geometry.body_dofs for j in joints], i64).reshape(nj, 7)),
+        pad_stack([j.geometry.elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
+        pad_stack([j.geometry.lengths for j in joints], (), 1.0, float),
+        pad_stack([j.geometry.starts for j in joints], (), 0.0, float),
+        np.array([len(j.geometry.lengths) for j in joints], i64),
+        np.array([j.geometry.total for j in joints], float),
+        np.array([j.geometry.s_dof for j in joints], i64),
+        c(np.array([j.geometry.point_tensors for j in joints], float).reshape(nj, 3, 3, 4, 4)),
+        np.array([j.constraints()[0].n_equations for j in joints], i64), rows,
         c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
         np.array([-1 if j.axial_force is None else functions(j.axial_force) for j in joints], i64),
         np.array([j.element for j in joints], i64), np.array([j.anchor for j in joints], float),

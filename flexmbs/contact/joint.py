@@ -77,6 +77,21 @@ TANGENTS = ("exact", "gauss_newton", "frozen_point")
 DETECTIONS = ("consistent", "paper")
 
 
+class ClearanceGeometry(NamedTuple):
+    """Where a clearance joint's coordinates are and what of its bore stays fixed, built when
+    the joint is bound (:meth:`SlidingClearanceJoint.bind`); read by the joint and by its pack
+    (:func:`pack_clearance`), which stacks the records of all clearance joints."""
+
+    body_dofs: np.ndarray     # (7,) the hole body's coordinates
+    elem_dofs: np.ndarray     # (n_elem, CENTERLINE_SIZE) every element's centreline coordinates
+    twist_dofs: np.ndarray    # (n_elem, N_TWIST) the twists of its nodes (−1: a cable)
+    beam_dofs: np.ndarray     # every coordinate of the beam (the pattern)
+    lengths: np.ndarray       # (n_elem,) element lengths
+    stations: np.ndarray      # (slots,) the sections' stations along the bore (tip slots 0)
+    tree: tuple[np.ndarray, ...]  # the sections' bounding-sphere tree (bores.section_tree)
+    tip_reach: float          # the longest gap between sections (_detect.place_tips)
+
+
 class ClearanceState(NamedTuple):
     """What a clearance joint carries from step to step, per section slot (the bore's
     sections, then the :data:`~flexmbs.contact._detect.N_TIPS` tip sections): built by the
@@ -213,7 +228,8 @@ class SlidingClearanceJoint(Interaction):
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
         # the sections' bounding-sphere tree (body coordinates; reach: a crossing that far from
-        # a section's centre counts, _detect.detect_section) and the detection's work arrays
+        # a section's centre counts, _detect.detect_section) and the detection's work arrays;
+        # the bore's geometry is known here, before the joint is bound (place_tips at validate)
         self._tree = section_tree(self.state.origins[:ns], 2.0 * hole.section.bounding_radius()
                                   + self.beam_radius)
         self._cross = (np.zeros(slots, np.int64), np.zeros((slots, MAX_CROSSINGS), np.int64),
@@ -244,24 +260,27 @@ class SlidingClearanceJoint(Interaction):
         return np.ascontiguousarray(qe, dtype=float)
 
     def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
-        self._body_dofs = dofs.body_dofs(self.body)
-        # the Hermite centreline coordinates of every element (the element's declared layout)
-        self._elem_dofs = dofs.element_dofs(self.beam)[:, self.beam.layout.centerline]
-        # the twists of every element's nodes (a rod's: its surface turns under the friction;
-        # −1 for a cable) and their charts' base tangents (set when packed, then re-based)
+        """Builds :attr:`geometry` (:class:`ClearanceGeometry`)."""
         lay = self.beam.layout
         ne = len(self.beam.centerline.lengths)
-        self._twist_dofs = (np.full((ne, N_TWIST), -1, np.int64) if lay.twist is None else
-                            np.ascontiguousarray(dofs.element_dofs(self.beam)[
-                                :, [lay.twist, lay.node_size + lay.twist]], dtype=np.int64))
+        self.geometry = ClearanceGeometry(
+            body_dofs=dofs.body_dofs(self.body),
+            # the Hermite centreline coordinates of every element (the element's declared layout)
+            elem_dofs=dofs.element_dofs(self.beam)[:, lay.centerline],
+            # the twists of every element's nodes (a rod's: its surface turns under the friction)
+            twist_dofs=(np.full((ne, N_TWIST), -1, np.int64) if lay.twist is None else
+                        np.ascontiguousarray(dofs.element_dofs(self.beam)[
+                            :, [lay.twist, lay.node_size + lay.twist]], dtype=np.int64)),
+            beam_dofs=dofs.beam_dofs(self.beam),
+            # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
+            lengths=np.array(self.beam.centerline.lengths, dtype=float),
+            stations=self._stations, tree=self._tree, tip_reach=self._tip_reach)
+        # the twists' charts' base tangents (set when packed, then re-based)
         self.state = self.state._replace(t_bar=np.zeros((ne, N_TWIST, 3)))
-        # writable contiguous copies: kernels are compiled per array flavour (readonly, layout)
-        self._lengths = np.array(self.beam.centerline.lengths, dtype=float)
-        self._beam_dofs = dofs.beam_dofs(self.beam)
 
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
-        self._check_start(q0[self._body_dofs], np.ascontiguousarray(q0[self._elem_dofs]),
-                          warn=False)
+        g = self.geometry
+        self._check_start(q0[g.body_dofs], np.ascontiguousarray(q0[g.elem_dofs]), warn=False)
         return np.zeros(0)
 
     def _planes(self, qb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -374,11 +393,12 @@ class SlidingClearanceJoint(Interaction):
         (body coordinates), elements and kinds are reused: the residual is then exactly the
         function whose derivative the tangent is (used by the finite-difference tests)."""
         if self._frozen is not None:
-            qb, vb = q[self._body_dofs], v[self._body_dofs]
+            g = self.geometry
+            qb, vb = q[g.body_dofs], v[g.body_dofs]
             out = []
             for k, j, kind, eP, u_Q, xiP, a, b, psi in self._frozen:
-                res = contact_point(qb, vb, u_Q, q[self._elem_dofs[eP]], v[self._elem_dofs[eP]],
-                                    self._lengths[eP], xiP, self.beam_radius, self.contact,
+                res = contact_point(qb, vb, u_Q, q[g.elem_dofs[eP]], v[g.elem_dofs[eP]],
+                                    g.lengths[eP], xiP, self.beam_radius, self.contact,
                                     self.friction, self._approach_for(k, psi),
                                     self.consistent and want_tangent,
                                     history=self._history(q, k, psi, eP),
@@ -389,10 +409,10 @@ class SlidingClearanceJoint(Interaction):
             return out
         if self.hole.section.compiled_shape() is not None:
             return self._contacts_compiled(q, v, want_tangent, update)
-        qb = q[self._body_dofs]
-        vb = v[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
+        vb = v[self.geometry.body_dofs]
         A, origins, axes = self._planes(qb)
-        qe = np.ascontiguousarray(q[self._elem_dofs])
+        qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         section = self.hole.section
         R_out = section.bounding_radius()
         R_in = section.inscribed_radius()
@@ -401,7 +421,7 @@ class SlidingClearanceJoint(Interaction):
         for k in range(len(self.stations)):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
+                qe, self.geometry.lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
                 float(self.state.xi[k]), r_b, 2 * R_out + r_b)
             if not found:
                 continue
@@ -417,9 +437,9 @@ class SlidingClearanceJoint(Interaction):
                 Qg = origin + cand.Q[0] * ey + cand.Q[1] * ez
                 psi = math.atan2(cand.Q[1], cand.Q[0])
                 u_Q = A.T @ (Qg - qb[:3])
-                eP, xiP, *_ = closest_point(qe, self._lengths, Qg, e, xi)
-                res = contact_point(qb, vb, u_Q, qe[eP], v[self._elem_dofs[eP]],
-                                    self._lengths[eP], xiP, r_b, self.contact, self.friction,
+                eP, xiP, *_ = closest_point(qe, self.geometry.lengths, Qg, e, xi)
+                res = contact_point(qb, vb, u_Q, qe[eP], v[self.geometry.elem_dofs[eP]],
+                                    self.geometry.lengths[eP], xiP, r_b, self.contact, self.friction,
                                     self._approach_for(k, psi), self.consistent and want_tangent,
                                     history=self._history(q, k, psi, eP),
                                     friction_stiffness=self.friction_stiffness(),
@@ -433,9 +453,9 @@ class SlidingClearanceJoint(Interaction):
         """The compiled narrow phase of every section at ``q`` (:func:`_detect.detect_section`):
         the candidate rows into ``self._rows``; returns their number (``-1 - k``: the axis left
         the bore at section k). ``update``: the crossings become the warm starts."""
-        qb = q[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
         A = rotation_matrix(qb[3:7])
-        qe = np.ascontiguousarray(q[self._elem_dofs])
+        qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         e_out, x_out = (self.state.elem, self.state.xi) if update else (self._elem_out, self._xi_out)
         unknown = np.full(1, -1, np.int64)        # lists not kept here: every section scanned
         out_list = np.full(self.n_slots + 1, -1, np.int64)
@@ -445,8 +465,9 @@ class SlidingClearanceJoint(Interaction):
         compiled = section.compiled_shape()
         assert compiled is not None
         shape, params = compiled
-        m = detect_section(qe, self._lengths, np.ascontiguousarray(qb[:3]), A, self.state.origins,
-                           self.state.axes, *self._tree, bool(self.hole.open_ends), self.state.tip_on,
+        g = self.geometry
+        m = detect_section(qe, g.lengths, np.ascontiguousarray(qb[:3]), A, self.state.origins,
+                           self.state.axes, *g.tree, bool(self.hole.open_ends), self.state.tip_on,
                            *self._cross,
                            self.state.elem, self.state.xi, unknown, e_out, x_out, out_list,
                            self.beam_radius, shape, params,
@@ -460,8 +481,8 @@ class SlidingClearanceJoint(Interaction):
                            update: bool) -> list:
         """A section with a compiled shape: the narrow phase of all sections runs compiled
         (contact/_detect.py)."""
-        qb = q[self._body_dofs]
-        vb = v[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
+        vb = v[self.geometry.body_dofs]
         A = rotation_matrix(qb[3:7])
         m = self.detect_rows(q, update)
         if m < 0:
@@ -470,8 +491,8 @@ class SlidingClearanceJoint(Interaction):
         for row in self._rows[:m].copy():
             k, j, kind, eP = int(row[0]), int(row[1]), int(row[2]), int(row[3])
             u_Q = A.T @ (row[5:8] - qb[:3])
-            ed = self._elem_dofs[eP]
-            res = contact_point(qb, vb, u_Q, q[ed], v[ed], self._lengths[eP], row[4],
+            ed = self.geometry.elem_dofs[eP]
+            res = contact_point(qb, vb, u_Q, q[ed], v[ed], self.geometry.lengths[eP], row[4],
                                 self.beam_radius, self.contact, self.friction,
                                 self._approach_for(k, row[11]), self.consistent and want_tangent,
                                 history=self._history(q, k, row[11], eP),
@@ -487,7 +508,7 @@ class SlidingClearanceJoint(Interaction):
             self._frozen = None
             return
         v = np.zeros_like(q) if v is None else v
-        qb = q[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
         A = rotation_matrix(qb[3:7])
         self._frozen = [(k, j, kind, eP, A.T @ (res.Q - qb[:3]), res.xi, a, b, psi)
                         for k, j, kind, eP, res, a, b, psi in self._contacts(q, v, False, False)]
@@ -598,14 +619,14 @@ class SlidingClearanceJoint(Interaction):
         start = self.state.q_start if self.state.q_start is not None else q
         st = self.state
         contact_history(st.anchor, st.stuck, tracked_slot(st.active, st.psi, int(k), float(psi)),
-                        int(k), start, self._body_dofs, self._elem_dofs[eP],
-                        self._twist_dofs[eP], hist)
+                        int(k), start, self.geometry.body_dofs, self.geometry.elem_dofs[eP],
+                        self.geometry.twist_dofs[eP], hist)
         return hist
 
     def _spin(self, q: np.ndarray, v: np.ndarray, eP: int) -> np.ndarray:
         """The spin data (pair.N_SPIN) of element eP (:func:`_detect.element_spin`)."""
         spin = np.empty(N_SPIN)
-        element_spin(q, v, self._twist_dofs[eP], self.state.t_bar[eP], spin)
+        element_spin(q, v, self.geometry.twist_dofs[eP], self.state.t_bar[eP], spin)
         return spin
 
     def _raise_left_bore(self, m: int) -> None:
@@ -632,16 +653,16 @@ class SlidingClearanceJoint(Interaction):
         scale = 0.0
         for _k, _j, kind, eP, res, *_ in self._contacts(q, v, matrix is not None, False):
             sign = float(kind)
-            r_q[self._body_dofs] -= sign * res.Q_body
-            r_q[self._elem_dofs[eP]] -= sign * res.Q_elem
-            twisted = self._twist_dofs[eP, 0] >= 0
+            r_q[self.geometry.body_dofs] -= sign * res.Q_body
+            r_q[self.geometry.elem_dofs[eP]] -= sign * res.Q_elem
+            twisted = self.geometry.twist_dofs[eP, 0] >= 0
             if twisted:
-                r_q[self._twist_dofs[eP]] -= sign * res.Q_twist
+                r_q[self.geometry.twist_dofs[eP]] -= sign * res.Q_twist
             scale = max(scale, float(np.abs(res.Q_body).max()), float(np.abs(res.Q_elem).max()))
             if matrix is not None:
                 _, cC, cK = matrix
-                idx = np.concatenate([self._body_dofs, self._elem_dofs[eP]]
-                                     + ([self._twist_dofs[eP]] if twisted else []))
+                idx = np.concatenate([self.geometry.body_dofs, self.geometry.elem_dofs[eP]]
+                                     + ([self.geometry.twist_dofs[eP]] if twisted else []))
                 n = idx.size
                 sink.add_to_matrix(idx, idx, sign * (cK * res.K + cC * res.C)[:n, :n])
         return scale
@@ -656,7 +677,8 @@ class SlidingClearanceJoint(Interaction):
             rows[i, ANCHOR_COL + 3] = res.stuck
         clearance_update(rows, len(contacts), np.full(1, -1, np.int64), self.state.approach,
                          self.state.active, self.state.psi, self.state.anchor, self.state.stuck)
-        self.place_tips(q[self._body_dofs], np.ascontiguousarray(q[self._elem_dofs]))
+        g = self.geometry
+        self.place_tips(q[g.body_dofs], np.ascontiguousarray(q[g.elem_dofs]))
 
     # ------------------------------------------------------------------ output
     def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
@@ -678,9 +700,9 @@ class SlidingClearanceJoint(Interaction):
     def section_records(self, q: np.ndarray, v: np.ndarray, t: float) -> list[dict[str, Any]]:
         """Per hole section: section frame, beam ellipse (section coordinates), bore radius and
         number of contact points (``sections.csv``, used by the section view)."""
-        qb = q[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
         _, origins, axes = self._planes(qb)
-        qe = np.ascontiguousarray(q[self._elem_dofs])
+        qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         R = self.hole.section.bounding_radius()
         counts: dict[int, int] = {}
         for k, *_ in self._contacts(q, v, False, False):
@@ -689,7 +711,7 @@ class SlidingClearanceJoint(Interaction):
         for k in range(len(self.stations)):
             origin, (n, ey, ez) = origins[k], axes[k].T
             found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self._lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
+                qe, self.geometry.lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
                 float(self.state.xi[k]), self.beam_radius, 2 * R + self.beam_radius)
             if not found:
                 continue
@@ -704,7 +726,7 @@ class SlidingClearanceJoint(Interaction):
         """The bore outline of every hole section at ``q`` (output: the ``hole_sections`` block):
         ``(n_sections, samples, 3)`` global points ``o_k + Y_y(psi) e_y,k + Y_z(psi) e_z,k``
         of the section boundary ``Y(psi)`` at ``psi = 2 pi j / samples`` in each section plane."""
-        _, origins, axes = self._planes(q[self._body_dofs])
+        _, origins, axes = self._planes(q[self.geometry.body_dofs])
         Y = self.hole.section.boundary(np.linspace(0.0, 2.0 * np.pi, int(samples), endpoint=False))[0]
         return (origins[:, None, :] + Y[None, :, :1] * axes[:, None, :, 1]
                 + Y[None, :, 1:] * axes[:, None, :, 2])
@@ -712,13 +734,13 @@ class SlidingClearanceJoint(Interaction):
     def slide_coordinate(self, q: np.ndarray) -> float:
         """Arc length (from the beam's first node) of the projection of the hole centre (the
         middle section's origin) onto the beam centreline."""
-        qb = q[self._body_dofs]
+        qb = q[self.geometry.body_dofs]
         k = len(self.stations) // 2
         centre = self._planes(qb)[1][k]
-        qe = np.ascontiguousarray(q[self._elem_dofs])
-        e, xi, *_ = closest_point(qe, self._lengths, centre, max(0, int(self.state.elem[k])),
+        qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
+        e, xi, *_ = closest_point(qe, self.geometry.lengths, centre, max(0, int(self.state.elem[k])),
                                   float(self.state.xi[k]))
-        return float(np.sum(self._lengths[:e]) + xi * self._lengths[e])
+        return float(np.sum(self.geometry.lengths[:e]) + xi * self.geometry.lengths[e])
 
     def contact_energy(self, q: np.ndarray, v: np.ndarray | None = None) -> float:
         """Potential of the contact forces at ``q``: ``Σ_k [Σ_max Φ(δ) − Σ_min Φ(δ)]`` over the
@@ -783,8 +805,8 @@ def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[
     uses the entries the beam already has (their shared node): reserving the rest would widen
     the band of every beam by a node (measured: Example 1 20 % slower) for entries of order
     ξ² near the shared node."""
-    cols = np.concatenate([joint._body_dofs, joint._beam_dofs])
-    return [(joint._body_dofs, cols), (cols, joint._body_dofs)]
+    cols = np.concatenate([joint.geometry.body_dofs, joint.geometry.beam_dofs])
+    return [(joint.geometry.body_dofs, cols), (cols, joint.geometry.body_dofs)]
 
 
 def _chart_tangents(joint: SlidingClearanceJoint, ctx: PackContext) -> np.ndarray:
@@ -792,7 +814,7 @@ def _chart_tangents(joint: SlidingClearanceJoint, ctx: PackContext) -> np.ndarra
     model's start, as the rod's own packing gives them (its ``node_base``); zeros for a beam
     without twist."""
     beam = joint.beam
-    out = np.zeros((len(joint._lengths), N_TWIST, 3))
+    out = np.zeros((len(joint.geometry.lengths), N_TWIST, 3))
     node_base = beam.element_type.node_base
     if beam.layout.twist is None or node_base is None:
         return out
@@ -808,40 +830,40 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
     start from ``ctx.q_ref`` until :meth:`~flexmbs.assembly.Assembly.begin` says otherwise."""
     dofs, n_total, q_ref = ctx, ctx.n_total, ctx.q_ref
     nj = len(joints)
-    max_ne = max((len(j._lengths) for j in joints), default=0)
+    max_ne = max((len(j.geometry.lengths) for j in joints), default=0)
     max_ns = max((j.n_slots for j in joints), default=0)
     n_contacts = contact_capacity(max_ns)
     pos = np.full((nj, max_ne, N_LOCAL * N_LOCAL), -1, np.int64)
     ne2 = CENTERLINE_SIZE * CENTERLINE_SIZE
     cross = np.zeros((nj, max_ne, 2, ne2), np.int64)
     for i, j in enumerate(joints):
-        n_el = len(j._lengths)
+        n_el = len(j.geometry.lengths)
         j.state.t_bar[:] = _chart_tangents(j, ctx)
         for k in range(n_el):
-            twisted = j._twist_dofs[k, 0] >= 0
-            idx = np.concatenate([j._body_dofs, j._elem_dofs[k]]
-                                 + ([j._twist_dofs[k]] if twisted else []))
+            twisted = j.geometry.twist_dofs[k, 0] >= 0
+            idx = np.concatenate([j.geometry.body_dofs, j.geometry.elem_dofs[k]]
+                                 + ([j.geometry.twist_dofs[k]] if twisted else []))
             block = pos[i, k].reshape(N_LOCAL, N_LOCAL)   # a cable: no twist rows, columns
             block[:idx.size, :idx.size] = dofs.positions(idx, idx).reshape(idx.size, idx.size)
             for side, other in ((0, k - 1), (1, k + 1)):
                 if 0 <= other < n_el:
-                    cross[i, k, side] = dofs.positions_present(j._elem_dofs[k],
-                                                               j._elem_dofs[other])
+                    cross[i, k, side] = dofs.positions_present(j.geometry.elem_dofs[k],
+                                                               j.geometry.elem_dofs[other])
     i64, c = np.int64, np.ascontiguousarray
     shapes = [j.hole.section.compiled_shape() or (0, np.zeros(4)) for j in joints]
     part = ClearancePart(
-        c(np.array([j._body_dofs for j in joints], i64).reshape(nj, 7)),
-        pad_stack([j._elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
-        pad_stack([j._twist_dofs for j in joints], (N_TWIST,), -1, np.int64),
+        c(np.array([j.geometry.body_dofs for j in joints], i64).reshape(nj, 7)),
+        pad_stack([j.geometry.elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
+        pad_stack([j.geometry.twist_dofs for j in joints], (N_TWIST,), -1, np.int64),
         pad_stack([j.state.t_bar for j in joints], (N_TWIST, 3), 0.0, float),
-        np.array([len(j._lengths) for j in joints], i64),
-        pad_stack([j._lengths for j in joints], (), 1.0, float),
+        np.array([len(j.geometry.lengths) for j in joints], i64),
+        pad_stack([j.geometry.lengths for j in joints], (), 1.0, float),
         pad_stack([j.state.origins for j in joints], (3,), 0.0, float),
         pad_stack([j.state.axes for j in joints], (3, 3), 0.0, float),
-        pad_stack([j._tree[0] for j in joints], (3,), 0.0, float),
-        pad_stack([j._tree[1] for j in joints], (), -1.0, float),   # -1: no node
-        pad_stack([j._tree[2] for j in joints], (), 0, np.int64),
-        pad_stack([j._tree[3] for j in joints], (), 0, np.int64),
+        pad_stack([j.geometry.tree[0] for j in joints], (3,), 0.0, float),
+        pad_stack([j.geometry.tree[1] for j in joints], (), -1.0, float),   # -1: no node
+        pad_stack([j.geometry.tree[2] for j in joints], (), 0, np.int64),
+        pad_stack([j.geometry.tree[3] for j in joints], (), 0, np.int64),
         np.array([j.hole.open_ends for j in joints], dtype=np.bool_),
         np.zeros(max_ns, i64), np.zeros((max_ns, MAX_CROSSINGS), i64),
         np.zeros((max_ns, MAX_CROSSINGS)), np.zeros(max_ns, i64), np.zeros(max_ns + 64, i64),
@@ -872,13 +894,13 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.zeros(n_contacts, i64), np.zeros(n_contacts, i64),
         np.zeros((0, N_LOCAL, N_EXT)),
         np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total),
-        pad_stack([j._stations for j in joints], (), 0.0, float),
+        pad_stack([j.geometry.stations for j in joints], (), 0.0, float),
         pad_stack([j.state.tip_on for j in joints], (), False, np.bool_),
         pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
-        np.array([j._tip_reach for j in joints], float), np.zeros(nj, np.bool_),
+        np.array([j.geometry.tip_reach for j in joints], float), np.zeros(nj, np.bool_),
         np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
-        j.state = ClearanceState.views(part, i, j.n_slots, len(j._lengths))
+        j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
     return part
 
 

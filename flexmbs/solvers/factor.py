@@ -2,8 +2,8 @@
 
 The compiled and the Python Newton loops, the velocity corrector and the initial accelerations
 factorise the assembled saddle-point matrix with the bordered banded LU
-(:mod:`flexmbs.solvers._bordered`) and the assembly's plan (:meth:`Assembly.factor_plan`:
-border and band order chosen by cost, :mod:`flexmbs.solvers._ordering`). The plan's border is
+(:mod:`flexmbs.linalg.bordered`) and the assembly's plan (:meth:`Assembly.factor_plan`:
+border and band order chosen by cost, :mod:`flexmbs.linalg.ordering`). The plan's border is
 safe for a matrix with mass on every band coordinate; a stiffness-only matrix (statics) is
 planned with every coordinate labelled massless, which closes every nonempty border over the
 whole matrix, and is factorised that way only when that costs no more than
@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ConvergenceError
-from ._bordered import BorderedBandedLU
+from ..linalg.bordered import BorderedBandedLU
 from .newton import SINGULAR, Factorization, SuperLUFactor
 
 if TYPE_CHECKING:
@@ -31,7 +31,7 @@ STATIC_COST_RATIO = 2.0
 
 
 class PlannedLU:
-    """:class:`~flexmbs.solvers._bordered.BorderedBandedLU` of the assembly's matrix pattern
+    """:class:`~flexmbs.linalg.bordered.BorderedBandedLU` of the assembly's matrix pattern
     with :meth:`Assembly.factor_plan`; :meth:`factorize` raises :class:`ConvergenceError` on a
     zero or non-finite pivot."""
 

@@ -178,7 +178,7 @@ class _VelocityStep(_AlphaStep):
     (v += gamma' u, q'' += beta' u) and lam; residual ``[r_q; Phi_q v / gamma']`` with
     ``Phi_q`` from the constraint rows of the iteration matrix without stiffness
     (:func:`flexmbs.driver.constraint_velocity`), which is its exact Newton matrix. The same
-    equations as the compiled corrector (:mod:`flexmbs.solvers._compiled`)."""
+    equations as the compiled corrector (:mod:`flexmbs.steploop`)."""
 
     def __init__(self, asm: Assembly, state: State) -> None:
         super().__init__(asm, state)
@@ -385,16 +385,16 @@ class _StepFailure(Exception):
 
 class _CompiledStepper:
     """Fast path: whole runs of steps (up to the next output) execute in numba
-    (:func:`flexmbs.solvers._compiled.alpha_run` through :func:`flexmbs.kernel.kernel`: the
+    (:func:`flexmbs.steploop.alpha_run` through :func:`flexmbs.kernel.kernel`: the
     driver's residual, Jacobian refresh,
     bordered banded LU, post-step update, all compiled); Python is re-entered only at output
     times and on failure. Applies when every term has a compiled form
     (:meth:`Assembly.compiled_reason` is empty)."""
 
     def __init__(self, asm: Assembly, options: GeneralizedAlpha, state: State) -> None:
+        from .. import steploop as cc
+        from ..linalg.bordered import BorderedBandedLU
         from ..terms import dynamic_mode
-        from . import _compiled as cc
-        from ._bordered import BorderedBandedLU
 
         self.cc = cc
         self.asm = asm

@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from .._jit import njit
 from ..errors import ConvergenceError, ModelError
+from ..steploop import renew_jacobian
 
 if TYPE_CHECKING:
     import scipy.sparse.linalg as spla
@@ -130,15 +130,6 @@ class NewtonStats:
     factorizations: int = 0
     residual_evaluations: int = 0
     history: list[float] = field(default_factory=list)
-
-
-@njit
-def renew_jacobian(step_its, cycle_steps, cycle_its, refresh_cost):  # noqa: ANN001, ANN201
-    """Renewal rule for modified Newton: refresh the Jacobian at the next step when the last
-    step's iterations exceed the average cost per step of the current cycle (the steps since
-    the last refresh), ``(refresh_cost + cycle_its) / cycle_steps``, in iterations; this
-    minimises the long-run cost per step when iterations grow as the Jacobian ages."""
-    return step_its * cycle_steps > refresh_cost + cycle_its
 
 
 def _too_slow(err: float, err_prev: float, o: NewtonOptions) -> bool:

@@ -71,7 +71,7 @@ def gradient_error(joint, body, asm: Assembly, q: np.ndarray) -> tuple[float, di
     r = np.zeros(asm.n_coords)
     joint.evaluate(None, q, v, None, 0.0, r, None)
     bd = asm.body_dofs(body)
-    ed = joint._elem_dofs[3:5].ravel()
+    ed = joint.geometry.elem_dofs[3:5].ravel()
     pairs = []
     for i in np.r_[bd[:3], ed]:
         e = np.zeros_like(q)
@@ -93,7 +93,7 @@ def gradient_error(joint, body, asm: Assembly, q: np.ndarray) -> tuple[float, di
 def _bent(asm: Assembly, joint, seed: int = 1) -> np.ndarray:  # noqa: ANN001
     """Reference coordinates with the wire's two elements at the eyelet bent a little."""
     q = asm.q_ref.copy()
-    ed = joint._elem_dofs[3:5].ravel()
+    ed = joint.geometry.elem_dofs[3:5].ravel()
     q[ed] += 2e-5 * np.random.default_rng(seed).standard_normal(ed.size)
     return q
 
@@ -206,7 +206,7 @@ def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -
         asm.evaluate(q_, v_, a, lam, 0.0, r1, r2)
         return r1
 
-    idx = np.r_[asm.body_dofs(body), joint._elem_dofs[3:5].ravel()]
+    idx = np.r_[asm.body_dofs(body), joint.geometry.elem_dofs[3:5].ravel()]
     for j in idx:
         e = np.zeros(n)
         e[j] = FD_STEP

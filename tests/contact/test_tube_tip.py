@@ -140,14 +140,14 @@ def test_the_tip_sections_follow_the_ends_into_and_out_of_the_bore():
     asm, joint, wire, st = _propped(load_steps=1)
     assert joint.n_slots == len(joint.stations) + N_TIPS
     q = st.q.copy()
-    body = joint._body_dofs
-    joint.place_tips(q[body], np.ascontiguousarray(q[joint._elem_dofs]))
+    body = joint.geometry.body_dofs
+    joint.place_tips(q[body], np.ascontiguousarray(q[joint.geometry.elem_dofs]))
     assert not joint.state.tip_on[0] and joint.state.tip_on[1]
     q2 = q.copy()
     q2[body[0]] -= 0.05                              # the tube moved past the wire: no tips
-    joint.place_tips(q2[body], np.ascontiguousarray(q2[joint._elem_dofs]))
+    joint.place_tips(q2[body], np.ascontiguousarray(q2[joint.geometry.elem_dofs]))
     assert not joint.state.tip_on.any()
     q3 = q.copy()
     q3[body[0]] -= 0.0125                            # the mouth past the clamp: both ends in
-    joint.place_tips(q3[body], np.ascontiguousarray(q3[joint._elem_dofs]))
+    joint.place_tips(q3[body], np.ascontiguousarray(q3[joint.geometry.elem_dofs]))
     assert joint.state.tip_on.all()

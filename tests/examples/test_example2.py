@@ -236,7 +236,7 @@ def test_contact_force_is_the_gradient_of_the_penalty_energy_for_shallow_crossin
         joint, asm, _ = _eyelet_on_a_held_wire(theta, "paper")
         n = asm.n_coords
         q = asm.q_ref.copy()
-        beam = np.unique(joint._elem_dofs.ravel())
+        beam = np.unique(joint.geometry.elem_dofs.ravel())
         q[beam] += 2e-6 * np.random.default_rng(1).standard_normal(beam.size)
         v = np.zeros(n)
         r = np.zeros(n)

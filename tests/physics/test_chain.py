@@ -10,8 +10,8 @@ import scipy.sparse.linalg as spla
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.solvers._bordered import BorderedBandedLU
-from flexmbs.solvers._ordering import plan_factorization
+from flexmbs.linalg.bordered import BorderedBandedLU
+from flexmbs.linalg.ordering import plan_factorization
 
 LINK, MASS = 0.1, 0.1
 INERTIA = (1e-6, MASS * LINK**2 / 12, MASS * LINK**2 / 12)

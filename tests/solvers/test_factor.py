@@ -13,7 +13,7 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.errors import ConvergenceError
 from flexmbs.io.scenario import load_scenario
-from flexmbs.solvers._bordered import BorderedBandedLU
+from flexmbs.linalg.bordered import BorderedBandedLU
 from flexmbs.solvers.factor import PlannedLU, static_factorization
 from flexmbs.solvers.newton import SuperLUFactor
 from tests.conftest import straight_beam

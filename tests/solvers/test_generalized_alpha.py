@@ -1,6 +1,6 @@
 """Generalized-alpha paths and step control: the compiled fast path and the general Python path
 agree, HHT, prescribed motion, step cut-back, divergence diagnostics (the bordered banded LU has
-its own tests in test_bordered.py)."""
+its own tests in tests/linalg/test_bordered.py)."""
 
 from __future__ import annotations
 

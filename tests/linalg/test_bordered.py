@@ -1,4 +1,4 @@
-"""Bordered-banded LU (flexmbs.solvers._bordered) against scipy/LAPACK on saddle-point matrices."""
+"""Bordered-banded LU (flexmbs.linalg.bordered) against scipy/LAPACK on saddle-point matrices."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from scipy.linalg.lapack import dgbtrf
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.solvers._bordered import BorderedBandedLU, bordered_solve
+from flexmbs.linalg.bordered import BorderedBandedLU, bordered_solve
 from tests.conftest import straight_beam
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -168,7 +168,7 @@ def test_band_storage_is_typed_like_the_idle_run(rng, n_band):
     (numba types an array that is C- and F-contiguous as C: a second compile of the entry)."""
     from numba import typeof
 
-    from flexmbs.solvers._compiled import idle_run
+    from flexmbs.steploop import idle_run
 
     n = n_band + 3
     D = rng.standard_normal((n, n)) + 5 * np.eye(n)

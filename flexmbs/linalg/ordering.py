@@ -1,4 +1,4 @@
-"""Choice of the bordered LU's border (:mod:`flexmbs.solvers._bordered`) from a cost estimate.
+"""Choice of the bordered LU's border (:mod:`flexmbs.linalg.bordered`) from a cost estimate.
 
 Pure Python and scipy (no compiled code here, so that this file does not enter the compiled
 kernels' cache stamp). See ``docs/design-notes.md`` ("The border, chosen by cost").
@@ -63,7 +63,7 @@ def factor_cost(n_band: int, n_border: int, bandwidth: int) -> float:
 
 
 class FactorPlan(NamedTuple):
-    """Border and band order of a :class:`~flexmbs.solvers._bordered.BorderedBandedLU`."""
+    """Border and band order of a :class:`~flexmbs.linalg.bordered.BorderedBandedLU`."""
 
     border: np.ndarray      # int64: unknowns of the dense Schur complement
     order: np.ndarray       # int64: the other unknowns in band order
@@ -134,7 +134,7 @@ def close_border(G: sp.csr_matrix, in_border: np.ndarray, n_coords: int,
                  owner: np.ndarray | None = None) -> np.ndarray:
     """The smallest border containing ``in_border`` whose band block A_aa is nonsingular
     whenever the iteration matrix is (in dynamics: mass on every band coordinate, Φ_q of
-    full row rank); the Schur complement needs A_aa^-1 (:mod:`flexmbs.solvers._bordered`).
+    full row rank); the Schur complement needs A_aa^-1 (:mod:`flexmbs.linalg.bordered`).
 
     A_aa = [[H_aa, B_a^T], [B_a, 0]] is nonsingular if B_a (the band multipliers' rows of
     Φ_q on the band coordinates) has full row rank and H_aa = c_M M_aa + ... is definite on

@@ -59,7 +59,7 @@ class BorderedBandedLU:
                  ) -> None:
         """``border``: the unknowns of the dense Schur complement; ``order``: the others in
         band order (default: reverse Cuthill-McKee), e.g. from
-        :func:`flexmbs.solvers._ordering.plan_factorization`."""
+        :func:`flexmbs.linalg.ordering.plan_factorization`."""
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
         A = sp.csc_matrix(A)

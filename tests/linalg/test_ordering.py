@@ -1,4 +1,4 @@
-"""The bordered LU's plan (flexmbs.solvers._ordering): border and band order chosen by cost,
+"""The bordered LU's plan (flexmbs.linalg.ordering): border and band order chosen by cost,
 checked against SuperLU on saddle-point systems of multibody shapes (issue 37)."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from flexmbs.solvers._bordered import BorderedBandedLU
-from flexmbs.solvers._ordering import close_border, plan_factorization
+from flexmbs.linalg.bordered import BorderedBandedLU
+from flexmbs.linalg.ordering import close_border, plan_factorization
 
 #: relative agreement with SuperLU (the systems below have cond ~ 1e2..1e4)
 SUPERLU_TOL = 1e-12

@@ -2,7 +2,7 @@
 
 One call of :func:`alpha_run` performs, for up to ``n_steps`` steps, the predictor, the
 modified-Newton iterations (residual :func:`flexmbs.driver.residual`, convergence test,
-Jacobian refresh :func:`flexmbs.driver.jacobian` + :func:`~flexmbs.solvers._bordered.bordered_factorize`
+Jacobian refresh :func:`flexmbs.driver.jacobian` + :func:`~flexmbs.linalg.bordered.bordered_factorize`
 when modified Newton contracts too slowly, solve with the bordered banded LU factors), the
 corrector, with ``velocity`` the velocity corrector (below), and the interactions' post-step
 update (:func:`flexmbs.driver.post_step`). Python is
@@ -26,10 +26,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._jit import njit
-from ..driver import constraint_velocity, jacobian, post_step, residual, stops_run
-from ._bordered import BorderedFactor, bordered_factorize, bordered_solve
-from .newton import renew_jacobian
+from ._jit import njit
+from .driver import constraint_velocity, jacobian, post_step, residual, stops_run
+from .linalg.bordered import BorderedFactor, bordered_factorize, bordered_solve
 
 STATUS_CONVERGED = 0   # all steps done
 STATUS_FAILED = 2      # the current step failed and was restored to its start
@@ -102,6 +101,15 @@ def idle_factor() -> BorderedFactor:
 
 
 @njit
+def renew_jacobian(step_its, cycle_steps, cycle_its, refresh_cost):  # noqa: ANN001, ANN201
+    """Renewal rule for modified Newton: refresh the Jacobian at the next step when the last
+    step's iterations exceed the average cost per step of the current cycle (the steps since
+    the last refresh), ``(refresh_cost + cycle_its) / cycle_steps``, in iterations; this
+    minimises the long-run cost per step when iterations grow as the Jacobian ages."""
+    return step_its * cycle_steps > refresh_cost + cycle_its
+
+
+@njit
 def _slow(err, err_prev, ratio, max_more):  # noqa: ANN001, ANN202
     """Modified Newton contracts too slowly: rate above ``ratio`` or more than ``max_more``
     further iterations predicted at the current rate (same rule as newton.Newton)."""
@@ -136,7 +144,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
     the current step, errors, worst equation, steps completed, error code
     (``flexmbs.driver.ERR_*`` or ERR_SINGULAR).
     Refresh rules: within a step, when modified Newton contracts too slowly (:func:`_slow`);
-    between steps, the renewal rule (:func:`flexmbs.solvers.newton.renew_jacobian`).
+    between steps, the renewal rule (:func:`flexmbs.steploop.renew_jacobian`).
     Returns a ``STATUS_*``.
 
     Inlined into :func:`flexmbs.kernel.kernel`, the one compiled entry (a call with more than
