@@ -26,6 +26,7 @@ from .errors import (
 # command start in milliseconds (numpy, scipy and numba load when a model is built), and a
 # Ctrl-C during start-up meets the command's own handler, not an import traceback.
 if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LAZY
+    from .beam_sections import BeamStiffness, CircularSection, Material
     from .constraints.sliding import SlidingJoint
     from .contact.joint import CircleHole, CurvedBore, Hole, SlidingClearanceJoint, SuperellipseHole
     from .contact.laws import (
@@ -40,7 +41,6 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
     from .geometry.curves import Centerline, arc, line, polyline
     from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
     from .model import GROUND, Beam, Model, Node, Pose, RigidBody
-    from .sections import BeamStiffness, CircularSection, Material
     from .simulation import Result, modes, simulate, solve_static
     from .solvers.generalized_alpha import GeneralizedAlpha
     from .solvers.newton import NewtonOptions
@@ -78,9 +78,9 @@ _LAZY = {
     "Node": ".model",
     "Pose": ".model",
     "RigidBody": ".model",
-    "BeamStiffness": ".sections",
-    "CircularSection": ".sections",
-    "Material": ".sections",
+    "BeamStiffness": ".beam_sections",
+    "CircularSection": ".beam_sections",
+    "Material": ".beam_sections",
     "Result": ".simulation",
     "modes": ".simulation",
     "simulate": ".simulation",

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
+from .beam_sections import BeamStiffness, CircularSection, Material
 from .elements import rigid_body as rb
 from .elements.ancf_cable import CableOptions
 from .elements.layout import ElementLayout, ElementType, get_element_type
@@ -20,7 +21,6 @@ from .elements.rigid_body import quaternion_from_matrix, rotation_matrix
 from .errors import ModelError
 from .geometry.curves import Centerline
 from .loads import TimeFunction, as_time_function
-from .sections import BeamStiffness, CircularSection, Material
 from .springs import SpringDamper, check_table
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -12,12 +12,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from ...beam_sections import BeamStiffness, CircularSection, Material
 from ...elements.ancf_cable import CableOptions
 from ...errors import ScenarioError
 from ...geometry.curves import Centerline, arc, line, polyline
 from ...model import Beam
 from ...registry import Registry
-from ...sections import BeamStiffness, CircularSection, Material
 from ..tables import Table, at, display_path, is_number
 from .context import BuildContext, Builder
 
