@@ -253,6 +253,18 @@ def _dense_solve(s: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
         b[i] = acc / s[i, i]
 
 
+@njit(inline="always")
+def _fill(block, data, pos, fr, fc, lo, hi):  # noqa: ANN001, ANN202
+    """Adds the CSC entries ``data[pos[lo:hi]]`` into ``block[fr, fc]``; returns 0.0, or nan
+    if one of them is inf or nan (the probe of :func:`bordered_factorize`)."""
+    probe = 0.0
+    for k in range(lo, hi):
+        d = data[pos[k]]
+        probe += 0.0 * d
+        block[fr[k], fc[k]] += d
+    return probe
+
+
 @njit
 def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
     """Fill the blocks from CSC ``data``, band LU of A_aa (dgbtf2), X = A_aa^-1 A_ab, Schur
@@ -265,23 +277,10 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
     xt[:, :] = 0.0
     a_ba[:, :] = 0.0
     s[:, :] = 0.0
-    nan_probe = 0.0     # stays 0 unless some entry is inf or nan
-    for k in range(ptr[0], ptr[1]):
-        d = data[pos[k]]
-        nan_probe += 0.0 * d
-        ab[fr[k], fc[k]] += d
-    for k in range(ptr[1], ptr[2]):
-        d = data[pos[k]]
-        nan_probe += 0.0 * d
-        xt[fr[k], fc[k]] += d
-    for k in range(ptr[2], ptr[3]):
-        d = data[pos[k]]
-        nan_probe += 0.0 * d
-        a_ba[fr[k], fc[k]] += d
-    for k in range(ptr[3], ptr[4]):
-        d = data[pos[k]]
-        nan_probe += 0.0 * d
-        s[fr[k], fc[k]] += d
+    nan_probe = (_fill(ab, data, pos, fr, fc, ptr[0], ptr[1])      # 0 unless an entry is
+                 + _fill(xt, data, pos, fr, fc, ptr[1], ptr[2])    # inf or nan
+                 + _fill(a_ba, data, pos, fr, fc, ptr[2], ptr[3])
+                 + _fill(s, data, pos, fr, fc, ptr[3], ptr[4]))
     if nan_probe != 0.0:
         return factor.n + 1
     info = _band_lu(ab, factor.kl, factor.ku, factor.piv)
