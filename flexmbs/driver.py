@@ -25,13 +25,13 @@ import numpy as np
 from ._jit import FLAG, njit
 from .constraints.drivers import DriverPart, drivers_jacobian, drivers_residual
 from .constraints.joints import (
+    JointPart,
     NormPart,
-    TermPart,
+    joints_jacobian,
+    joints_residual,
+    joints_set_bases,
     norms_jacobian,
     norms_residual,
-    terms_jacobian,
-    terms_residual,
-    terms_set_bases,
 )
 from .constraints.linear import LinearPart, linear_jacobian, linear_residual
 from .constraints.sliding import (
@@ -99,7 +99,7 @@ class SystemPart(NamedTuple):
     loads: LoadsPart
     linear: LinearPart
     norms: NormPart
-    terms: TermPart
+    joints: JointPart
     sliding: SlidingPart
     clearance: ClearancePart
     springs: SpringPart
@@ -121,7 +121,7 @@ class SystemPart(NamedTuple):
 
 #: the kinds of terms compiled only for models that have them (docs/design-notes.md, "Compile
 #: time"); beams, loads and linear rows are in nearly every model
-OPTIONAL_KINDS = ("bodies", "norms", "terms", *(kind.name for kind in INTERACTION_KINDS), "springs",
+OPTIONAL_KINDS = ("bodies", "norms", "joints", *(kind.name for kind in INTERACTION_KINDS), "springs",
                   "drivers")
 
 
@@ -138,7 +138,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     scale = max(scale, springs_residual(sy.springs, q, v, mode, r))
     linear_residual(sy.linear, n, q, lam, fv, mode, r)
     norms_residual(sy.norms, n, q, lam, r)
-    terms_residual(sy.terms, n, q, lam, r)
+    joints_residual(sy.joints, n, q, lam, r)
     drivers_residual(sy.drivers, n, q, lam, fv, mode, r)
     scale = max(scale, sliding_residual(sy.sliding, n, q, v, lam, fv, r))
     sc, code = clearance_terms(sy.clearance, q, v, FLAG[0], 0.0, 0.0, r, r, sy.error)
@@ -158,7 +158,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     kscale = max(kscale, springs_jacobian(sy.springs, q, v, mode, cC, cK, data))
     linear_jacobian(sy.linear, data)
     norms_jacobian(sy.norms, q, lam, cK, data)
-    terms_jacobian(sy.terms, q, lam, cK, data)
+    joints_jacobian(sy.joints, q, lam, cK, data)
     drivers_jacobian(sy.drivers, q, lam, fv, mode, cK, data)
     sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data)
     _, code = clearance_terms(sy.clearance, q, v, FLAG[1], cC, cK, data, data, sy.error)
@@ -220,7 +220,7 @@ def set_bases(sy, log, stop, elements, q):  # noqa: ANN001, ANN201
     next step (empty for a resumed run, whose start :meth:`Assembly.begin` sets)."""
     if elements:
         groups_set_bases(sy.beams, log, stop)
-    terms_set_bases(sy.terms, log, stop)
+    joints_set_bases(sy.joints, log, stop)
     loads_set_bases(sy.loads, log, stop)
     clearance_set_bases(sy.clearance, log, stop, q)
 

@@ -59,7 +59,7 @@ def test_kernel_gets_none_for_the_kinds_a_model_lacks():
     model.rigid(beam.last_node, body)
     asm = Assembly(model)
     present = {k for k in OPTIONAL_KINDS if getattr(asm.kernel_system, k) is not None}
-    assert present == {"bodies", "norms", "terms"}
+    assert present == {"bodies", "norms", "joints"}
 
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba disabled")

@@ -13,7 +13,7 @@ import numpy as np
 from .. import driver
 from ..constraints.base import Constraint
 from ..constraints.drivers import JointDriver, pack_drivers
-from ..constraints.joints import EulerParameterNormalization, joint_pattern, pack_norms, pack_terms
+from ..constraints.joints import EulerParameterNormalization, joint_pattern, pack_joints, pack_norms
 from ..constraints.linear import linear_pattern, pack_linear
 from ..elements import rigid_body as rb
 from ..elements.group import MAX_GROUPS
@@ -92,9 +92,9 @@ def term_owners(model: Model, numbering: Numbering, rows: ConstraintRows, loads:
     joints = [nl.constraint for nl in rows.nonlinear if id(nl.constraint) not in rows.interaction_constraints]
     coords = {id(nl.constraint): nl.coords for nl in rows.nonlinear}
     norms = [c for c in joints if isinstance(c, EulerParameterNormalization)]
-    terms = [c for c in joints if hasattr(c, "table")]
+    tables = [c for c in joints if hasattr(c, "table")]
     drivers = [c for c in joints if isinstance(c, JointDriver)]
-    if len(norms) + len(terms) + len(drivers) != len(joints):
+    if len(norms) + len(tables) + len(drivers) != len(joints):
         raise ModelError("internal: a constraint that no term kind packs")
 
     def joint_blocks(kept: Sequence[Constraint]) -> Blocks:
@@ -118,8 +118,8 @@ def term_owners(model: Model, numbering: Numbering, rows: ConstraintRows, loads:
                                          ctx.functions, ctx)),
         TermOwner("norms", joint_blocks(norms),
                   lambda ctx: pack_norms(norms, ctx), bool(norms)),
-        TermOwner("terms", joint_blocks(terms),
-                  lambda ctx: pack_terms(terms, ctx), bool(terms)),
+        TermOwner("joints", joint_blocks(tables),
+                  lambda ctx: pack_joints(tables, ctx), bool(tables)),
     ]
     for kind in driver.INTERACTION_KINDS:
         objs = by_kind[kind.name]

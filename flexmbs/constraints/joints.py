@@ -747,8 +747,9 @@ class NormPart(NamedTuple):
     p: np.ndarray                    # work (4,)
 
 
-class TermPart(NamedTuple):
-    """All joints of term tables (:class:`TermTable`), concatenated."""
+class JointPart(NamedTuple):
+    """The joints whose equations are term tables (:class:`TermTable`), concatenated: the
+    ``joints`` part of the packed system."""
 
     table: TermTable
     eq_ptr: np.ndarray               # (nc + 1,) equations of constraint c
@@ -809,7 +810,7 @@ def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> 
                     np.array(ph, i64).reshape(k, 4), np.zeros(4))
 
 
-def pack_terms(constraints: list, dofs: DofMap) -> TermPart:
+def pack_joints(constraints: list, dofs: DofMap) -> JointPart:
     """Joints whose equations are a :class:`TermTable` (``c.table``)."""
     table, eq_ptr = concatenate_tables([c.table for c in constraints])
     coords = [np.asarray(c.coordinates(), np.int64) for c in constraints]
@@ -840,7 +841,7 @@ def pack_terms(constraints: list, dofs: DofMap) -> TermPart:
     def cat(parts: list[np.ndarray]) -> np.ndarray:
         return np.concatenate(parts).astype(i64) if parts else np.zeros(0, i64)
 
-    return TermPart(table, np.ascontiguousarray(eq_ptr, i64), cptr, cat(coords), cat(rows), jptr,
+    return JointPart(table, np.ascontiguousarray(eq_ptr, i64), cptr, cat(coords), cat(rows), jptr,
                     cat(pj), cat(pt), hptr, cat(ha), cat(hb), cat(ph), np.zeros(max_nl),
                     np.zeros(max_ne), np.zeros((max_ne, max_nl)), np.zeros((max_nl, max_nl)),
                     np.zeros(max_ne), term_work())
@@ -888,7 +889,7 @@ def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False, internal=True)
-def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
+def joints_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every joint of the term tables."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
@@ -905,7 +906,7 @@ def terms_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
+def joints_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
     the directors (NODE_DIRECTOR) of joints holding them read the new bases."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -927,7 +928,7 @@ def terms_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False, internal=True)
-def terms_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
+def joints_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ and ``cK Σ λ_i ∂²Φ_i/∂q²`` of every joint of the term tables."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return

@@ -84,6 +84,8 @@ PROBES.register("slide_coordinate",
                 _joint_probe(probes.SlideCoordinateProbe, "slide_coordinate", "sliding"))
 PROBES.register("contact_force",
                 _joint_probe(probes.ContactForceProbe, "contact_force", "clearance"))
+
+
 @PROBES.register("reaction")
 def _reaction(t: Table, ctx: BuildContext) -> probes.Probe:
     """``type = "reaction"``, ``constraint = NAME`` (a constraint or joint), ``part = NAME``
