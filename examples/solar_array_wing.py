@@ -13,7 +13,7 @@ presses it on the eyelet walls along the ellipse's minor axis; the middle eyelet
 further out. A half-sine force on panel 2 then starts a free vibration. ``--ideal`` replaces the
 clearance joints by rings without clearance (sliding joints, variant "ring").
 
-    python examples/solar_array_wing.py [--t-end 20] [--dt 1e-4] [--ideal] [--clearance 1.2e-3]
+    python examples/solar_array_wing.py [--t-end 20] [--dt 1e-3] [--step-tolerance 1e-5] [--ideal] [--clearance 1.2e-3]
         [--sections 3] [--stiffness 4e4] [--excitation 2.0] [--out DIR]
 """
 
@@ -122,7 +122,10 @@ def build(*, ideal: bool = False, clearance: float = 1.2e-3, sections: int = 3,
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t-end", type=float, default=20.0)
-    ap.add_argument("--dt", type=float, default=1e-4)
+    ap.add_argument("--dt", type=float, default=None,
+                    help="largest step (default 1e-3 s; with --ideal the fixed step 1e-4 s)")
+    ap.add_argument("--step-tolerance", type=float, default=None,
+                    help="local error per step [m] (default 1e-5; 0 with --ideal: fixed steps)")
     ap.add_argument("--ideal", action="store_true")
     ap.add_argument("--clearance", type=float, default=1.2e-3)
     ap.add_argument("--sections", type=int, default=3)
@@ -135,8 +138,13 @@ def main(argv: list[str] | None = None) -> int:
         stiffness=args.stiffness, excitation=args.excitation)
     name = "solar_array_wing_ideal" if args.ideal else "solar_array_wing"
     out = args.out or f"out/{name}_py"
-    res = fm.simulate(model, t_end=args.t_end, dt=args.dt, output_interval=1e-2, probes=probes,
-                      integrator=fm.GeneralizedAlpha(rho_inf=0.8), out=out, name=name,
+    # as the scenario files: step-error control with clearance, fixed steps for the rings
+    dt = args.dt if args.dt is not None else 1e-4 if args.ideal else 1e-3
+    tol = (args.step_tolerance if args.step_tolerance is not None
+           else 0.0 if args.ideal else 1e-5)
+    res = fm.simulate(model, t_end=args.t_end, dt=dt, output_interval=1e-2, probes=probes,
+                      integrator=fm.GeneralizedAlpha(rho_inf=0.8, step_tolerance=tol), out=out,
+                      name=name,
                       initial_static=True, static_options=STATIC)
     print(f"{name}: {res.stats.steps} steps, {res.stats.newton_iterations} Newton iterations, "
           f"wall {res.wall_time:.1f} s; output in {out}")

@@ -18,6 +18,10 @@ the Newmark direction (v += γ' u, q'' += β' u, λ += μ / s) until the velocit
 ``[[s(β' M + γ' C), Φ_qᵀ], [Φ_q, 0]] [u; μ] = -[s r_q; Φ_q v / γ']``, the iteration matrix
 with no stiffness (q does not move), factorised once per step into its own ``factor_v``.
 ``Φ_q v`` is read from the constraint rows of that matrix (:func:`flexmbs.driver.constraint_velocity`).
+
+Step-error control (``step_tolerance > 0``): after a converged step, :func:`step_error` estimates
+its local error in q; a step whose estimate exceeds the tolerance is restored and reported
+(ERR_STEP_ERROR), and the caller retries it with half the step.
 """
 
 from __future__ import annotations
@@ -36,12 +40,14 @@ STATUS_STOPPED = 3     # a step converged, then an interaction stopped the run (
 
 #: error code of a singular iteration matrix (the others are flexmbs.driver.ERR_*)
 ERR_SINGULAR = 100
+#: error code of a converged step whose local error estimate exceeds the tolerance
+ERR_STEP_ERROR = 101
 
 #: ``info`` entries
 (INFO_IT, INFO_PREV, INFO_ERR, INFO_WORST, INFO_DONE, INFO_TOTAL, INFO_CODE, INFO_HAVE,
  INFO_KSCALE, INFO_FACT, INFO_RES, INFO_PIVOT, INFO_CYC_STEPS, INFO_CYC_ITS, INFO_STEP_ITS,
- INFO_RENEW, INFO_VEL_ITS) = range(17)
-INFO_SIZE = 17
+ INFO_RENEW, INFO_VEL_ITS, INFO_STEP_ERR, INFO_STEP_ERR_MAX) = range(19)
+INFO_SIZE = 19
 
 
 class AlphaRun(NamedTuple):
@@ -74,6 +80,7 @@ class AlphaRun(NamedTuple):
     indptr: np.ndarray          # int64 (N + 1,): CSC pattern of the iteration matrix ...
     indices: np.ndarray         # int64 (nnz,): ... (Φ_q v from its constraint rows)
     velocity_rows: np.ndarray   # (m,) 1.0: Φ_q v = 0 held; 0.0: a row with Φ_t, kept as is
+    step_tolerance: float       # local error a step may have (step_error), 0: not checked
 
 
 def idle_run() -> AlphaRun:
@@ -86,7 +93,7 @@ def idle_run() -> AlphaRun:
                     full_newton=False, rtol=0.0, ctol=0.0, floor_factor=0.0, refresh_ratio=0.0,
                     refresh_iterations=0.0, refresh_cost=0.0, keep_acceleration=False,
                     info=np.zeros(INFO_SIZE), velocity=False, factor_v=idle_factor(),
-                    indptr=zi, indices=zi, velocity_rows=z)
+                    indptr=zi, indices=zi, velocity_rows=z, step_tolerance=0.0)
 
 
 def idle_factor() -> BorderedFactor:
@@ -117,6 +124,27 @@ def _slow(err, err_prev, ratio, max_more):  # noqa: ANN001, ANN202
     if rho > ratio:
         return True
     return np.log(err) > max_more * -np.log(rho)
+
+
+@njit
+def step_error(a, a_old, h, beta, gamma, tolerance):  # noqa: ANN001, ANN201
+    """Local error estimate of a generalized-alpha step in q, scaled by ``tolerance``:
+    ``max_i |(β − γ/2 + 1/12) h² (a_{n+1} − a_n)_i| / tolerance``; 1 = at the tolerance.
+
+    The algorithmic acceleration approximates ``q̈(t_n + δh)``, ``δ = α_m − α_f = 1/2 − γ``
+    (Arnold & Brüls 2007), so ``q_{n+1} = q_n + h v_n + h²(1/2 − β) a_n + h² β a_{n+1}``
+    differs from the Taylor series through ``(q_n, v_n)`` by ``(β + δ/2 − 1/6) h³ q⃛`` and
+    ``h q⃛ ≈ a_{n+1} − a_n`` (for γ = 1/2 the Newmark estimate ``(β − 1/6) h² Δq̈`` of
+    Zienkiewicz & Xie 1991; tests/solvers/test_step_control.py checks it against the true local
+    error of an oscillator). Coordinates in model units: metres for positions and slide
+    coordinates, 1 for slopes and Euler parameters."""
+    c = abs(beta - 0.5 * gamma + 1.0 / 12.0) * h * h / tolerance
+    e = 0.0
+    for i in range(a.size):
+        d = abs(a[i] - a_old[i])
+        if d > e:
+            e = d
+    return c * e
 
 
 @njit
@@ -153,7 +181,8 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
     the Jacobian (each inlines the whole model)."""
     (n_steps, h, am, af, gamma, beta, a, backup, factor, rhs, dx, a_star, max_it, full_newton,
      rtol, ctol, floor_factor, refresh_ratio, refresh_iterations, refresh_cost,
-     keep_acceleration, info, velocity, factor_v, indptr, indices, velocity_rows) = run
+     keep_acceleration, info, velocity, factor_v, indptr, indices, velocity_rows,
+     step_tolerance) = run
     n = q.size
     m = lam.size
     bp = (1 - am) / (h * h * beta * (1 - af))
@@ -162,6 +191,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
     c_corr = (1 - af) / (1 - am)
     info[INFO_DONE] = 0.0
     info[INFO_CODE] = 0.0
+    info[INFO_STEP_ERR_MAX] = 0.0
     while info[INFO_DONE] < n_steps:
         fvk = fv[int(info[INFO_DONE])]
         for i in range(n):
@@ -293,6 +323,14 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
             return STATUS_FAILED
         for i in range(n):
             a[i] = a_star[i] + c_corr * qdd[i]
+        if step_tolerance > 0.0:
+            e = step_error(a, backup[3, :n], h, beta, gamma, step_tolerance)
+            info[INFO_STEP_ERR] = e
+            if e > 1.0:
+                info[INFO_CODE] = ERR_STEP_ERROR
+                _restore(backup, q, v, qdd, a, lam)
+                return STATUS_FAILED
+            info[INFO_STEP_ERR_MAX] = max(info[INFO_STEP_ERR_MAX], e)
         info[INFO_CYC_STEPS] += 1.0
         info[INFO_CYC_ITS] += info[INFO_STEP_ITS]
         if renew_jacobian(info[INFO_STEP_ITS], info[INFO_CYC_STEPS], info[INFO_CYC_ITS],

@@ -39,8 +39,8 @@ VARIANTS = {
     "clearance 1.6 mm": _all("hole.radius", "2.4e-3"),
     "5 sections": _all("hole.sections", "5"),
     "k = 1.6e5 N/m": _all("contact.stiffness", "1.6e5"),
-    "dt = 5e-5 s": ["simulation.dt=5e-5"],
-    "dt = 2e-4 s": ["simulation.dt=2e-4"],
+    "step_tolerance = 1e-6": ["simulation.step_tolerance=1e-6"],
+    "fixed h = 1e-4 s": ["simulation.dt=1e-4", "simulation.step_tolerance=0"],
 }
 
 

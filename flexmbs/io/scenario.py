@@ -82,7 +82,8 @@ class Scenario:
                                 min_step=sim.min_step or 0.0,
                                 predictor=sim.predictor,  # type: ignore[arg-type]
                                 compiled=sim.compiled,
-                                constraint_level=sim.constraint_level)  # type: ignore[arg-type]
+                                constraint_level=sim.constraint_level,  # type: ignore[arg-type]
+                                step_tolerance=sim.step_tolerance)
 
     def static_options(self) -> StaticOptions:
         """Options of the static solver (``integrator = "static"`` or ``initial_static``)."""

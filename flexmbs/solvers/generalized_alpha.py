@@ -27,11 +27,15 @@ from ..budget import check_times
 from ..driver import constraint_velocity
 from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
+from ..steploop import step_error
 from .factor import PlannedLU
 from .newton import Newton, NewtonOptions
 
 #: values of :attr:`GeneralizedAlpha.constraint_level` (the scenario key of the same name)
 CONSTRAINT_LEVELS = ("position", "position_velocity")
+#: with step-error control the step doubles only after steps whose error estimates were at most
+#: this share of the tolerance (the estimate scales with h³: 8 × 0.1 leaves a margin of 0.8)
+GROW_ERROR = 0.1
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -50,6 +54,12 @@ class GeneralizedAlpha:
     joints and ``rho_inf = 1`` the constraint forces then stay bounded and the energy is
     conserved (an extra factorisation per step; equations with ``Phi_t != 0``, prescribed
     motion and drivers, keep their velocity).
+    ``step_tolerance`` (> 0, model units: m for positions, 1 for slopes and Euler parameters):
+    step-error control: a converged step whose local error estimate
+    (:func:`flexmbs.steploop.step_error`) exceeds it is retried with half the step, and the
+    step grows back (by 2, up to ``dt``) only after ``grow_after`` steps whose estimates were at
+    most :data:`GROW_ERROR` of it, so that the doubled step stays within it; ``dt`` is then
+    the largest step. 0: steps are cut only when Newton fails (fixed ``dt`` otherwise).
     """
 
     rho_inf: float = 0.8
@@ -61,8 +71,15 @@ class GeneralizedAlpha:
     compiled: bool = True            # compiled Newton loop when the model allows it
     predictor: Literal["zero_acceleration", "constant_acceleration"] = "constant_acceleration"
     constraint_level: Literal["position", "position_velocity"] = "position"
+    step_tolerance: float = 0.0      # 0: no step-error control
 
     def __post_init__(self) -> None:
+        if not (self.step_tolerance >= 0.0 and math.isfinite(self.step_tolerance)):
+            raise ModelError(f"step_tolerance must be a finite number >= 0 (got "
+                             f"{self.step_tolerance}; 0 = fixed steps)")
+        if self.step_tolerance > 0.0 and not self.adaptive:
+            raise ModelError("step_tolerance needs adaptive steps (adaptive = true): a step "
+                             "refused for its error is retried with half the step")
         if self.constraint_level not in CONSTRAINT_LEVELS:
             raise ModelError(f"unknown constraint_level {self.constraint_level!r} (known: "
                              f"{', '.join(CONSTRAINT_LEVELS)})")
@@ -110,6 +127,7 @@ class IntegrationStats:
     factorizations: int = 0
     residual_evaluations: int = 0
     velocity_iterations: int = 0    # of the velocity corrector (constraint_level)
+    error_rejections: int = 0       # of rejected_steps: converged, refused for their error
 
 
 class _AlphaStep:
@@ -326,15 +344,21 @@ class _PythonStepper:
         self.velocity = options.constraint_level == "position_velocity" and asm.n_mult > 0
         self.corrector = Newton(options.newton, asm.length_scale, PlannedLU(asm))
         self.velocity_step = _VelocityStep(asm, state) if self.velocity else None
+        self.error = 0.0
 
     def max_chunk(self) -> int:
         return 1
 
+    def error_max(self) -> float:
+        """The largest scaled step-error estimate of the last call's steps (0 without control)."""
+        return self.error
+
     def invalidate(self) -> None:
         self.newton.invalidate()
 
-    def advance(self, h: float, n_steps: int, t0: float) -> int:
-        """One step from t0 (``n_steps`` is 1); on failure the state is restored."""
+    def advance(self, h: float, n_steps: int, t0: float, tolerance: float = 0.0) -> int:
+        """One step from t0 (``n_steps`` is 1); on failure (or a step error estimate above
+        ``tolerance`` > 0) the state is restored."""
         am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
         st = self.state
         saved = st.copy()
@@ -360,6 +384,13 @@ class _PythonStepper:
                                                                saved.a, saved.lam)
             raise _StepFailure(0, str(exc)) from None
         st.a[:] = a_star + (1 - af) / (1 - am) * st.qdd
+        self.error = 0.0
+        if tolerance > 0.0:
+            self.error = float(step_error(st.a, saved.a, h, beta, gamma, tolerance))
+            if self.error > 1.0:
+                st.q[:], st.v[:], st.qdd[:], st.a[:], st.lam[:] = (saved.q, saved.v, saved.qdd,
+                                                                   saved.a, saved.lam)
+                raise _StepFailure(0, _step_error_reason(self.error, tolerance), error=True)
         return 1
 
     def finish_chunk(self) -> None:
@@ -377,10 +408,16 @@ class _PythonStepper:
         return self.corrector.total.iterations
 
 
+def _step_error_reason(error: float, tolerance: float) -> str:
+    return (f"its local error estimate {error * tolerance:.3g} exceeds step_tolerance = "
+            f"{tolerance:g}")
+
+
 class _StepFailure(Exception):
-    def __init__(self, done: int, reason: str) -> None:
+    def __init__(self, done: int, reason: str, error: bool = False) -> None:
         super().__init__(reason)
         self.done = done
+        self.error = error          # converged, refused by step-error control
 
 
 class _CompiledStepper:
@@ -416,6 +453,7 @@ class _CompiledStepper:
         plan = asm.factor_plan()
         self.lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
         self.stopped: Exception | None = None
+        self.tolerance = 0.0
         # the velocity corrector (constraint_level): its own factorisation, the matrix pattern
         # to read Phi_q from, the equations it holds
         self.velocity = options.constraint_level == "position_velocity" and m > 0
@@ -432,6 +470,10 @@ class _CompiledStepper:
 
     def max_chunk(self) -> int:
         return 1_000_000
+
+    def error_max(self) -> float:
+        """The largest scaled step-error estimate of the last call's steps (0 without control)."""
+        return float(self.info[self.cc.INFO_STEP_ERR_MAX])
 
     #: entries of ``info`` that steer the next steps (counters excluded: the summary adds them)
     _KEPT_INFO = ("INFO_HAVE", "INFO_KSCALE", "INFO_RENEW", "INFO_CYC_STEPS", "INFO_CYC_ITS")
@@ -465,6 +507,8 @@ class _CompiledStepper:
     def _failure_reason(self) -> str:
         cc, info = self.cc, self.info
         code = int(info[cc.INFO_CODE])
+        if code == cc.ERR_STEP_ERROR:
+            return _step_error_reason(float(info[cc.INFO_STEP_ERR]), self.tolerance)
         if code == cc.ERR_SINGULAR:
             return ("the iteration matrix is singular (a coordinate without mass or stiffness, "
                     f"or dependent constraints; zero pivot {int(info[cc.INFO_PIVOT])})")
@@ -474,8 +518,9 @@ class _CompiledStepper:
                 f"{info[cc.INFO_ERR]:.3g}, 1 = tolerance; worst equation: "
                 f"{self.asm.describe_coordinate(int(info[cc.INFO_WORST]))})")
 
-    def advance(self, h: float, n_steps: int, t0: float) -> int:
+    def advance(self, h: float, n_steps: int, t0: float, tolerance: float = 0.0) -> int:
         asm, st, o, cc = self.asm, self.state, self.o, self.cc
+        self.tolerance = tolerance
         fv = asm.functions.table(t0, h, n_steps)
         run = cc.AlphaRun(
             n_steps=int(n_steps), h=float(h), am=self.am, af=self.af, gamma=self.gamma,
@@ -487,7 +532,8 @@ class _CompiledStepper:
             refresh_ratio=float(o.refresh_ratio), refresh_iterations=float(o.refresh_iterations),
             refresh_cost=float(o.refresh_cost), keep_acceleration=self.keep_acceleration,
             info=self.info, velocity=self.velocity, factor_v=self.factor_v,
-            indptr=self.pattern[0], indices=self.pattern[1], velocity_rows=self.velocity_rows)
+            indptr=self.pattern[0], indices=self.pattern[1], velocity_rows=self.velocity_rows,
+            step_tolerance=float(tolerance))
         value, _ = kernel(OP_STEPS, asm.kernel_system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
                           self._coef, self.r, self.data, run)
         status = int(value)
@@ -499,7 +545,8 @@ class _CompiledStepper:
             self.stopped = asm.error_exception(int(self.info[cc.INFO_CODE]), st.q, t0 + done * h)
             return done
         self.invalidate()
-        raise _StepFailure(done, self._failure_reason())
+        raise _StepFailure(done, self._failure_reason(),
+                           error=int(self.info[cc.INFO_CODE]) == cc.ERR_STEP_ERROR)
 
     def finish_chunk(self) -> None:
         if self.stopped is not None:
@@ -545,6 +592,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
     h = dt
     h_min = options.min_step or dt / 1024
     ok_since_cut = 0
+    err_since_cut = 0.0     # largest step-error estimate since the last cut or growth
     t_eps = 1e-9 * dt
     k_out = int(math.floor(state.t / out_dt + 1e-9)) + 1
     h_matrix: float | None = None
@@ -552,12 +600,13 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         stepper.restore(solver_state)
         h = float(solver_state.get("h", h))
         ok_since_cut = int(solver_state.get("ok_since_cut", 0))
+        err_since_cut = float(solver_state.get("err_since_cut", 0.0))
         hm = float(solver_state.get("h_matrix", -1.0))
         h_matrix = hm if hm > 0 else None
 
     def observe() -> None:
         if snapshot is not None:
-            snapshot({"h": h, "ok_since_cut": ok_since_cut,
+            snapshot({"h": h, "ok_since_cut": ok_since_cut, "err_since_cut": err_since_cut,
                       "h_matrix": -1.0 if h_matrix is None else h_matrix, **stepper.snapshot()})
         if observer is not None:
             observer(state)
@@ -579,18 +628,22 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             stepper.invalidate()
             h_matrix = h_step
         t_start = state.t
+        # at the smallest step no step is refused for its error (only Newton can fail there)
+        tolerance = options.step_tolerance if h_step > h_min * (1 + 1e-12) else 0.0
         try:
-            done = stepper.advance(h_step, n_chunk, t_start)
+            done = stepper.advance(h_step, n_chunk, t_start, tolerance)
         except _StepFailure as exc:
             done = exc.done
             stats.steps += done
             state.t = t_start + done * h_step
             stats.rejected_steps += 1
+            stats.error_rejections += int(exc.error)
             if not options.adaptive or h_step <= h_min * (1 + 1e-12):
                 raise ConvergenceError(f"step from t = {state.t:.6g} failed at h = {h_step:.3g}: "
                                        f"{exc}") from None
             h = max(h_step / 2, h_min)
             ok_since_cut = 0
+            err_since_cut = 0.0
             stepper.invalidate()
             h_matrix = None
             continue
@@ -600,9 +653,12 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         stats.steps += done
         if h < h_nom:
             ok_since_cut += done
+            err_since_cut = max(err_since_cut, stepper.error_max())
             if ok_since_cut >= options.grow_after:
-                h = min(2 * h, h_nom)
+                if err_since_cut <= GROW_ERROR:
+                    h = min(2 * h, h_nom)
                 ok_since_cut = 0
+                err_since_cut = 0.0
         stepper.finish_chunk()
         if state.t == t_out:
             k_out += 1

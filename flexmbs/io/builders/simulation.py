@@ -43,6 +43,7 @@ class SimulationSettings:
     predictor: str = "constant_acceleration"   #: Newton start of each step
     compiled: bool = True                      #: compiled integrator when the model allows it
     constraint_level: str = "position"         #: "position" | "position_velocity"
+    step_tolerance: float = 0.0                #: local error per step; 0: fixed steps
     newton: dict[str, Any] = field(default_factory=dict)  #: NewtonOptions overrides
 
     def newton_options(self, *, static: bool = False) -> NewtonOptions:
@@ -58,7 +59,7 @@ def read_simulation(t: Table) -> SimulationSettings:
     t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval", "output_frames",
              "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
              "static_stabilizer", "predictor", "compiled", "constraint_level",
-             "newton"))
+             "step_tolerance", "newton"))
     integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
     static = integrator == "static"
     t_end = t.number("t_end", 1.0 if static else MISSING, gt=0)
@@ -74,6 +75,11 @@ def read_simulation(t: Table) -> SimulationSettings:
     min_step = t.number("min_step", None, gt=0)
     if min_step is not None and min_step > dt:
         raise t.fail("min_step", f"a number <= dt = {dt:g}", min_step)
+    adaptive = t.boolean("adaptive", True)
+    step_tolerance = t.number("step_tolerance", 0.0, ge=0.0)
+    if step_tolerance > 0.0 and not adaptive:
+        raise t.fail("step_tolerance", "0 when adaptive = false (a step refused for its error is "
+                     "retried with half the step), or adaptive = true", step_tolerance)
     newton: dict[str, Any] = {}
     nt = t.table("newton", None)
     if nt is not None:
@@ -89,7 +95,7 @@ def read_simulation(t: Table) -> SimulationSettings:
         t_end=t_end, dt=dt, integrator=integrator, rho_inf=rho_inf, gravity=(gx, gy, gz),
         output_interval=out, initial_static=t.boolean("initial_static", False),
         output_frames=t.choice("output_frames", OUTPUT_FRAMES, "multiblock", what="output form"),
-        adaptive=t.boolean("adaptive", True), min_step=min_step,
+        adaptive=adaptive, min_step=min_step,
         redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
         load_steps=t.integer("load_steps", 1, ge=1),
         static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0),
@@ -97,4 +103,4 @@ def read_simulation(t: Table) -> SimulationSettings:
         compiled=t.boolean("compiled", True),
         constraint_level=t.choice("constraint_level", CONSTRAINT_LEVELS, "position",
                                   what="constraint level"),
-        newton=newton)
+        step_tolerance=step_tolerance, newton=newton)
