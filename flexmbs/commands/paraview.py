@@ -184,12 +184,21 @@ def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,
     if time is not None:
         cmd += ["--time", repr(float(time))]
     cmd = headless(cmd)
+    before = png.stat().st_mtime_ns if png.is_file() else None
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
+    lines = (proc.stderr or proc.stdout or "").strip().splitlines()
+    written = png.is_file() and png.stat().st_mtime_ns != before
+    if proc.returncode != 0 and written and lines and lines[-1].startswith(_XVFB_CLEANUP):
+        return png     # pvbatch rendered; only xvfb-run failed to remove its own temp folder
     if proc.returncode != 0 or not png.is_file():
-        lines = (proc.stderr or proc.stdout or "").strip().splitlines()
         raise RuntimeError(f"pvbatch failed (exit {proc.returncode})"
                            + (f": {lines[-1]}" if lines else ""))
     return png
+
+
+#: xvfb-run's last line when it cannot remove its temporary folder after the program ran (it
+#: then exits 5; seen with two xvfb-run at once on a loaded machine)
+_XVFB_CLEANUP = "xvfb-run: error: problem while cleaning up temporary directory"
 
 
 # ================================================================================ CLI

@@ -256,6 +256,29 @@ def test_screenshot_without_paraview_says_so_in_one_line(sleeve_run, tmp_path, c
     assert not (tmp_path / "v.png").exists()
 
 
+@pytest.mark.parametrize("renders", [True, False])
+def test_xvfb_run_failing_only_to_clean_up_after_the_render(tmp_path, monkeypatch, renders):
+    """xvfb-run exits 5 when it cannot remove its temporary folder (seen with two at once on a
+    loaded machine): the screenshot counts if pvbatch wrote it in this call, not otherwise."""
+    from flexmbs.commands.paraview import screenshot
+
+    monkeypatch.setenv("DISPLAY", ":99")                   # no xvfb-run around the stub
+    fake = tmp_path / "pvbatch"
+    write = 'printf png > "$3"\n' if renders else ""
+    fake.write_text("#!/bin/sh\n" + write + "echo 'xvfb-run: error: problem while cleaning up "
+                    "temporary directory' >&2\nexit 5\n")
+    fake.chmod(0o755)
+    png = tmp_path / "shot.png"
+    png.write_text("an older picture")
+    os.utime(png, ns=(1, 1))
+    if renders:
+        assert screenshot(tmp_path / "view.py", png, pvbatch=str(fake)) == png.resolve()
+        assert png.read_text() == "png"
+    else:
+        with pytest.raises(RuntimeError, match="exit 5"):
+            screenshot(tmp_path / "view.py", png, pvbatch=str(fake))
+
+
 @pytest.mark.parametrize("args, text", [
     (["--color-by", "nope"], "unknown beam field 'nope' (known: displacement, velocity"),
     (["--tube-scale", "0"], "--tube-scale must be a number > 0"),
