@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs import driver as cm
     from flexmbs._jit import FLAG, njit
     from flexmbs.assembly import Assembly
-    from flexmbs.contact._detect import _joint_forces
+    from flexmbs.contact.clearance_term import _joint_forces
     from flexmbs.io.scenario import load_scenario
     from flexmbs.linalg.bordered import (
         BorderedBandedLU,

@@ -27,7 +27,7 @@ __all__ = ["MAX_SECTIONS", "available_memory", "check_run", "require_memory"]
 BASE_BYTES = 150e6
 BYTES_PER_ELEMENT = 12e3
 #: a clearance-joint section: its candidate rows (8 x 21 doubles), the exact tangent's work for
-#: two contacts (2 x 19 x 50 doubles, contact/_detect.contact_capacity), tracked contacts
+#: two contacts (2 x 19 x 50 doubles, contact/clearance_term.contact_capacity), tracked contacts
 BYTES_PER_SECTION = 17e3
 FRAME_BYTES_PER_ELEMENT = 1.8e3
 FRAME_BYTES_BASE = 4e3

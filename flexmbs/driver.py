@@ -42,7 +42,7 @@ from .constraints.sliding import (
     sliding_post_step,
     sliding_residual,
 )
-from .contact._detect import (
+from .contact.clearance_term import (
     ERR_LEFT_BORE,
     ClearancePart,
     clearance_post_step_all,

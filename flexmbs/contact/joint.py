@@ -27,24 +27,26 @@ from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ANCHOR_COL,
-    CONTACTS_PER_SECTION,
-    ERR_LEFT_BORE,
-    ERR_TOO_MANY_CONTACTS,
     MAX_CANDIDATES,
     MAX_CROSSINGS,
     N_COLS,
     N_TIPS,
+    detect_section,
+    place_tips,
+)
+from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole, section_tree
+from .clearance_term import (
+    CONTACTS_PER_SECTION,
+    ERR_LEFT_BORE,
+    ERR_TOO_MANY_CONTACTS,
     ClearancePart,
     clearance_update,
     contact_capacity,
     contact_history,
-    detect_section,
     element_spin,
-    place_tips,
     tracked_approach,
     tracked_slot,
 )
-from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole, section_tree
 from .geometry import closest_point, section_state
 from .laws import (
     N_FRICTION,
@@ -624,7 +626,7 @@ class SlidingClearanceJoint(Interaction):
         return hist
 
     def _spin(self, q: np.ndarray, v: np.ndarray, eP: int) -> np.ndarray:
-        """The spin data (pair.N_SPIN) of element eP (:func:`_detect.element_spin`)."""
+        """The spin data (pair.N_SPIN) of element eP (:func:`clearance_term.element_spin`)."""
         spin = np.empty(N_SPIN)
         element_spin(q, v, self.geometry.twist_dofs[eP], self.state.t_bar[eP], spin)
         return spin
@@ -920,7 +922,7 @@ def _enable_clearance(part: ClearancePart, i: int, on: bool) -> None:
 
 def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
     """``q`` starts the next step: the friction's reference, and the tip sections of open bores
-    placed there (as after every converged step, _detect.clearance_post_step_all; a resumed
+    placed there (as after every converged step, clearance_term.clearance_post_step_all; a resumed
     run places them as the uninterrupted one did)."""
     part.q_start[:] = q
     part.tips_due[:] = False

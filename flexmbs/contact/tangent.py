@@ -1,7 +1,7 @@
 """Exact linearisation of one detected clearance contact (issue "exact linearisation"; FORMULATION
 II §2–§5 differentiated, implicit-function theorem on the detection's own equations).
 
-The residual of a contact is that of :func:`flexmbs.contact._detect.clearance_forces`: in hole
+The residual of a contact is that of :func:`flexmbs.contact.clearance_term.clearance_forces`: in hole
 section k the beam axis crosses the section plane at ξ_I (element e_I), its section is the
 ellipse ``X(φ) = c + a cos φ e_a + b sin φ e_b`` (in-plane centre c, major axis e_a, a =
 r_b|r′|/|n·r′|, b = r_b); a stationary point φ of ``½|X|²`` (``F(φ) = X·X_φ = 0``) gives the

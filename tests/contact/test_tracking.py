@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import flexmbs as fm
-from flexmbs.contact._detect import MATCH_ANGLE, N_COLS, clearance_update, tracked_approach
+from flexmbs.contact._detect import N_COLS
+from flexmbs.contact.clearance_term import MATCH_ANGLE, clearance_update, tracked_approach
 from tests.contact.test_clearance_joint import _beam_with_sleeve
 
 P = 8   # tracked points per section (the joint's MAX_POINTS)

@@ -1,0 +1,579 @@
+"""The clearance joints' term of the assembler (:mod:`flexmbs.terms`): the penalty forces and
+tangent blocks of a joint's detected points (:func:`clearance_forces`, FORMULATION II §4-§8),
+the contacts tracked from step to step (:func:`clearance_update`: approach velocities, friction
+anchors, stick states), and the packed part of all clearance joints with the kernels the driver
+calls (:class:`ClearancePart`, :func:`clearance_terms`, :func:`clearance_post_step_all`,
+:func:`clearance_set_bases`). The detection it calls is :mod:`flexmbs.contact._detect`.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .._jit import njit
+from ..elements.ancf_cable import CENTERLINE_SIZE
+from ..elements.rigid_body import rotation
+from ._detect import (
+    ANCHOR_COL,
+    CROSSING_COL,
+    MAX_CANDIDATES,
+    angle_distance,
+    detect_section,
+    place_tips,
+    reset_crossings,
+)
+from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_TWIST, TWIST_OFF, contact_force
+from .sections import section_boundary
+from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
+
+#: two contact points of one section are the same contact from one step to the next if the
+#: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
+MATCH_ANGLE = 0.5
+
+
+@njit
+def tracked_slot(active, psi_track, k, psi):  # noqa: ANN001, ANN201
+    """Slot of the tracked contact of section k nearest to section angle ``psi`` (within
+    :data:`MATCH_ANGLE`), −1 for a new contact."""
+    best = MATCH_ANGLE
+    slot = -1
+    for s in range(active.shape[1]):
+        if active[k, s]:
+            d = angle_distance(psi_track[k, s], psi)
+            if d < best:
+                best = d
+                slot = s
+    return slot
+
+
+@njit
+def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN201
+    """Approach velocity stored for the contact of section k nearest to section angle ``psi``
+    (:func:`tracked_slot`), 0 for a new contact."""
+    slot = tracked_slot(active, psi_track, k, psi)
+    return approach[k, slot] if slot >= 0 else 0.0
+
+
+@njit
+def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, twist_dofs, hist):  # noqa: ANN001, ANN201
+    """History of a contact (pair.N_HISTORY) from its tracked slot (−1: a new contact, no
+    anchor, counted as sticking) and the coordinates the step started from (the element's
+    twists where it has them, ``twist_dofs`` ≥ 0)."""
+    for c in range(3):
+        hist[c] = anchor[k, slot, c] if slot >= 0 else 0.0
+    hist[3] = stuck[k, slot] if slot >= 0 else 1.0
+    for c in range(7):
+        hist[4 + c] = q_start[body_dofs[c]]
+    for c in range(CENTERLINE_SIZE):
+        hist[11 + c] = q_start[elem_dofs[c]]
+    for a in range(N_TWIST):
+        hist[HIST_TWIST + a] = q_start[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
+
+
+@njit
+def element_spin(q, v, twist_dofs, t_bar, spin):  # noqa: ANN001, ANN201
+    """The spin data (pair.N_SPIN) of a contact element: its nodes' twists, their rates and
+    their charts' base tangents ``t_bar`` (2, 3); ``spin[0] = 0`` for an element without twist
+    (``twist_dofs`` −1, a cable). ``spin`` None: no joint of the model holds a beam with
+    twist (the rod's spin is compiled out of the contact, _compiled_view)."""
+    if spin is None:
+        return
+    spin[0] = 1.0 if twist_dofs[0] >= 0 else 0.0
+    for a in range(N_TWIST):
+        spin[1 + a] = q[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
+        spin[3 + a] = v[twist_dofs[a]] if twist_dofs[a] >= 0 else 0.0
+        for c in range(3):
+            spin[5 + 3 * a + c] = t_bar[a, c]
+
+
+@njit
+def clearance_update(rows, m, sections, approach, active, psi_track, anchor, stuck):  # noqa: ANN001, ANN201, C901, PLR0912
+    """Contact state after a converged step from the candidate rows of the converged state
+    (with ``gap``, ``gap_rate`` and the friction history): every penetrating point is matched
+    to the nearest tracked contact of its section (section angle, greedy by distance, within
+    :data:`MATCH_ANGLE`) and keeps its approach velocity; a new one stores ``−ġ_N`` (approach
+    velocity at onset, used by the dissipative laws); each takes its anchor and stick state
+    from its row; tracked contacts not found are released (their anchors cleared). ``rows``
+    sorted by section; ``sections`` (``[count, k₀, …]`` sorted, count −1: every section) the
+    sections crossed at the step's start, where every tracked contact lies: O(rows + crossed
+    sections) per step."""
+    P = active.shape[1]
+    taken = np.zeros(P, dtype=np.bool_)
+    new_app = np.zeros(P)
+    new_psi = np.zeros(P)
+    new_anchor = np.zeros((P, 4))
+    idx = np.empty(max(m, 1), dtype=np.int64)
+    slot_of = np.empty(max(m, 1), dtype=np.int64)
+    r0 = 0
+    listed = sections[0] >= 0
+    n_listed = sections[0] if listed else active.shape[0]
+    w = 0
+    while True:
+        # the next section with rows (sorted by section, as detect_section writes them) or
+        # tracked contacts (in the list of sections crossed at the step's start)
+        k = -1
+        if r0 < m:
+            k = int(rows[r0, 0])
+        if w < n_listed:
+            kw = sections[1 + w] if listed else w
+            if k < 0 or kw < k:
+                k = kw
+        if k < 0:
+            break
+        while w < n_listed and (sections[1 + w] if listed else w) <= k:
+            w += 1
+        nc = 0
+        i = r0
+        while i < m and int(rows[i, 0]) == k:
+            if rows[i, 12] < 0.0:
+                idx[nc] = i
+                nc += 1
+            i += 1
+        r0 = i
+        if nc == 0:
+            tracked = False
+            for s in range(P):
+                if active[k, s]:
+                    tracked = True
+                    break
+            if not tracked:
+                continue
+        taken[:] = False
+        slot_of[:nc] = -1
+        while True:   # greedy matching, nearest pair first
+            best = MATCH_ANGLE
+            bi = -1
+            bs = -1
+            for c in range(nc):
+                if slot_of[c] >= 0:
+                    continue
+                for s in range(P):
+                    if active[k, s] and not taken[s]:
+                        d = angle_distance(psi_track[k, s], rows[idx[c], 11])
+                        if d < best:
+                            best = d
+                            bi = c
+                            bs = s
+            if bi < 0:
+                break
+            slot_of[bi] = bs
+            taken[bs] = True
+        for c in range(min(nc, P)):
+            i = idx[c]
+            new_psi[c] = rows[i, 11]
+            new_app[c] = approach[k, slot_of[c]] if slot_of[c] >= 0 else -rows[i, 13]
+            for a in range(4):
+                new_anchor[c, a] = rows[i, ANCHOR_COL + a]
+        for s in range(P):
+            if s < min(nc, P):
+                approach[k, s] = new_app[s]
+                psi_track[k, s] = new_psi[s]
+                active[k, s] = True
+                for a in range(3):
+                    anchor[k, s, a] = new_anchor[s, a]
+                stuck[k, s] = new_anchor[s, 3]
+            else:
+                approach[k, s] = 0.0
+                psi_track[k, s] = 0.0
+                active[k, s] = False
+                for a in range(3):
+                    anchor[k, s, a] = 0.0
+                stuck[k, s] = 0.0
+
+
+@njit
+def _frame(q, body_dofs):  # noqa: ANN001, ANN202
+    """Hole body [r, p] and rotation A(p) (homogeneous)."""
+    qb = np.empty(7)
+    for i in range(7):
+        qb[i] = q[body_dofs[i]]
+    return qb, rotation(qb[3:7])
+
+
+@njit(internal=True)
+def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+                     tree_c, tree_r, tree_lo,
+                     tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                     xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
+                     consistent, paper, law, fric,
+                     approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
+                     exact, r_q, K_out, C_out, elem_k, elem_i):
+    """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
+    sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
+    of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
+    each candidate row gets its ``gap``, ``gap_rate`` and friction history after the step
+    (``dx, dy, dz, stick``: the contact's :func:`~flexmbs.contact.laws.tangential_force` from
+    its tracked anchor, stick state and the step's start ``q_start``). With ``want_tangent`` the signed
+    tangent blocks go to ``K_out`` (N_LOCAL × N_EXT: rows [r_H, p, e_P], columns [r_H, p, e_I,
+    e_P] of :mod:`flexmbs.contact.tangent`) and ``C_out`` (N_LOCAL × N_LOCAL), the elements of
+    the contact point and of the section crossing to ``elem_k`` and ``elem_i``: the exact
+    linearisation (``exact``) or Gauss–Newton ``k BᵀB`` (frozen hole point, no e_I columns).
+    ``spin`` (pair.N_SPIN) work for the contact element's spin, ``paper`` as in
+    :func:`detect_section` (None: compiled out). Returns ``(rows, contacts, scale)``;
+    ``rows = −1 − k`` if the beam axis left the bore at section k."""
+    qb, A = _frame(q, body_dofs)
+    vb = np.empty(7)
+    for i in range(7):
+        vb[i] = v[body_dofs[i]]
+    ne = elem_dofs.shape[0]
+    for e in range(ne):
+        for k in range(CENTERLINE_SIZE):
+            qe[e, k] = q[elem_dofs[e, k]]
+    m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
+                       tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                       xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
+                       consistent, paper, rows)
+    if m < 0:
+        return m, 0, 0.0
+    Qc = np.empty(N_LOCAL)
+    K = np.empty((N_LOCAL, N_LOCAL))
+    C = np.empty((N_LOCAL, N_LOCAL))
+    KX = np.empty((N_LOCAL, N_EXT))
+    Qx = np.empty(N_LOCAL)
+    Y = np.empty(2)
+    Yp = np.empty(2)
+    Ypp = np.empty(2)
+    geo = np.empty(N_GEO)
+    hist = np.empty(N_HISTORY)
+    ve = np.empty(CENTERLINE_SIZE)
+    u_Q = np.empty(3)
+    count = 0
+    scale = 0.0
+    for i in range(m):
+        row = rows[i]
+        k, eP = int(row[0]), int(row[3])
+        sign = row[2]
+        for c in range(3):
+            u_Q[c] = (A[0, c] * (row[5] - qb[0]) + A[1, c] * (row[6] - qb[1])
+                      + A[2, c] * (row[7] - qb[2]))
+        for c in range(CENTERLINE_SIZE):
+            ve[c] = v[elem_dofs[eP, c]]
+        slot = tracked_slot(active, psi_track, k, row[11])
+        v_app = approach[k, slot] if slot >= 0 else 0.0
+        contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP],
+                        twist_dofs[eP], hist)
+        element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
+        g, gdot, _, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
+                                        law, fric, hist, v_app, want_tangent and not exact, Qc, K,
+                                        C, geo)
+        row[12] = g
+        row[13] = gdot
+        for c in range(4):
+            row[ANCHOR_COL + c] = geo[12 + c]
+        if g >= 0.0:
+            continue
+        for c in range(7):
+            r_q[body_dofs[c]] -= sign * Qc[c]
+        for c in range(CENTERLINE_SIZE):
+            r_q[elem_dofs[eP, c]] -= sign * Qc[7 + c]
+        for c in range(N_TWIST):
+            if twist_dofs[eP, c] >= 0:
+                r_q[twist_dofs[eP, c]] -= sign * Qc[TWIST_OFF + c]
+        for c in range(N_LOCAL):
+            if abs(Qc[c]) > scale:
+                scale = abs(Qc[c])
+        if want_tangent and count >= K_out.shape[0]:
+            return _OVERFLOW, count, scale
+        if want_tangent and exact:
+            eI = eP if consistent else int(row[CROSSING_COL])
+            section_boundary(shape, params, row[11], Y, Yp, Ypp)
+            contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI],
+                            row[CROSSING_COL + 1],
+                            qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
+                            fric, hist, v_app, consistent, paper, Qx, KX, C)
+            for a in range(N_LOCAL):
+                for b in range(N_EXT):
+                    K_out[count, a, b] = sign * KX[a, b]
+                for b in range(N_LOCAL):
+                    C_out[count, a, b] = sign * C[a, b]
+            elem_k[count] = eP
+            elem_i[count] = eI
+        elif want_tangent:
+            for a in range(N_LOCAL):
+                for b in range(N_EXT):
+                    K_out[count, a, b] = 0.0
+                for b in range(7):
+                    K_out[count, a, b] = sign * K[a, b]
+                for b in range(CENTERLINE_SIZE):
+                    K_out[count, a, P_OFF + b] = sign * K[a, 7 + b]
+                for b in range(N_TWIST):
+                    K_out[count, a, T_OFF + b] = sign * K[a, TWIST_OFF + b]
+                for b in range(N_LOCAL):
+                    C_out[count, a, b] = sign * C[a, b]
+            elem_k[count] = eP
+            elem_i[count] = eP
+        count += 1
+    return m, count, scale
+
+
+# ---------------------------------------------------------------------------------------------
+# the clearance-joint term of the assembler (flexmbs.terms): all clearance joints
+#: error code: the beam axis left the bore (joint in ``error[1]``, section in ``error[2]``)
+ERR_LEFT_BORE = 1
+#: error code: more contacts at once than the tangent's work arrays hold (joint in
+#: ``error[1]``, contacts in ``error[2]``; :data:`CONTACTS_PER_SECTION`)
+ERR_TOO_MANY_CONTACTS = 3
+#: contacts per section the tangent's work arrays hold on average (plus
+#: :data:`EXTRA_CONTACTS`): a section has one, two past a²/b > R, a third with a local minimum;
+#: sized by the candidates instead (MAX_CANDIDATES per section) they took 60 kB per section
+CONTACTS_PER_SECTION = 2
+EXTRA_CONTACTS = 64
+#: ``clearance_forces``' first result when the contacts overflow the work arrays
+_OVERFLOW = -(1 << 40)
+
+
+class ClearancePart(NamedTuple):
+    body: np.ndarray                 # (nj, 7)
+    elem_dofs: np.ndarray            # (nj, max_ne, CENTERLINE_SIZE)
+    twist_dofs: np.ndarray           # (nj, max_ne, N_TWIST) the nodes' twists (−1: a cable)
+    t_bar: np.ndarray                # (nj, max_ne, 2, 3) their charts' base tangents (a holder
+                                     # of the nodal bases: clearance_set_bases)
+    n_elem: np.ndarray
+    lengths: np.ndarray              # (nj, max_ne)
+    origins: np.ndarray              # (nj, max_ns, 3) section origins (body coordinates)
+    frames: np.ndarray               # (nj, max_ns, 3, 3) section axes (body coordinates)
+    tree_c: np.ndarray               # (nj, max_nodes, 3) the sections' bounding-sphere tree
+    tree_r: np.ndarray               # (nj, max_nodes)     (bores.section_tree)
+    tree_lo: np.ndarray              # (nj, max_nodes)
+    tree_hi: np.ndarray              # (nj, max_nodes)
+    open_ends: np.ndarray            # (nj,) the beam may enter and leave the bore
+    cross_n: np.ndarray              # work (max_ns,) crossings per section (zero between calls)
+    cross_e: np.ndarray              # work (max_ns, MAX_CROSSINGS)
+    cross_xi: np.ndarray             # work (max_ns, MAX_CROSSINGS)
+    touched: np.ndarray              # work (max_ns,)
+    work: np.ndarray                 # work (max_ns + 64,)
+    n_sec: np.ndarray
+    r_b: np.ndarray
+    shape: np.ndarray                # (nj,) compiled section kind (sections.SHAPE_*)
+    params: np.ndarray               # (nj, 4) its parameters
+    R_out: np.ndarray                # (nj,) bounding radius of the section
+    R_in: np.ndarray                 # (nj,) inscribed radius
+    consistent: np.ndarray           # (nj,) detection: stationary pairs (§4b), else the paper's
+    law: np.ndarray                  # (nj, 5)
+    fric: np.ndarray                 # (nj, N_FRICTION) friction law (laws.Friction.parameters)
+    enabled: np.ndarray              # (nj,) evaluated here (else by the joint's Python path)
+    exact: np.ndarray                # (nj,) exact tangent (else Gauss-Newton)
+    elem_ws: np.ndarray              # (nj, max_ns) state: warm starts (−1: not crossed)
+    xi_ws: np.ndarray
+    ws_list: np.ndarray              # (nj, max_ns + 1) the sections with elem_ws set
+                                     # ([count, k...], count −1: not known; reset_crossings)
+    approach: np.ndarray             # (nj, max_ns, P) state: tracked contacts (approach
+    active: np.ndarray               # (nj, max_ns, P)   velocity, in use, section angle)
+    psi: np.ndarray                  # (nj, max_ns, P)
+    anchor: np.ndarray               # (nj, max_ns, P, 3) state: friction anchors (elastic
+    stuck: np.ndarray                # (nj, max_ns, P)      displacement, body frame; stuck)
+    q_start: np.ndarray              # (n,) state: the coordinates the step started from
+    pos: np.ndarray                  # (nj, max_ne, N_LOCAL * N_LOCAL): (body, element) blocks
+    cross: np.ndarray                # (nj, max_ne, 2, CENTERLINE_SIZE²): (element, element ∓ 1),
+                                     # −1 outside the pattern
+    qe: np.ndarray                   # work (max_ne, CENTERLINE_SIZE)
+    rows: np.ndarray                 # (nj, MAX_CANDIDATES max_ns, N_COLS): last candidates
+    n_candidates: np.ndarray         # (nj,) their number
+    elem_out: np.ndarray             # (nj, max_ns): section crossings of the last residual
+    xi_out: np.ndarray
+    out_list: np.ndarray             # (nj, max_ns + 1) the sections with elem_out set
+    K: np.ndarray                    # work (n_contacts, N_LOCAL, N_EXT), n_contacts =
+    C: np.ndarray                    # work (n_contacts, N_LOCAL, N_LOCAL)  contact_capacity()
+    kelem: np.ndarray                # work (n_contacts,): contact point's element
+    kelem_i: np.ndarray              # work (n_contacts,): crossing's element
+    no_K: np.ndarray                 # (0, N_LOCAL, N_EXT): no tangent in the residual
+    no_C: np.ndarray                 # (0, N_LOCAL, N_LOCAL)
+    no_elem: np.ndarray              # (0,)
+    scratch: np.ndarray              # (n + m,) residual written while assembling the matrix
+    stations: np.ndarray             # (nj, max_ns) the sections' stations along the bore
+    tip_on: np.ndarray               # (nj, N_TIPS) state: tip section placed (place_tips; its
+    tip_station: np.ndarray          # (nj, N_TIPS)   slot n_sec − N_TIPS + t), its station
+    tip_reach: np.ndarray            # (nj,) largest distance of neighbouring sections
+    tips_due: np.ndarray             # (nj,) state: place the tip sections at q_start first
+    spin: np.ndarray                 # work (N_SPIN,) a contact element's spin (element_spin)
+    paper: np.ndarray                # (nj,) the paper's detection (not ``consistent``)
+    # (the last three are None in the kernel's copy when no joint of the model uses them:
+    # contact.joint._compiled_view, their code is then not compiled)
+
+
+def contact_capacity(max_sections: int) -> int:
+    """Contacts at once the tangent's work arrays of a joint with ``max_sections`` hold."""
+    return min(MAX_CANDIDATES * max_sections, CONTACTS_PER_SECTION * max_sections + EXTRA_CONTACTS)
+
+
+@njit(inline="always")
+def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # noqa: ANN001, ANN202
+    """:func:`clearance_forces` of clearance joint j; records the candidates' count and, if the
+    beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
+    ne_j = cl.n_elem[j]
+    ns = cl.n_sec[j]
+    place_due_tips(cl.tips_due, j, cl.q_start, cl.qe, cl.n_elem[j], cl.n_sec[j], cl.elem_dofs[j],
+                   cl.body[j], cl.lengths[j], cl.origins[j], cl.frames[j], cl.stations[j],
+                   cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], cl.tip_reach[j],
+                   cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j], cl.tip_station[j], cl.work)
+    m, cnt, sc = clearance_forces(
+        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j], cl.spin,
+        cl.lengths[j, :ne_j], cl.origins[j, :ns],
+        cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
+        cl.open_ends[j], cl.tip_on[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
+        cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
+        cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
+        cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
+        cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
+        want_tangent, cl.exact[j], r, K, C, elem, elem_i)
+    if m == _OVERFLOW:
+        cl.n_candidates[j] = 0
+        error[0] = ERR_TOO_MANY_CONTACTS
+        error[1] = j
+        error[2] = cnt
+        return m, cnt, sc
+    cl.n_candidates[j] = m
+    if m < 0:
+        error[0] = ERR_LEFT_BORE
+        error[1] = j
+        error[2] = -1 - m
+    return m, cnt, sc
+
+
+@njit(internal=True)
+def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: ANN001, ANN201, C901
+    """Contact forces of every (enabled) clearance joint subtracted from ``r_q`` (``r``), or
+    with ``want_tangent`` their tangent ``cK K + cC C`` into ``data`` (exact or Gauss–Newton,
+    per joint; the residual then goes to ``cl.scratch``); one compiled function for both (its
+    callees are optimised and compiled once). Returns ``(scale, error code)``.
+
+    The tangent's columns of the crossing element e_I go to the (body, e_I) block for the
+    body's rows and, for the element's rows, to the entries of a neighbouring e_I that the
+    pattern holds (the shared node; the others, of order ξ² where the contact and the crossing
+    straddle a node, and a crossing two or more elements away, are dropped: the tangent is
+    exact whenever the section plane crosses the contact point's element)."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0.0, 0
+    ne = CENTERLINE_SIZE
+    scale = 0.0
+    rr = cl.scratch if want_tangent else r
+    K = cl.K if want_tangent else cl.no_K
+    C = cl.C if want_tangent else cl.no_C
+    kelem = cl.kelem if want_tangent else cl.no_elem
+    kelem_i = cl.kelem_i if want_tangent else cl.no_elem
+    for j in range(cl.r_b.size):
+        if not cl.enabled[j]:
+            continue
+        m, cnt, sc = _joint_forces(cl, j, q, v, want_tangent, rr, K, C, kelem, kelem_i, error)
+        if m < 0:
+            return scale, error[0]
+        if sc > scale:
+            scale = sc
+        if not want_tangent:
+            continue
+        for i in range(cnt):
+            eP = cl.kelem[i]
+            eI = cl.kelem_i[i]
+            pos = cl.pos[j, eP]
+            # a rod's rows and columns of its twists (a cable has none: −1)
+            n_rows = N_LOCAL if cl.twist_dofs[j, eP, 0] >= 0 else TWIST_OFF
+            for a in range(n_rows):
+                for c in range(7):
+                    data[pos[N_LOCAL * a + c]] += cK * cl.K[i, a, c] + cC * cl.C[i, a, c]
+                for c in range(ne):
+                    kk = cl.K[i, a, P_OFF + c]
+                    if eI == eP:
+                        kk += cl.K[i, a, I_OFF + c]
+                    data[pos[N_LOCAL * a + 7 + c]] += cK * kk + cC * cl.C[i, a, 7 + c]
+                for c in range(n_rows - TWIST_OFF):
+                    data[pos[N_LOCAL * a + TWIST_OFF + c]] += (cK * cl.K[i, a, T_OFF + c]
+                                                               + cC * cl.C[i, a, TWIST_OFF + c])
+            if eI == eP:
+                continue
+            posI = cl.pos[j, eI]
+            for a in range(7):
+                for c in range(ne):
+                    data[posI[N_LOCAL * a + 7 + c]] += cK * cl.K[i, a, I_OFF + c]
+            side = 0 if eI == eP - 1 else (1 if eI == eP + 1 else -1)
+            if side < 0:
+                continue
+            cross = cl.cross[j, eP, side]
+            for a in range(ne):
+                for c in range(ne):
+                    at = cross[ne * a + c]
+                    if at >= 0:     # the shared node's entries (see clearance_pattern)
+                        data[at] += cK * cl.K[i, 7 + a, I_OFF + c]
+    return scale, 0
+
+
+@njit(internal=True)
+def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION I
+    §2.4): the contact elements holding them read the new base tangent; ``q`` (its twists
+    changed), unless empty (a resumed run: :func:`~flexmbs.contact.joint._begin_clearance`),
+    is the start of the next step, the friction's reference."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
+    for j in range(cl.r_b.size):
+        for e in range(cl.n_elem[j]):
+            for a in range(N_TWIST):
+                dof = cl.twist_dofs[j, e, a]
+                if dof < 0:
+                    continue
+                for i in range(stop):
+                    if np.int64(log[i, 0]) == dof:
+                        for c in range(3):
+                            cl.t_bar[j, e, a, c] = log[i, 1 + c]
+    if q.size > 0:
+        for i in range(cl.q_start.size):
+            cl.q_start[i] = q[i]
+
+
+@njit(internal=True)
+def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
+    """After a converged step (following a residual at that state, whose detection it reuses):
+    warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`),
+    ``q`` the start of the next step, where the tip sections of open bores will be placed
+    (:func:`place_tips`) by its first evaluation: the output of this state still sees the
+    sections its equilibrium was found with."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return
+    for i in range(cl.q_start.size):
+        cl.q_start[i] = q[i]
+    for j in range(cl.r_b.size):
+        if not cl.enabled[j]:
+            continue
+        ns = cl.n_sec[j]
+        ws_list = cl.ws_list[j]
+        out_list = cl.out_list[j]
+        clearance_update(cl.rows[j], cl.n_candidates[j], ws_list, cl.approach[j, :ns],
+                         cl.active[j, :ns], cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns])
+        reset_crossings(cl.elem_ws[j, :ns], ws_list)
+        for i in range(out_list[0]):
+            k = out_list[1 + i]
+            cl.elem_ws[j, k] = cl.elem_out[j, k]
+            cl.xi_ws[j, k] = cl.xi_out[j, k]
+            ws_list[1 + i] = k
+        ws_list[0] = out_list[0]
+        _mark_tips_due(cl.tips_due, j, cl.open_ends[j])
+
+
+@njit(internal=True)
+def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, frames, stations,  # noqa: ANN001, ANN201, PLR0913
+                   tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
+                   tip_station, work):
+    """At the step's first evaluation (``due[j]``): :func:`place_tips` of clearance joint j at
+    ``q``, the step's start; ``qe`` work (n_elem, CENTERLINE_SIZE). ``due`` None: no joint of
+    the model has an open bore (the tip sections' code is compiled out, _compiled_view)."""
+    if due is None:
+        return
+    if not due[j]:
+        return
+    due[j] = False
+    for e in range(ne):
+        for c in range(CENTERLINE_SIZE):
+            qe[e, c] = q[elem_dofs[e, c]]
+    qb, A = _frame(q, body)
+    place_tips(qe[:ne], lengths[:ne], qb[:3], A, origins[:ns], frames[:ns], stations[:ns],
+               tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
+               tip_station, work)
+
+
+@njit
+def _mark_tips_due(due, j, open_end):  # noqa: ANN001, ANN202
+    """The next step's first evaluation places joint j's tip sections (an open bore)."""
+    if due is None:
+        return
+    due[j] = open_end
