@@ -199,6 +199,7 @@ def test_checkpoint_interval_bounds_the_cost_and_the_end_is_always_saved(tmp_pat
         for k in range(3):
             st.t = 0.01 * k
             w.write(st)
+            w.flush()           # the writer's thread has written the output
             assert load_checkpoint(tmp_path / "checkpoint.npz")[0].t == 0.0
     st_ck, extra = load_checkpoint(tmp_path / "checkpoint.npz")
     assert st_ck.t == 0.02 and extra["output_step"] == 2
