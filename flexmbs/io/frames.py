@@ -97,6 +97,24 @@ _MERGED_IDS = ("block_id", "beam_id", "body_id")
 OUTLINE_SAMPLES = 48
 
 
+def _constant(a: np.ndarray) -> np.ndarray:
+    """``a`` (owning its data) made read-only: the same in every frame, so the VTK writer
+    encodes it once (:func:`flexmbs.io.vtu._data_array`)."""
+    a = np.array(a) if a.base is not None else a
+    a.setflags(write=False)
+    return a
+
+
+def _cross(w: np.ndarray, arm: np.ndarray) -> np.ndarray:
+    """``np.cross(w, arm)`` of a 3-vector and rows (n, 3): the same operations, without its
+    generic overhead (a body's point velocities in every frame)."""
+    out = np.empty(arm.shape)
+    out[:, 0] = w[1] * arm[:, 2] - w[2] * arm[:, 1]
+    out[:, 1] = w[2] * arm[:, 0] - w[0] * arm[:, 2]
+    out[:, 2] = w[0] * arm[:, 1] - w[1] * arm[:, 0]
+    return out
+
+
 @dataclass
 class _BeamSampler:
     index: int
@@ -138,7 +156,7 @@ class FrameBuilder:
             if beam.closed:
                 seg = np.vstack([seg, [ns - 1, 0]])
             gi, sl = asm.beam_slices[id(beam)]
-            self.beams.append(_BeamSampler(bi, dofs, S, ref, cum[e] + xi_tab[k] * L[e],
+            self.beams.append(_BeamSampler(bi, dofs, S, ref, _constant(cum[e] + xi_tab[k] * L[e]),
                                            e * (spe + 1) + k, seg.astype(np.int64), gi, sl, xi_tab))
         # per-frame constants: sliced reference data, element dofs, radius and cell arrays
         self._field_names = [grp.element_type.layout.output_fields for grp in asm.groups]
@@ -148,12 +166,14 @@ class FrameBuilder:
             nseg = b.segments.shape[0]
             self._beam_const.append((
                 asm.beam_rest(beam), asm.element_dofs(beam),
-                np.full(b.S.shape[0], np.nan if beam.radius is None else float(beam.radius)),
+                _constant(np.full(b.S.shape[0], np.nan if beam.radius is None
+                                  else float(beam.radius))),
                 {"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
                  "beam_id": np.full(nseg, b.index, np.int32),
                  "body_id": np.full(nseg, -1, np.int32)}))
-        self._polyline = [np.append(np.arange(b.S.shape[0]), [0] if model.beams[b.index].closed
-                                    else []).astype(np.int64) for b in self.beams]
+        self._polyline = [_constant(np.append(np.arange(b.S.shape[0]),
+                                              [0] if model.beams[b.index].closed else []
+                                              ).astype(np.int64)) for b in self.beams]
         #: interactions that report contact points / bore outlines (blocks of the multiblock)
         self._contact_sources = [j for j in model.interactions if hasattr(j, "output")]
         self._outline_sources = [(i, j) for i, j in enumerate(model.interactions)
@@ -164,6 +184,7 @@ class FrameBuilder:
         self.bodies = []
         for bi, body in enumerate(model.bodies):
             pts, tri = body_surface(body)
+            tri = _constant(np.array(tri, np.int64))
             d = asm.body_dofs(body)
             q0 = asm.q_ref[d]
             ref = q0[:3] + pts @ rb.rotation_matrix(q0[3:]).T
@@ -207,7 +228,7 @@ class FrameBuilder:
         nt = tri.shape[0]
         return VTUMesh(
             x, [(VTK_TRIANGLE, tri)],
-            point_data={"displacement": x - ref, "velocity": v[d[:3]] + np.cross(w, arm)},
+            point_data={"displacement": x - ref, "velocity": v[d[:3]] + _cross(w, arm)},
             cell_data={"block_id": np.full(nt, BLOCK_BODY, np.int32),
                        "beam_id": np.full(nt, -1, np.int32),
                        "body_id": np.full(nt, bi, np.int32)})
@@ -256,12 +277,13 @@ class FrameBuilder:
             for (ji, _), jr in zip(self._outline_sources, rings, strict=True):
                 for k, ring in enumerate(jr):
                     m = ring.shape[0]
-                    rings_ji.append(np.append(np.arange(start, start + m), start).astype(np.int64))
+                    rings_ji.append(_constant(np.append(np.arange(start, start + m),
+                                                        start).astype(np.int64)))
                     joints.append(ji)
                     sections.append(k)
                     start += m
-            self._outline_cells = (rings_ji, np.array(joints, np.int32),
-                                   np.array(sections, np.int32))
+            self._outline_cells = (rings_ji, _constant(np.array(joints, np.int32)),
+                                   _constant(np.array(sections, np.int32)))
         lines, joint, section = self._outline_cells
         pts = [ring for jr in rings for ring in jr]
         return VTUMesh(np.vstack(pts) if pts else np.zeros((0, 3)), [(VTK_POLY_LINE, lines)],
