@@ -432,9 +432,10 @@ class OutputWriter:
                 except BaseException as exc:  # noqa: BLE001 - raised in the caller's thread
                     self._failure = exc
 
-    def _raise_failure(self) -> None:
-        """Raise the writer thread's error in the caller's thread (once; ``finish`` knows)."""
-        if self._failure is not None and not self._failure_raised:
+    def _raise_failure(self, again: bool = True) -> None:
+        """Raise the writer thread's error in the caller's thread (the output is broken: at
+        every call; ``again=False``: only if the caller has not had it, as ``finish`` does)."""
+        if self._failure is not None and (again or not self._failure_raised):
             self._failure_raised = True
             raise self._failure
 
@@ -586,7 +587,7 @@ class OutputWriter:
         except OSError:
             self._remove_temporaries()
             raise
-        self._raise_failure()      # unless the caller had it already
+        self._raise_failure(again=False)      # unless the caller had it already
         if interrupted is not None:
             raise interrupted
 

@@ -229,3 +229,24 @@ def test_flush_waits_for_the_queued_outputs(tmp_path, monkeypatch):
         w.flush()
         assert len(_rows(tmp_path / "probes.csv")) == 4
         assert _frames_complete(tmp_path, "demo") == [0.0, 0.01, 0.02, 0.03]
+
+
+def test_after_an_error_every_write_raises_it(tmp_path, monkeypatch):
+    """The output is broken after an error of the thread: each later write raises it again
+    (nothing is queued silently); the end of ``with`` does not raise it a second time."""
+    asm, _, st = _pendulum()
+
+    def failing(path, mesh, **kw):
+        raise RuntimeError("broken")
+
+    monkeypatch.setattr(vtu, "write_vtp", failing)
+    w = OutputWriter(tmp_path, "demo", asm)
+    with w:
+        w.write(st)
+        with pytest.raises(RuntimeError, match="broken"):
+            w.flush()
+        for _ in range(2):
+            with pytest.raises(RuntimeError, match="broken"):
+                w.write(st)
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == \
+        "failed: RuntimeError: broken"
