@@ -4,7 +4,9 @@
         final, stats = integrate(asm, opts, ..., observer=out.write)
         out.finish("completed", stats=stats)
 
-Files (every one valid after every output, so a run that stops early leaves readable results):
+Files (every one valid after every output written, so a run that stops early leaves readable
+results; the writer's thread writes them, following the run by at most :data:`QUEUE_SIZE`
+outputs, and whatever ends the run, everything queued is written before the summary):
 
 - ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtm`` with its pieces ``vtu/<name>_NNNNNN_<block>.vtp``
   (``output_frames="multiblock"``, the default), or ``vtu/<name>_NNNNNN.vtu`` (``"merged"``)
