@@ -729,7 +729,12 @@ class SlidingClearanceJoint(Interaction):
         ``(n_sections, samples, 3)`` global points ``o_k + Y_y(psi) e_y,k + Y_z(psi) e_z,k``
         of the section boundary ``Y(psi)`` at ``psi = 2 pi j / samples`` in each section plane."""
         _, origins, axes = self._planes(q[self.geometry.body_dofs])
-        Y = self.hole.section.boundary(np.linspace(0.0, 2.0 * np.pi, int(samples), endpoint=False))[0]
+        cached = getattr(self, "_outline_boundary", None)    # the section's, the same each time
+        section = self.hole.section
+        if cached is None or cached[0] != int(samples) or cached[1] is not section:
+            psi = np.linspace(0.0, 2.0 * np.pi, int(samples), endpoint=False)
+            cached = self._outline_boundary = (int(samples), section, section.boundary(psi)[0])
+        Y = cached[2]
         return (origins[:, None, :] + Y[None, :, :1] * axes[:, None, :, 1]
                 + Y[None, :, 1:] * axes[:, None, :, 2])
 

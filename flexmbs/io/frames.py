@@ -59,6 +59,7 @@ Radius: By Absolute Scalar" on ``radius`` draws the true section). Body surfaces
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -68,7 +69,7 @@ import numpy as np
 from ..elements import ancf_cable as cable
 from ..elements import rigid_body as rb
 from ..errors import ModelError
-from ..springs import ANGLE, spring_forces, spring_points
+from ..springs import ANGLE, SpringPart, spring_forces, spring_points
 from ..terms import dynamic_mode
 from .surfaces import body_surface
 from .vtu import VTK_LINE, VTK_POLY_LINE, VTK_TRIANGLE, VTK_VERTEX, MultiBlock, VTUMesh
@@ -94,6 +95,24 @@ _MULTIBLOCK_ONLY = ("joint_id", "section", "point_index")
 _MERGED_IDS = ("block_id", "beam_id", "body_id")
 #: points on each bore outline of the ``hole_sections`` block
 OUTLINE_SAMPLES = 48
+
+
+def _constant(a: np.ndarray) -> np.ndarray:
+    """``a`` (owning its data) made read-only: the same in every frame, so the VTK writer
+    encodes it once (:func:`flexmbs.io.vtu._data_array`)."""
+    a = np.array(a) if a.base is not None else a
+    a.setflags(write=False)
+    return a
+
+
+def _cross(w: np.ndarray, arm: np.ndarray) -> np.ndarray:
+    """``np.cross(w, arm)`` of a 3-vector and rows (n, 3): the same operations, without its
+    generic overhead (a body's point velocities in every frame)."""
+    out = np.empty(arm.shape)
+    out[:, 0] = w[1] * arm[:, 2] - w[2] * arm[:, 1]
+    out[:, 1] = w[2] * arm[:, 0] - w[0] * arm[:, 2]
+    out[:, 2] = w[0] * arm[:, 1] - w[1] * arm[:, 0]
+    return out
 
 
 @dataclass
@@ -137,7 +156,7 @@ class FrameBuilder:
             if beam.closed:
                 seg = np.vstack([seg, [ns - 1, 0]])
             gi, sl = asm.beam_slices[id(beam)]
-            self.beams.append(_BeamSampler(bi, dofs, S, ref, cum[e] + xi_tab[k] * L[e],
+            self.beams.append(_BeamSampler(bi, dofs, S, ref, _constant(cum[e] + xi_tab[k] * L[e]),
                                            e * (spe + 1) + k, seg.astype(np.int64), gi, sl, xi_tab))
         # per-frame constants: sliced reference data, element dofs, radius and cell arrays
         self._field_names = [grp.element_type.layout.output_fields for grp in asm.groups]
@@ -147,20 +166,25 @@ class FrameBuilder:
             nseg = b.segments.shape[0]
             self._beam_const.append((
                 asm.beam_rest(beam), asm.element_dofs(beam),
-                np.full(b.S.shape[0], np.nan if beam.radius is None else float(beam.radius)),
+                _constant(np.full(b.S.shape[0], np.nan if beam.radius is None
+                                  else float(beam.radius))),
                 {"block_id": np.full(nseg, BLOCK_BEAM, np.int32),
                  "beam_id": np.full(nseg, b.index, np.int32),
                  "body_id": np.full(nseg, -1, np.int32)}))
-        self._polyline = [np.append(np.arange(b.S.shape[0]), [0] if model.beams[b.index].closed
-                                    else []).astype(np.int64) for b in self.beams]
+        self._polyline = [_constant(np.append(np.arange(b.S.shape[0]),
+                                              [0] if model.beams[b.index].closed else []
+                                              ).astype(np.int64)) for b in self.beams]
         #: interactions that report contact points / bore outlines (blocks of the multiblock)
         self._contact_sources = [j for j in model.interactions if hasattr(j, "output")]
         self._outline_sources = [(i, j) for i, j in enumerate(model.interactions)
                                  if hasattr(j, "section_outlines")]
         self._joint_ids = {str(getattr(j, "name", i)): i for i, j in enumerate(model.interactions)}
+        self._outline_cells: tuple[list[np.ndarray], np.ndarray, np.ndarray] | None = None
+        self._springs: SpringPart | None = None    # springs_now's copy
         self.bodies = []
         for bi, body in enumerate(model.bodies):
             pts, tri = body_surface(body)
+            tri = _constant(np.array(tri, np.int64))
             d = asm.body_dofs(body)
             q0 = asm.q_ref[d]
             ref = q0[:3] + pts @ rb.rotation_matrix(q0[3:]).T
@@ -204,7 +228,7 @@ class FrameBuilder:
         nt = tri.shape[0]
         return VTUMesh(
             x, [(VTK_TRIANGLE, tri)],
-            point_data={"displacement": x - ref, "velocity": v[d[:3]] + np.cross(w, arm)},
+            point_data={"displacement": x - ref, "velocity": v[d[:3]] + _cross(w, arm)},
             cell_data={"block_id": np.full(nt, BLOCK_BODY, np.int32),
                        "beam_id": np.full(nt, -1, np.int32),
                        "body_id": np.full(nt, bi, np.int32)})
@@ -242,26 +266,47 @@ class FrameBuilder:
 
     def outline_mesh(self, q: np.ndarray) -> VTUMesh:
         """The bore outlines of the clearance joints' sections: one closed poly line each,
-        cell data ``joint_id``, ``section``."""
-        pts, lines, joint, section = [], [], [], []
-        start = 0
-        for ji, j in self._outline_sources:
-            rings = j.section_outlines(q, OUTLINE_SAMPLES)
-            for k, ring in enumerate(rings):
-                m = ring.shape[0]
-                pts.append(ring)
-                lines.append(np.append(np.arange(start, start + m), start).astype(np.int64))
-                joint.append(ji)
-                section.append(k)
-                start += m
+        cell data ``joint_id``, ``section``. The cells and their data are the same in every
+        frame (built at the first)."""
+        rings = [j.section_outlines(q, OUTLINE_SAMPLES) for _, j in self._outline_sources]
+        if self._outline_cells is None:
+            rings_ji: list[np.ndarray] = []
+            joints: list[int] = []
+            sections: list[int] = []
+            start = 0
+            for (ji, _), jr in zip(self._outline_sources, rings, strict=True):
+                for k, ring in enumerate(jr):
+                    m = ring.shape[0]
+                    rings_ji.append(_constant(np.append(np.arange(start, start + m),
+                                                        start).astype(np.int64)))
+                    joints.append(ji)
+                    sections.append(k)
+                    start += m
+            self._outline_cells = (rings_ji, _constant(np.array(joints, np.int32)),
+                                   _constant(np.array(sections, np.int32)))
+        lines, joint, section = self._outline_cells
+        pts = [ring for jr in rings for ring in jr]
         return VTUMesh(np.vstack(pts) if pts else np.zeros((0, 3)), [(VTK_POLY_LINE, lines)],
-                       cell_data={"joint_id": np.array(joint, np.int32),
-                                  "section": np.array(section, np.int32)})
+                       cell_data={"joint_id": joint, "section": section})
 
-    def spring_mesh(self, q: np.ndarray, v: np.ndarray) -> VTUMesh:
-        """Translational springs as lines between their ends, rotational ones as a vertex at
-        the joint point (their cells in that order)."""
+    def springs_now(self) -> SpringPart | None:
+        """The springs as a frame of the present state reads them, their mutable part (the
+        rotational springs' turns, ``theta_ref``) copied: what :meth:`spring_mesh` needs of
+        the live model when the frame is built later (in the output's writer thread). Its work
+        arrays are a copy of the solver's, shared by the frames (built by one thread)."""
+        if not self.asm.model.springs:
+            return None
         sp = self.asm.system.springs
+        if self._springs is None:   # work arrays of its own: the solver's are in use meanwhile
+            self._springs = copy.deepcopy(sp)
+        return self._springs._replace(theta_ref=sp.theta_ref.copy())
+
+    def spring_mesh(self, q: np.ndarray, v: np.ndarray, springs: SpringPart | None = None
+                    ) -> VTUMesh:
+        """Translational springs as lines between their ends, rotational ones as a vertex at
+        the joint point (their cells in that order); ``springs``: a :meth:`springs_now`
+        (default the model's, live)."""
+        sp = self.asm.system.springs if springs is None else springs
         x = spring_points(sp, q)
         fo = spring_forces(sp, q, v, dynamic_mode())
         rot = np.flatnonzero(sp.measure == ANGLE)
@@ -298,8 +343,10 @@ class FrameBuilder:
             out.append({"path": "hole_sections", "kind": "hole_sections"})
         return out
 
-    def multiblock(self, state: State, *, contacts: Sequence[dict] | None = None) -> MultiBlock:
-        """One output frame as named blocks (module docstring)."""
+    def multiblock(self, state: State, *, contacts: Sequence[dict] | None = None,
+                   springs: SpringPart | None = None) -> MultiBlock:
+        """One output frame as named blocks (module docstring). Reads nothing of the live
+        model but the springs' turns, which ``springs`` (:meth:`springs_now`) may give."""
         q = np.asarray(state.q)
         v = np.asarray(state.v)
         model = self.asm.model
@@ -316,7 +363,7 @@ class FrameBuilder:
         if self._contact_sources or contacts:
             blocks.append(("contacts", self.contact_mesh(list(contacts or []))))
         if model.springs:
-            blocks.append(("springs", self.spring_mesh(q, v)))
+            blocks.append(("springs", self.spring_mesh(q, v, springs)))
         if self._outline_sources:
             blocks.append(("hole_sections", self.outline_mesh(q)))
         frame = MultiBlock(blocks)
@@ -326,7 +373,10 @@ class FrameBuilder:
                 mesh.cell_data.pop(k, None)
         return frame
 
-    def __call__(self, state: State, *, contacts: Sequence[dict] | None = None) -> VTUMesh:
+    def __call__(self, state: State, *, contacts: Sequence[dict] | None = None,
+                 springs: SpringPart | None = None) -> VTUMesh:
+        """One output frame as a single merged grid (module docstring); ``springs`` as for
+        :meth:`multiblock`."""
         q = np.asarray(state.q)
         v = np.asarray(state.v)
         parts = [self.beam_mesh(b, q, v) for b in self.beams]
@@ -337,7 +387,7 @@ class FrameBuilder:
                 part.point_data.pop(k)
             parts.append(part)
         if self.asm.model.springs:
-            parts.append(self.spring_mesh(q, v))
+            parts.append(self.spring_mesh(q, v, springs))
         mesh = VTUMesh.merge(parts)
         t = np.array([float(state.t)])
         mesh.field_data = {"time": t, "TimeValue": t.copy()}

@@ -4,7 +4,9 @@
         final, stats = integrate(asm, opts, ..., observer=out.write)
         out.finish("completed", stats=stats)
 
-Files (every one valid after every output, so a run that stops early leaves readable results):
+Files (every one valid after every output written, so a run that stops early leaves readable
+results; the writer's thread writes them, following the run by at most :data:`QUEUE_SIZE`
+outputs, and whatever ends the run, everything queued is written before the summary):
 
 - ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtm`` with its pieces ``vtu/<name>_NNNNNN_<block>.vtp``
   (``output_frames="multiblock"``, the default), or ``vtu/<name>_NNNNNN.vtu`` (``"merged"``)
@@ -36,11 +38,13 @@ import errno
 import json
 import math
 import os
+import queue
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import Any, TextIO
+from typing import Any, NamedTuple, TextIO
 
 import numpy as np
 
@@ -64,6 +68,8 @@ SECTION_COLUMNS = ("t", "joint", "section", "ox", "oy", "oz", "eyx", "eyy", "eyz
 
 def _fmt(x: Any) -> str:
     """CSV field: floats with the shortest exact representation, others as text."""
+    if type(x) is float:     # the common case first (a numpy float is a subclass: below)
+        return repr(x)
     if x is None:
         return ""
     if isinstance(x, (float, np.floating)):
@@ -102,6 +108,34 @@ def failure_reason(exc: BaseException) -> str:
         text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
     return text
 
+
+class _Output(NamedTuple):
+    """One output time as the writer's thread gets it: copies of what it reads of the run
+    (nothing of the live model; the springs' turns in ``springs``)."""
+
+    state: Any                     # a copy of the state (State.copy())
+    contacts: list[dict]
+    sections: list[dict]
+    probe_values: np.ndarray
+    springs: Any                   # FrameBuilder.springs_now() or None
+    checkpoint_extra: dict | None  # None: no checkpoint
+    written: tuple[int, float, dict]   # the summary's outputs, final time and energy after it
+
+
+class _Flush(NamedTuple):
+    """A marker in the writer's queue: set ``done`` when the thread takes it."""
+
+    done: threading.Event
+
+
+def _rows(t: str, records: Sequence[dict], columns: Sequence[str]) -> list[list[str]]:
+    """CSV rows of ``records`` (dicts by column; missing keys are empty fields) at time ``t``."""
+    keys = columns[1:]
+    return [[t, *[_fmt(c.get(k)) for k in keys]] for c in records]
+
+
+#: outputs queued for the writer's thread at most (the solver waits when the disk is slower)
+QUEUE_SIZE = 16
 
 #: trailing blanks of summary.json: room for the final status on a full disk
 SUMMARY_RESERVE = 4096
@@ -175,13 +209,23 @@ class OutputWriter:
     :mod:`flexmbs.io.frames`.
     ``resume_at=t`` appends to the folder of an earlier run whose outputs up to ``t`` are kept
     (the CSV headers must match; the initial energy is taken from its ``summary.json``).
+
+    ``background=True`` (the default): :meth:`write` takes copies of what the output reads of
+    the run (state, rows, probe values, the springs' turns) and a thread of the writer builds
+    the frame, formats the rows and writes the files, in order, while the caller goes on (the
+    compiled integrator releases the GIL). At most :data:`QUEUE_SIZE` outputs wait; an error
+    of the thread is raised by the next :meth:`write`, :meth:`flush` or :meth:`finish`, with
+    its message; :meth:`finish` (also through ``with``, whatever ends the run) writes every
+    output queued before, then the checkpoint and the summary. ``background=False`` writes
+    each output in :meth:`write` itself (the same files).
     """
 
     def __init__(self, directory: str | os.PathLike, name: str, asm: Any, *,
                  probes: Sequence[Probe] = (), write_vtu: bool = True, checkpoints: bool = True,
                  metadata: dict | None = None, samples_per_element: int = 8,
                  vtu_encoding: str = "binary", resume_at: float | None = None,
-                 checkpoint_interval: float = 10.0, output_frames: str = "multiblock") -> None:
+                 checkpoint_interval: float = 10.0, output_frames: str = "multiblock",
+                 background: bool = True) -> None:
         # before the folder is touched: what can refuse the output
         frames = check_output(directory, name, asm, probes=probes, write_vtu=write_vtu,
                               output_frames=output_frames,
@@ -211,6 +255,12 @@ class OutputWriter:
         #: callable returning ``(stats, wall_time)`` (the run's counters so far), set by the run
         self.totals: Callable[[], tuple[Any, float | None]] | None = None
         self._files: list[Any] = []
+        self.background = bool(background)
+        self._queue: queue.Queue[_Output | _Flush | None] | None = None
+        self._thread: threading.Thread | None = None
+        self._failure: BaseException | None = None   # the writer thread's error
+        self._failure_raised = False
+        self._written: tuple[int, float, dict] | None = None   # the last output on disk
         self.series: VTUSeries | None = None
         self.frames: FrameBuilder | None = None
         self.resume_at = None if resume_at is None else float(resume_at)
@@ -224,8 +274,9 @@ class OutputWriter:
         try:
             if frames is not None:
                 self.frames = frames
+                # without the writer's thread the series stores the files in one of its own
                 self.series = VTUSeries(self.pvd_path, encoding=vtu_encoding,
-                                        resume_at=self.resume_at, background=True)
+                                        resume_at=self.resume_at, background=not self.background)
                 if self.series.entries:     # a resumed series keeps its form
                     last = self.series.entries[-1][1]
                     self.output_frames = "multiblock" if last.endswith(".vtm") else "merged"
@@ -237,6 +288,10 @@ class OutputWriter:
         except BaseException:
             self._close_files()
             raise
+        if self.background:
+            self._queue = queue.Queue(maxsize=QUEUE_SIZE)
+            self._thread = threading.Thread(target=self._run, name="flexmbs-output", daemon=True)
+            self._thread.start()
 
     # ------------------------------------------------------------------ paths
     @property
@@ -294,52 +349,132 @@ class OutputWriter:
               probe_values: np.ndarray | None = None, energy: dict | None = None) -> None:
         """Record one output time: VTU frame, probe row, contact rows, checkpoint.
         ``probe_values`` (the probes' columns) and ``energy`` (:meth:`Assembly.energies`) may
-        be passed when the caller has them already."""
+        be passed when the caller has them already. What the output reads of the live model is
+        evaluated here; with ``background`` the files are written by the writer's thread."""
         if self.finished:
             raise ValueError("OutputWriter.write after finish()")
+        self._raise_failure()
         t = float(state.t)
-        contacts = list(contacts or [])
-        if self.series is not None and self.frames is not None:
-            frame = (self.frames.multiblock(state, contacts=contacts)
-                     if self.output_frames == "multiblock" else self.frames(state, contacts=contacts))
-            with _naming(self.series.next_path(frame)):
-                self.series.write(t, frame)
         if probe_values is None:
             probe_values = np.concatenate(
                 [np.asarray(p.evaluate(self.asm, state), float).reshape(-1) for p in self.probes]
                 + [np.zeros(0)])
-        row = [_fmt(t)] + [_fmt(float(x)) for x in probe_values]
+        if energy is None:
+            energy = self.asm.energies(state.q, state.v)
+        extra = None
+        if self.checkpoints:
+            extra = {"output_step": self.n_outputs, **(checkpoint_extra or {})}
+        if self.initial_energy is None:
+            self.initial_energy = energy
+        self.n_outputs += 1
+        job = _Output(state.copy(), list(contacts or []), list(sections or []),
+                      np.array(probe_values, dtype=float).reshape(-1),
+                      self.frames.springs_now() if self.frames is not None else None, extra,
+                      (self.n_outputs, t, energy))
+        if self._queue is None:
+            self._store(job)
+            self._written = job.written
+            return
+        while True:     # the queue is bounded; a thread that stopped on an error takes no more
+            self._raise_failure()
+            try:
+                self._queue.put(job, timeout=0.1)
+                return
+            except queue.Full:
+                if self._thread is None or not self._thread.is_alive():
+                    self._raise_failure()
+                    raise RuntimeError("flexmbs output thread ended") from None
+
+    def _store(self, job: _Output) -> None:
+        """Write the files of one output (the writer's thread, or :meth:`write` without it)."""
+        state = job.state
+        t = float(state.t)
+        if self.series is not None and self.frames is not None:
+            frame = (self.frames.multiblock(state, contacts=job.contacts, springs=job.springs)
+                     if self.output_frames == "multiblock"
+                     else self.frames(state, contacts=job.contacts, springs=job.springs))
+            with _naming(self.series.next_path(frame)):
+                self.series.write(t, frame)
+        ft = _fmt(t)
         with _naming(self.directory / "probes.csv"):
-            csv.writer(self._probe_file).writerow(row)
+            csv.writer(self._probe_file).writerow([ft, *map(repr, job.probe_values.tolist())])
             self._probe_file.flush()
-        if contacts:
+        if job.contacts:
             with _naming(self.directory / "contacts.csv"):
-                w = csv.writer(self._contact_file)
-                for c in contacts:
-                    w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in CONTACT_COLUMNS[1:]])
+                csv.writer(self._contact_file).writerows(_rows(ft, job.contacts, CONTACT_COLUMNS))
                 self._contact_file.flush()
-        if sections:
+        if job.sections:
             with _naming(self.directory / "sections.csv"):
                 if self._section_file is None:
                     self._section_file, _ = self._open_csv("sections.csv", list(SECTION_COLUMNS))
-                w = csv.writer(self._section_file)
-                for c in sections:
-                    w.writerow([_fmt(t)] + [_fmt(c.get(k)) for k in SECTION_COLUMNS[1:]])
+                csv.writer(self._section_file).writerows(_rows(ft, job.sections, SECTION_COLUMNS))
                 self._section_file.flush()
-        if self.checkpoints:
-            extra = {"output_step": self.n_outputs, **(checkpoint_extra or {})}
-            self._pending_checkpoint = (state.copy(), extra)
+        if job.checkpoint_extra is not None:
+            self._pending_checkpoint = (state, job.checkpoint_extra)
             now = time.perf_counter()
             if now - self._last_checkpoint >= self.checkpoint_interval:
                 self._write_checkpoint()
                 self._last_checkpoint = now
-        if energy is None:
-            energy = self.asm.energies(state.q, state.v)
-        if self.initial_energy is None:
-            self.initial_energy = energy
-        self.final_energy = energy
-        self.final_time = t
-        self.n_outputs += 1
+
+    def _run(self) -> None:
+        """The writer's thread: the queued outputs in order until ``None``; after an error the
+        rest is taken and dropped (the series stops at the last output written whole)."""
+        assert self._queue is not None
+        while True:
+            job = self._queue.get()
+            if job is None:
+                return
+            if isinstance(job, _Flush):
+                job.done.set()
+                continue
+            if self._failure is None:
+                try:
+                    self._store(job)
+                    self._written = job.written
+                except BaseException as exc:  # noqa: BLE001 - raised in the caller's thread
+                    self._failure = exc
+
+    def _raise_failure(self, again: bool = True) -> None:
+        """Raise the writer thread's error in the caller's thread (the output is broken: at
+        every call; ``again=False``: only if the caller has not had it, as ``finish`` does)."""
+        if self._failure is not None and (again or not self._failure_raised):
+            self._failure_raised = True
+            raise self._failure
+
+    def _stop_thread(self) -> None:
+        """Let the writer's thread write every queued output and end. An interrupt (Ctrl-C)
+        while waiting does not abandon the queued outputs: it is raised after them."""
+        if self._thread is None or self._queue is None:
+            return
+        thread, q = self._thread, self._queue
+        interrupted: KeyboardInterrupt | None = None
+        while True:
+            try:
+                if thread.is_alive():
+                    q.put(None)
+                break
+            except KeyboardInterrupt as exc:
+                interrupted = exc
+        while thread.is_alive():
+            try:
+                thread.join()
+            except KeyboardInterrupt as exc:  # noqa: PERF203 - waited for again
+                interrupted = exc
+        self._thread = None
+        if interrupted is not None:
+            raise interrupted
+
+    def flush(self) -> None:
+        """Wait until every output given to :meth:`write` is written (files flushed; the
+        checkpoint still follows its interval); raises the writer thread's error, if any."""
+        if self._queue is not None and self._thread is not None:
+            done = threading.Event()
+            # the thread is idle once it takes this marker: every earlier output is written
+            self._queue.put(_Flush(done))
+            while not done.wait(0.1):
+                if not self._thread.is_alive():
+                    break
+        self._raise_failure()
 
     # ------------------------------------------------------------------ summary
     def _summary(self, *, stats: Any = None, wall_time: float | None = None,
@@ -426,9 +561,16 @@ class OutputWriter:
             return
         self.status = " ".join(str(status).split())   # one line
         self.finished = True
+        interrupted: KeyboardInterrupt | None = None
+        try:
+            self._stop_thread()        # every output queued before is written
+        except KeyboardInterrupt as exc:    # raised once the folder is complete
+            interrupted = exc
+        if self._written is not None:      # the summary counts the outputs on disk
+            self.n_outputs, self.final_time, self.final_energy = self._written
         try:
             try:
-                self._write_checkpoint()
+                self._write_checkpoint()    # of the last output written whole
             finally:
                 self._close_files()
         except OSError as exc:    # e.g. the disk is full: the summary still says so if it can
@@ -439,11 +581,17 @@ class OutputWriter:
                                     energy_balance=energy_balance)
             self._remove_temporaries()
             raise
+        if self._failure is not None:     # the writer thread's error is the run's end
+            self.status = f"failed: {failure_reason(self._failure)}"
+            self._remove_temporaries()
         try:
             self._write_summary(stats=stats, wall_time=wall_time, energy_balance=energy_balance)
         except OSError:
             self._remove_temporaries()
             raise
+        self._raise_failure(again=False)      # unless the caller had it already
+        if interrupted is not None:
+            raise interrupted
 
     def _remove_temporaries(self) -> None:
         for p in self.directory.glob(".*.tmp"):

@@ -9,6 +9,7 @@ and a builder registered there.
 
 from __future__ import annotations
 
+import weakref
 from abc import ABC, abstractmethod
 from typing import Any
 
@@ -80,8 +81,22 @@ class BeamPointProbe(Probe):
             raise ModelError(f"probe '{self.name}': beam '{self.beam.name}' is not part of the model")
 
     def _interp(self, asm: Any, x: np.ndarray) -> np.ndarray:
-        return cable.centerline_points(x, asm.centerline_dofs(self.beam), self.beam.centerline.lengths,
+        return cable.centerline_points(x, self._dofs(asm)[1], self.beam.centerline.lengths,
                                        np.array([self._element]), np.array([self._xi]))[0]
+
+    def _dofs(self, asm: Any) -> tuple[Any, np.ndarray, dict[str, np.ndarray]]:
+        """(the assembly, the beam's centreline coordinates in it, a place for values of its
+        reference) kept for the assembly last asked about: every output asks again."""
+        kept: tuple[Any, np.ndarray, dict[str, np.ndarray]] | None = getattr(self, "_kept", None)
+        if kept is None or kept[0]() is not asm:
+            kept = (weakref.ref(asm), asm.centerline_dofs(self.beam), {})
+            self._kept = kept
+        return kept
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state.pop("_kept", None)       # a weak reference: not pickled
+        return state
 
     def evaluate(self, asm: Any, state: Any) -> np.ndarray:
         if self.quantity not in self.QUANTITIES:
@@ -94,7 +109,10 @@ class BeamPointProbe(Probe):
             return self._interp(asm, state.v)
         r = self._interp(asm, state.q)
         if self.quantity == "displacement":
-            r = r - self._interp(asm, asm.q_ref)
+            ref = self._dofs(asm)[2]
+            if "q_ref" not in ref:
+                ref["q_ref"] = self._interp(asm, asm.q_ref)
+            r = r - ref["q_ref"]
         return r
 
 

@@ -20,11 +20,13 @@ import base64
 import os
 import re
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 
 import numpy as np
 
@@ -150,8 +152,48 @@ def _format_array(a: np.ndarray, binary: bool) -> str:
     return " ".join(map(repr, flat)) if a.dtype.kind == "f" else " ".join(map(str, flat))
 
 
+#: the encoded ``DataArray`` of read-only arrays that own their data (a series' constants:
+#: cells, reference data, marked so by :class:`~flexmbs.io.frames.FrameBuilder`), by identity
+_FROZEN: dict[tuple, tuple[weakref.ref, Any]] = {}
+
+
+def _frozen(a: Any) -> bool:
+    """Whether ``a`` is an array that nothing can change: read-only and owning its data."""
+    return isinstance(a, np.ndarray) and not a.flags.writeable and a.base is None
+
+
+def _remember(key: tuple, arrays: Sequence[np.ndarray], value: Any) -> None:
+    if len(_FROZEN) > 4096:     # arrays gone: forget them
+        for k in [k for k, (ref, _) in _FROZEN.items() if ref() is None]:
+            _FROZEN.pop(k, None)
+    _FROZEN[key] = (weakref.ref(arrays[0]), (tuple(weakref.ref(x) for x in arrays[1:]), value))
+
+
+def _recall(key: tuple, arrays: Sequence[np.ndarray]) -> Any:
+    hit = _FROZEN.get(key)
+    if hit is None or hit[0]() is not arrays[0]:
+        return None
+    refs, value = hit[1]
+    if len(refs) != len(arrays) - 1 or any(r() is not x for r, x in zip(refs, arrays[1:],
+                                                                       strict=True)):
+        return None
+    return value
+
+
 def _data_array(name: str, a: np.ndarray, binary: bool, *, tuples: bool = False) -> str:
-    a = np.asarray(a)
+    """The ``DataArray`` element of ``a`` (that of a read-only array that owns its data is
+    encoded once: such an array cannot change)."""
+    if _frozen(a):
+        key = ("array", id(a), name, binary, tuples)
+        text = _recall(key, [a])
+        if text is None:
+            text = _encode_array(name, a, binary, tuples=tuples)
+            _remember(key, [a], text)
+        return text
+    return _encode_array(name, np.asarray(a), binary, tuples=tuples)
+
+
+def _encode_array(name: str, a: np.ndarray, binary: bool, *, tuples: bool = False) -> str:
     if a.dtype.kind == "b":
         a = a.astype(np.uint8)
     elif a.dtype.kind in "iu" and a.dtype not in _VTK_TYPES:
@@ -275,19 +317,12 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     is reordered so (a stable sort by section). Arguments as :func:`write_vtu`."""
     binary = _encoding(encoding)
     pts = np.asarray(mesh.points, np.float64).reshape(-1, 3)
-    conn, offs, types = mesh.flat_cells()
-    n, m = pts.shape[0], types.size
+    m, counts, order, cells_xml = _poly_cells(mesh, binary)
+    n = pts.shape[0]
     _checked_arrays(mesh, n, m)
-    section = _SECTION_OF_TYPE[types]
-    if m and section.min() < 0:
-        bad = sorted(set(types[section < 0].tolist()))
-        raise ValueError(f"PolyData holds vertices, lines and polygons only (cell types {bad})")
-    starts = np.concatenate([[0], offs[:-1]]) if m else np.zeros(0, np.int64)
-    order = np.argsort(section, kind="stable")
     cell_data = mesh.cell_data
-    if m and (np.diff(section) < 0).any():
+    if order is not None:
         cell_data = {k: np.asarray(v)[order] for k, v in mesh.cell_data.items()}
-    counts = np.bincount(section, minlength=len(_POLY_SECTIONS)).tolist()
     out = ['<?xml version="1.0"?>\n',
            '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
            'header_type="UInt64">\n<PolyData>\n']
@@ -295,6 +330,38 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     out.append(f'<Piece NumberOfPoints="{n}" NumberOfVerts="{counts[0]}" '
                f'NumberOfLines="{counts[1]}" NumberOfStrips="0" NumberOfPolys="{counts[2]}">\n')
     out.extend(_attributes_xml(mesh.point_data, cell_data, pts, binary))
+    out.extend(cells_xml)
+    out.append("</Piece>\n</PolyData>\n</VTKFile>\n")
+    if store is not None:
+        return store(Path(path), "".join(out))
+    return _store(Path(path), "".join(out), atomic)
+
+
+def _poly_cells(mesh: VTUMesh, binary: bool
+                ) -> tuple[int, list[int], np.ndarray | None, list[str]]:
+    """The cells of ``mesh`` as PolyData stores them: (number of cells, cells per section,
+    the order of the cell data or None when it keeps its order, the sections' XML). Cells
+    given as read-only arrays that own their data (:func:`_frozen`) are converted once."""
+    arrays: list[np.ndarray] = []
+    for _, c in mesh.cells:
+        arrays.extend([c] if isinstance(c, np.ndarray) else c)
+    key: tuple | None = None
+    if arrays and all(_frozen(a) for a in arrays):
+        key = ("cells", binary, tuple((t, isinstance(c, np.ndarray), len(c)) for t, c in mesh.cells),
+               tuple(id(a) for a in arrays))
+        hit = _recall(key, arrays)
+        if hit is not None:
+            return hit
+    conn, offs, types = mesh.flat_cells()
+    m = types.size
+    section = _SECTION_OF_TYPE[types]
+    if m and section.min() < 0:
+        bad = sorted(set(types[section < 0].tolist()))
+        raise ValueError(f"PolyData holds vertices, lines and polygons only (cell types {bad})")
+    starts = np.concatenate([[0], offs[:-1]]) if m else np.zeros(0, np.int64)
+    order = np.argsort(section, kind="stable")
+    counts = np.bincount(section, minlength=len(_POLY_SECTIONS)).tolist()
+    out: list[str] = []
     for k, (tag, _) in enumerate(_POLY_SECTIONS):
         if not counts[k]:
             continue
@@ -306,10 +373,10 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
         out.append(_data_array("connectivity", sel.astype(np.int64), binary))
         out.append(_data_array("offsets", ends.astype(np.int64), binary))
         out.append(f"</{tag}>\n")
-    out.append("</Piece>\n</PolyData>\n</VTKFile>\n")
-    if store is not None:
-        return store(Path(path), "".join(out))
-    return _store(Path(path), "".join(out), atomic)
+    result = (m, counts, order if m and (np.diff(section) < 0).any() else None, out)
+    if key is not None:
+        _remember(key, arrays, result)
+    return result
 
 
 @dataclass

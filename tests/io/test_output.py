@@ -199,6 +199,7 @@ def test_checkpoint_interval_bounds_the_cost_and_the_end_is_always_saved(tmp_pat
         for k in range(3):
             st.t = 0.01 * k
             w.write(st)
+            w.flush()           # the writer's thread has written the output
             assert load_checkpoint(tmp_path / "checkpoint.npz")[0].t == 0.0
     st_ck, extra = load_checkpoint(tmp_path / "checkpoint.npz")
     assert st_ck.t == 0.02 and extra["output_step"] == 2
@@ -275,3 +276,29 @@ def test_probe_names_must_be_unique_and_belong_to_the_model(tmp_path):
     other, beam2, _ = cantilever_and_pendulum(2)
     with pytest.raises(ModelError, match="not part of the model"):
         OutputWriter(tmp_path, "x", asm, probes=[BeamPointProbe("p", beam2, 0.5)])
+
+
+def test_beam_point_probe_keeps_its_coordinates_and_pickles():
+    """The probe keeps the beam's coordinates for the assembly it last evaluated (every
+    output asks again): the same values as a new probe, for another assembly too, and it
+    pickles (a sweep sends probes to its workers)."""
+    import pickle
+
+    model, beam, _ = cantilever_and_pendulum(3)
+    asm = Assembly(model)
+    st = _initial(asm)
+    st.q[asm.centerline_dofs(beam)[-1]] += 1e-3
+    probe = BeamPointProbe("tip", beam, 0.8, quantity="displacement")
+    first = probe.evaluate(asm, st)
+    np.testing.assert_array_equal(probe.evaluate(asm, st), first)
+    np.testing.assert_array_equal(
+        BeamPointProbe("tip", beam, 0.8, quantity="displacement").evaluate(asm, st), first)
+    assert np.any(first != 0.0)
+    other = Assembly(model)         # another assembly of the model: its own coordinates
+    st2 = _initial(other)
+    np.testing.assert_array_equal(probe.evaluate(other, st2), np.zeros(3))
+    probe2, model2 = pickle.loads(pickle.dumps((probe, model)))     # with its model
+    asm2 = Assembly(model2)
+    st3 = _initial(asm2)
+    st3.q[:] = st.q
+    np.testing.assert_array_equal(probe2.evaluate(asm2, st3), first)

@@ -189,6 +189,11 @@ def test_a_real_full_disk_mid_run(tiny_filesystem, capsys):
 
     def fill(state, stats):      # progress callback: after 0.02 s, the disk fills up
         if state.t > 0.02 and not filler.exists():
+            # once the writer's thread has the first three frames on disk (the fourth begun;
+            # the thread follows the solver by up to output.QUEUE_SIZE outputs)
+            deadline = time.monotonic() + 30
+            while len(list((out / "vtu").glob("*.vtm"))) < 4 and time.monotonic() < deadline:
+                time.sleep(0.01)
             with open(filler, "wb") as f, contextlib.suppress(OSError):
                 while True:
                     f.write(b"x" * 4096)

@@ -349,3 +349,28 @@ def test_background_series_loses_no_frame_to_an_interrupt_while_waiting(tmp_path
         series.write(1.0, mesh)
     with pytest.raises(OSError):
         series.close()
+
+
+def test_read_only_arrays_are_encoded_once_and_writable_ones_each_time(tmp_path):
+    """A frame's constants (read-only arrays owning their data) are encoded once; an array
+    that may change (writeable) is encoded at every write, also when changed in place."""
+    from flexmbs.io.vtu import VTK_POLY_LINE, write_vtp
+
+    pts = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    ring = np.array([0, 1, 2, 3, 0])
+    ids = np.array([7], np.int32)
+    mesh = VTUMesh(pts, [(VTK_POLY_LINE, [ring])], cell_data={"id": ids})
+    plain = write_vtp(tmp_path / "a.vtp", mesh).read_text()
+    frozen_ring, frozen_ids = ring.copy(), ids.copy()
+    frozen_ring.setflags(write=False)
+    frozen_ids.setflags(write=False)
+    frozen = VTUMesh(pts, [(VTK_POLY_LINE, [frozen_ring])], cell_data={"id": frozen_ids})
+    for _ in range(2):      # encoded, then remembered: the same file
+        assert write_vtp(tmp_path / "b.vtp", frozen).read_text() == plain
+    ring[:] = [3, 2, 1, 0, 3]       # changed in place: written as it is now
+    ids[0] = 8
+    again = write_vtp(tmp_path / "c.vtp", mesh).read_text()
+    assert again != plain
+    fresh = VTUMesh(pts, [(VTK_POLY_LINE, [np.array([3, 2, 1, 0, 3])])],
+                    cell_data={"id": np.array([8], np.int32)})
+    assert again == write_vtp(tmp_path / "d.vtp", fresh).read_text()
