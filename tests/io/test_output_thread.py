@@ -13,31 +13,37 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.io import output, vtu
 from flexmbs.io.checkpoint import load_checkpoint
 from flexmbs.io.output import OutputWriter
 from flexmbs.io.probes import BodyPositionProbe, EnergyProbe
 from flexmbs.solvers.generalized_alpha import consistent_initial_state
+from tests.io.test_output import cantilever_and_pendulum
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE2 = ROOT / "examples" / "solar_array_wing.toml"
 
 
 def _pendulum():
-    model = fm.Model(gravity=(0, 0, -9.81), name="demo")
-    beam = model.add_beam(fm.line((0, 0, 0), (1.0, 0, 0), elements=4), name="rail",
-                          section=fm.BeamStiffness(axial_stiffness=1e6, bending_stiffness=5.0,
-                                                   mass_per_length=0.5))
-    model.clamp(beam.first_node)
-    body = model.add_rigid_body(mass=0.5, inertia=(1e-3, 2e-3, 2e-3), position=(0.2, 1.0, 0.0),
-                                angular_velocity=(0, 0, 1.0), name="bob",
-                                shape={"type": "box", "size": [0.1, 0.05, 0.05]})
-    model.spherical(body, fm.GROUND, point=(0.0, 1.0, 0.0))
+    """The cantilever and pendulum of test_output.py (4 elements), assembled, at its consistent
+    initial state."""
+    model, _, body = cantilever_and_pendulum(4)
     asm = Assembly(model)
     q, v = asm.initial_state()
     return asm, body, consistent_initial_state(asm, q, v, 0.0)
+
+
+@pytest.fixture
+def slow_disk(monkeypatch):
+    """Each output takes 50 ms to store (the writer's thread falls behind the run)."""
+    real = OutputWriter._store
+
+    def slow(self, job):  # noqa: ANN001, ANN202
+        time.sleep(0.05)
+        real(self, job)
+
+    monkeypatch.setattr(OutputWriter, "_store", slow)
 
 
 def _rows(path: Path) -> list[str]:
@@ -153,18 +159,11 @@ def test_finish_raises_the_error_of_the_last_output(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("exc, status", [(KeyboardInterrupt(), "interrupted"),
                                          (RuntimeError("solver"), "failed: RuntimeError: solver")])
-def test_whatever_ends_the_run_the_queued_outputs_are_written_first(tmp_path, monkeypatch, exc,
+def test_whatever_ends_the_run_the_queued_outputs_are_written_first(tmp_path, slow_disk, exc,
                                                                     status):
     """A slow disk (each output takes 50 ms): the run ends (Ctrl-C, an error) with outputs
     still queued; all of them are written before the checkpoint and the summary."""
     asm, body, st = _pendulum()
-    real = OutputWriter._store
-
-    def slow(self, job):
-        time.sleep(0.05)
-        real(self, job)
-
-    monkeypatch.setattr(OutputWriter, "_store", slow)
     n = 8
     with pytest.raises(type(exc)), OutputWriter(tmp_path, "demo", asm,
                                                 probes=[EnergyProbe("E")]) as w:
@@ -213,15 +212,8 @@ def test_the_queue_is_bounded(tmp_path, monkeypatch):
     assert _frames_complete(tmp_path, "demo") == [0.0, 0.01, 0.02, 0.03, 0.04]
 
 
-def test_flush_waits_for_the_queued_outputs(tmp_path, monkeypatch):
+def test_flush_waits_for_the_queued_outputs(tmp_path, slow_disk):
     asm, _, st = _pendulum()
-    real = OutputWriter._store
-
-    def slow(self, job):
-        time.sleep(0.05)
-        real(self, job)
-
-    monkeypatch.setattr(OutputWriter, "_store", slow)
     with OutputWriter(tmp_path, "demo", asm) as w:
         for k in range(4):
             st.t = 0.01 * k
