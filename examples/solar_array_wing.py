@@ -13,8 +13,8 @@ presses it on the eyelet walls along the ellipse's minor axis; the middle eyelet
 further out. A half-sine force on panel 2 then starts a free vibration. ``--ideal`` replaces the
 clearance joints by rings without clearance (sliding joints, variant "ring").
 
-    python examples/solar_array_wing.py [--t-end 20] [--dt 1e-3] [--step-tolerance 1e-5] [--ideal] [--clearance 1.2e-3]
-        [--sections 3] [--stiffness 4e4] [--excitation 2.0] [--out DIR]
+    python examples/solar_array_wing.py [--t-end 20] [--dt 1e-3] [--step-tolerance 1e-5] [--ideal]
+        [--clearance 1.2e-3] [--sections 3] [--stiffness 4e4] [--excitation 2.0] [--out DIR]
 """
 
 from __future__ import annotations
