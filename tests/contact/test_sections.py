@@ -282,3 +282,33 @@ def test_quartic_real_roots_match_numpy(rng: np.random.Generator) -> None:
     np.testing.assert_allclose(np.sort(out[:3]), [1.0, 2.0, 3.0], rtol=1e-9)
     assert quartic_real_roots(0.0, 0.0, 1.0, -3.0, 2.0, out) == 2
     np.testing.assert_allclose(np.sort(out[:2]), [1.0, 2.0], rtol=1e-12)
+
+
+def test_a_sections_radii_are_computed_once(monkeypatch):
+    """Sections are immutable: the bounding radius (a superellipse samples its wall 2 049
+    times for it) is computed at the first call and kept, per instance; equal sections stay
+    equal and hash alike, and a pickled section keeps working."""
+    import pickle
+
+    from flexmbs.contact.shapes.superellipse import SuperellipseSection
+
+    a = SuperellipseSection(a=4e-3, b=2.6e-3, exponent=4.0)
+    calls = []
+    real = SuperellipseSection.boundary
+
+    def counted(self, psi):  # noqa: ANN001, ANN202
+        calls.append(np.size(psi))
+        return real(self, psi)
+
+    monkeypatch.setattr(SuperellipseSection, "boundary", counted)
+    r = a.bounding_radius()
+    assert len(calls) == 1 and a.bounding_radius() == r and len(calls) == 1
+    psi = np.linspace(0.0, 0.5 * np.pi, 200001)               # |y/a|^4 + |z/b|^4 = 1 in polar form
+    rho = (np.abs(np.cos(psi) / 4e-3) ** 4 + np.abs(np.sin(psi) / 2.6e-3) ** 4) ** -0.25
+    assert rho.max() <= r < rho.max() * (1 + 2e-6)
+    b = SuperellipseSection(a=4e-3, b=2.6e-3, exponent=4.0)
+    assert a == b and hash(a) == hash(b)
+    assert b.bounding_radius() == r and len(calls) == 2        # its own, computed once
+    c = pickle.loads(pickle.dumps(a))
+    assert c == a and c.bounding_radius() == r
+    assert a.inscribed_radius() == pytest.approx(2.6e-3)

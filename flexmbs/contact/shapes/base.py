@@ -5,9 +5,12 @@ names. The shapes themselves are one module each in this package."""
 
 from __future__ import annotations
 
+import functools
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -93,6 +96,20 @@ class HoleSection(ABC):
 
     #: number of samples of F(ψ) in the generic detector (≥ 64, FORMULATION II §6)
     samples: int = 128
+
+    #: the methods whose value a section computes once (sections are immutable: a frozen
+    #: dataclass each); a superellipse's bounding radius samples its wall 2 049 times
+    _ONCE = ("bounding_radius", "inscribed_radius")
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """A subclass's :meth:`bounding_radius` and :meth:`inscribed_radius` are computed at
+        their first call and kept (the detectors and the output ask for them per root and per
+        output: Example "rounded slot" spent 10 s building its scenario in them)."""
+        super().__init_subclass__(**kwargs)
+        for name in HoleSection._ONCE:
+            method = cls.__dict__.get(name)
+            if method is not None and not getattr(method, "computed_once", False):
+                setattr(cls, name, _once(name, method))
 
     def boundary(self, psi: np.ndarray | float
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -204,6 +221,23 @@ class HoleSection(ABC):
         return Candidate(phi=ellipse.angle_of(X) % (2.0 * np.pi), X=X, Q=np.asarray(Y, dtype=float),
                          normal=np.asarray(N, dtype=float), depth=d,
                          kind=1 if dF < 0.0 else -1, psi=float(psi % (2.0 * np.pi)))
+
+
+def _once(name: str, method: Callable[[Any], float]) -> Callable[[Any], float]:
+    """``method`` computed once per instance, its value kept in the instance's ``__dict__``
+    (set through ``object.__setattr__``: the sections are frozen dataclasses)."""
+    key = f"_{name}_value"
+
+    @functools.wraps(method)
+    def once(self: Any) -> float:
+        value = self.__dict__.get(key)
+        if value is None:
+            value = method(self)
+            object.__setattr__(self, key, value)
+        return value
+
+    once.computed_once = True  # type: ignore[attr-defined]
+    return once
 
 
 #: scenario name -> hole section class (``hole = { shape = "circle", radius = ... }``)
