@@ -178,6 +178,30 @@ def test_ctrl_c_while_starting_is_one_line(tmp_path):
         assert len(lines) == 1 and lines[0].startswith("flexmbs: error: interrupted"), err
 
 
+def test_ctrl_c_wrapped_by_python_is_still_an_interrupt(monkeypatch, capsys):
+    """A Ctrl-C landing in a class body being created (a dataclass field's ``__set_name__``)
+    reaches the command as a RuntimeError caused by the KeyboardInterrupt (seen in CI while
+    the model module loaded): still one line and exit 130; other errors are not swallowed."""
+    from flexmbs import cli
+
+    def wrapped(argv):  # noqa: ANN001, ANN202
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise RuntimeError("Error calling __set_name__ on 'Field' instance") from exc
+
+    monkeypatch.setattr(cli, "_main", wrapped)
+    assert cli.main(["run", SLEEVE]) == cli.EXIT_INTERRUPTED
+    assert capsys.readouterr().err.strip() == "flexmbs: error: interrupted"
+
+    def plain(argv):  # noqa: ANN001, ANN202
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(cli, "_main", plain)
+    with pytest.raises(RuntimeError, match="a bug"):
+        cli.main(["run", SLEEVE])
+
+
 def test_clearance_geometry_errors_name_the_key(tmp_path, capsys):
     out = str(tmp_path / "o")
     _refused(["run", SLEEVE, "--set", "joints.sleeve.hole.radius=1e-3", "--out", out, "-q"],
