@@ -118,6 +118,11 @@ class State:
         return State(self.t, self.q.copy(), self.v.copy(), self.qdd.copy(), self.a.copy(),
                      self.lam.copy())
 
+    def restore(self, saved: State) -> None:
+        """The arrays of ``saved`` (a :meth:`copy`) back in place (a refused step)."""
+        self.q[:], self.v[:], self.qdd[:], self.a[:], self.lam[:] = (
+            saved.q, saved.v, saved.qdd, saved.a, saved.lam)
+
 
 @dataclass
 class IntegrationStats:
@@ -380,16 +385,14 @@ class _PythonStepper:
                 self.corrector.invalidate()     # its matrix: this step's q, no stiffness
                 self.corrector.solve(self.velocity_step)
         except ConvergenceError as exc:
-            st.q[:], st.v[:], st.qdd[:], st.a[:], st.lam[:] = (saved.q, saved.v, saved.qdd,
-                                                               saved.a, saved.lam)
+            st.restore(saved)
             raise _StepFailure(0, str(exc)) from None
         st.a[:] = a_star + (1 - af) / (1 - am) * st.qdd
         self.error = 0.0
         if tolerance > 0.0:
             self.error = float(step_error(st.a, saved.a, h, beta, gamma, tolerance))
             if self.error > 1.0:
-                st.q[:], st.v[:], st.qdd[:], st.a[:], st.lam[:] = (saved.q, saved.v, saved.qdd,
-                                                                   saved.a, saved.lam)
+                st.restore(saved)
                 raise _StepFailure(0, _step_error_reason(self.error, tolerance), error=True)
         return 1
 
