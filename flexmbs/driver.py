@@ -112,6 +112,8 @@ class SystemPart(NamedTuple):
         and the present interaction kinds' parts as they declare them for the kernel (their
         ``compiled_view``: features no interaction uses are ``None`` too); the same arrays
         otherwise: in-place updates are seen by both."""
+        present = {k: on or present.get(COMPILED_WITH.get(k, ""), False)
+                   for k, on in present.items()}
         absent: dict[str, Any] = {k: None for k in OPTIONAL_KINDS if not present[k]}
         for kind in INTERACTION_KINDS:
             if present[kind.name] and kind.compiled_view is not None:
@@ -123,6 +125,13 @@ class SystemPart(NamedTuple):
 #: time"); beams, loads and linear rows are in nearly every model
 OPTIONAL_KINDS = ("bodies", "norms", "joints", *(kind.name for kind in INTERACTION_KINDS), "springs",
                   "drivers")
+
+#: optional kinds compiled whenever the kind they name is present, even in a model that has none
+#: of them: the joints and springs of rigid bodies. A model of bodies then gains its first joint
+#: or spring without a kernel of its own (a new kind of model is a compile of 15-40 s), and
+#: the test suite compiles 14 kernels instead of 27; the price is their code in the first
+#: compile of a model of bodies without them (docs/design-notes.md, "Compile time").
+COMPILED_WITH = {"joints": "bodies", "springs": "bodies"}
 
 
 @njit(inline="always")

@@ -59,7 +59,23 @@ def test_kernel_gets_none_for_the_kinds_a_model_lacks():
     model.rigid(beam.last_node, body)
     asm = Assembly(model)
     present = {k for k in OPTIONAL_KINDS if getattr(asm.kernel_system, k) is not None}
-    assert present == {"bodies", "norms", "joints"}
+    # a body brings the joints and springs of bodies along (driver.COMPILED_WITH), empty here
+    assert present == {"bodies", "norms", "joints", "springs"}
+    assert asm.kernel_system.springs.idx.shape[0] == 0
+
+
+def test_a_first_spring_or_joint_on_bodies_needs_no_kernel_of_its_own():
+    """Models of bodies with and without springs and joints have one kind of kernel."""
+    kinds = set()
+    for extra in ("none", "spring", "joint"):
+        model, beam = _cantilever()
+        body = model.add_rigid_body(mass=0.1, inertia=(1e-5, 1e-5, 1e-5), position=(1.0, 0, 0))
+        if extra == "spring":
+            model.add_spring_damper(body, beam.first_node, stiffness=10.0)
+        elif extra == "joint":
+            model.spherical(body, point=(1.0, 0.0, 0.0))
+        kinds.add(kmod.model_kind(Assembly(model).kernel_system))
+    assert kinds == {"BeamPart+bodies+norms+joints+springs"}
 
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba disabled")

@@ -28,7 +28,8 @@ ROOT = Path(__file__).resolve().parents[2]
 RTOL = 1e-12
 SPE = 8            # samples per element of the output (OutputWriter's default)
 MU = 0.3
-#: Example 1 with friction, a second beam (a clamped guy wire) and a spring from the sleeve to it
+#: Example 1 with friction, a second beam (a guy wire, clamped at its start and pinned by a joint
+#: at its end) and a spring from the sleeve to it (the kind of model of Example 2: one kernel for both)
 EXTRA = """
 [[beams]]
 name = "guy"
@@ -44,9 +45,11 @@ beam = "guy"
 node = "first"
 
 [[constraints]]
-type = "clamp"
+type = "joint"
+name = "guy_pin"
 beam = "guy"
 node = "last"
+point = [0.8, 0.3, 0.5]
 
 [[springs]]
 name = "tether"
