@@ -112,8 +112,10 @@ class SystemPart(NamedTuple):
         and the present interaction kinds' parts as they declare them for the kernel (their
         ``compiled_view``: features no interaction uses are ``None`` too); the same arrays
         otherwise: in-place updates are seen by both."""
-        present = {k: on or present.get(COMPILED_WITH.get(k, ""), False)
-                   for k, on in present.items()}
+        present = dict(present)
+        for group in COMPILED_TOGETHER:
+            if any(present[k] for k in group):
+                present.update(dict.fromkeys(group, True))
         absent: dict[str, Any] = {k: None for k in OPTIONAL_KINDS if not present[k]}
         for kind in INTERACTION_KINDS:
             if present[kind.name] and kind.compiled_view is not None:
@@ -126,12 +128,13 @@ class SystemPart(NamedTuple):
 OPTIONAL_KINDS = ("bodies", "norms", "joints", *(kind.name for kind in INTERACTION_KINDS), "springs",
                   "drivers")
 
-#: optional kinds compiled whenever the kind they name is present, even in a model that has none
-#: of them: the joints and springs of rigid bodies. A model of bodies then gains its first joint
-#: or spring without a kernel of its own (a new kind of model is a compile of 15-40 s), and
-#: the test suite compiles 14 kernels instead of 27; the price is their code in the first
-#: compile of a model of bodies without them (docs/design-notes.md, "Compile time").
-COMPILED_WITH = {"joints": "bodies", "springs": "bodies"}
+#: optional kinds compiled together: a model that has any kind of a group compiles the group's
+#: other kinds too (their parts empty, not None). Joints and spring-dampers: a model of bodies
+#: with joints gains its first spring (or the reverse) without a kernel of its own (a new kind
+#: of model is a compile of 15-40 s), and the test suite compiles 19 kernels instead of 27.
+#: Bodies alone stay lean: compiling joints and springs into every model of bodies (Example 1
+#: has neither) cost its first run 77 -> 105 s (docs/design-notes.md, "Compile time").
+COMPILED_TOGETHER = (("joints", "springs"),)
 
 
 @njit(inline="always")

@@ -59,23 +59,27 @@ def test_kernel_gets_none_for_the_kinds_a_model_lacks():
     model.rigid(beam.last_node, body)
     asm = Assembly(model)
     present = {k for k in OPTIONAL_KINDS if getattr(asm.kernel_system, k) is not None}
-    # a body brings the joints and springs of bodies along (driver.COMPILED_WITH), empty here
+    # the joint brings the springs along (driver.COMPILED_TOGETHER), empty here
     assert present == {"bodies", "norms", "joints", "springs"}
     assert asm.kernel_system.springs.idx.shape[0] == 0
 
 
-def test_a_first_spring_or_joint_on_bodies_needs_no_kernel_of_its_own():
-    """Models of bodies with and without springs and joints have one kind of kernel."""
+def test_a_first_spring_next_to_a_joint_needs_no_kernel_of_its_own():
+    """Models of bodies with joints, springs or both have one kind of kernel; bodies alone
+    another (driver.COMPILED_TOGETHER)."""
     kinds = set()
-    for extra in ("none", "spring", "joint"):
+    for extra in ("spring", "joint", "both"):
         model, beam = _cantilever()
         body = model.add_rigid_body(mass=0.1, inertia=(1e-5, 1e-5, 1e-5), position=(1.0, 0, 0))
-        if extra == "spring":
+        if extra in ("spring", "both"):
             model.add_spring_damper(body, beam.first_node, stiffness=10.0)
-        elif extra == "joint":
+        if extra in ("joint", "both"):
             model.spherical(body, point=(1.0, 0.0, 0.0))
         kinds.add(kmod.model_kind(Assembly(model).kernel_system))
     assert kinds == {"BeamPart+bodies+norms+joints+springs"}
+    model, beam = _cantilever()
+    model.add_rigid_body(mass=0.1, inertia=(1e-5, 1e-5, 1e-5), position=(1.0, 0, 0))
+    assert kmod.model_kind(Assembly(model).kernel_system) == "BeamPart+bodies+norms"
 
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba disabled")

@@ -491,10 +491,12 @@ class GenericJoint(_TermConstraint):
     Joint frames: on a rigid body ``J = A(p)·frame`` at ``x = r + A(p)·point``; on ground ``frame``
     and ``point`` are global; a beam node (attachment a only, translation only) has ``x = r_node``.
 
-    - Translation, axis k locked: ``(A_b f_b[:,k])·(x_a − x_b) = 0`` (components in b's joint
-      frame). If all three are locked and a or b is ground, the equations are the global
-      components ``x_a − x_b = 0`` instead (same constraint set, linear when the other side is
-      a beam node, labels then mean global x, y, z).
+    - Translation, all three axes locked: the global components ``x_a − x_b = 0`` (labels x, y,
+      z and the multipliers' components are global; linear when the other side is ground or a
+      beam node). Between two bodies this has no Hessian
+      block coupling them, so a chain of bodies keeps a narrower band (issue 37).
+    - Translation, some axes locked: ``(A_b f_b[:,k])·(x_a − x_b) = 0`` for each locked axis k
+      (components in b's joint frame, which the free axes need).
     - Rotation (dot-1 form): about joint x ``(A_a f_a[:,1])·(A_b f_b[:,2]) = 0``, about y
       ``(A_a f_a[:,2])·(A_b f_b[:,0]) = 0``, about z ``(A_a f_a[:,0])·(A_b f_b[:,1]) = 0``.
       They assume the frames are aligned (up to the free rotations) at assembly; a dot-1
@@ -530,7 +532,7 @@ class GenericJoint(_TermConstraint):
         self._coords = np.concatenate([a.dofs[:na], b.dofs[:nb]])
         tr_axes = [k for k in range(3) if tr[k]]
         rot_axes = [k for k in range(3) if ro[k]]
-        self.global_translation = all(tr) and (a.is_ground or b.is_ground)
+        self.global_translation = all(tr)
         self.n_equations = len(tr_axes) + len(rot_axes)
         self.equation_labels = ([_AXES[k] for k in tr_axes] + [f"rot_{_AXES[k]}" for k in rot_axes])
         tb = _TableBuilder()

@@ -264,6 +264,27 @@ def test_spherical_to_ground_uses_global_components():
     assert np.allclose(_phi(c, q1), [1e-3, 2e-3, -3e-3], atol=1e-12)
 
 
+def test_spherical_between_bodies_uses_global_components():
+    """All translations locked between two bodies: Φ = x_a − x_b in global components, so the
+    Hessian of Φ_qᵀλ has no block between a's and b's coordinates (the chain's narrow band,
+    issue 37); a revolute's translations likewise."""
+    rng = np.random.default_rng(6)
+    for make in (spherical, revolute):
+        c, q, _, _ = _assembled(rng, make, theta=0.3 if make is spherical else 0.0)
+        assert c.global_translation
+        q1 = q.copy()
+        q1[BODY_A[:3]] += np.array([1e-3, 2e-3, -3e-3])
+        assert np.allclose(_phi(c, q1)[:3], [1e-3, 2e-3, -3e-3], atol=1e-12)
+    c, q, _, _ = _assembled(rng, spherical)
+    ql = q[c.coordinates()]
+    H = c.hessian_lambda(ql, rng.normal(size=3), 0.0)
+    na = 7
+    assert np.abs(H[:na, na:]).max() == 0.0 and np.abs(H[na:, :na]).max() == 0.0
+    assert np.abs(H).max() > 0.0                     # each body's own rotation block remains
+    partial = GenericJoint("g", c.a, c.b, translation=(1, 1, 0))
+    assert not partial.global_translation
+
+
 # ------------------------------------------------------------------------ beam node connections
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("to_ground", [False, True])

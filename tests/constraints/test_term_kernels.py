@@ -143,7 +143,8 @@ def test_kernels_match_finite_differences(kind):
 
 def test_table_semantics():
     """Documented layout: spherical to ground is LIN with P = I of (body point − ground point);
-    a revolute between bodies is 5 DOT equations on BODY_DIR/BODY_POINT rows."""
+    a revolute between bodies is 3 LIN equations (global components of the points'
+    difference) and 2 DOT equations of body directions."""
     g = Attachment.ground((1.0, 2.0, 3.0))
     s = spherical("s", Attachment.rigid_body(BODY_A, (0.5, 0.0, 0.0)), g)
     t = s.table
@@ -155,8 +156,10 @@ def test_table_semantics():
     assert not t.vec_T[u2].any() and (t.eq_vec[:, 2:] == -1).all()
     r = revolute("r", _body(BODY_A, np.random.default_rng(0)), _body(BODY_B, np.random.default_rng(1)))
     t = r.table
-    assert t.eq_kind.tolist() == [DOT] * 5 and not t.eq_P.any()
-    assert set(t.vec_kind.tolist()) == {BODY_POINT, BODY_DIR}
+    assert t.eq_kind.tolist() == [LIN] * 3 + [DOT] * 2
+    assert np.array_equal(t.eq_P[:3], np.eye(3)) and not t.eq_P[3:].any()
+    assert set(t.vec_kind[t.eq_vec[:3, :2].ravel()].tolist()) == {BODY_POINT}
+    assert set(t.vec_kind[t.eq_vec[3:, :2].ravel()].tolist()) == {BODY_DIR}
     assert set(t.vec_off.tolist()) == {0, 7}
     n = BeamNodeRigid("n", Attachment.beam_node(NODE), g, np.eye(3)[:, :2])
     assert set(n.table.vec_kind.tolist()) == {NODE_POS, NODE_SLOPE, CONST}
