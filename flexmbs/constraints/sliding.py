@@ -558,13 +558,24 @@ class SlidingPart(NamedTuple):
 
 
 def sliding_pattern(joint: SlidingJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Body and s couple with every beam coordinate (the current element moves along the beam),
-    both ways; the joint's multipliers with all of them."""
-    own = np.concatenate([joint.geometry.body_dofs, [joint.geometry.s_dof]])
-    cols = np.concatenate([own, joint.geometry.beam_dofs])
+    """The joint's multipliers couple with the body, s and every beam coordinate (the current
+    element moves along the beam), both ways; so do s and, on a cylindrical joint, the body
+    (its alignment rows ``(A y)·r′(s)`` mix p with the element and s). A ring's equations
+    ``r_H + A u_C − r(s)`` are a sum of a body term and a beam term: its Hessian couples
+    the body only with itself, which keeps a fixed eyelet's body out of the factorisation's
+    border (issue 37)."""
+    g = joint.geometry
+    body, s = g.body_dofs, np.array([g.s_dof])
+    cols = np.concatenate([body, s, g.beam_dofs])
     rows = dofs.multiplier_rows(joint.constraints()[0])
     mult = dofs.n_coords + rows[rows >= 0]
-    return [(own, cols), (cols, own), (mult, cols), (cols, mult)]
+    if joint.variant == "ring":
+        beam_s = np.concatenate([s, g.beam_dofs])
+        blocks = [(body, body), (s, beam_s), (beam_s, s)]
+    else:
+        own = np.concatenate([body, s])
+        blocks = [(own, cols), (cols, own)]
+    return [*blocks, (mult, cols), (cols, mult)]
 
 
 def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
@@ -592,7 +603,7 @@ def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
                 rr = n + r[kept]
                 pj[i, k, kept] = dofs.positions(rr, cc).reshape(kept.size, N_SLIDE)
                 pt[i, k, kept] = dofs.positions(cc, rr).reshape(N_SLIDE, kept.size).T
-            ph[i, k] = dofs.positions(cc, cc)
+            ph[i, k] = dofs.positions_present(cc, cc)   # −1: outside a ring's Hessian pattern
             pse[i, k] = dofs.positions(sd, j.geometry.elem_dofs[k])
         pss[i] = dofs.positions(sd, sd)[0]
         if (j.friction is not None or j.axial_force is not None) and np.all(r[:3] >= 0):
@@ -698,7 +709,9 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
         sliding_hessian(sl.ql, sl.lengths[j, k], sl.starts[j, k], sl.T[j], ne_j, sl.lam[:ne_j], sl.H)
         for a in range(N_SLIDE):
             for c in range(N_SLIDE):
-                data[sl.pos_hess[j, k, N_SLIDE * a + c]] += cK * sl.H[a, c]
+                pos = sl.pos_hess[j, k, N_SLIDE * a + c]
+                if pos >= 0:      # a ring's body-beam entries are zero and not in the pattern
+                    data[pos] += cK * sl.H[a, c]
         if sl.friction[j, 0] != FRICTION_NONE or sl.fn[j] >= 0:
             _, dQ_de, dQ_ds, dQ_dlam, dQ_dsd, _, _, _ = _joint_force(sl, j, k, sd, q, v, lam, fv)
             for a in range(CENTERLINE_SIZE):
