@@ -493,8 +493,8 @@ class GenericJoint(_TermConstraint):
 
     - Translation, all three axes locked: the global components ``x_a − x_b = 0`` (labels x, y,
       z and the multipliers' components are global; linear when the other side is ground or a
-      beam node). Between two bodies this has no Hessian
-      block coupling them, so a chain of bodies keeps a narrower band (issue 37).
+      beam node). Between two bodies this has no Hessian block coupling them, so a chain of
+      bodies keeps a narrower band (issue 37).
     - Translation, some axes locked: ``(A_b f_b[:,k])·(x_a − x_b) = 0`` for each locked axis k
       (components in b's joint frame, which the free axes need).
     - Rotation (dot-1 form): about joint x ``(A_a f_a[:,1])·(A_b f_b[:,2]) = 0``, about y
