@@ -138,6 +138,7 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
             raise
         zero = np.zeros_like(st.q)
         state = State(t, st.q, zero, zero.copy(), zero.copy(), st.lam)
+        asm.observe(state.q, state.v, state.lam, t)
         writer.write(state, contacts=interaction_outputs(asm, state),
                      sections=interaction_sections(asm, state),
                      checkpoint_extra={"scenario": run_name, "n_coords": int(asm.n_coords),

@@ -457,6 +457,34 @@ class Assembly:
         n = self.n_coords
         return sp.csr_matrix(self._matrix_at(q, 0.0, 1.0)[:n, :n])
 
+    def observe(self, q: np.ndarray, v: np.ndarray, lam: np.ndarray, t: float, *,
+                after_step: bool = False) -> None:
+        """An output's state ``(q, v, lam, t)``: the by-products of the kernel's residual at it
+        go to the interactions (:attr:`~flexmbs.constraints.interaction.InteractionKind.
+        observe`), whose output records (contact rows, section counts, contact energy) are then
+        read from them instead of evaluated again: with ``after_step``, those of the last
+        residual of the converged step that just left this state (the forces its equations
+        held), else of one residual evaluated here. The steps' state is left as it was; any
+        other state is evaluated as before."""
+        kinds = [kind for kind in driver.INTERACTION_KINDS
+                 if kind.observe is not None and self.joint_lists[kind.name]]
+        q = np.ascontiguousarray(q, dtype=float)
+        v = np.ascontiguousarray(v, dtype=float)
+
+        def residual() -> None:
+            _, code = self._kernel(OP_RESIDUAL, q, v, np.zeros_like(q),
+                                   np.ascontiguousarray(lam, dtype=float),
+                                   self.functions.values(t), dynamic_mode(), np.empty_like(self._r))
+            if code:
+                raise self.error_exception(code, q, t)
+
+        if kinds and not after_step:
+            self._sync_compiled_forms()
+        for kind in kinds:
+            assert kind.observe is not None
+            kind.observe(getattr(self.system, kind.name), self.joint_lists[kind.name], q, v,
+                         None if after_step else residual)
+
     # ================================================================== energies
     def energies(self, q: np.ndarray, v: np.ndarray) -> dict[str, float]:
         """Kinetic, strain and gravitational potential energy (zero at the reference); the last

@@ -48,6 +48,12 @@ class InteractionKind:
     energy of the kind's interactions in :meth:`~flexmbs.assembly.Assembly.energies` and the
     function ``energy(obj, q, v)`` giving one interaction's share.
 
+    ``observe(part, objs, q, v, residual)``: an output's state (:meth:`~flexmbs.assembly.
+    Assembly.observe`): the kind hands the by-products of the kernel's last residual, which
+    was at ``(q, v)``, to its interactions for their output records (the clearance joints'
+    contact points); ``residual()``, when given, evaluates that residual first (the state is
+    not one a converged step just left), leaving the steps' state as it was.
+
     ``name``: the interactions' ``term_kind`` and the field of
     :class:`~flexmbs.driver.SystemPart` holding the part; ``pattern(obj, dofs)``: the blocks
     ``(rows, cols)`` one interaction writes; ``pack(objs, ctx)``: the part of all of them
@@ -64,6 +70,8 @@ class InteractionKind:
     begin: Callable[[Any, np.ndarray], None] | None = None
     compiled_view: Callable[[Any], Any] | None = None
     energy: tuple[str, Callable[[Any, np.ndarray, np.ndarray], float]] | None = None
+    observe: Callable[[Any, list[Any], np.ndarray, np.ndarray, Callable[[], None] | None],
+                      None] | None = None
 
 
 class ModelParts(Protocol):

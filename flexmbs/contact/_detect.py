@@ -34,13 +34,20 @@ from .sections import (
 )
 from .stationary import PAIR_MARGIN, line_model_points, stationary_pair
 
-#: columns of a candidate row (``gap`` and ``gap_rate`` are filled by :func:`clearance_forces`)
+#: columns of a candidate row (from ``gap`` on filled by :func:`clearance_forces`; the
+#: contact's force and geometry in the last ten: what an output at the state reads)
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
-        "gap_rate", "phi", "dx", "dy", "dz", "stick", "elem_i", "xi_i")
+        "gap_rate", "phi", "dx", "dy", "dz", "stick", "elem_i", "xi_i",
+        "f_n", "xi_p", "nx", "ny", "nz", "px", "py", "pz", "cx", "cy", "cz", "fx", "fy", "fz")
 #: first column of the friction history after the step (``d_new`` (3), ``stick``; pair.N_GEO)
 ANCHOR_COL = 15
 #: the section crossing a row's contact belongs to (element, ξ): columns elem_i, xi_i
 CROSSING_COL = 19
+#: the contact's normal force and its beam point's ξ: columns f_n, xi_p
+FORCE_COL = 21
+#: first column of the contact's ``[n, P, Q, F_H]`` (pair.N_GEO's first 12: normal, beam
+#: point, hole point, force on the hole)
+GEOMETRY_COL = 23
 N_COLS = len(COLS)
 
 

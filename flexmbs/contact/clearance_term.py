@@ -18,6 +18,8 @@ from ..elements.rigid_body import rotation
 from ._detect import (
     ANCHOR_COL,
     CROSSING_COL,
+    FORCE_COL,
+    GEOMETRY_COL,
     MAX_CANDIDATES,
     angle_distance,
     detect_section,
@@ -203,9 +205,11 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
-    each candidate row gets its ``gap``, ``gap_rate`` and friction history after the step
+    each candidate row gets its ``gap``, ``gap_rate``, friction history after the step
     (``dx, dy, dz, stick``: the contact's :func:`~flexmbs.contact.laws.tangential_force` from
-    its tracked anchor, stick state and the step's start ``q_start``). With ``want_tangent`` the signed
+    its tracked anchor, stick state and the step's start ``q_start``), normal force, and
+    normal, beam point, hole point and force on the hole (the output's records of the state:
+    :meth:`~flexmbs.contact.joint.SlidingClearanceJoint.keep_records`). With ``want_tangent`` the signed
     tangent blocks go to ``K_out`` (N_LOCAL × N_EXT: rows [r_H, p, e_P], columns [r_H, p, e_I,
     e_P] of :mod:`flexmbs.contact.tangent`) and ``C_out`` (N_LOCAL × N_LOCAL), the elements of
     the contact point and of the section crossing to ``elem_k`` and ``elem_i``: the exact
@@ -255,13 +259,17 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP],
                         twist_dofs[eP], hist)
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
-        g, gdot, _, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
+        g, gdot, f, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
                                         C, geo)
         row[12] = g
         row[13] = gdot
         for c in range(4):
             row[ANCHOR_COL + c] = geo[12 + c]
+        row[FORCE_COL] = f
+        row[FORCE_COL + 1] = xiP
+        for c in range(12):
+            row[GEOMETRY_COL + c] = geo[c]
         if g >= 0.0:
             continue
         for c in range(7):

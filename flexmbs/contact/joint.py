@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -27,6 +28,8 @@ from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ANCHOR_COL,
+    FORCE_COL,
+    GEOMETRY_COL,
     MAX_CANDIDATES,
     MAX_CROSSINGS,
     N_COLS,
@@ -92,6 +95,23 @@ class ClearanceGeometry(NamedTuple):
     stations: np.ndarray      # (slots,) the sections' stations along the bore (tip slots 0)
     tree: tuple[np.ndarray, ...]  # the sections' bounding-sphere tree (bores.section_tree)
     tip_reach: float          # the longest gap between sections (_detect.place_tips)
+
+
+class ContactRecord(NamedTuple):
+    """What an output records of one contact point (the fields of
+    :class:`~flexmbs.contact.pair.ContactResult` it reads), as the compiled residual found it
+    (:meth:`SlidingClearanceJoint.keep_records`; global vectors)."""
+
+    gap: float
+    normal: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    f_n: float
+    force_on_hole: np.ndarray
+    xi: float
+    gap_rate: float
+    anchor: np.ndarray
+    stuck: float
 
 
 class ClearanceState(NamedTuple):
@@ -229,6 +249,7 @@ class SlidingClearanceJoint(Interaction):
             t_bar=np.zeros((0, N_TWIST, 3)), q_start=None)
         self._frozen: list | None = None
         self._contact_cache: tuple | None = None
+        self._records: tuple | None = None      # keep_records: (state key, contacts)
         # the sections' bounding-sphere tree (body coordinates; reach: a crossing that far from
         # a section's centre counts, _detect.detect_section) and the detection's work arrays;
         # the bore's geometry is known here, before the joint is bound (place_tips at validate)
@@ -377,15 +398,50 @@ class SlidingClearanceJoint(Interaction):
         rows, section records and probes ask for the same state)."""
         if want_tangent or update or self._frozen is not None:
             return self._detect_contacts(q, v, want_tangent, update)
-        key = (q.tobytes(), v.tobytes(), self.state.elem.tobytes(), self.state.xi.tobytes(),
-               self.state.approach.tobytes(), self.state.psi.tobytes(), self.state.active.tobytes(),
-               self.state.anchor.tobytes(), self.state.stuck.tobytes(),
-               None if self.state.q_start is None else self.state.q_start.tobytes(),
-               self.contact, self.friction)
+        key = self._state_key(q, v)
         if self._contact_cache is not None and self._contact_cache[0] == key:
             return self._contact_cache[1]
         out = self._detect_contacts(q, v, False, False)
         self._contact_cache = (key, out)
+        return out
+
+    def _state_key(self, q: np.ndarray, v: np.ndarray) -> tuple:
+        """What the contacts at ``(q, v)`` depend on besides the joint's parameters."""
+        st = self.state
+        return (q.tobytes(), v.tobytes(), st.elem.tobytes(), st.xi.tobytes(),
+                st.approach.tobytes(), st.psi.tobytes(), st.active.tobytes(),
+                st.anchor.tobytes(), st.stuck.tobytes(), st.tip_on.tobytes(),
+                None if st.q_start is None else st.q_start.tobytes(),
+                self.contact, self.friction)
+
+    def keep_records(self, q: np.ndarray, v: np.ndarray, rows: np.ndarray) -> None:
+        """The candidate rows (:data:`~flexmbs.contact._detect.COLS`) the compiled residual
+        wrote at ``(q, v)``: the contact records of that state (output rows, section counts,
+        contact energy and force) are read from them instead of detected again
+        (:meth:`~flexmbs.assembly.Assembly.observe`)."""
+        self._records = (self._state_key(q, v), rows.copy())
+
+    def _observed(self, q: np.ndarray, v: np.ndarray) -> list:
+        """The contacts at ``(q, v)`` as an output reads them: from the rows
+        :meth:`keep_records` kept for this state, else :meth:`_contacts`."""
+        kept = self._records
+        if kept is None or self._frozen is not None or kept[0] != self._state_key(q, v):
+            return self._contacts(q, v, False, False)
+        if isinstance(kept[1], list):
+            return kept[1]
+        out = []
+        for row in kept[1]:
+            if row[12] >= 0.0:
+                continue
+            g = row[GEOMETRY_COL:GEOMETRY_COL + 12]
+            rec = ContactRecord(gap=float(row[12]), normal=g[0:3], P=g[3:6], Q=g[6:9],
+                                f_n=float(row[FORCE_COL]), force_on_hole=g[9:12],
+                                xi=float(row[FORCE_COL + 1]), gap_rate=float(row[13]),
+                                anchor=row[ANCHOR_COL:ANCHOR_COL + 3],
+                                stuck=float(row[ANCHOR_COL + 3]))
+            out.append((int(row[0]), int(row[1]), int(row[2]), int(row[3]), rec, float(row[8]),
+                        float(row[9]), float(row[11])))
+        self._records = (kept[0], out)
         return out
 
     def _detect_contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
@@ -689,7 +745,7 @@ class SlidingClearanceJoint(Interaction):
         contacts.csv, ``position`` and ``normal``, the friction force on the hole
         ``tangential_force`` (3,) and ``stick`` (1.0 while the stick law holds the contact)."""
         rows = []
-        for k, j, kind, _eP, res, a, b, _psi in self._contacts(q, v, False, False):
+        for k, j, kind, _eP, res, a, b, _psi in self._observed(q, v):
             rows.append({
                 "t": t, "joint": self.name, "section": k, "point": j, "gap": res.gap,
                 "normal_force": float(kind) * res.f_n, "qx": res.Q[0], "qy": res.Q[1],
@@ -707,7 +763,7 @@ class SlidingClearanceJoint(Interaction):
         qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         R = self.hole.section.bounding_radius()
         counts: dict[int, int] = {}
-        for k, *_ in self._contacts(q, v, False, False):
+        for k, *_ in self._observed(q, v):
             counts[k] = counts.get(k, 0) + 1
         rows = []
         for k in range(len(self.stations)):
@@ -759,12 +815,12 @@ class SlidingClearanceJoint(Interaction):
         law = self.contact.parameters()
         v = np.zeros_like(q) if v is None else v
         return float(sum(kind * law_energy(law, -res.gap)
-                         for _k, _j, kind, _eP, res, *_ in self._contacts(q, v, False, False)))
+                         for _k, _j, kind, _eP, res, *_ in self._observed(q, v)))
 
     def contact_force(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total contact force on the hole body (global components)."""
         F = np.zeros(3)
-        for _k, _j, kind, _eP, res, *_ in self._contacts(q, v, False, False):
+        for _k, _j, kind, _eP, res, *_ in self._observed(q, v):
             F += float(kind) * res.force_on_hole
         return F
 
@@ -945,6 +1001,26 @@ def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
                    part.params[j], part.tip_on[j], part.tip_station[j], part.work)
 
 
+def _observe_clearance(part: ClearancePart, joints: list[SlidingClearanceJoint], q: np.ndarray,
+                       v: np.ndarray, residual: Callable[[], None] | None) -> None:
+    """An output's state: the compiled joints keep the contact points of the kernel's last
+    residual, at that state (:meth:`SlidingClearanceJoint.keep_records`), after evaluating it
+    with ``residual`` if given; the tip sections due at the next step then stay due (the
+    output sees the sections the step's equilibrium was found with)."""
+    on = [i for i in range(len(joints)) if part.enabled[i]]
+    if not on:
+        return
+    if residual is not None:
+        due = part.tips_due.copy()
+        part.tips_due[:] = False
+        try:
+            residual()
+        finally:
+            part.tips_due[:] = due
+    for i in on:
+        joints[i].keep_records(q, v, part.rows[i, :int(part.n_candidates[i])])
+
+
 #: the clearance joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`);
 #: a joint without a compiled form at the moment is switched off here and evaluated in Python;
 #: its contact potential is the energy "contact"
@@ -952,4 +1028,4 @@ CLEARANCE = InteractionKind(
     name="clearance", pattern=clearance_pattern, pack=pack_clearance,
     errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS),
     enable=_enable_clearance, begin=_begin_clearance, compiled_view=_compiled_view,
-    energy=("contact", SlidingClearanceJoint.contact_energy))
+    energy=("contact", SlidingClearanceJoint.contact_energy), observe=_observe_clearance)

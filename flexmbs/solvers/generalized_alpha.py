@@ -607,14 +607,16 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         hm = float(solver_state.get("h_matrix", -1.0))
         h_matrix = hm if hm > 0 else None
 
-    def observe() -> None:
+    def observe(after_step: bool) -> None:
         if snapshot is not None:
             snapshot({"h": h, "ok_since_cut": ok_since_cut, "err_since_cut": err_since_cut,
                       "h_matrix": -1.0 if h_matrix is None else h_matrix, **stepper.snapshot()})
         if observer is not None:
+            # the interactions' records of the state: what its step's equations held
+            asm.observe(state.q, state.v, state.lam, state.t, after_step=after_step)
             observer(state)
 
-    observe()
+    observe(False)
     while state.t < t_end - t_eps:
         t_out = min(k_out * out_dt, t_end)
         remaining = t_out - state.t
@@ -665,7 +667,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
         stepper.finish_chunk()
         if state.t == t_out:
             k_out += 1
-            observe()
+            observe(True)
         if progress is not None:
             stats.newton_iterations, stats.factorizations, stats.residual_evaluations = (
                 stepper.totals())
