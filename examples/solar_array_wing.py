@@ -139,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     name = "solar_array_wing_ideal" if args.ideal else "solar_array_wing"
     out = args.out or f"out/{name}_py"
     # as the scenario files: step-error control with clearance, fixed steps for the rings
-    dt = args.dt if args.dt is not None else 1e-4 if args.ideal else 1e-3
+    dt = args.dt if args.dt is not None else 1e-4 if args.ideal else 2e-3
     tol = (args.step_tolerance if args.step_tolerance is not None
            else 0.0 if args.ideal else 1e-5)
     res = fm.simulate(model, t_end=args.t_end, dt=dt, output_interval=1e-2, probes=probes,
