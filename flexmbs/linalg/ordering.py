@@ -52,6 +52,57 @@ def _band_order(G: sp.csr_matrix, band: np.ndarray) -> tuple[np.ndarray, int]:
     return perm, w
 
 
+def supernode_order(G: sp.csr_matrix, band: np.ndarray, n_coords: int) -> np.ndarray:
+    """Band order by nodes: reverse Cuthill-McKee on the quotient graph whose vertices are the
+    sets of coordinates with one closed neighbourhood among the coordinates (a beam node's
+    coordinates, a rigid body's), each multiplier joined to the set of the coordinates it
+    constrains when they lie in one set (a clamp's rows with its node), on the side of the set
+    away from its neighbours in the order. Scalar RCM splits a node between two of its
+    levels (a clamped cable: half bandwidth 15 where node by node gives 11, the coordinates of
+    a node coupling 2 x 6 - 1 positions ahead); this keeps nodes whole."""
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    P = G[band][:, band].tocsr()
+    nb = band.size
+    is_coord = band < n_coords
+    C = (P + sp.identity(nb, format="csr")).tocsr()
+    C.sort_indices()
+    coords = np.flatnonzero(is_coord)
+    Cpp = C[coords][:, coords].tocsr()
+    Cpp.sort_indices()
+    group = np.full(nb, -1, np.int64)
+    keys: dict[bytes, int] = {}
+    for i, c in enumerate(coords):
+        key = Cpp.indices[Cpp.indptr[i]:Cpp.indptr[i + 1]].tobytes()
+        group[c] = keys.setdefault(key, len(keys))
+    joined = np.zeros(nb, bool)       # a multiplier in its coordinates' set
+    for r in np.flatnonzero(~is_coord):
+        nbr = C.indices[C.indptr[r]:C.indptr[r + 1]]
+        g = np.unique(group[nbr[is_coord[nbr]]])
+        if g.size == 1:
+            group[r] = g[0]
+            joined[r] = True
+        else:
+            group[r] = len(keys)
+            keys[bytes(8) + r.tobytes()] = group[r]
+    ng = len(keys)
+    E = sp.csr_matrix((np.ones(nb), (np.arange(nb), group)), shape=(nb, ng))
+    Q = (E.T @ C @ E).tocsr()
+    rank = np.empty(ng, np.int64)
+    rank[reverse_cuthill_mckee(Q, symmetric_mode=True)] = np.arange(ng)
+    # within a set: its coordinates, its multipliers first if its neighbours come after it
+    Q = Q.tocoo()
+    off = Q.row != Q.col
+    later = np.bincount(Q.row[off], weights=(rank[Q.col[off]] > rank[Q.row[off]]).astype(float),
+                        minlength=ng)
+    earlier = np.bincount(Q.row[off], weights=(rank[Q.col[off]] < rank[Q.row[off]]).astype(float),
+                          minlength=ng)
+    first = later > earlier
+    inner = np.where(joined, np.where(first[group], -1, 1), 0)
+    key = rank[group] * 4 + inner + 1
+    return band[np.lexsort((np.arange(nb), key))]
+
+
 def factor_cost(n_band: int, n_border: int, bandwidth: int) -> float:
     """Estimated flops of one bordered factorisation plus :data:`SOLVES_PER_FACTOR` solves
     (kl = ku = ``bandwidth``; partial pivoting widens the upper band to kl + ku): band LU
@@ -111,6 +162,11 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
             continue
         band = np.flatnonzero(~in_border).astype(np.int64)
         order, w = _band_order(G, band)
+        if band.size:
+            alt = supernode_order(G, band, n_coords)
+            w_alt = _bandwidth(G, alt)
+            if w_alt < w:
+                order, w = alt, w_alt
         # the second order only where it can matter (bodies in the band, or a border whose
         # rows leave multipliers in it): a plain beam model keeps its plan at RCM's cost
         if border.size or (owner is not None and (owner[band] >= 0).any()):

@@ -277,3 +277,40 @@ def test_two_anchors_rows_join_the_border():
     assert closed[n + 1:n + 7].all() and not closed[n]   # joint rows in, body 0's norm. out
     rank, size = _band_rank(A, closed)
     assert rank == size
+
+
+def _clamped_beam(rng: np.random.Generator, elements: int) -> tuple[sp.csc_matrix, int]:
+    """A cable's pattern: 6 coordinates per node, 12 x 12 element blocks, the first node's
+    position and two slope components held by 5 single-coordinate rows (a clamp)."""
+    n = 6 * (elements + 1)
+    K = sp.lil_matrix((n, n))
+    for e in range(elements):
+        B = rng.standard_normal((12, 12))
+        s = slice(6 * e, 6 * e + 12)
+        K[s, s] = K[s, s].toarray() + B @ B.T / 12 + np.eye(12)
+    clamp = [0, 1, 2, 4, 5]
+    C = sp.csr_matrix((np.ones(len(clamp)), (np.arange(len(clamp)), clamp)), shape=(len(clamp), n))
+    A = sp.bmat([[sp.csr_matrix(K), C.T], [C, None]], format="csc")
+    A.sort_indices()
+    return A, n
+
+
+def test_a_clamped_beam_is_ordered_node_by_node():
+    """Scalar reverse Cuthill-McKee splits a node's coordinates between two of its levels and
+    puts the clamp's rows between nodes (half bandwidth 15); node by node, the clamp's rows at
+    the beam's end, the band is as narrow as the element coupling: 2 x 6 - 1 = 11 (measured on
+    the dynamic cantilever: factorisation and solve about 17 % cheaper)."""
+    from flexmbs.linalg.ordering import _band_order, _graph
+
+    rng = np.random.default_rng(7)
+    for elements in (8, 40):
+        A, n = _clamped_beam(rng, elements)
+        G, _ = _graph(A)
+        assert _band_order(G, np.arange(A.shape[0]))[1] > 11          # scalar RCM
+        plan = plan_factorization(A, np.zeros(0, np.int64), n)
+        assert plan.border.size == 0 and plan.bandwidth == 11
+        lu = BorderedBandedLU(A, plan.border, plan.order)
+        assert lu.factorize(A.data) and lu.kl == lu.ku == 11
+        b = rng.standard_normal(A.shape[0])
+        ref = spla.splu(A, permc_spec="COLAMD").solve(b)
+        assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
