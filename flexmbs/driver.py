@@ -172,7 +172,9 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     norms_jacobian(sy.norms, q, lam, cK, data)
     joints_jacobian(sy.joints, q, lam, cK, data)
     drivers_jacobian(sy.drivers, q, lam, fv, mode, cK, data)
-    sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data)
+    code = sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data, sy.error)
+    if code != 0:
+        return kscale, code
     _, code = clearance_terms(sy.clearance, q, v, FLAG[1], cC, cK, data, data, sy.error)
     return kscale, code
 

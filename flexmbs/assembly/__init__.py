@@ -27,6 +27,7 @@ import scipy.sparse as sp
 
 from .. import driver
 from ..constraints.drivers import JointDriver
+from ..constraints.sliding import ERR_OFF_PLAN
 from ..elements import rigid_body as rb
 from ..elements.layout import BASE_RECORD, ElementType
 from ..errors import FlexmbsError, ModelError
@@ -85,7 +86,7 @@ class Assembly:
         self.stiffness_scale = 0.0
         self._idle_run = idle_run()
         self._kernel_ready = False
-        self._plans: dict[bool, Any] = {}
+        self._plans: dict[tuple[bool, bytes | None], Any] = {}
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -375,23 +376,80 @@ class Assembly:
             owner[np.asarray(self.extra_dofs(obj), np.int64)] = MASSLESS
         return owner
 
-    def factor_plan(self, *, mass: bool = True) -> Any:
+    def factor_plan(self, *, mass: bool = True, windows: np.ndarray | None = None) -> Any:
         """The factorisation plan of the iteration matrix
         (:func:`flexmbs.linalg.ordering.plan_factorization` of this pattern with
         :meth:`border_indices` and :meth:`coordinate_owners`), computed once. ``mass``: the
         matrix has c_M M on every coordinate that has mass (dynamics, velocity corrector,
         initial accelerations); without (statics, stiffness only) every coordinate is labelled
         massless, which closes every nonempty border over the whole matrix (docs/design-notes.md,
-        "One factorisation for every solver")."""
+        "One factorisation for every solver"). ``windows`` (:meth:`sliding_windows`): a plan
+        that follows the sliding joints, holding their slide coordinates' and multipliers'
+        entries with their beam only on those elements (the last one is kept)."""
         from ..linalg.ordering import MASSLESS, plan_factorization
 
-        if mass not in self._plans:
+        key = (mass, None if windows is None else np.asarray(windows, np.int64).tobytes())
+        if key not in self._plans:
             owner = self.coordinate_owners()
             if not mass:
                 owner[:self.n_coords] = MASSLESS
-            self._plans[mass] = plan_factorization(self.matrix, self.border_indices(),
-                                                   self.n_coords, owner)
-        return self._plans[mass]
+            keep = None if windows is None else self._window_entries(windows)
+            if windows is not None:      # one following plan at a time
+                for old in [k for k in self._plans if k[1] is not None]:
+                    del self._plans[old]
+            self._plans[key] = plan_factorization(self.matrix, self.border_indices(),
+                                                  self.n_coords, owner, keep)
+        return self._plans[key]
+
+    def sliding_windows(self, reach: int) -> np.ndarray | None:
+        """Per sliding joint the elements ``[k − reach, k + reach]`` around its current
+        element k, clipped to its beam, as ``(n_joints, 2)`` ranges ``[lo, hi)``: where a plan
+        that follows the joints holds their entries (:meth:`factor_plan`); None without
+        sliding joints."""
+        joints = self.joint_lists["sliding"]
+        if not joints:
+            return None
+        part = self.system.sliding
+        k = part.element.astype(np.int64)
+        return np.stack([np.maximum(k - reach, 0),
+                         np.minimum(k + reach + 1, part.n_elem)], axis=1).astype(np.int64)
+
+    def follow_sliding(self, windows: np.ndarray | None) -> None:
+        """The elements the factorisation's plan holds each sliding joint's entries on
+        (:meth:`sliding_windows`; None: its whole beam): the Jacobian of a joint outside its
+        window reports ``sliding.ERR_OFF_PLAN`` instead of writing entries the plan left out."""
+        joints = self.joint_lists["sliding"]
+        if not joints:
+            return
+        part = self.system.sliding
+        if windows is None:
+            part.window[:, 0] = 0
+            part.window[:, 1] = part.n_elem
+        else:
+            part.window[:] = windows
+
+    @staticmethod
+    def off_plan(code: int) -> bool:
+        """Whether a driver error ``code`` says a sliding joint left the elements the plan
+        follows it on (:meth:`follow_sliding`): the step is to be retried after a new plan."""
+        return code == ERR_OFF_PLAN
+
+    def _window_entries(self, windows: np.ndarray) -> np.ndarray:
+        """The stored positions a plan following the sliding joints reads: all but each
+        joint's slide coordinate and multipliers against its beam's coordinates outside the
+        elements of its window (zero while the joint is on them: only its current element's
+        entries are written)."""
+        keep = np.ones(self.matrix.nnz, bool)
+        for (lo, hi), joint in zip(np.asarray(windows, np.int64), self.joint_lists["sliding"],
+                                   strict=True):
+            g = joint.geometry
+            rows = self.multiplier_rows(joint.constraints()[0])
+            own = np.concatenate([[g.s_dof], self.n_coords + rows[rows >= 0]]).astype(np.int64)
+            outside = np.setdiff1d(g.beam_dofs, g.elem_dofs[lo:hi])
+            for a, b in ((own, outside), (outside, own)):
+                pos = self.positions_present(a, b)
+                keep[pos[pos >= 0]] = False
+        return keep
 
     def _matrix_at(self, q: np.ndarray, t: float, cM: float) -> sp.csc_matrix:
         """The iteration matrix with ``cM`` M and no stiffness (Φ_q in its borders)."""

@@ -16,6 +16,7 @@ the first frame's beam piece for the field names); it needs neither VTK nor Para
 from __future__ import annotations
 
 import argparse
+import atexit
 import csv
 import json
 import math
@@ -23,6 +24,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -165,7 +167,19 @@ def headless(cmd: list[str]) -> list[str]:
     changes."""
     if os.environ.get("DISPLAY") or shutil.which("xvfb-run") is None:
         return cmd
-    return ["xvfb-run", "-a", *cmd]
+    # its own auth file (xvfb-run's default, ./.Xauthority, is shared by concurrent runs from
+    # one folder: a test suite's workers then failed with "bad X server connection") and its
+    # own first display number to try
+    pid = os.getpid()
+    auth = Path(tempfile.gettempdir()) / f"flexmbs-xauth-{pid}"
+    if auth not in _AUTH_FILES:
+        _AUTH_FILES.add(auth)
+        atexit.register(auth.unlink, missing_ok=True)
+    return ["xvfb-run", "-a", "-n", str(100 + pid % 4000), "-f", str(auth), *cmd]
+
+
+#: the auth files of this process's headless runs (removed when it exits)
+_AUTH_FILES: set[Path] = set()
 
 
 def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,

@@ -447,7 +447,13 @@ class SlidingJoint(Interaction):
         return [self._constraint]
 
     def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
-        """The exception for an error code of :func:`sliding_post_step`."""
+        """The exception for an error code of :func:`sliding_post_step` (or, should it ever
+        leave the integrator, :data:`ERR_OFF_PLAN` of :func:`sliding_jacobian`)."""
+        if code == ERR_OFF_PLAN:
+            return FlexmbsError(
+                f"joint '{self.name}': on element {detail} of beam '{self.beam.name}', outside "
+                "the elements the factorisation was planned for (internal: the integrator "
+                "plans again)")
         s = float(q[self.geometry.s_dof])
         return SimulationStopped(
             f"joint '{self.name}': body '{self.body.name}' reached the end of beam "
@@ -524,6 +530,9 @@ class SlidingJoint(Interaction):
 # the sliding-joint term of the assembler (flexmbs.terms)
 #: error code of :func:`sliding_post_step`: the slide coordinate left the beam
 ERR_END_OF_BEAM = 2
+#: error code of :func:`sliding_jacobian`: a joint's element lies outside the elements the
+#: factorisation's plan follows it on (``window``); the step is retried after a new plan
+ERR_OFF_PLAN = 4
 
 
 class SlidingPart(NamedTuple):
@@ -550,6 +559,9 @@ class SlidingPart(NamedTuple):
     pos_s_elem: np.ndarray           # (nj, max_ne, CENTERLINE_SIZE): friction / axial force row of s
     pos_ss: np.ndarray               # (nj,)
     pos_s_lam: np.ndarray            # (nj, 3)
+    window: np.ndarray               # (nj, 2) state: the elements [lo, hi) the factorisation's
+                                     # plan holds the joint's entries on (the whole beam unless
+                                     # Assembly.follow_sliding set it)
     ql: np.ndarray                   # work (N_SLIDE,)
     phi: np.ndarray
     jac: np.ndarray
@@ -624,6 +636,7 @@ def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
         np.array([j.element for j in joints], i64), np.array([j.anchor for j in joints], float),
         np.array([j.stuck for j in joints], i64), np.array([j.anchor for j in joints], float),
         np.array([j.stuck for j in joints], i64), pj, pt, ph, pse, pss, psl,
+        c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)),
         np.zeros(N_SLIDE), np.zeros(5), np.zeros((5, N_SLIDE)), np.zeros((N_SLIDE, N_SLIDE)), np.zeros(5))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = SlidingState(element=part.element[i:i + 1], anchor=part.anchor[i:i + 1],
@@ -691,11 +704,19 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
+def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data, error):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the exact derivatives of −Q_s in the element
-    coordinates, s, ṡ and λ_pos (:func:`sliding_axial_force`)."""
+    coordinates, s, ṡ and λ_pos (:func:`sliding_axial_force`); returns 0, or
+    ``ERR_OFF_PLAN`` (joint in ``error[1]``, element in ``error[2]``) when a joint's element
+    lies outside its ``window``: its entries there are not in the factorisation's plan."""
     if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
-        return
+        return 0
+    for j in range(sl.s_dof.size):
+        if sl.element[j] < sl.window[j, 0] or sl.element[j] >= sl.window[j, 1]:
+            error[0] = ERR_OFF_PLAN
+            error[1] = j
+            error[2] = sl.element[j]
+            return ERR_OFF_PLAN
     for j in range(sl.s_dof.size):
         k, ed, sd, ne_j = _joint_values(sl, j, q)
         for i in range(ne_j):
@@ -720,6 +741,7 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data):  # noqa: ANN001, ANN201
             if sl.rows[j, 0] >= 0 and sl.rows[j, 1] >= 0 and sl.rows[j, 2] >= 0:
                 for a in range(3):
                     data[sl.pos_s_lam[j, a]] -= dQ_dlam[a]
+    return 0
 
 
 @njit(internal=True)
@@ -749,4 +771,4 @@ def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
 
 #: the sliding joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`)
 SLIDING = InteractionKind(name="sliding", pattern=sliding_pattern, pack=pack_sliding,
-                          errors=(ERR_END_OF_BEAM,), stops=(ERR_END_OF_BEAM,))
+                          errors=(ERR_END_OF_BEAM, ERR_OFF_PLAN), stops=(ERR_END_OF_BEAM,))

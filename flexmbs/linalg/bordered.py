@@ -55,11 +55,14 @@ class BorderedBandedLU:
     """Bordered-banded LU of a matrix with a fixed CSC pattern (band: RCM + dgbtf2, border:
     Schur complement + dgetf2), all in numba; see the module docstring."""
 
-    def __init__(self, A: sp.csc_matrix, border: np.ndarray, order: np.ndarray | None = None
-                 ) -> None:
+    def __init__(self, A: sp.csc_matrix, border: np.ndarray, order: np.ndarray | None = None,
+                 keep: np.ndarray | None = None) -> None:
         """``border``: the unknowns of the dense Schur complement; ``order``: the others in
         band order (default: reverse Cuthill-McKee), e.g. from
-        :func:`flexmbs.linalg.ordering.plan_factorization`."""
+        :func:`flexmbs.linalg.ordering.plan_factorization`; ``keep``: the entries of the
+        pattern (a bool per CSC position) the factorisation reads, default all; the others
+        must be zero in every matrix it factorises (a plan that follows the sliding joints,
+        :meth:`flexmbs.assembly.Assembly.factor_plan`)."""
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
         A = sp.csc_matrix(A)
@@ -74,6 +77,9 @@ class BorderedBandedLU:
         band = np.flatnonzero(~in_border).astype(np.int64)
         cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
         rows = A.indices[:cols.size].astype(np.int64)
+        read = np.ones(cols.size, bool) if keep is None else np.asarray(keep, bool)
+        if read.shape != cols.shape:
+            raise ValueError("BorderedBandedLU: keep must have one entry per stored position")
         if order is not None:
             perm = np.asarray(order, np.int64)
             if perm.shape != band.shape or not np.array_equal(np.sort(perm), band):
@@ -91,12 +97,13 @@ class BorderedBandedLU:
         local[border] = np.arange(nb)
         ri, ci = local[rows], local[cols]
         rb, cb = in_border[rows], in_border[cols]
-        aa = ~rb & ~cb
+        aa = ~rb & ~cb & read
         kl = int(max(0, (ri[aa] - ci[aa]).max(initial=0)))
         ku = int(max(0, (ci[aa] - ri[aa]).max(initial=0)))
         kv = kl + ku
         # blocks aa, ab, ba, bb -> (mask, first index, second index) into ab, xt, a_ba, s
-        blocks = [(aa, kv + ri - ci, ci), (~rb & cb, ci, ri), (rb & ~cb, ri, ci), (rb & cb, ri, ci)]
+        blocks = [(aa, kv + ri - ci, ci), (~rb & cb & read, ci, ri), (rb & ~cb & read, ri, ci),
+                  (rb & cb & read, ri, ci)]
         pos = [np.flatnonzero(m) for m, _, _ in blocks]
         fill_row = np.concatenate([r[m] for m, r, _ in blocks])
         fill_col = np.concatenate([c[m] for m, _, c in blocks])

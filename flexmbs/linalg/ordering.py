@@ -6,10 +6,13 @@ kernels' cache stamp). See ``docs/design-notes.md`` ("The border, chosen by cost
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
+
+if TYPE_CHECKING:
+    from .bordered import BorderedBandedLU
 
 #: borders larger than this are not considered (the dense Schur complement's memory)
 MAX_BORDER = 4000
@@ -20,13 +23,16 @@ MAX_BORDER = 4000
 SOLVES_PER_FACTOR = 8.0
 
 
-def _graph(A: sp.csc_matrix) -> tuple[sp.csr_matrix, np.ndarray]:
-    """Symmetric adjacency (pattern of A + A^T without the diagonal) and the structural
-    diagonal (True where the pattern stores A_ii)."""
+def _graph(A: sp.csc_matrix, keep: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Symmetric adjacency (pattern of A + A^T without the diagonal; ``keep``: the stored
+    positions that count, default all) and the structural diagonal (True where the pattern
+    stores A_ii)."""
     A = sp.csc_matrix(A)
     N = A.shape[0]
     cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
     rows = A.indices[:cols.size].astype(np.int64)
+    if keep is not None:
+        cols, rows = cols[keep], rows[keep]
     diag = np.zeros(N, bool)
     diag[rows[rows == cols]] = True
     off = rows != cols
@@ -120,10 +126,18 @@ class FactorPlan(NamedTuple):
     order: np.ndarray       # int64: the other unknowns in band order
     bandwidth: int          # half bandwidth of the band in that order (before pivoting)
     cost: float             # factor_cost estimate
+    keep: np.ndarray | None = None   # the stored positions planned for (None: all)
+
+    def factorization(self, A: sp.csc_matrix) -> BorderedBandedLU:
+        """The bordered banded LU of ``A``'s pattern with this plan."""
+        from .bordered import BorderedBandedLU
+
+        return BorderedBandedLU(A, self.border, self.order, self.keep)
 
 
 def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
-                       owner: np.ndarray | None = None) -> FactorPlan:
+                       owner: np.ndarray | None = None, keep: np.ndarray | None = None
+                       ) -> FactorPlan:
     """The border (unknowns of the dense Schur complement) and band order with the least
     :func:`factor_cost` among these borders: ``suggested`` (e.g.
     :meth:`flexmbs.assembly.Assembly.border_indices`), none (the whole saddle-point system in
@@ -135,8 +149,9 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
     zero diagonal block; ``owner``: a label per unknown, >= 0 for the coordinates of one rigid
     body, kept together; :data:`MASSLESS` for a coordinate without mass). Each border is
     closed by :func:`close_border` (the band block must stay nonsingular). Computed once per
-    pattern."""
-    G, _ = _graph(A)
+    pattern. ``keep``: the stored positions to plan for (the others are zero whenever the
+    plan is used: a plan that follows the sliding joints), default all."""
+    G, _ = _graph(A, keep)
     N = G.shape[0]
     is_coord = np.arange(N) < n_coords
     degree = np.diff(G.indptr)
@@ -176,7 +191,7 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
                 order, w = alt, w_alt
         cost = factor_cost(band.size, border.size, w)
         if best is None or cost < best.cost:
-            best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost)
+            best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost, keep)
     assert best is not None
     return best
 

@@ -133,6 +133,7 @@ class IntegrationStats:
     residual_evaluations: int = 0
     velocity_iterations: int = 0    # of the velocity corrector (constraint_level)
     error_rejections: int = 0       # of rejected_steps: converged, refused for their error
+    replans: int = 0                # plans made again as sliding joints moved on (FOLLOW_*)
 
 
 class _AlphaStep:
@@ -351,6 +352,14 @@ class _PythonStepper:
         self.velocity_step = _VelocityStep(asm, state) if self.velocity else None
         self.error = 0.0
 
+    replans = 0     # the Python loop's plan holds every entry (none follows the joints)
+
+    def replan(self) -> None:
+        raise AssertionError("the Python loop's plan does not follow the sliding joints")
+
+    def release(self) -> None:
+        return None
+
     def max_chunk(self) -> int:
         return 1
 
@@ -417,10 +426,20 @@ def _step_error_reason(error: float, tolerance: float) -> str:
 
 
 class _StepFailure(Exception):
-    def __init__(self, done: int, reason: str, error: bool = False) -> None:
+    def __init__(self, done: int, reason: str, error: bool = False, replan: bool = False
+                 ) -> None:
         super().__init__(reason)
         self.done = done
         self.error = error          # converged, refused by step-error control
+        self.replan = replan        # a sliding joint left the elements the plan follows
+
+
+#: a plan that follows the sliding joints (:meth:`Assembly.factor_plan` with windows) holds
+#: each joint's entries on this many elements either side of its current one
+FOLLOW_REACH = 1
+#: ... and is used when its estimated cost is below this fraction of the plan of the whole
+#: reserved pattern (a few joints on long beams keep the fixed plan: no re-planning)
+FOLLOW_COST_RATIO = 0.25
 
 
 class _CompiledStepper:
@@ -453,8 +472,19 @@ class _CompiledStepper:
         self.info = np.zeros(cc.INFO_SIZE)
         self.info[cc.INFO_KSCALE] = asm.stiffness_scale
         self.data = np.zeros_like(asm.matrix.data)
+        # the plan of the whole reserved pattern, or one that follows the sliding joints
+        # where that is much cheaper (many rings on a beam: their slide coordinates and
+        # multipliers then sit in the band beside their elements, not in a dense border)
         plan = asm.factor_plan()
-        self.lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
+        self.windows: np.ndarray | None = None
+        self.replans = 0
+        windows = asm.sliding_windows(FOLLOW_REACH)
+        if windows is not None:
+            following = asm.factor_plan(windows=windows)
+            if following.cost < FOLLOW_COST_RATIO * plan.cost:
+                self.windows, plan = windows, following
+        asm.follow_sliding(self.windows)
+        self.lu: BorderedBandedLU = plan.factorization(asm.matrix)
         self.stopped: Exception | None = None
         self.tolerance = 0.0
         # the velocity corrector (constraint_level): its own factorisation, the matrix pattern
@@ -463,7 +493,7 @@ class _CompiledStepper:
         if self.velocity:
             # the same plan: its matrix has the mass, not the stiffness (docs/design-notes.md,
             # "One factorisation for every solver")
-            self.factor_v = BorderedBandedLU(asm.matrix, plan.border, plan.order).factor
+            self.factor_v = plan.factorization(asm.matrix).factor
             self.pattern = asm.matrix_pattern()
             self.velocity_rows = asm.velocity_rows()
         else:
@@ -484,16 +514,45 @@ class _CompiledStepper:
 
     def snapshot(self) -> dict[str, np.ndarray]:
         """What the next steps depend on besides the state: whether a factorisation is held,
-        its age in the renewal rule, the stiffness scale, and the factors themselves, so that a
-        resumed run continues with the same factorisation (bit for bit, issue "nothing lost")."""
+        its age in the renewal rule, the stiffness scale, the factors themselves and the
+        windows of a plan that follows the sliding joints, so that a resumed run continues
+        with the same factorisation (bit for bit, issue "nothing lost")."""
         cc = self.cc
         out = {"info": np.array([self.info[getattr(cc, k)] for k in self._KEPT_INFO])}
         for k in self._FACTOR_ARRAYS:
             out[k] = np.array(getattr(self.lu.factor, k), copy=True)
+        if self.windows is not None:
+            out["windows"] = self.windows.copy()
         return out
+
+    def _plan_on(self, windows: np.ndarray) -> None:
+        """Factorise with the plan that follows the sliding joints on ``windows``."""
+        self.windows = np.asarray(windows, np.int64).copy()
+        self.asm.follow_sliding(self.windows)
+        plan = self.asm.factor_plan(windows=self.windows)
+        self.lu = plan.factorization(self.asm.matrix)
+        if self.velocity:
+            self.factor_v = plan.factorization(self.asm.matrix).factor
+        self.invalidate()
+
+    def replan(self) -> None:
+        """A sliding joint left the elements the plan follows it on: a new plan around every
+        joint's current element (the next step refreshes the factorisation)."""
+        windows = self.asm.sliding_windows(FOLLOW_REACH)
+        assert windows is not None
+        self._plan_on(windows)
+        self.replans += 1
+
+    def release(self) -> None:
+        """The run is over: every plan holds the sliding joints' whole beams again."""
+        self.asm.follow_sliding(None)
 
     def restore(self, saved: dict[str, np.ndarray]) -> None:
         """Take over a :meth:`snapshot` (ignored unless every array fits this model)."""
+        windows = saved.get("windows")
+        if self.windows is not None and windows is not None \
+                and np.shape(windows) == self.windows.shape:
+            self._plan_on(windows)
         if "info" not in saved or any(
                 k not in saved or np.shape(saved[k]) != getattr(self.lu.factor, k).shape
                 for k in self._FACTOR_ARRAYS):
@@ -549,7 +608,9 @@ class _CompiledStepper:
             return done
         self.invalidate()
         raise _StepFailure(done, self._failure_reason(),
-                           error=int(self.info[cc.INFO_CODE]) == cc.ERR_STEP_ERROR)
+                           error=int(self.info[cc.INFO_CODE]) == cc.ERR_STEP_ERROR,
+                           replan=(self.windows is not None
+                                   and asm.off_plan(int(self.info[cc.INFO_CODE]))))
 
     def finish_chunk(self) -> None:
         if self.stopped is not None:
@@ -617,61 +678,77 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             observer(state)
 
     observe(False)
-    while state.t < t_end - t_eps:
-        t_out = min(k_out * out_dt, t_end)
-        remaining = t_out - state.t
-        n_full = int(math.floor(remaining / h + 1e-9))
-        if n_full == 0 or remaining - h < t_eps:
-            h_step, n_chunk = remaining, 1
-        else:
-            h_step = h
-            n_chunk = n_full if remaining - n_full * h < t_eps else n_full
-            if h < h_nom:   # after a cut-back: few steps, then try to grow again
-                n_chunk = min(n_chunk, options.grow_after - ok_since_cut)
-        n_chunk = max(1, min(n_chunk, stepper.max_chunk()))
-        if h_matrix is None or abs(h_step - h_matrix) > 1e-12 * h_step:
-            stepper.invalidate()
-            h_matrix = h_step
-        t_start = state.t
-        # at the smallest step no step is refused for its error (only Newton can fail there)
-        tolerance = options.step_tolerance if h_step > h_min * (1 + 1e-12) else 0.0
-        try:
-            done = stepper.advance(h_step, n_chunk, t_start, tolerance)
-        except _StepFailure as exc:
-            done = exc.done
-            stats.steps += done
-            state.t = t_start + done * h_step
-            stats.rejected_steps += 1
-            stats.error_rejections += int(exc.error)
-            if not options.adaptive or h_step <= h_min * (1 + 1e-12):
-                raise ConvergenceError(f"step from t = {state.t:.6g} failed at h = {h_step:.3g}: "
-                                       f"{exc}") from None
-            h = max(h_step / 2, h_min)
-            ok_since_cut = 0
-            err_since_cut = 0.0
-            stepper.invalidate()
-            h_matrix = None
-            continue
-        state.t = t_start + done * h_step
-        if abs(state.t - t_out) <= t_eps:
-            state.t = t_out
-        stats.steps += done
-        if h < h_nom:
-            ok_since_cut += done
-            err_since_cut = max(err_since_cut, stepper.error_max())
-            if ok_since_cut >= options.grow_after:
-                if err_since_cut <= GROW_ERROR:
-                    h = min(2 * h, h_nom)
+    replanned = False
+    try:
+        while state.t < t_end - t_eps:
+            t_out = min(k_out * out_dt, t_end)
+            remaining = t_out - state.t
+            n_full = int(math.floor(remaining / h + 1e-9))
+            if n_full == 0 or remaining - h < t_eps:
+                h_step, n_chunk = remaining, 1
+            else:
+                h_step = h
+                n_chunk = n_full if remaining - n_full * h < t_eps else n_full
+                if h < h_nom:   # after a cut-back: few steps, then try to grow again
+                    n_chunk = min(n_chunk, options.grow_after - ok_since_cut)
+            n_chunk = max(1, min(n_chunk, stepper.max_chunk()))
+            if h_matrix is None or abs(h_step - h_matrix) > 1e-12 * h_step:
+                stepper.invalidate()
+                h_matrix = h_step
+            t_start = state.t
+            # at the smallest step no step is refused for its error (only Newton can fail there)
+            tolerance = options.step_tolerance if h_step > h_min * (1 + 1e-12) else 0.0
+            try:
+                done = stepper.advance(h_step, n_chunk, t_start, tolerance)
+                replanned = False
+            except _StepFailure as exc:
+                done = exc.done
+                stats.steps += done
+                state.t = t_start + done * h_step
+                if exc.replan:
+                    # a sliding joint moved past its planned elements: plan anew (the new plan
+                    # holds every joint's current element, so once per step at most)
+                    if replanned and not done:
+                        raise ConvergenceError(f"step from t = {state.t:.6g}: {exc}") from None
+                    stepper.replan()
+                    replanned = True
+                    h_matrix = None
+                    continue
+                replanned = False
+                stats.rejected_steps += 1
+                stats.error_rejections += int(exc.error)
+                if not options.adaptive or h_step <= h_min * (1 + 1e-12):
+                    raise ConvergenceError(f"step from t = {state.t:.6g} failed at h = {h_step:.3g}: "
+                                           f"{exc}") from None
+                h = max(h_step / 2, h_min)
                 ok_since_cut = 0
                 err_since_cut = 0.0
-        stepper.finish_chunk()
-        if state.t == t_out:
-            k_out += 1
-            observe(True)
-        if progress is not None:
-            stats.newton_iterations, stats.factorizations, stats.residual_evaluations = (
-                stepper.totals())
-            progress(state, stats)
+                stepper.invalidate()
+                h_matrix = None
+                continue
+            state.t = t_start + done * h_step
+            if abs(state.t - t_out) <= t_eps:
+                state.t = t_out
+            stats.steps += done
+            if h < h_nom:
+                ok_since_cut += done
+                err_since_cut = max(err_since_cut, stepper.error_max())
+                if ok_since_cut >= options.grow_after:
+                    if err_since_cut <= GROW_ERROR:
+                        h = min(2 * h, h_nom)
+                    ok_since_cut = 0
+                    err_since_cut = 0.0
+            stepper.finish_chunk()
+            if state.t == t_out:
+                k_out += 1
+                observe(True)
+            if progress is not None:
+                stats.newton_iterations, stats.factorizations, stats.residual_evaluations = (
+                    stepper.totals())
+                progress(state, stats)
+    finally:
+        stepper.release()
+    stats.replans = stepper.replans
     stats.newton_iterations, stats.factorizations, stats.residual_evaluations = stepper.totals()
     stats.velocity_iterations = stepper.velocity_iterations()
     return state, stats

@@ -256,6 +256,24 @@ def test_screenshot_without_paraview_says_so_in_one_line(sleeve_run, tmp_path, c
     assert not (tmp_path / "v.png").exists()
 
 
+def test_headless_runs_use_an_auth_file_of_their_own(tmp_path, monkeypatch):
+    """Without a display, ParaView runs under ``xvfb-run -a`` with an auth file and a first
+    display number of this process: xvfb-run's default auth file, ./.Xauthority, was shared
+    by the test suite's two workers ("bad X server connection" in one of them)."""
+    fake = tmp_path / "xvfb-run"
+    fake.write_text("#!/bin/sh\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    monkeypatch.delenv("DISPLAY", raising=False)
+    cmd = headless(["pvbatch", "view.py"])
+    assert cmd[:2] == ["xvfb-run", "-a"] and cmd[-2:] == ["pvbatch", "view.py"]
+    auth = cmd[cmd.index("-f") + 1]
+    assert str(os.getpid()) in auth and not auth.startswith(".")
+    assert int(cmd[cmd.index("-n") + 1]) >= 100
+    monkeypatch.setenv("DISPLAY", ":5")
+    assert headless(["pvbatch", "view.py"]) == ["pvbatch", "view.py"]
+
+
 @pytest.mark.parametrize("renders", [True, False])
 def test_xvfb_run_failing_only_to_clean_up_after_the_render(tmp_path, monkeypatch, renders):
     """xvfb-run exits 5 when it cannot remove its temporary folder (seen with two at once on a

@@ -119,6 +119,55 @@ def test_axial_force_on_the_ring():
     assert np.abs(s - (0.2 + 0.5 * (2.0 / 0.5) * res.t**2)).max() < 1e-6
 
 
+def _ring_pushed_along(tmp_path, follow: bool, t_end: float, *, resume: bool = False):  # noqa: ANN202
+    """The ring of test_axial_force_on_the_ring on a beam of 32 elements (6.25 cm): it slides
+    over about three elements in 0.3 s; ``follow``: the compiled loop's plan follows it
+    (forced: alone on its beam the fixed plan is the cheaper one), else the fixed plan; full
+    Newton (a fresh matrix at every iteration: the joint's elements are checked at each)."""
+    import flexmbs.solvers.generalized_alpha as ga
+
+    model, beam, body, joint = _inclined(0.0, variant="ring", axial_force=2.0, n_elem=32)
+    model.gravity[:] = 0.0
+    ratio = ga.FOLLOW_COST_RATIO
+    ga.FOLLOW_COST_RATIO = np.inf if follow else 0.0
+    try:
+        res = fm.simulate(model, t_end=t_end, dt=1e-3, output_interval=0.05,
+                          record_energy=False, out=tmp_path / "run", resume=resume,
+                          integrator=fm.GeneralizedAlpha(
+                              newton=fm.NewtonOptions(modified=False)))
+    finally:
+        ga.FOLLOW_COST_RATIO = ratio
+    return res, joint
+
+
+def test_a_plan_that_follows_the_ring_gives_the_same_motion(tmp_path):
+    """The compiled loop's factorisation planned on the ring's current elements only
+    (issue 37: many rings on a beam stay out of the dense border): the slide coordinate
+    keeps s'' = F/m, the run equals the fixed plan's to round-off, the plan was made again as
+    the ring moved on (ERR_OFF_PLAN from the Jacobian), and afterwards every plan holds the
+    whole beam again."""
+    follow, joint = _ring_pushed_along(tmp_path / "follow", True, 0.3)
+    fixed, _ = _ring_pushed_along(tmp_path / "fixed", False, 0.3)
+    s = follow.q[:, follow.assembly.extra_dofs(joint)[0]]
+    assert np.abs(s - (0.2 + 0.5 * (2.0 / 0.5) * follow.t**2)).max() < 1e-6
+    assert s[-1] > 0.2 + 2.5 * 2.0 / 32                   # across three element ends
+    assert follow.stats.replans >= 1 and fixed.stats.replans == 0
+    assert follow.stats.rejected_steps == fixed.stats.rejected_steps == 0
+    np.testing.assert_allclose(follow.q, fixed.q, rtol=0, atol=1e-12)
+    part = follow.assembly.system.sliding
+    assert part.window[0, 0] == 0 and part.window[0, 1] == 32
+
+
+def test_a_resumed_run_follows_the_ring_with_the_same_plan(tmp_path):
+    """The plan's windows travel in the checkpoint: stopped at 0.15 s and resumed to 0.3 s,
+    the run that follows the ring equals the uninterrupted one bit for bit."""
+    full, _ = _ring_pushed_along(tmp_path / "full", True, 0.3)
+    _ring_pushed_along(tmp_path / "part", True, 0.15)
+    part, _ = _ring_pushed_along(tmp_path / "part", True, 0.3, resume=True)
+    np.testing.assert_array_equal(part.q[-1], full.q[-1])
+    np.testing.assert_array_equal(part.lam[-1], full.lam[-1])
+
+
 def test_sleeve_on_stiff_arc_swings_with_rigid_track_period():
     """FORMULATION Part III §9, rigid-track limit: sleeve (m = 0.21441 kg, J = 4.098e-5)
     released at phi0 = -30 deg on a 90-deg arc of radius 1 m (E x 1000, 16 elements):

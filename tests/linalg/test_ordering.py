@@ -314,3 +314,46 @@ def test_a_clamped_beam_is_ordered_node_by_node():
         b = rng.standard_normal(A.shape[0])
         ref = spla.splu(A, permc_spec="COLAMD").solve(b)
         assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
+
+
+def test_a_plan_of_the_entries_in_use_puts_a_ring_beside_its_element():
+    """A slide coordinate and its three multipliers reserve entries against the whole beam
+    (the ring may slide anywhere) but use those of one element: planned on the whole pattern
+    they are hubs in the dense border; planned on the entries in use (``keep``, the rest zero)
+    they sit in the band beside their element, and the factorisation (which reads only the
+    kept entries) solves as SuperLU does."""
+    rng = np.random.default_rng(11)
+    A, n = _clamped_beam(rng, 40)
+    N0 = A.shape[0]
+    ring = np.arange(N0, N0 + 4)                        # s, then three multipliers
+    near = np.arange(6 * 20, 6 * 22)                    # element 20's coordinates
+    B = sp.lil_matrix((N0 + 4, N0 + 4))
+    B[:N0, :N0] = A
+    B[ring[0], ring[0]] = 1.0
+    for r in ring:                                      # the reserved pattern: whole beam
+        B[r, :n] = 1e-300
+        B[:n, r] = 1e-300
+    B = sp.csc_matrix(B)
+    B.sort_indices()
+    cols = np.repeat(np.arange(B.shape[0]), np.diff(B.indptr))
+    rows = B.indices
+    reserved = (np.isin(rows, ring) & (cols < n)) | (np.isin(cols, ring) & (rows < n))
+    in_use = reserved & (np.isin(rows, near) | np.isin(cols, near))
+    values = B.copy()                                   # the same pattern, values in use:
+    values.data[reserved] = 0.0                         # ring x beam at element 20 only
+    w = rng.standard_normal((4, near.size))
+    for k in np.flatnonzero(in_use):
+        r, c = (rows[k], cols[k]) if rows[k] >= N0 else (cols[k], rows[k])
+        values.data[k] = w[r - N0, np.searchsorted(near, c)]
+    coords = n                                          # the ring's unknowns: massless + rows
+    owner = np.full(B.shape[0], -1, np.int64)
+    whole = plan_factorization(B, ring, coords, owner)
+    assert whole.border.size > 0
+    keep = ~reserved | in_use
+    used = plan_factorization(B, ring, coords, owner, keep)
+    assert used.border.size == 0 and used.bandwidth < 30
+    lu = used.factorization(B)
+    assert lu.factorize(values.data)
+    b = rng.standard_normal(B.shape[0])
+    ref = spla.splu(values, permc_spec="COLAMD").solve(b)
+    assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
