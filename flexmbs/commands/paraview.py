@@ -181,6 +181,21 @@ def headless(cmd: list[str]) -> list[str]:
 #: the auth files of this process's headless runs (removed when it exits)
 _AUTH_FILES: set[Path] = set()
 
+#: what ParaView says when the virtual screen it was given is not there (yet): seen under
+#: xvfb-run on a loaded machine (a test suite compiling beside it); tried once more
+_NO_SCREEN = "bad X server connection"
+
+
+def run_headless(cmd: list[str], *, timeout: float | None = 600.0) -> subprocess.CompletedProcess:
+    """Run the ParaView program ``cmd`` (under :func:`headless`), its output captured; a run
+    whose virtual screen was not there is tried once more."""
+    wrapped = headless(cmd)
+    proc = subprocess.run(wrapped, capture_output=True, text=True, timeout=timeout, check=False)
+    if proc.returncode != 0 and wrapped != cmd and _NO_SCREEN in (proc.stderr or ""):
+        proc = subprocess.run(wrapped, capture_output=True, text=True, timeout=timeout,
+                              check=False)
+    return proc
+
 
 def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,
                time: float | None = None, pvbatch: str | None = None,
@@ -197,9 +212,8 @@ def screenshot(script: str | os.PathLike[str], png: str | os.PathLike[str], *,
     cmd = [exe, str(Path(script).resolve()), "--screenshot", str(png)]
     if time is not None:
         cmd += ["--time", repr(float(time))]
-    cmd = headless(cmd)
     before = png.stat().st_mtime_ns if png.is_file() else None
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
+    proc = run_headless(cmd, timeout=timeout)
     lines = (proc.stderr or proc.stdout or "").strip().splitlines()
     written = png.is_file() and png.stat().st_mtime_ns != before
     if proc.returncode != 0 and written and lines and lines[-1].startswith(_XVFB_CLEANUP):
