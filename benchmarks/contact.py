@@ -17,23 +17,19 @@ system's tuples of arrays paid 6-10 µs per residual that the step itself does n
 from __future__ import annotations
 
 import argparse
-import time
+import sys
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from unit_loops import best_of, loop_factorize, loop_solve  # noqa: E402
 
 
 def _best(fn, args, n: int = 300) -> float:  # noqa: ANN001
     """Best of 7 repeats, microseconds per call."""
-    fn(*args, 3)
-    best = np.inf
-    for _ in range(7):
-        t0 = time.perf_counter()
-        fn(*args, n)
-        best = min(best, (time.perf_counter() - t0) / n * 1e6)
-    return best
+    return best_of(fn, args, n)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -43,11 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs.assembly import Assembly
     from flexmbs.contact.clearance_term import _joint_forces
     from flexmbs.io.scenario import load_scenario
-    from flexmbs.linalg.bordered import (
-        BorderedBandedLU,
-        bordered_factorize,
-        bordered_solve,
-    )
+    from flexmbs.linalg.bordered import BorderedBandedLU
     from flexmbs.terms import dynamic_mode
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -70,16 +62,6 @@ def main(argv: list[str] | None = None) -> int:
     def loop_jacobian(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN202
         for _ in range(n):
             cm.jacobian(m, q, v, qdd, lam, fv, mode, 1.0, 0.05, 1e-8, data)
-
-    @njit(refcount=False)
-    def loop_factorize(f, data, n):  # noqa: ANN001, ANN202
-        for _ in range(n):
-            bordered_factorize(f, data)
-
-    @njit(refcount=False)
-    def loop_solve(f, b, x, n):  # noqa: ANN001, ANN202
-        for _ in range(n):
-            bordered_solve(f, b, x)
 
     print(f"Examples 1 (16 elements, 9 hole sections) and 2 (15 elements, 3 eyelets of 3 "
           f"sections; after its static solve): compiled unit costs [us], best of 7; "

@@ -16,7 +16,7 @@ elements it was planned on) would gain; the run loop does not do that yet.
 from __future__ import annotations
 
 import argparse
-import time
+import sys
 import warnings
 from pathlib import Path
 
@@ -26,41 +26,16 @@ import scipy.sparse.linalg as spla
 
 import flexmbs as fm
 from flexmbs import driver
-from flexmbs._jit import njit
-from flexmbs.linalg.bordered import BorderedBandedLU, bordered_factorize, bordered_solve
+from flexmbs.linalg.bordered import BorderedBandedLU
 from flexmbs.linalg.ordering import plan_factorization
 from flexmbs.terms import dynamic_mode
 
 ROOT = Path(__file__).resolve().parent
-
-
-@njit(refcount=False)
-def _loop_factorize(factor, data, n):  # noqa: ANN001, ANN202
-    for _ in range(n):
-        bordered_factorize(factor, data)
-
-
-@njit(refcount=False)
-def _loop_solve(factor, b, x, n):  # noqa: ANN001, ANN202
-    for _ in range(n):
-        bordered_solve(factor, b, x)
-
-
-def _best(fn, args, n: int = 50) -> float:  # noqa: ANN001
-    """Best of 5 repeats, microseconds per call."""
-    fn(*args, 2)
-    best = np.inf
-    for _ in range(5):
-        t0 = time.perf_counter()
-        fn(*args, n)
-        best = min(best, (time.perf_counter() - t0) / n * 1e6)
-    return best
+sys.path.insert(0, str(ROOT))
+from unit_loops import best_of, loop_factorize, loop_solve  # noqa: E402
 
 
 def measure(n_eyelets: int) -> dict:
-    import sys
-
-    sys.path.insert(0, str(ROOT))
     from chain import build_eyelets
 
     with warnings.catch_warnings():
@@ -84,8 +59,8 @@ def measure(n_eyelets: int) -> dict:
     plan = asm.factor_plan()
     lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
     assert lu.factorize(data)
-    out["now"] = (plan.border.size, plan.bandwidth, _best(_loop_factorize, (lu.factor, data)),
-                  _best(_loop_solve, (lu.factor, rhs, x)),
+    out["now"] = (plan.border.size, plan.bandwidth, best_of(loop_factorize, (lu.factor, data), 50, 5),
+                  best_of(loop_solve, (lu.factor, rhs, x), 50, 5),
                   float(np.abs(lu.solve(rhs) - ref).max() / np.abs(ref).max()))
     # the rings' unknowns (slide coordinates, multipliers) against the beam's coordinates
     coo = asm.matrix.tocoo()
@@ -108,8 +83,8 @@ def measure(n_eyelets: int) -> dict:
     lu2 = BorderedBandedLU(pattern, plan2.border, plan2.order)
     assert lu2.factorize(values.data)
     out["current"] = (plan2.border.size, plan2.bandwidth,
-                      _best(_loop_factorize, (lu2.factor, values.data)),
-                      _best(_loop_solve, (lu2.factor, rhs, x)),
+                      best_of(loop_factorize, (lu2.factor, values.data), 50, 5),
+                      best_of(loop_solve, (lu2.factor, rhs, x), 50, 5),
                       float(np.abs(lu2.solve(rhs) - ref).max() / np.abs(ref).max()))
     out["dropped"] = int((~keep).sum())
     return out
