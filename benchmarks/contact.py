@@ -39,7 +39,6 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs.assembly import Assembly
     from flexmbs.contact.clearance_term import _joint_forces
     from flexmbs.io.scenario import load_scenario
-    from flexmbs.linalg.bordered import BorderedBandedLU
     from flexmbs.terms import dynamic_mode
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -90,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         x = np.zeros_like(r)
         data = np.zeros_like(asm.matrix.data)
         cm.jacobian(m, st.q, st.v, st.qdd, st.lam, fv, mode, 1.0, 0.05, 1e-8, data)
-        lu = BorderedBandedLU(asm.matrix, asm.border_indices())
+        lu = asm.factor_plan().factorization(asm.matrix)     # the plan the run uses
         lu.factorize(data)
         u_res = _best(loop_residual, (m, st.q, st.v, st.qdd, st.lam, fv, mode, r))
         u_joint = u_paper = u_res_paper = u_jac_paper = float("nan")
