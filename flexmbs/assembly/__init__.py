@@ -376,7 +376,8 @@ class Assembly:
             owner[np.asarray(self.extra_dofs(obj), np.int64)] = MASSLESS
         return owner
 
-    def factor_plan(self, *, mass: bool = True, windows: np.ndarray | None = None) -> Any:
+    def factor_plan(self, *, mass: bool = True, windows: np.ndarray | None = None,
+                    border: np.ndarray | None = None) -> Any:
         """The factorisation plan of the iteration matrix
         (:func:`flexmbs.linalg.ordering.plan_factorization` of this pattern with
         :meth:`border_indices` and :meth:`coordinate_owners`), computed once. ``mass``: the
@@ -385,7 +386,8 @@ class Assembly:
         massless, which closes every nonempty border over the whole matrix (docs/design-notes.md,
         "One factorisation for every solver"). ``windows`` (:meth:`sliding_windows`): a plan
         that follows the sliding joints, holding their slide coordinates' and multipliers'
-        entries with their beam only on those elements (the last one is kept)."""
+        entries with their beam only on those elements (the last one is kept); ``border``:
+        with ``windows``, plan only that border (a re-plan keeps the border it had)."""
         from ..linalg.ordering import MASSLESS, plan_factorization
 
         key = (mass, None if windows is None else np.asarray(windows, np.int64).tobytes())
@@ -397,8 +399,10 @@ class Assembly:
             if windows is not None:      # one following plan at a time
                 for old in [k for k in self._plans if k[1] is not None]:
                     del self._plans[old]
-            self._plans[key] = plan_factorization(self.matrix, self.border_indices(),
-                                                  self.n_coords, owner, keep)
+            suggested = self.border_indices() if windows is None or border is None else border
+            self._plans[key] = plan_factorization(
+                self.matrix, suggested, self.n_coords, owner, keep,
+                search=windows is None or border is None)
         return self._plans[key]
 
     def sliding_windows(self, reach: int) -> np.ndarray | None:

@@ -136,8 +136,8 @@ class FactorPlan(NamedTuple):
 
 
 def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
-                       owner: np.ndarray | None = None, keep: np.ndarray | None = None
-                       ) -> FactorPlan:
+                       owner: np.ndarray | None = None, keep: np.ndarray | None = None,
+                       search: bool = True) -> FactorPlan:
     """The border (unknowns of the dense Schur complement) and band order with the least
     :func:`factor_cost` among these borders: ``suggested`` (e.g.
     :meth:`flexmbs.assembly.Assembly.border_indices`), none (the whole saddle-point system in
@@ -150,16 +150,18 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
     body, kept together; :data:`MASSLESS` for a coordinate without mass). Each border is
     closed by :func:`close_border` (the band block must stay nonsingular). Computed once per
     pattern. ``keep``: the stored positions to plan for (the others are zero whenever the
-    plan is used: a plan that follows the sliding joints), default all."""
+    plan is used: a plan that follows the sliding joints), default all; ``search=False``:
+    only the ``suggested`` border (closed), e.g. a plan's border planned again for shifted
+    ``keep`` (a re-plan that follows the joints, in a few ms instead of tens)."""
     G, _ = _graph(A, keep)
     N = G.shape[0]
     is_coord = np.arange(N) < n_coords
     degree = np.diff(G.indptr)
     suggested = np.unique(np.asarray(suggested, np.int64))
-    candidates = [suggested, np.zeros(0, np.int64)]
+    candidates = [suggested, np.zeros(0, np.int64)] if search else [suggested]
     levels = np.unique(degree)
     levels = levels[levels > 2 * max(float(np.median(degree)), 1.0)]
-    if levels.size:
+    if levels.size and search:
         for d in levels[::-1][::max(1, levels.size // 6)]:
             candidates.append(np.flatnonzero(degree >= d).astype(np.int64))
     best: FactorPlan | None = None

@@ -523,13 +523,15 @@ class _CompiledStepper:
             out[k] = np.array(getattr(self.lu.factor, k), copy=True)
         if self.windows is not None:
             out["windows"] = self.windows.copy()
+            out["plan_border"] = np.array(self.lu.factor.border, copy=True)
         return out
 
-    def _plan_on(self, windows: np.ndarray) -> None:
-        """Factorise with the plan that follows the sliding joints on ``windows``."""
+    def _plan_on(self, windows: np.ndarray, border: np.ndarray) -> None:
+        """Factorise with the plan that follows the sliding joints on ``windows`` with the
+        dense ``border`` (the first such plan's: a re-plan only orders the band again)."""
         self.windows = np.asarray(windows, np.int64).copy()
         self.asm.follow_sliding(self.windows)
-        plan = self.asm.factor_plan(windows=self.windows)
+        plan = self.asm.factor_plan(windows=self.windows, border=border)
         self.lu = plan.factorization(self.asm.matrix)
         if self.velocity:
             self.factor_v = plan.factorization(self.asm.matrix).factor
@@ -540,7 +542,7 @@ class _CompiledStepper:
         joint's current element (the next step refreshes the factorisation)."""
         windows = self.asm.sliding_windows(FOLLOW_REACH)
         assert windows is not None
-        self._plan_on(windows)
+        self._plan_on(windows, self.lu.factor.border)
         self.replans += 1
 
     def release(self) -> None:
@@ -549,10 +551,10 @@ class _CompiledStepper:
 
     def restore(self, saved: dict[str, np.ndarray]) -> None:
         """Take over a :meth:`snapshot` (ignored unless every array fits this model)."""
-        windows = saved.get("windows")
-        if self.windows is not None and windows is not None \
+        windows, border = saved.get("windows"), saved.get("plan_border")
+        if self.windows is not None and windows is not None and border is not None \
                 and np.shape(windows) == self.windows.shape:
-            self._plan_on(windows)
+            self._plan_on(windows, np.asarray(border, np.int64))
         if "info" not in saved or any(
                 k not in saved or np.shape(saved[k]) != getattr(self.lu.factor, k).shape
                 for k in self._FACTOR_ARRAYS):
