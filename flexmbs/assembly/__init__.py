@@ -390,7 +390,9 @@ class Assembly:
         with ``windows``, plan only that border (a re-plan keeps the border it had)."""
         from ..linalg.ordering import MASSLESS, plan_factorization
 
-        key = (mass, None if windows is None else np.asarray(windows, np.int64).tobytes())
+        key = (mass, None if windows is None else
+               np.asarray(windows, np.int64).tobytes()
+               + (b"" if border is None else b"|" + np.asarray(border, np.int64).tobytes()))
         if key not in self._plans:
             owner = self.coordinate_owners()
             if not mass:
