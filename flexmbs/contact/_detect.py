@@ -39,6 +39,8 @@ from .stationary import PAIR_MARGIN, line_model_points, stationary_pair
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
         "gap_rate", "phi", "dx", "dy", "dz", "stick", "elem_i", "xi_i",
         "f_n", "xi_p", "nx", "ny", "nz", "px", "py", "pz", "cx", "cy", "cz", "fx", "fy", "fz")
+#: the contact's gap and gap rate: columns gap, gap_rate
+GAP_COL = 12
 #: first column of the friction history after the step (``d_new`` (3), ``stick``; pair.N_GEO)
 ANCHOR_COL = 15
 #: the section crossing a row's contact belongs to (element, ξ): columns elem_i, xi_i

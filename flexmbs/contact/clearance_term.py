@@ -19,6 +19,7 @@ from ._detect import (
     ANCHOR_COL,
     CROSSING_COL,
     FORCE_COL,
+    GAP_COL,
     GEOMETRY_COL,
     MAX_CANDIDATES,
     angle_distance,
@@ -262,8 +263,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         g, gdot, f, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
                                         C, geo)
-        row[12] = g
-        row[13] = gdot
+        row[GAP_COL] = g
+        row[GAP_COL + 1] = gdot
         for c in range(4):
             row[ANCHOR_COL + c] = geo[12 + c]
         row[FORCE_COL] = f

@@ -29,6 +29,7 @@ from ..terms import pad_stack
 from ._detect import (
     ANCHOR_COL,
     FORCE_COL,
+    GAP_COL,
     GEOMETRY_COL,
     MAX_CANDIDATES,
     MAX_CROSSINGS,
@@ -112,6 +113,14 @@ class ContactRecord(NamedTuple):
     gap_rate: float
     anchor: np.ndarray
     stuck: float
+
+
+def _row_contact(row: np.ndarray, res: Any) -> tuple:
+    """A penetrating candidate row of the compiled detection (:data:`_detect.COLS`) with its
+    contact result as :meth:`SlidingClearanceJoint._contacts` lists it: (section, index, kind,
+    element, result, a, b, psi)."""
+    return (int(row[0]), int(row[1]), int(row[2]), int(row[3]), res, float(row[8]),
+            float(row[9]), float(row[11]))
 
 
 class ClearanceState(NamedTuple):
@@ -431,16 +440,15 @@ class SlidingClearanceJoint(Interaction):
             return kept[1]
         out = []
         for row in kept[1]:
-            if row[12] >= 0.0:
+            if row[GAP_COL] >= 0.0:
                 continue
             g = row[GEOMETRY_COL:GEOMETRY_COL + 12]
-            rec = ContactRecord(gap=float(row[12]), normal=g[0:3], P=g[3:6], Q=g[6:9],
+            rec = ContactRecord(gap=float(row[GAP_COL]), normal=g[0:3], P=g[3:6], Q=g[6:9],
                                 f_n=float(row[FORCE_COL]), force_on_hole=g[9:12],
-                                xi=float(row[FORCE_COL + 1]), gap_rate=float(row[13]),
+                                xi=float(row[FORCE_COL + 1]), gap_rate=float(row[GAP_COL + 1]),
                                 anchor=row[ANCHOR_COL:ANCHOR_COL + 3],
                                 stuck=float(row[ANCHOR_COL + 3]))
-            out.append((int(row[0]), int(row[1]), int(row[2]), int(row[3]), rec, float(row[8]),
-                        float(row[9]), float(row[11])))
+            out.append(_row_contact(row, rec))
         self._records = (kept[0], out)
         return out
 
@@ -547,7 +555,7 @@ class SlidingClearanceJoint(Interaction):
             self._raise_left_bore(m)
         out = []
         for row in self._rows[:m].copy():
-            k, j, kind, eP = int(row[0]), int(row[1]), int(row[2]), int(row[3])
+            k, eP = int(row[0]), int(row[3])
             u_Q = A.T @ (row[5:8] - qb[:3])
             ed = self.geometry.elem_dofs[eP]
             res = contact_point(qb, vb, u_Q, q[ed], v[ed], self.geometry.lengths[eP], row[4],
@@ -557,7 +565,7 @@ class SlidingClearanceJoint(Interaction):
                                 friction_stiffness=self.friction_stiffness(),
                                 spin=self._spin(q, v, eP))
             if res.gap < 0.0:
-                out.append((k, j, kind, eP, res, row[8], row[9], float(row[11])))
+                out.append(_row_contact(row, res))
         return out
 
     def freeze_detection(self, q: np.ndarray | None, v: np.ndarray | None = None) -> None:
