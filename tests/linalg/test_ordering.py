@@ -121,6 +121,51 @@ def test_chain_is_one_band_of_constant_width():
     assert widths[0] == widths[1] == widths[2] <= 21
 
 
+def test_reverse_cuthill_mckee_starts_at_a_chain_end():
+    """scipy's reverse Cuthill-McKee starts at a vertex of least degree, on a chain of bodies
+    anywhere along it: its band is then about twice as wide as from an end. Started at a
+    pseudo-peripheral vertex the band does not depend on the chain's length; the planned LU
+    solves as SuperLU does."""
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    from flexmbs.linalg.ordering import _bandwidth, _graph, _peripheral_rcm
+
+    scipy_widths, widths = [], []
+    for nb in (10, 40, 160, 320):
+        rng = np.random.default_rng(3)
+        A, n, border, owner = _saddle(rng, nb, _chain(nb))
+        G, _ = _graph(A)
+        scipy_widths.append(_bandwidth(G, reverse_cuthill_mckee(G, symmetric_mode=True)))
+        widths.append(_bandwidth(G, _peripheral_rcm(G)))
+        plan = plan_factorization(A, border, n, owner)
+        assert plan.border.size == 0 and plan.bandwidth <= widths[-1]
+        lu = BorderedBandedLU(A, plan.border, plan.order)
+        assert lu.factorize(A.data)
+        b = rng.standard_normal(A.shape[0])
+        ref = spla.splu(A, permc_spec="COLAMD").solve(b)
+        assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
+    assert len(set(widths)) == 1 and max(scipy_widths) > widths[0]
+
+
+def test_a_chain_of_spherical_joints_plans_to_the_width_of_one_link():
+    """The hanging chain of ``benchmarks/chain.py`` (spherical joints in global components):
+    one link's 7 coordinates, its normalisation row and the 3 rows of the next joint, so a
+    half bandwidth of 10 at any length (13 or 17 where the order started mid-chain)."""
+    import flexmbs as fm
+    from flexmbs.assembly import Assembly
+
+    for nb in (10, 320):
+        model = fm.Model(gravity=(0.0, 0.0, -9.81))
+        prev = fm.GROUND
+        for k in range(nb):
+            body = model.add_rigid_body(mass=0.1, inertia=(1e-6, 1e-4, 1e-4),
+                                        pose=fm.Pose(((k + 0.5) * 0.1, 0.0, 0.0), np.eye(3)))
+            model.spherical(body, prev, point=(k * 0.1, 0.0, 0.0))
+            prev = body
+        plan = Assembly(model).factor_plan()
+        assert plan.border.size == 0 and plan.bandwidth == 10
+
+
 def test_star_keeps_its_hub_in_the_border():
     """A star's hub couples to every joint: a band would be as wide as the star; the hub's
     coordinates (with the rows on the hub alone: normalisation, joint to the ground) form the
