@@ -87,6 +87,7 @@ class Assembly:
         self._idle_run = idle_run()
         self._kernel_ready = False
         self._plans: dict[tuple[bool, bytes | None], Any] = {}
+        self._window_index: tuple[np.ndarray, ...] | None = None
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -444,18 +445,49 @@ class Assembly:
         """The stored positions a plan following the sliding joints reads: all but each
         joint's slide coordinate and multipliers against its beam's coordinates outside the
         elements of its window (zero while the joint is on them: only its current element's
-        entries are written)."""
+        entries are written). One pass over the stored positions (a re-plan's set-up)."""
+        if self._window_index is None:
+            self._window_index = self._sliding_window_index()
+        own, joint_beam, beam_of, first, last, rows, cols = self._window_index
+        lo, hi = np.asarray(windows, np.int64).T
         keep = np.ones(self.matrix.nnz, bool)
-        for (lo, hi), joint in zip(np.asarray(windows, np.int64), self.joint_lists["sliding"],
-                                   strict=True):
+        for a, b in ((rows, cols), (cols, rows)):
+            j = own[a]
+            at = np.flatnonzero(j >= 0)
+            j, d = j[at], b[at]
+            outside = (beam_of[d] == joint_beam[j]) & ((first[d] >= hi[j]) | (last[d] < lo[j]))
+            keep[at[outside]] = False
+        return keep
+
+    def _sliding_window_index(self) -> tuple[np.ndarray, ...]:
+        """What :meth:`_window_entries` reads, built once: per unknown the sliding joint it is
+        own to (its slide coordinate, its multipliers; −1 else), per joint its beam, per
+        unknown its beam (−1 else) and the first and last of that beam's elements whose
+        centreline holds it (none: a rod's twist, outside every window), and the stored
+        positions' rows and columns."""
+        N = self.n_total
+        joints = self.joint_lists["sliding"]
+        own = np.full(N, -1, np.int64)
+        beam_of = np.full(N, -1, np.int64)
+        first = np.full(N, np.iinfo(np.int64).max, np.int64)
+        last = np.full(N, -1, np.int64)
+        beams: dict[int, int] = {}
+        joint_beam = np.empty(len(joints), np.int64)
+        for j, joint in enumerate(joints):
             g = joint.geometry
             rows = self.multiplier_rows(joint.constraints()[0])
-            own = np.concatenate([[g.s_dof], self.n_coords + rows[rows >= 0]]).astype(np.int64)
-            outside = np.setdiff1d(g.beam_dofs, g.elem_dofs[lo:hi])
-            for a, b in ((own, outside), (outside, own)):
-                pos = self.positions_present(a, b)
-                keep[pos[pos >= 0]] = False
-        return keep
+            own[g.s_dof] = j
+            own[self.n_coords + rows[rows >= 0]] = j
+            b = beams.setdefault(id(joint.beam), len(beams))
+            joint_beam[j] = b
+            beam_of[g.beam_dofs] = b
+            elem = np.repeat(np.arange(g.elem_dofs.shape[0], dtype=np.int64), g.elem_dofs.shape[1])
+            np.minimum.at(first, g.elem_dofs.ravel(), elem)
+            np.maximum.at(last, g.elem_dofs.ravel(), elem)
+        A = self.matrix
+        cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
+        rows = A.indices[:cols.size].astype(np.int64)
+        return own, joint_beam, beam_of, first, last, rows, cols
 
     def _matrix_at(self, q: np.ndarray, t: float, cM: float) -> sp.csc_matrix:
         """The iteration matrix with ``cM`` M and no stiffness (Φ_q in its borders)."""

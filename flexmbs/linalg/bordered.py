@@ -120,6 +120,15 @@ class BorderedBandedLU:
         self.kl, self.ku, self.n_band, self.n_border = kl, ku, na, nb
         self.info = -1
 
+    def twin(self) -> BorderedFactor:
+        """A second factorisation of this plan (e.g. the velocity corrector's): the index maps
+        shared (never written), its own numeric storage."""
+        f = self.factor
+        return f._replace(ab=np.zeros_like(f.ab), piv=np.zeros_like(f.piv), xt=np.zeros_like(f.xt),
+                          a_ba=np.zeros_like(f.a_ba), s=np.zeros_like(f.s),
+                          piv_s=np.zeros_like(f.piv_s), work_a=np.zeros_like(f.work_a),
+                          work_b=np.zeros_like(f.work_b))
+
     def factorize(self, data: np.ndarray) -> bool:
         """Factor the matrix with CSC ``data`` (pattern of construction). False if singular;
         ``self.info`` holds the code of :func:`bordered_factorize`."""

@@ -42,30 +42,47 @@ def _graph(A: sp.csc_matrix, keep: np.ndarray | None = None) -> tuple[sp.csr_mat
     return G, diag
 
 
-def _peripheral_node(P: sp.csr_matrix, nodes: np.ndarray, degree: np.ndarray) -> int:
-    """A pseudo-peripheral vertex of the connected component ``nodes`` of the graph ``P``
-    (George and Liu 1979): from a vertex of least degree, a breadth-first search at a time
-    moves to the least-degree vertex of the last level while the eccentricity grows."""
-    from scipy.sparse.csgraph import shortest_path
+def _least_degree(mask: np.ndarray, label: np.ndarray, degree: np.ndarray,
+                  n_comp: int) -> np.ndarray:
+    """Per connected component the vertex of least degree among ``mask`` (the lowest index
+    among equals; −1 where the component has none)."""
+    at = np.flatnonzero(mask)
+    pick = at[np.lexsort((at, degree[at], label[at]))]
+    first = np.full(n_comp, -1, np.int64)
+    lab = label[pick]
+    head = np.r_[True, lab[1:] != lab[:-1]] if pick.size else np.zeros(0, bool)
+    first[lab[head]] = pick[head]
+    return first
 
-    r = int(nodes[np.argmin(degree[nodes])])
-    eccentricity = -1
+
+def _peripheral_nodes(P: sp.csr_matrix, label: np.ndarray, n_comp: int) -> np.ndarray:
+    """A pseudo-peripheral vertex of every connected component of the graph ``P`` (George
+    and Liu 1979): from a vertex of least degree, a breadth-first search at a time moves to
+    the least-degree vertex of the last level while the eccentricity grows. All components
+    at once: one multi-source search per round (the components are disjoint, so each
+    vertex's distance is from its own component's start)."""
+    from scipy.sparse.csgraph import dijkstra
+
+    degree = np.diff(P.indptr)
+    start = _least_degree(np.ones(label.size, bool), label, degree, n_comp)
+    eccentricity = np.full(n_comp, -1, np.int64)
     while True:
-        dist = shortest_path(P, directed=False, unweighted=True, indices=r)
-        e = int(dist[np.isfinite(dist)].max())
-        if e <= eccentricity:
-            return r
-        eccentricity = e
-        last = np.flatnonzero(dist == e)
-        nxt = int(last[np.argmin(degree[last])])
-        if nxt == r:
-            return r
-        r = nxt
+        dist = dijkstra(P, directed=False, unweighted=True, indices=start, min_only=True)
+        level = np.where(np.isfinite(dist), dist, -1).astype(np.int64)
+        e = np.full(n_comp, -1, np.int64)
+        np.maximum.at(e, label, level)
+        grew = e > eccentricity
+        eccentricity = np.maximum(e, eccentricity)
+        nxt = _least_degree(level == e[label], label, degree, n_comp)
+        moved = grew & (nxt != start)
+        if not moved.any():
+            return start
+        start = np.where(moved, nxt, start)
 
 
 def _peripheral_rcm(P: sp.csr_matrix) -> np.ndarray:
     """Reverse Cuthill-McKee order of the symmetric graph ``P`` (no diagonal) started in each
-    connected component at a pseudo-peripheral vertex (:func:`_peripheral_node`). scipy's
+    connected component at a pseudo-peripheral vertex (:func:`_peripheral_nodes`). scipy's
     ``reverse_cuthill_mckee`` starts at a vertex of least degree, which on a chain of bodies
     may lie anywhere along it (its half bandwidth then 17 instead of 10 from an end). Its
     start is steered, not reimplemented: each start gets a new neighbour of degree 1, every
@@ -75,12 +92,8 @@ def _peripheral_rcm(P: sp.csr_matrix) -> np.ndarray:
     from scipy.sparse.csgraph import connected_components, reverse_cuthill_mckee
 
     n = P.shape[0]
-    degree = np.diff(P.indptr)
     n_comp, label = connected_components(P, directed=False)
-    by_label = np.argsort(label, kind="stable")
-    bounds = np.searchsorted(label[by_label], np.arange(n_comp + 1))
-    starts = np.array([_peripheral_node(P, by_label[bounds[c]:bounds[c + 1]], degree)
-                       for c in range(n_comp) if bounds[c + 1] - bounds[c] > 2], np.int64)
+    starts = _peripheral_nodes(P, label, n_comp)[np.bincount(label, minlength=n_comp) > 2]
     k = starts.size
     seeds = n + np.arange(k, dtype=np.int64)
     rows = np.concatenate([np.arange(n, dtype=np.int64), seeds, starts])
@@ -127,21 +140,34 @@ def supernode_order(G: sp.csr_matrix, band: np.ndarray, n_coords: int) -> np.nda
     Cpp = C[coords][:, coords].tocsr()
     Cpp.sort_indices()
     group = np.full(nb, -1, np.int64)
-    keys: dict[bytes, int] = {}
-    for i, c in enumerate(coords):
-        key = Cpp.indices[Cpp.indptr[i]:Cpp.indptr[i + 1]].tobytes()
-        group[c] = keys.setdefault(key, len(keys))
+    # coordinates with one closed neighbourhood: one set, numbered in order of appearance; rows
+    # compared by their length and two sums of random 64-bit words of their columns (exact and
+    # order-free in wrapping integer arithmetic; fixed seed: a plan is reproducible)
+    words = np.random.default_rng(0x5E7).integers(0, 2**63, size=(2, coords.size),
+                                                  dtype=np.uint64)
+    sums = np.add.reduceat(words[:, Cpp.indices], Cpp.indptr[:-1], axis=1)   # rows: >= 1 entry
+    keys = np.column_stack([np.diff(Cpp.indptr).astype(np.uint64), sums.T])
+    _, first_seen, which = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    appearance = np.empty(first_seen.size, np.int64)
+    appearance[np.argsort(first_seen, kind="stable")] = np.arange(first_seen.size)
+    group[coords] = appearance[which.ravel()]
+    # a multiplier whose coordinates lie in one set joins it; the others: sets of their own
+    mult = np.flatnonzero(~is_coord)
+    M = C[mult][:, coords].tocsr()
+    count = np.diff(M.indptr)
+    lowest = np.full(mult.size, -1, np.int64)
+    highest = np.full(mult.size, -2, np.int64)
+    some = count > 0
+    if M.nnz:
+        g = group[coords][M.indices]
+        lowest[some] = np.minimum.reduceat(g, M.indptr[:-1][some])
+        highest[some] = np.maximum.reduceat(g, M.indptr[:-1][some])
     joined = np.zeros(nb, bool)       # a multiplier in its coordinates' set
-    for r in np.flatnonzero(~is_coord):
-        nbr = C.indices[C.indptr[r]:C.indptr[r + 1]]
-        g = np.unique(group[nbr[is_coord[nbr]]])
-        if g.size == 1:
-            group[r] = g[0]
-            joined[r] = True
-        else:
-            group[r] = len(keys)
-            keys[bytes(8) + r.tobytes()] = group[r]
-    ng = len(keys)
+    joined[mult] = lowest == highest
+    alone = mult[lowest != highest]
+    group[mult[lowest == highest]] = lowest[lowest == highest]
+    group[alone] = first_seen.size + np.arange(alone.size)
+    ng = first_seen.size + alone.size
     E = sp.csr_matrix((np.ones(nb), (np.arange(nb), group)), shape=(nb, ng))
     Q = (E.T @ C @ E).tocsr()
     rank = np.empty(ng, np.int64)

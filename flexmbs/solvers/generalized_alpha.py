@@ -493,7 +493,7 @@ class _CompiledStepper:
         if self.velocity:
             # the same plan: its matrix has the mass, not the stiffness (docs/design-notes.md,
             # "One factorisation for every solver")
-            self.factor_v = plan.factorization(asm.matrix).factor
+            self.factor_v = self.lu.twin()
             self.pattern = asm.matrix_pattern()
             self.velocity_rows = asm.velocity_rows()
         else:
@@ -534,7 +534,7 @@ class _CompiledStepper:
         plan = self.asm.factor_plan(windows=self.windows, border=border)
         self.lu = plan.factorization(self.asm.matrix)
         if self.velocity:
-            self.factor_v = plan.factorization(self.asm.matrix).factor
+            self.factor_v = self.lu.twin()
         self.invalidate()
 
     def replan(self) -> None:

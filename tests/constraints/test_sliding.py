@@ -168,6 +168,48 @@ def test_a_resumed_run_follows_the_ring_with_the_same_plan(tmp_path):
     np.testing.assert_array_equal(part.lam[-1], full.lam[-1])
 
 
+@pytest.mark.parametrize("element", ["ancf_cable", "ancf_rod14"])
+def test_a_following_plan_drops_exactly_the_entries_outside_the_windows(element, rng):
+    """The stored positions a plan following the sliding joints reads (one vectorised pass):
+    all but each joint's slide coordinate and multipliers against its beam's coordinates
+    outside the elements of its window, by their definition (the beam's coordinates minus
+    those of the window's elements; a rod's twists are in no window), for three rings and a
+    sleeve on one beam and a ring on a second, at random windows."""
+    model = fm.Model(gravity=(0, 0, -9.81))
+    stiffness = fm.BeamStiffness(axial_stiffness=1e9, bending_stiffness=1e6, mass_per_length=1.0,
+                                 torsional_stiffness=1e6)
+    beams = [model.add_beam(fm.line((0, y, 0), (2.0, y, 0), elements=n), section=stiffness,
+                            element=element) for y, n in ((0.0, 20), (0.5, 12))]
+    for beam in beams:
+        model.clamp(beam.first_node)
+    for k, (beam, s, variant) in enumerate([(beams[0], 0.3, "ring"), (beams[0], 0.9, "ring"),
+                                            (beams[0], 1.5, "cylindrical"), (beams[0], 1.7, "ring"),
+                                            (beams[1], 1.0, "ring")]):
+        body = model.add_rigid_body(mass=0.5, inertia=(1e-3, 2e-3, 2e-3), pose=beam.frame_at(s),
+                                    name=f"b{k}")
+        model.add_joint(fm.SlidingJoint(beam, body, variant=variant, name=f"j{k}"))
+    asm = Assembly(model)
+    A = asm.matrix
+    cols = np.repeat(np.arange(asm.n_total), np.diff(A.indptr))
+    rows = A.indices
+    for _ in range(5):
+        windows = []
+        expected = np.ones(A.nnz, bool)
+        for joint in asm.joint_lists["sliding"]:
+            g = joint.geometry
+            lo = int(rng.integers(0, g.elem_dofs.shape[0]))
+            hi = int(rng.integers(lo + 1, g.elem_dofs.shape[0] + 1))
+            windows.append((lo, hi))
+            lam = asm.multiplier_rows(joint.constraints()[0])
+            own = np.concatenate([[g.s_dof], asm.n_coords + lam[lam >= 0]])
+            outside = np.setdiff1d(g.beam_dofs, g.elem_dofs[lo:hi])
+            expected &= ~((np.isin(rows, own) & np.isin(cols, outside))
+                          | (np.isin(cols, own) & np.isin(rows, outside)))
+        keep = asm._window_entries(np.array(windows, np.int64))
+        assert (~expected).sum() > 0
+        np.testing.assert_array_equal(keep, expected)
+
+
 def test_sleeve_on_stiff_arc_swings_with_rigid_track_period():
     """FORMULATION Part III §9, rigid-track limit: sleeve (m = 0.21441 kg, J = 4.098e-5)
     released at phi0 = -30 deg on a 90-deg arc of radius 1 m (E x 1000, 16 elements):
