@@ -95,19 +95,49 @@ def _one_line_warnings() -> None:
     warnings.showwarning = showwarning
 
 
+class _InterruptWatch:
+    """SIGINT handler for the length of a command: Python's (raise KeyboardInterrupt), which
+    also remembers that it fired. A Ctrl-C that lands inside a C extension's import may come
+    out as another error with the interrupt dropped from its chain (numpy's: "PyCapsule_Import
+    could not import module datetime" while its C part loads); the flag still says why."""
+
+    def __init__(self) -> None:
+        self.fired = False
+        self.previous: Any = None
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        self.fired = True
+        raise KeyboardInterrupt
+
+    def __enter__(self) -> _InterruptWatch:
+        import signal
+
+        with contextlib.suppress(ValueError):      # not the main thread: leave it alone
+            self.previous = signal.signal(signal.SIGINT, self)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        import signal
+
+        if self.previous is not None:
+            with contextlib.suppress(ValueError):
+                signal.signal(signal.SIGINT, self.previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """The ``flexmbs`` command; returns the exit status. Ctrl-C at any moment (also while the
     libraries load) is one line and exit 130."""
-    try:
-        return _main(argv)
-    except KeyboardInterrupt:
-        error("interrupted")
-        return EXIT_INTERRUPTED
-    except Exception as exc:
-        if not _caused_by_interrupt(exc):
-            raise
-        error("interrupted")        # e.g. Python wraps a Ctrl-C that lands in a class body
-        return EXIT_INTERRUPTED     # being created (dataclass fields) in a RuntimeError
+    with _InterruptWatch() as watch:
+        try:
+            return _main(argv)
+        except KeyboardInterrupt:
+            error("interrupted")
+            return EXIT_INTERRUPTED
+        except Exception as exc:
+            if not (watch.fired or _caused_by_interrupt(exc)):
+                raise
+            error("interrupted")    # e.g. Python wraps a Ctrl-C that lands in a class body
+            return EXIT_INTERRUPTED  # being created (dataclass fields) in a RuntimeError
 
 
 def _caused_by_interrupt(exc: BaseException) -> bool:

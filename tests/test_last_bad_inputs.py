@@ -162,6 +162,31 @@ def test_an_infinite_load_is_named():
         fm.simulate(model, t_end=0.01, dt=1e-3)
 
 
+def test_ctrl_c_that_a_c_extension_turns_into_another_error_is_one_line(monkeypatch, capsys):
+    """A Ctrl-C that lands while a C extension loads can come out as another error with the
+    interrupt dropped from its chain (numpy, mid-import: "PyCapsule_Import could not import
+    module datetime"): still one line and exit 130, because the command saw the signal."""
+    import os
+    import signal
+
+    from flexmbs import cli
+
+    def start(argv):  # noqa: ANN001, ANN202
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        except KeyboardInterrupt:
+            pass
+        raise ImportError('PyCapsule_Import could not import module "datetime"')
+
+    monkeypatch.setattr(cli, "_main", start)
+    handler = signal.getsignal(signal.SIGINT)
+    assert cli.main(["run", SLEEVE]) == cli.EXIT_INTERRUPTED
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("flexmbs: error: interrupted")
+    assert signal.getsignal(signal.SIGINT) is handler      # restored
+
+
 def test_ctrl_c_while_starting_is_one_line(tmp_path):
     """SIGINT at several moments of start-up (imports, scenario, compilation, first steps)."""
     for delay in (0.15, 0.4, 0.8):
