@@ -34,23 +34,44 @@ G = (0.0, 0.0, -9.81)
 PULL_RAMP = 0.01      # s: the eyelet wire's pull, cosine ramp from 0 (build_eyelets)
 
 
-def build_chain(n: int) -> tuple[fm.Model, list]:
+def chain_parents(n: int) -> list[int]:
+    """The chain: link k hangs from link k - 1 (the first from the ground, -1)."""
+    return list(range(-1, n - 1))
+
+
+def tree_parents(n: int) -> list[int]:
+    """A binary tree: link k hangs from link (k - 1) // 2 (siblings coincide and move alike)."""
+    return [-1] + [(k - 1) // 2 for k in range(1, n)]
+
+
+def _depths(parents: list[int]) -> list[int]:
+    depth: list[int] = []
+    for p in parents:
+        depth.append(0 if p < 0 else depth[p] + 1)
+    return depth
+
+
+def build_chain(n: int, parents: list[int] | None = None) -> tuple[fm.Model, list]:
+    """N links on spherical joints, each link's start on its parent's end (``parents``,
+    default :func:`chain_parents`), along x."""
+    parents = chain_parents(n) if parents is None else parents
+    depth = _depths(parents)
     model = fm.Model(gravity=G)
-    bodies = []
-    prev = fm.GROUND
+    bodies: list = []
     for k in range(n):
         b = model.add_rigid_body(mass=MASS, inertia=INERTIA,
-                                 pose=fm.Pose(((k + 0.5) * LINK, 0.0, 0.0), np.eye(3)))
-        model.spherical(b, prev, point=(k * LINK, 0.0, 0.0))
+                                 pose=fm.Pose(((depth[k] + 0.5) * LINK, 0.0, 0.0), np.eye(3)))
+        model.spherical(b, fm.GROUND if parents[k] < 0 else bodies[parents[k]],
+                        point=(depth[k] * LINK, 0.0, 0.0))
         bodies.append(b)
-        prev = b
     return model, bodies
 
 
-def run_flexmbs_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1, repeats: int = 1) -> dict:
+def run_flexmbs_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1, repeats: int = 1,
+                      parents: list[int] | None = None) -> dict:
     best = None
     for _ in range(repeats):
-        model, bodies = build_chain(n)
+        model, bodies = build_chain(n, parents)
         integ = fm.GeneralizedAlpha(rho_inf=0.8, adaptive=False)
         res = fm.simulate(model, t_end=t_end, dt=h, integrator=integ, output_interval=t_end,
                           record_energy=False)
@@ -65,30 +86,35 @@ def run_flexmbs_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1, repeats: i
                 rejected=getattr(s, "rejected_steps", 0))
 
 
-def run_exudyn_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1) -> dict:
+def run_exudyn_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1,
+                     parents: list[int] | None = None) -> dict:
     import exudyn as exu
     import exudyn.itemInterface as ei
     from exudyn.rigidBodyUtilities import RigidBodyInertia
 
+    parents = chain_parents(n) if parents is None else parents
+    depth = _depths(parents)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     ground = mbs.AddObject(ei.ObjectGround())
     inertia = RigidBodyInertia(mass=MASS, inertiaTensor=np.diag(INERTIA))
-    prev_marker = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    ground_marker = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localPosition=[0, 0, 0]))
+    ends: list = []      # each link's end marker (its children's joint)
     last = None
     for k in range(n):
         node = mbs.AddNode(ei.NodeRigidBodyEP(
-            referenceCoordinates=[(k + 0.5) * LINK, 0, 0, 1, 0, 0, 0],
+            referenceCoordinates=[(depth[k] + 0.5) * LINK, 0, 0, 1, 0, 0, 0],
             initialVelocities=[0] * 7))
         body = mbs.AddObject(ei.ObjectRigidBody(
             physicsMass=MASS, physicsInertia=inertia.GetInertia6D(), nodeNumber=node))
         mbs.AddLoad(ei.Force(markerNumber=mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=node)),
                               loadVector=[MASS * g for g in G]))
         m_left = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=body, localPosition=[-LINK / 2, 0, 0]))
-        mbs.AddObject(ei.ObjectJointSpherical(markerNumbers=[prev_marker, m_left],
+        parent_marker = ground_marker if parents[k] < 0 else ends[parents[k]]
+        mbs.AddObject(ei.ObjectJointSpherical(markerNumbers=[parent_marker, m_left],
                                                constrainedAxes=[1, 1, 1]))
-        prev_marker = mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=body,
-                                                        localPosition=[LINK / 2, 0, 0]))
+        ends.append(mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=body,
+                                                      localPosition=[LINK / 2, 0, 0])))
         last = node
     mbs.Assemble()
     s = _quiet_settings("EigenSparse")
@@ -183,18 +209,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 40, 160, 640])
     ap.add_argument("--eyelets", type=int, default=50)
     ap.add_argument("--fed", type=int, default=0, help="also a wire fed through this many rings")
+    ap.add_argument("--tree", action="store_true",
+                    help="binary trees of links instead of chains (not O(N): see the README)")
     args = ap.parse_args(argv)
     run_flexmbs_chain(3, t_end=0.005)   # compile / load numba caches outside the timing
     have_exu = exudyn_available()
-    print(f"hanging chain, h = {args.dt}, t_end = {args.t_end}, rho_inf = 0.8, modified Newton")
+    shape = tree_parents if args.tree else chain_parents
+    print(f"hanging {'binary tree' if args.tree else 'chain'}, h = {args.dt}, t_end = "
+          f"{args.t_end}, rho_inf = 0.8, modified Newton")
     print(f"{'N':>5} {'flexmbs us/step':>16} {'Exudyn us/step':>15} {'ratio':>7} "
           f"{'flexmbs it/jac':>15} {'Exudyn it/jac':>14} {'end z flexmbs':>14} {'end z Exudyn':>13}")
     ts = []
     for n in args.sizes:
-        f = run_flexmbs_chain(n, h=args.dt, t_end=args.t_end, repeats=2)
+        f = run_flexmbs_chain(n, h=args.dt, t_end=args.t_end, repeats=2, parents=shape(n))
         ts.append(f["us_per_step"])
         if have_exu:
-            e = min((run_exudyn_chain(n, h=args.dt, t_end=args.t_end) for _ in range(2)),
+            e = min((run_exudyn_chain(n, h=args.dt, t_end=args.t_end, parents=shape(n))
+                     for _ in range(2)),
                     key=lambda d: d["us_per_step"])
             print(f"{n:5d} {f['us_per_step']:16.1f} {e['us_per_step']:15.1f} "
                   f"{f['us_per_step'] / e['us_per_step']:7.2f} {f['newton']:>7d}/{f['jac']:<7d} "

@@ -74,7 +74,32 @@ def _install_package_stamp() -> None:
         PackageLocator.__name__ = "Flexmbs" + base.__name__.lstrip("_")
         return PackageLocator
 
-    impl._locator_classes = [locator(b) for b in bases] + list(impl._locator_classes)
+    def caller_locator(base: Any) -> Any:
+        class CallerLocator(base):  # type: ignore[misc, valid-type]
+            """A function outside the package compiled by :func:`njit` (a benchmark's timing
+            loop, a user's kernel): its cached code holds the package kernels it calls, so its
+            stamp is its own file's and the package's."""
+
+            def get_source_stamp(self) -> Any:
+                return (super().get_source_stamp(), stamp)
+
+            @classmethod
+            def from_function(cls, py_func: Any, py_file: str) -> Any:
+                if not getattr(py_func, _CALLER_MARK, False) \
+                        or Path(py_file).resolve().is_relative_to(root):
+                    return None
+                return super().from_function(py_func, py_file)
+
+        CallerLocator.__name__ = "FlexmbsCaller" + base.__name__.lstrip("_")
+        return CallerLocator
+
+    impl._locator_classes = ([locator(b) for b in bases] + [caller_locator(b) for b in bases]
+                             + list(impl._locator_classes))
+
+
+#: attribute :func:`njit` sets on the Python functions it compiles (their cache stamp then
+#: includes the package's, :func:`_install_package_stamp`)
+_CALLER_MARK = "__flexmbs_njit__"
 
 
 if _njit is not None:
@@ -116,6 +141,9 @@ def njit(*args: Any, refcount: bool = True, internal: bool = False, **kwargs: An
         if len(args) == 1 and callable(args[0]) and not kwargs:
             return args[0]
         return lambda f: f
+    for f in args[:1]:
+        if callable(f):
+            setattr(f, _CALLER_MARK, True)
     kwargs.setdefault("cache", True)
     if internal:
         kwargs["no_cpython_wrapper"] = True
@@ -125,7 +153,12 @@ def njit(*args: Any, refcount: bool = True, internal: bool = False, **kwargs: An
     if len(args) == 1 and callable(args[0]):
         return wrap(_tolerate_stale_cache(_njit(**kwargs)(args[0])))
     decorate = _njit(*args, **kwargs)
-    return lambda f: wrap(_tolerate_stale_cache(decorate(f)))
+
+    def compile_marked(f: Any) -> Any:
+        setattr(f, _CALLER_MARK, True)
+        return wrap(_tolerate_stale_cache(decorate(f)))
+
+    return compile_marked
 
 
 _INTERNAL_CLASSES: dict[type, type] = {}

@@ -81,6 +81,35 @@ def test_kernels_are_stamped_with_every_kernel_module(tmp_path):
         assert locator.get_source_stamp() == package_stamp(root)
 
 
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba caching only")
+def test_a_caller_outside_the_package_is_stamped_with_the_package(tmp_path, monkeypatch):
+    """A function outside the package compiled by flexmbs' njit (a benchmark's timing loop)
+    caches the package kernels it calls with its own code: its stamp is its file's and the
+    package's, so an edit of a kernel module recompiles it too (it measured stale code
+    before); numba's own functions keep numba's stamp."""
+    import importlib
+
+    import numba
+
+    import flexmbs
+    from flexmbs._jit import package_stamp
+
+    (tmp_path / "timing_loop.py").write_text(
+        "from flexmbs._jit import njit\nimport numba\n\n\n@njit\ndef loop(n):\n"
+        "    return n + 1\n\n\n@njit(refcount=False)\ndef loop2(n):\n    return n + 2\n\n\n"
+        "@numba.njit(cache=True)\ndef plain(n):\n    return n + 3\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    mod = importlib.import_module("timing_loop")
+    assert (mod.loop(1), mod.loop2(1), mod.plain(1)) == (2, 3, 4)
+    package = package_stamp(Path(flexmbs.__file__).parent)
+    for d in (mod.loop, mod.loop2):
+        own, stamp = d._cache._impl._locator.get_source_stamp()
+        assert stamp == package and own
+    assert isinstance(mod.plain, numba.core.dispatcher.Dispatcher)
+    assert mod.plain._cache._impl._locator.get_source_stamp() != package
+    assert package not in tuple(mod.plain._cache._impl._locator.get_source_stamp())
+
+
 def _arrays_returned_without_refcount(dispatchers) -> list[str]:  # noqa: ANN001
     """Compiled signatures of reference-count-free kernels whose result holds an array (the
     caller would release a reference it was never given, ``_jit.njit``)."""

@@ -11,12 +11,11 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import shape_xi
+from ..elements.ancf_cable import element_point_values, shape_xi
 from ..elements.centerline import (
     beam_point,
     closest_point,
     closest_point_kernel,
-    cross3,
     dot3,
     section_crossing,
     section_crossing_kernel,
@@ -36,6 +35,24 @@ __all__ = [
 ]
 
 
+@njit(inline="always")
+def _ellipse_axes(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN202
+    """:func:`section_ellipse` with the axes as 3-tuples (no allocation): the one statement."""
+    nt = math.sqrt(dot3(tangent_vec, tangent_vec))
+    t = (tangent_vec[0] / nt, tangent_vec[1] / nt, tangent_vec[2] / nt)
+    c = abs(dot3(t, normal))
+    eb = (t[1] * normal[2] - t[2] * normal[1], t[2] * normal[0] - t[0] * normal[2],
+          t[0] * normal[1] - t[1] * normal[0])
+    sn = math.sqrt(dot3(eb, eb))
+    if sn < 1e-10:
+        return r_b, r_b, (e_y[0], e_y[1], e_y[2]), (e_z[0], e_z[1], e_z[2]), c
+    eb = (eb[0] / sn, eb[1] / sn, eb[2] / sn)
+    ea = (normal[1] * eb[2] - normal[2] * eb[1], normal[2] * eb[0] - normal[0] * eb[2],
+          normal[0] * eb[1] - normal[1] * eb[0])
+    a = r_b / c if c > 0.0 else np.inf
+    return a, r_b, ea, eb, c
+
+
 @njit
 def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
     """Tangent-cylinder section ellipse (FORMULATION II §2): ``(a, b, e_a, e_b, cos θ)``.
@@ -44,16 +61,13 @@ def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
     ``e_a = n×e_b`` (in-plane tangent direction, major axis). When ``|t×n| < 1e-10`` the section is
     a circle and ``e_a = e_y``, ``e_b = e_z``. ``cos θ = 0`` (beam in the plane) gives ``a = inf``.
     """
-    t = tangent_vec / math.sqrt(dot3(tangent_vec, tangent_vec))
-    c = abs(dot3(t, normal))
-    eb = cross3(t, normal)
-    sn = math.sqrt(dot3(eb, eb))
-    if sn < 1e-10:
-        return r_b, r_b, e_y.copy(), e_z.copy(), c
-    eb = eb / sn
-    ea = cross3(normal, eb)
-    a = r_b / c if c > 0.0 else np.inf
-    return a, r_b, ea, eb, c
+    a, b, ea3, eb3, c = _ellipse_axes(tangent_vec, normal, e_y, e_z, r_b)
+    ea = np.empty(3)
+    eb = np.empty(3)
+    for i in range(3):
+        ea[i] = ea3[i]
+        eb[i] = eb3[i]
+    return a, b, ea, eb, c
 
 
 @njit
@@ -94,8 +108,8 @@ def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_d
 def section_ellipse_at(q_e, lengths, e, xi, origin, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
     """The beam's section ellipse where its axis crosses the plane at ``(e, xi)``, in section
     coordinates: ``(cy, cz, a, b, eax, eay)`` (centre, semi-axes a ≥ b, unit major axis)."""
-    r, rx, _ = beam_point(q_e, lengths, e, xi)
-    a, b, ea3, _, _ = section_ellipse(rx, normal, e_y, e_z, r_b)
+    r, rx, _ = element_point_values(q_e[e], lengths[e], xi)
+    a, b, ea3, _, _ = _ellipse_axes(rx, normal, e_y, e_z, r_b)
     cy = 0.0
     cz = 0.0
     for c in range(3):

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements._rod_derivatives import spin as chart_spin
-from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
+from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, element_point_values, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
 from .laws import (
     FRICTION_NONE,
@@ -101,8 +101,8 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
     # closest-point projection on this element (extrapolating the cubic)
     xi = xi0
     for _ in range(30):
-        r, rx, rxx = element_point(q_elem, length, xi)
-        d = r - Q
+        r, rx, rxx = element_point_values(q_elem, length, xi)
+        d = (r[0] - Q[0], r[1] - Q[1], r[2] - Q[2])
         h = d[0] * rx[0] + d[1] * rx[1] + d[2] * rx[2]
         a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
         if abs(h) <= 1e-14 * math.sqrt(a11) * max(1.0, math.sqrt(Q[0]**2 + Q[1]**2 + Q[2]**2)):

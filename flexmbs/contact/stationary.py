@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import element_point
+from ..elements.ancf_cable import element_point_values
 from ..elements.centerline import bracketed_newton_step, closest_point_kernel
 from .sections import SHAPE_CIRCLE, section_boundary, trig_quadratic_roots
 
@@ -190,7 +190,7 @@ def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, 
     for _ in range(PAIR_JOINT_ITER):
         e = min(max(int(math.floor(s)), 0), n - 1)
         x = s - e
-        r, rx, rxx = element_point(qe[e], lengths[e], x)
+        r, rx, rxx = element_point_values(qe[e], lengths[e], x)
         section_boundary(shape, params, psi, Y, Yp, Ypp)
         u0 = r[0] - _in_space(origin, ey, ez, Y[0], Y[1], 0)
         u1 = r[1] - _in_space(origin, ey, ez, Y[0], Y[1], 1)
@@ -244,7 +244,7 @@ def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, ele
     Ypp = np.empty(2)
     # the fast path: Newton on (ξ, ψ) together, from the seed's wall point projected once
     section_boundary(shape, params, psi0, Y, Yp, Ypp)
-    r, rx, _ = element_point(qe[elem0], lengths[elem0], xi0)
+    r, rx, _ = element_point_values(qe[elem0], lengths[elem0], xi0)
     t = 0.0
     rr = 0.0
     for c in range(3):

@@ -194,22 +194,34 @@ def shape_xi(xi, length):  # noqa: ANN001, ANN201
     return S, dS, ddS
 
 
-@njit
-def element_point(q, L, xi):  # noqa: ANN001, ANN201
-    """Centreline point of one element: ``r, r_ξ, r_ξξ`` (3,) at ξ from its coordinates
+@njit(inline="always")
+def _combine(w, q, c):  # noqa: ANN001, ANN202
+    """Component c of ``Σ_m w_m q_m`` over the element's four coordinate triples."""
+    return w[0] * q[c] + w[1] * q[3 + c] + w[2] * q[6 + c] + w[3] * q[9 + c]
+
+
+@njit(inline="always")
+def element_point_values(q, L, xi):  # noqa: ANN001, ANN201
+    """Centreline point of one element: ``r, r_ξ, r_ξξ`` at ξ as three 3-tuples (no
+    allocation: the crossing and projection Newton loops) from its coordinates
     ``q = [r0, r0′, r1, r1′]`` (any real ξ: the cubic is extrapolated), r = S(ξ) q."""
     s, d, dd, _ = hermite_basis(xi, L)
+    return ((_combine(s, q, 0), _combine(s, q, 1), _combine(s, q, 2)),
+            (_combine(d, q, 0), _combine(d, q, 1), _combine(d, q, 2)),
+            (_combine(dd, q, 0), _combine(dd, q, 1), _combine(dd, q, 2)))
+
+
+@njit
+def element_point(q, L, xi):  # noqa: ANN001, ANN201
+    """:func:`element_point_values` as arrays (3,) ``r, r_ξ, r_ξξ``."""
+    v, vx, vxx = element_point_values(q, L, xi)
     r = np.empty(3)
     rx = np.empty(3)
     rxx = np.empty(3)
     for c in range(3):
-        a0 = q[c]
-        a1 = q[3 + c]
-        a2 = q[6 + c]
-        a3 = q[9 + c]
-        r[c] = s[0] * a0 + s[1] * a1 + s[2] * a2 + s[3] * a3
-        rx[c] = d[0] * a0 + d[1] * a1 + d[2] * a2 + d[3] * a3
-        rxx[c] = dd[0] * a0 + dd[1] * a1 + dd[2] * a2 + dd[3] * a3
+        r[c] = v[c]
+        rx[c] = vx[c]
+        rxx[c] = vxx[c]
     return r, rx, rxx
 
 

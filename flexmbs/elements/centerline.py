@@ -20,6 +20,7 @@ import numpy as np
 
 from .._jit import njit
 from .ancf_cable import element_point as _elem_point
+from .ancf_cable import element_point_values
 
 __all__ = ["dot3", "cross3", "beam_point", "section_crossing", "section_crossing_kernel", "closest_point",
            "closest_point_kernel"]
@@ -64,8 +65,8 @@ def cross3(a, b):  # noqa: ANN001, ANN202
 def _phi_at(q_e, lengths, origin, normal, s):  # noqa: ANN001, ANN202
     n = q_e.shape[0]
     e, xi = _locate(s, n)
-    r, rx, _ = _elem_point(q_e[e], lengths[e], xi)
-    d = r - origin
+    r, rx, _ = element_point_values(q_e[e], lengths[e], xi)
+    d = (r[0] - origin[0], r[1] - origin[1], r[2] - origin[2])
     return dot3(normal, d), dot3(normal, rx), e, xi, math.sqrt(dot3(d, d))
 
 
