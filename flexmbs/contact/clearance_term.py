@@ -27,7 +27,16 @@ from ._detect import (
     place_tips,
     reset_crossings,
 )
-from .pair import HIST_TWIST, N_GEO, N_HISTORY, N_LOCAL, N_TWIST, TWIST_OFF, contact_force
+from .pair import (
+    HIST_TWIST,
+    N_GEO,
+    N_HISTORY,
+    N_LOCAL,
+    N_TWIST,
+    PAIR_WORK,
+    TWIST_OFF,
+    contact_force,
+)
 from .sections import section_boundary
 from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
 
@@ -244,6 +253,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     hist = np.empty(N_HISTORY)
     ve = np.empty(CENTERLINE_SIZE)
     u_Q = np.empty(3)
+    pair_work = np.empty(PAIR_WORK)
     count = 0
     scale = 0.0
     for i in range(m):
@@ -262,7 +272,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
         g, gdot, f, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
-                                        C, geo)
+                                        C, geo, pair_work)
         row[GAP_COL] = g
         row[GAP_COL + 1] = gdot
         for c in range(4):

@@ -23,8 +23,14 @@ import numpy as np
 
 from .._jit import njit
 from ..elements._rod_derivatives import spin as chart_spin
-from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, element_point_values, shape_xi
-from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
+from ..elements.ancf_cable import (
+    CENTERLINE_SIZE,
+    element_point,
+    element_point_values,
+    hermite_basis,
+    shape_xi,
+)
+from ..elements.rigid_body import point_jacobian_of, point_tensor_into, rotation
 from .laws import (
     FRICTION_NONE,
     FRICTION_STICK,
@@ -76,25 +82,46 @@ class ContactResult(NamedTuple):
 @njit
 def contact_map(Bp, S):  # noqa: ANN001, ANN201
     """``W = ∂(x_Q − x_P)/∂q_c = [I, 2T(u_Q)p, −S(ξ_P)]`` (3, N_LOCAL) at fixed u_Q and ξ_P
-    (FORMULATION II §4): ``Bp`` = 2T(u_Q)p (3, 4), ``S`` the shape functions at ξ_P (4,)."""
-    W = np.zeros((3, N_LOCAL))
+    (FORMULATION II §4): ``Bp`` = 2T(u_Q)p (3, 4), ``S`` the shape functions at ξ_P (4,)
+    (:func:`contact_map_into` a new array)."""
+    W = np.empty((3, N_LOCAL))
+    contact_map_into(Bp, S, W)
+    return W
+
+
+@njit
+def contact_map_into(Bp, S, W):  # noqa: ANN001, ANN201
+    """:func:`contact_map` written into ``W`` (3, N_LOCAL)."""
+    for c in range(3):
+        for j in range(N_LOCAL):
+            W[c, j] = 0.0
     for c in range(3):
         W[c, c] = 1.0
         for i in range(4):
             W[c, 3 + i] = Bp[c, i]
         for m in range(4):
             W[c, 7 + 3 * m + c] = -S[m]
-    return W
+
+
+#: flat work of one contact's kinematics and force (:func:`contact_force`'s ``work``): T (3,
+#: 4, 4), 2T(u_Q)p (3, 4), Q, P, n, F_H (3 each), W (3, N_LOCAL), B (N_LOCAL)
+PAIR_WORK = 48 + 12 + 12 + 4 * N_LOCAL
 
 
 @njit
-def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa: ANN001, ANN202
+def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):  # noqa: ANN001, ANN202
     """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
-    rx, rxx, ell)``; see :func:`contact_geometry`."""
+    rx, rxx, ell)``, the arrays views of ``work`` (:data:`PAIR_WORK`; no allocation), dS, rx,
+    rxx tuples; see :func:`contact_geometry`."""
     p = q_body[3:7]
-    T = point_tensor_of(u_Q)
-    Bp = np.empty((3, 4))
-    Q = np.empty(3)
+    T = work[0:48].reshape((3, 4, 4))
+    Bp = work[48:60].reshape((3, 4))
+    Q = work[60:63]
+    P = work[63:66]
+    n = work[66:69]
+    W = work[72:72 + 3 * N_LOCAL].reshape((3, N_LOCAL))
+    B = work[72 + 3 * N_LOCAL:72 + 4 * N_LOCAL]
+    point_tensor_into(u_Q, T)
     point_jacobian_of(T, p, Bp, Q)            # 2T(u_Q)p and A u_Q
     for k in range(3):
         Q[k] += q_body[k]
@@ -113,25 +140,26 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b):  # noqa:
         xi = max(-1.0, min(2.0, xi + step))
         if abs(step) < 1e-15:
             break
-    S, dS, _ = shape_xi(xi, length)
-    P, rx, rxx = element_point(q_elem, length, xi)
-    u = Q - P
+    S, dS, _, _ = hermite_basis(xi, length)
+    Pv, rx, rxx = element_point_values(q_elem, length, xi)
+    for c in range(3):
+        P[c] = Pv[c]
+    u = (Q[0] - P[0], Q[1] - P[1], Q[2] - P[2])
     ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-    n = u / ell
+    for c in range(3):
+        n[c] = u[c] / ell
     g = ell - r_b
-    W = contact_map(Bp, S)
-    B = np.zeros(N_LOCAL)
-    vrel = np.zeros(3)
+    contact_map_into(Bp, S, W)
     for j in range(N_LOCAL):
         B[j] = n[0] * W[0, j] + n[1] * W[1, j] + n[2] * W[2, j]
-    for c in range(3):
+    gdot = 0.0
+    for c in range(3):      # n · v_rel, v_rel = W q̇_c at fixed u_Q, ξ_P
         acc = v_body[c]
         for i in range(4):
             acc += Bp[c, i] * v_body[3 + i]
         for m in range(4):
             acc -= S[m] * v_elem[3 * m + c]
-        vrel[c] = acc
-    gdot = n[0] * vrel[0] + n[1] * vrel[1] + n[2] * vrel[2]
+        gdot += n[c] * acc
     return xi, g, gdot, n, P, Q, B, W, T, dS, rx, rxx, ell
 
 
@@ -176,7 +204,7 @@ def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want
     ``H = ∂²g_N/∂q_c²`` of §5 including the ξ_P variation and the Euler-parameter Hessian.
     """
     xi, g, gdot, n, P, Q, B, W, T, dS, rx, rxx, ell = _kinematics(
-        q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b)
+        q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, np.empty(PAIR_WORK))
     H = _gap_hessian(n, W, T, dS, rx, rxx, ell) if want_hessian else np.zeros((N_LOCAL, N_LOCAL))
     return xi, g, gdot, n, P, Q, B, W, H
 
@@ -303,7 +331,7 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):  # noqa: ANN001, ANN2
 
 @njit
 def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0912, PLR0913, PLR0915, C901
-                  approach_velocity, want_tangent, Qc, K, C, geo):
+                  approach_velocity, want_tangent, Qc, K, C, geo, work):
     """Penalty force of one contact point and its Gauss–Newton tangent (FORMULATION II §4–§5).
 
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
@@ -314,13 +342,14 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     (N_LOCAL,) = ``W_fᵀ F_H`` (external generalized force on [r_H, p, e_k, φ_k]; W_f = W with
     the surface's turn), with ``want_tangent`` ``K = k_t BᵀB`` plus
     the friction terms at frozen n, u_Q, ξ_P and ``C = c_t BᵀB`` plus friction (N_LOCAL,
-    N_LOCAL), and ``geo`` (:data:`N_GEO`) = [n, P, Q, F_H, d_new (body coordinates), stuck].
+    N_LOCAL), and ``geo`` (:data:`N_GEO`) = [n, P, Q, F_H, d_new (body coordinates), stuck];
+    ``work`` (:data:`PAIR_WORK`): its scratch (the frictionless path allocates nothing).
     Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
-                                                            length, xi0, r_b)
+                                                            length, xi0, r_b, work)
     f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
-    F_H = np.empty(3)
+    F_H = work[69:72]
     for c in range(3):
         F_H[c] = f * n[c]
     for c in range(12, N_GEO):
@@ -430,7 +459,7 @@ def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.
         contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:TWIST_OFF].copy(),
                       v_c[7:TWIST_OFF].copy(), spin_arg, float(length), float(xi), float(r_b), law, fr,
                       hist, approach_velocity, False, Qc, np.empty((0, 0)), np.empty((0, 0)),
-                      np.empty(N_GEO))
+                      np.empty(N_GEO), np.empty(PAIR_WORK))
         out.append(Qc)
     return out[0] - out[1]
 
@@ -490,7 +519,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     spin_arg = _spin_argument(sp)
     g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length),
                                      float(xi), float(r_b), law_p, fric, hist,
-                                     float(approach_velocity), True, Qc, K, C, geo)
+                                     float(approach_velocity), True, Qc, K, C, geo,
+                                     np.empty(PAIR_WORK))
     n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
     if consistent:
         # exact geometric and damping terms of the normal force (§5), and the friction
@@ -507,10 +537,10 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
             Kn, Cn = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
             contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, fric, hist, float(approach_velocity), True, Qf, Kf,
-                          Cf, np.empty(N_GEO))
+                          Cf, np.empty(N_GEO), np.empty(PAIR_WORK))
             contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, no_friction(), hist, float(approach_velocity), True,
-                          Qf, Kn, Cn, np.empty(N_GEO))
+                          Qf, Kn, Cn, np.empty(N_GEO), np.empty(PAIR_WORK))
             K -= Kf - Kn
             q_c = np.concatenate([q_body, q_elem, sp[1:3]])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))

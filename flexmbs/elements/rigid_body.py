@@ -171,11 +171,23 @@ def e_hat(y: np.ndarray) -> np.ndarray:
 
 @njit
 def point_tensor_of(u):  # noqa: ANN001, ANN201
-    """Symmetric ``T_k(u)`` (3, 4, 4) with ``(A(p)u)_k = pᵀT_k(u)p`` for every p (A homogeneous).
+    """Symmetric ``T_k(u)`` (3, 4, 4) with ``(A(p)u)_k = pᵀT_k(u)p`` for every p (A homogeneous)
+    (:func:`point_tensor_into` a new array)."""
+    T = np.empty((3, 4, 4))
+    point_tensor_into(u, T)
+    return T
+
+
+@njit
+def point_tensor_into(u, T):  # noqa: ANN001, ANN201
+    """:func:`point_tensor_of` written into ``T`` (3, 4, 4).
 
     Derivation [D]: ``Au = (e0² − eᵀe) u + 2e(eᵀu) + 2e0 (e × u)``, read off term by term.
     """
-    T = np.zeros((3, 4, 4))
+    for k in range(3):
+        for i in range(4):
+            for j in range(4):
+                T[k, i, j] = 0.0
     for k in range(3):
         T[k, 0, 0] = u[k]
         for i in range(3):
@@ -188,7 +200,6 @@ def point_tensor_of(u):  # noqa: ANN001, ANN201
                          (2, 0, 1.0, 1), (2, 1, -1.0, 0)):
         T[k, 0, i + 1] = sgn * u[j]
         T[k, i + 1, 0] = sgn * u[j]
-    return T
 
 
 def point_tensor(s: np.ndarray) -> np.ndarray:
