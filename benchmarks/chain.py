@@ -127,11 +127,31 @@ def run_exudyn_chain(n: int, *, h: float = 1e-3, t_end: float = 0.1,
                 end_z=float(z), newton=int(it.newtonStepsCount), jac=int(it.newtonJacobiCount))
 
 
+def _wire_through_rings(stations: np.ndarray, pull: float, *, clamped: bool, n_elem: int = 100
+                        ) -> tuple[fm.Model, fm.Beam]:
+    """A 1 m steel wire (r = 0.5 mm) along x under gravity through fixed rings at ``stations``
+    (``SlidingJoint(variant="ring")`` on fixed bodies, a slide coordinate each), pulled by
+    ``pull`` N along its axis at its end, ramped in over ``PULL_RAMP``; ``clamped``: at its
+    start."""
+    model = fm.Model(gravity=G)
+    wire = model.add_beam(fm.line((0, 0, 0), (1.0, 0, 0), elements=n_elem),
+                          section=fm.CircularSection(5e-4),
+                          material=fm.Material(E=2.1e11, rho=7800.0))
+    if clamped:
+        model.clamp(wire.first_node)
+    for k, x in enumerate(stations):
+        ring = model.add_rigid_body(mass=1e-2, inertia=(1e-6, 1e-6, 1e-6),
+                                    pose=fm.Pose((float(x), 0.0, 0.0), np.eye(3)), name=f"eyelet{k}")
+        model.fix_body(ring)
+        model.add_joint(fm.SlidingJoint(wire, ring, variant="ring", name=f"ring{k}"))
+    model.add_point_load(wire.last_node, force=(pull, 0.0, 0.0),
+                         function=fm.Ramp(end=PULL_RAMP, smooth=True))
+    return model, wire
+
+
 def build_eyelets(n_eyelets: int, n_elem: int = 100) -> fm.Model:
-    """A 1 m steel wire (r = 0.5 mm, 100 elements), clamped at its start, threaded through
-    ``n_eyelets`` fixed eyelets (rings without clearance: ``SlidingJoint(variant="ring")`` on
-    fixed bodies, each with its slide coordinate) evenly spaced along it, pulled by 1 N along
-    its axis at the free end (ramped in over ``PULL_RAMP``), under gravity.
+    """The wire clamped at its start, threaded through ``n_eyelets`` fixed eyelets evenly
+    spaced along it, pulled by 1 N at the free end (:func:`_wire_through_rings`).
 
     The pull is ramped: applied at once, it gives the light tip node (consistent mass about
     2.3e-5 kg) an initial acceleration of about 4e4 m/s^2, which the constant-acceleration
@@ -139,19 +159,8 @@ def build_eyelets(n_eyelets: int, n_elem: int = 100) -> fm.Model:
     1 cm tip element; Newton then converges to the folded branch of that element (r' = -e_x,
     zero Green strain as for +e_x), and two steps later the rings' equations fail
     (benchmarks/README.md, "Eyelet wire")."""
-    model = fm.Model(gravity=G)
-    wire = model.add_beam(fm.line((0, 0, 0), (1.0, 0, 0), elements=n_elem),
-                          section=fm.CircularSection(5e-4),
-                          material=fm.Material(E=2.1e11, rho=7800.0))
-    model.clamp(wire.first_node)
-    for k, x in enumerate(np.linspace(0.0, 1.0, n_eyelets + 2)[1:-1]):
-        ring = model.add_rigid_body(mass=1e-2, inertia=(1e-6, 1e-6, 1e-6),
-                                    pose=fm.Pose((x, 0.0, 0.0), np.eye(3)), name=f"eyelet{k}")
-        model.fix_body(ring)
-        model.add_joint(fm.SlidingJoint(wire, ring, variant="ring", name=f"ring{k}"))
-    model.add_point_load(wire.last_node, force=(1.0, 0.0, 0.0),
-                         function=fm.Ramp(end=PULL_RAMP, smooth=True))
-    return model
+    return _wire_through_rings(np.linspace(0.0, 1.0, n_eyelets + 2)[1:-1], 1.0, clamped=True,
+                               n_elem=n_elem)[0]
 
 
 def run_flexmbs_eyelets(n_eyelets: int, *, h: float = 1e-3, t_end: float = 0.05) -> dict:
@@ -172,22 +181,12 @@ def run_flexmbs_eyelets(n_eyelets: int, *, h: float = 1e-3, t_end: float = 0.05)
 
 
 def build_fed_wire(n_eyelets: int, n_elem: int = 100) -> tuple[fm.Model, fm.Beam]:
-    """A free 1 m steel wire (as :func:`build_eyelets`, without the clamp) threaded through
-    ``n_eyelets`` fixed rings between 0.3 and 0.7 m, pulled by 0.05 N along its axis at its
-    end (ramped in over ``PULL_RAMP``): it is fed about 15 cm, 15 elements, through the rings
-    in 0.2 s, so a plan that follows the rings is made again as they pass element ends."""
-    model = fm.Model(gravity=G)
-    wire = model.add_beam(fm.line((0, 0, 0), (1.0, 0, 0), elements=n_elem),
-                          section=fm.CircularSection(5e-4),
-                          material=fm.Material(E=2.1e11, rho=7800.0))
-    for k, x in enumerate(np.linspace(0.3, 0.7, n_eyelets)):
-        ring = model.add_rigid_body(mass=1e-2, inertia=(1e-6, 1e-6, 1e-6),
-                                    pose=fm.Pose((x, 0.0, 0.0), np.eye(3)), name=f"eyelet{k}")
-        model.fix_body(ring)
-        model.add_joint(fm.SlidingJoint(wire, ring, variant="ring", name=f"ring{k}"))
-    model.add_point_load(wire.last_node, force=(0.05, 0.0, 0.0),
-                         function=fm.Ramp(end=PULL_RAMP, smooth=True))
-    return model, wire
+    """The wire free (no clamp) through ``n_eyelets`` fixed rings between 0.3 and 0.7 m,
+    pulled by 0.05 N at its end (:func:`_wire_through_rings`): it is fed about 15 cm, 15
+    elements, through the rings in 0.2 s, so a plan that follows the rings is made again as
+    they pass element ends."""
+    return _wire_through_rings(np.linspace(0.3, 0.7, n_eyelets), 0.05, clamped=False,
+                               n_elem=n_elem)
 
 
 def run_flexmbs_fed(n_eyelets: int, *, h: float = 1e-3, t_end: float = 0.2) -> dict:
