@@ -104,7 +104,7 @@ def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_d
     return True, e, xi, cy, cz, a, b, eax, eay
 
 
-@njit
+@njit(refcount=False)
 def section_ellipse_at(q_e, lengths, e, xi, origin, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
     """The beam's section ellipse where its axis crosses the plane at ``(e, xi)``, in section
     coordinates: ``(cy, cz, a, b, eax, eay)`` (centre, semi-axes a ≥ b, unit major axis)."""

@@ -180,7 +180,7 @@ def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp
     return e, x, d1, d2, ell, speed, w0, w1, w2
 
 
-@njit(internal=True)
+@njit(internal=True, refcount=False)
 def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
     """Newton on both unknowns of ``∇D(ξ, ψ) = 0`` at once (one axis point and one wall point
     per iteration, no inner projection), from ξ one projection step off the seed. Returns

@@ -61,7 +61,7 @@ def cross3(a, b):  # noqa: ANN001, ANN202
     return out
 
 
-@njit
+@njit(refcount=False)
 def _phi_at(q_e, lengths, origin, normal, s):  # noqa: ANN001, ANN202
     n = q_e.shape[0]
     e, xi = _locate(s, n)
@@ -86,7 +86,7 @@ def bracketed_newton_step(s, f, df, lo, hi, flo):  # noqa: ANN001, ANN201
     return s_new, lo, hi, flo
 
 
-@njit
+@njit(refcount=False)
 def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter, s0):  # noqa: ANN001, ANN202
     """Root of φ(s) in [lo, hi] with φ(lo)φ(hi) ≤ 0: Newton from ``s0`` (the midpoint when
     ``s0`` is not inside the bracket), bisection if it leaves the bracket."""
@@ -147,7 +147,7 @@ def element_plane_range(q, L, origin, normal):  # noqa: ANN001, ANN201
     return lo, hi
 
 
-@njit
+@njit(refcount=False)
 def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, s_out):  # noqa: ANN001, ANN201
     """Every crossing of element ``e`` with the plane ``n·(x − O) = 0`` (chain parameter
     ``s = e + ξ`` into ``s_out``, at most 3: a cubic). When the Bézier control values of φ

@@ -92,6 +92,8 @@ def _peripheral_rcm(P: sp.csr_matrix) -> np.ndarray:
     from scipy.sparse.csgraph import connected_components, reverse_cuthill_mckee
 
     n = P.shape[0]
+    if n == 0:
+        return np.zeros(0, np.int64)
     n_comp, label = connected_components(P, directed=False)
     starts = _peripheral_nodes(P, label, n_comp)[np.bincount(label, minlength=n_comp) > 2]
     k = starts.size
