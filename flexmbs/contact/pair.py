@@ -103,9 +103,17 @@ def contact_map_into(Bp, S, W):  # noqa: ANN001, ANN201
             W[c, 7 + 3 * m + c] = -S[m]
 
 
-#: flat work of one contact's kinematics and force (:func:`contact_force`'s ``work``): T (3,
-#: 4, 4), 2T(u_Q)p (3, 4), Q, P, n, F_H (3 each), W (3, N_LOCAL), B (N_LOCAL)
-PAIR_WORK = 48 + 12 + 12 + 4 * N_LOCAL
+#: flat work of one contact's kinematics and force (:func:`contact_force`'s ``work``): the
+#: offsets of T (3, 4, 4), 2T(u_Q)p (3, 4), Q, P, n, F_H (3 each), W (3, N_LOCAL), B (N_LOCAL)
+_WORK_T = 0
+_WORK_BP = _WORK_T + 3 * 4 * 4
+_WORK_Q = _WORK_BP + 3 * 4
+_WORK_P = _WORK_Q + 3
+_WORK_N = _WORK_P + 3
+_WORK_FH = _WORK_N + 3
+_WORK_W = _WORK_FH + 3
+_WORK_B = _WORK_W + 3 * N_LOCAL
+PAIR_WORK = _WORK_B + N_LOCAL
 
 
 @njit
@@ -114,13 +122,13 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):  #
     rx, rxx, ell)``, the arrays views of ``work`` (:data:`PAIR_WORK`; no allocation), dS, rx,
     rxx tuples; see :func:`contact_geometry`."""
     p = q_body[3:7]
-    T = work[0:48].reshape((3, 4, 4))
-    Bp = work[48:60].reshape((3, 4))
-    Q = work[60:63]
-    P = work[63:66]
-    n = work[66:69]
-    W = work[72:72 + 3 * N_LOCAL].reshape((3, N_LOCAL))
-    B = work[72 + 3 * N_LOCAL:72 + 4 * N_LOCAL]
+    T = work[_WORK_T:_WORK_BP].reshape((3, 4, 4))
+    Bp = work[_WORK_BP:_WORK_Q].reshape((3, 4))
+    Q = work[_WORK_Q:_WORK_P]
+    P = work[_WORK_P:_WORK_N]
+    n = work[_WORK_N:_WORK_FH]
+    W = work[_WORK_W:_WORK_B].reshape((3, N_LOCAL))
+    B = work[_WORK_B:PAIR_WORK]
     point_tensor_into(u_Q, T)
     point_jacobian_of(T, p, Bp, Q)            # 2T(u_Q)p and A u_Q
     for k in range(3):
@@ -349,7 +357,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
                                                             length, xi0, r_b, work)
     f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
-    F_H = work[69:72]
+    F_H = work[_WORK_FH:_WORK_W]
     for c in range(3):
         F_H[c] = f * n[c]
     for c in range(12, N_GEO):
