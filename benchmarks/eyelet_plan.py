@@ -57,7 +57,7 @@ def measure(n_eyelets: int) -> dict:
     x = np.zeros(size)
     out: dict = {"unknowns": size}
     plan = asm.factor_plan()
-    lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
+    lu = plan.factorization(asm.matrix)
     assert lu.factorize(data)
     out["now"] = (plan.border.size, plan.bandwidth, best_of(loop_factorize, (lu.factor, data), 50, 5),
                   best_of(loop_solve, (lu.factor, rhs, x), 50, 5),

@@ -10,6 +10,12 @@ bodies, interaction coordinates, nonlinear multipliers) that may couple densely 
 
     y = A_aa^-1 b_a,  x_b = S^-1 (b_b - A_ba y),  x_a = y - X x_b
 
+Before the band, an optional *tree part* (:class:`~flexmbs.linalg.ordering.TreePlan`: rigid
+bodies with their joint rows, children before parents) is eliminated supernode by supernode:
+each block D_k = P L U (dense, partial pivoting), X_k = D_k^-1 A_kp on the columns of its
+parent set p, and A_pp -= A_pk X_k in the parent's block (a later supernode's, or the band's and
+border's, where the plan reserved it): no other fill, O(N) on trees of bodies (Baraff 1996).
+
 Factorisation and solve are numba functions taking a :class:`BorderedFactor` (a NamedTuple of
 arrays), so that a compiled Newton loop can call them; the index maps from the CSC ``data`` of the
 fixed pattern to the four blocks are precomputed in Python. Pivoting is within ``A_aa`` and within
@@ -19,12 +25,47 @@ enters it; not for a beam held only through border unknowns in statics).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
 
 from .._jit import njit
+
+if TYPE_CHECKING:
+    from .ordering import TreePlan
+
+
+class TreeFactor(NamedTuple):
+    """The tree part's maps and storage (:class:`BorderedFactor`'s ``tree``); S supernodes.
+    ``val`` holds per supernode k, from ``base[k]``: D_k (n x n), then X_k^T (m x n: the
+    columns of A_kp, then of D_k^-1 A_kp), then A_pk (m x n), all row-major."""
+
+    ptr: np.ndarray         # int64 (S + 1,): supernode k is unknowns[ptr[k]:ptr[k + 1]] (n)
+    unknowns: np.ndarray    # int64: global unknowns of the supernodes
+    set_ptr: np.ndarray     # int64 (S + 1,): its parent set is parent_set[set_ptr[k]:...] (m)
+    parent_set: np.ndarray  # int64: global unknowns
+    base: np.ndarray        # int64 (S + 1,): supernode k's storage in val
+    val: np.ndarray         # float64
+    piv: np.ndarray         # int64 (ptr[S],): row interchanges of each D_k, local 0-based
+    fill_pos: np.ndarray    # int64: CSC data positions of the tree's entries
+    fill_at: np.ndarray     # int64: their places in val
+    upd_ptr: np.ndarray     # int64 (S + 1,): A_pk X_k's m x m entries, row-major, go to
+    upd_kind: np.ndarray    # int64: 0 val[a], 1 ab[a, b], 2 xt[a, b], 3 a_ba[a, b], 4 s[a, b]
+    upd_a: np.ndarray       # int64
+    upd_b: np.ndarray       # int64
+    work: np.ndarray        # float64 (N,): the right-hand side as the elimination changes it
+    work_k: np.ndarray      # float64 (max n,)
+
+
+def empty_tree() -> TreeFactor:
+    """A :class:`TreeFactor` of no supernodes, typed like a real one."""
+    zi = np.zeros(1, np.int64)
+    z = np.zeros(0)
+    e = np.zeros(0, np.int64)
+    return TreeFactor(ptr=zi, unknowns=e, set_ptr=zi, parent_set=e, base=zi, val=z, piv=e,
+                      fill_pos=e, fill_at=e, upd_ptr=zi, upd_kind=e, upd_a=e, upd_b=e, work=z,
+                      work_k=z)
 
 
 class BorderedFactor(NamedTuple):
@@ -49,6 +90,7 @@ class BorderedFactor(NamedTuple):
     piv_s: np.ndarray       # int64 (n_b,): 0-based row interchanges of the dense LU
     work_a: np.ndarray      # float64 (n_a,)
     work_b: np.ndarray      # float64 (n_b,)
+    tree: TreeFactor        # the bodies eliminated before the band (none: empty_tree())
 
 
 class BorderedBandedLU:
@@ -56,13 +98,15 @@ class BorderedBandedLU:
     Schur complement + dgetf2), all in numba; see the module docstring."""
 
     def __init__(self, A: sp.csc_matrix, border: np.ndarray, order: np.ndarray | None = None,
-                 keep: np.ndarray | None = None) -> None:
-        """``border``: the unknowns of the dense Schur complement; ``order``: the others in
-        band order (default: reverse Cuthill-McKee), e.g. from
-        :func:`flexmbs.linalg.ordering.plan_factorization`; ``keep``: the entries of the
-        pattern (a bool per CSC position) the factorisation reads, default all; the others
-        must be zero in every matrix it factorises (a plan that follows the sliding joints,
-        :meth:`flexmbs.assembly.Assembly.factor_plan`)."""
+                 keep: np.ndarray | None = None, tree: TreePlan | None = None) -> None:
+        """``border``: the unknowns of the dense Schur complement; ``order``: the band's in
+        band order (default: reverse Cuthill-McKee of all unknowns in neither the border nor
+        the tree), e.g. from :func:`flexmbs.linalg.ordering.plan_factorization`; ``keep``: the
+        entries of the pattern (a bool per CSC position) the factorisation reads, default
+        all; the others must be zero in every matrix it factorises (a plan that follows the
+        sliding joints, :meth:`flexmbs.assembly.Assembly.factor_plan`); ``tree``: the
+        unknowns eliminated in tree order first (their entries must lie within a supernode
+        or between it and its parent set)."""
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
         A = sp.csc_matrix(A)
@@ -74,7 +118,13 @@ class BorderedBandedLU:
             raise ValueError("BorderedBandedLU: border index out of range")
         in_border = np.zeros(N, bool)
         in_border[border] = True
-        band = np.flatnonzero(~in_border).astype(np.int64)
+        in_tree = np.zeros(N, bool)
+        if tree is not None:
+            in_tree[tree.unknowns] = True
+            if (in_tree & in_border).any() or np.bincount(tree.unknowns, minlength=N).max() > 1:
+                raise ValueError("BorderedBandedLU: the tree's unknowns must be distinct and "
+                                 "outside the border")
+        band = np.flatnonzero(~in_border & ~in_tree).astype(np.int64)
         cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
         rows = A.indices[:cols.size].astype(np.int64)
         read = np.ones(cols.size, bool) if keep is None else np.asarray(keep, bool)
@@ -83,7 +133,7 @@ class BorderedBandedLU:
         if order is not None:
             perm = np.asarray(order, np.int64)
             if perm.shape != band.shape or not np.array_equal(np.sort(perm), band):
-                raise ValueError("BorderedBandedLU: order must list every non-border unknown once")
+                raise ValueError("BorderedBandedLU: order must list every band unknown once")
         elif band.size:
             P = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(N, N))[band][:, band]
             P = (P + P.T).tocsr()
@@ -95,18 +145,29 @@ class BorderedBandedLU:
         local = np.empty(N, np.int64)   # position inside the band order or inside the border
         local[perm] = np.arange(na)
         local[border] = np.arange(nb)
+        on_tree = in_tree[rows] | in_tree[cols]
+        rest = read & ~on_tree
+        if tree is not None:     # the parent blocks the tree's elimination adds to
+            cr, cc = tree.cliques(~in_tree)
+        else:
+            cr = cc = np.zeros(0, np.int64)
         ri, ci = local[rows], local[cols]
         rb, cb = in_border[rows], in_border[cols]
-        aa = ~rb & ~cb & read
-        kl = int(max(0, (ri[aa] - ci[aa]).max(initial=0)))
-        ku = int(max(0, (ci[aa] - ri[aa]).max(initial=0)))
+        aa = ~rb & ~cb & rest
+        extra = ~in_border[cr] & ~in_border[cc]
+        dif = np.concatenate([ri[aa] - ci[aa], local[cr[extra]] - local[cc[extra]]])
+        kl = int(max(0, dif.max(initial=0)))
+        ku = int(max(0, (-dif).max(initial=0)))
         kv = kl + ku
         # blocks aa, ab, ba, bb -> (mask, first index, second index) into ab, xt, a_ba, s
-        blocks = [(aa, kv + ri - ci, ci), (~rb & cb & read, ci, ri), (rb & ~cb & read, ri, ci),
-                  (rb & cb & read, ri, ci)]
+        blocks = [(aa, kv + ri - ci, ci), (~rb & cb & rest, ci, ri), (rb & ~cb & rest, ri, ci),
+                  (rb & cb & rest, ri, ci)]
         pos = [np.flatnonzero(m) for m, _, _ in blocks]
         fill_row = np.concatenate([r[m] for m, r, _ in blocks])
         fill_col = np.concatenate([c[m] for m, _, c in blocks])
+        tree_factor = (empty_tree() if tree is None else
+                       _tree_factor(tree, N, rows[read & on_tree], cols[read & on_tree],
+                                    np.flatnonzero(read & on_tree), local, in_border, kv))
         self.factor = BorderedFactor(
             n=N, n_band=na, n_border=nb, kl=kl, ku=ku, perm=perm, border=border,
             fill_pos=np.ascontiguousarray(np.concatenate(pos), dtype=np.int64),
@@ -115,19 +176,25 @@ class BorderedBandedLU:
             fill_ptr=np.concatenate([[0], np.cumsum([p.size for p in pos])]).astype(np.int64),
             ab=_band_storage(2 * kl + ku + 1, na), piv=np.zeros(na, np.int64),
             xt=np.zeros((nb, na)), a_ba=np.zeros((nb, na)), s=np.zeros((nb, nb)),
-            piv_s=np.zeros(nb, np.int64), work_a=np.zeros(na), work_b=np.zeros(nb))
+            piv_s=np.zeros(nb, np.int64), work_a=np.zeros(na), work_b=np.zeros(nb),
+            tree=tree_factor)
         self.nnz = rows.size
         self.kl, self.ku, self.n_band, self.n_border = kl, ku, na, nb
+        self.n_tree = 0 if tree is None else tree.size
         self.info = -1
 
     def twin(self) -> BorderedFactor:
         """A second factorisation of this plan (e.g. the velocity corrector's): the index maps
         shared (never written), its own numeric storage."""
         f = self.factor
+        t = f.tree
         return f._replace(ab=np.zeros_like(f.ab), piv=np.zeros_like(f.piv), xt=np.zeros_like(f.xt),
                           a_ba=np.zeros_like(f.a_ba), s=np.zeros_like(f.s),
                           piv_s=np.zeros_like(f.piv_s), work_a=np.zeros_like(f.work_a),
-                          work_b=np.zeros_like(f.work_b))
+                          work_b=np.zeros_like(f.work_b),
+                          tree=t._replace(val=np.zeros_like(t.val), piv=np.zeros_like(t.piv),
+                                          work=np.zeros_like(t.work),
+                                          work_k=np.zeros_like(t.work_k)))
 
     def factorize(self, data: np.ndarray) -> bool:
         """Factor the matrix with CSC ``data`` (pattern of construction). False if singular;
@@ -144,6 +211,76 @@ class BorderedBandedLU:
         x = np.empty(self.factor.n)
         bordered_solve(self.factor, np.ascontiguousarray(b, dtype=np.float64), x)
         return x
+
+
+def _tree_factor(tree: TreePlan, N: int, rows: np.ndarray, cols: np.ndarray, pos: np.ndarray,
+                 local: np.ndarray, in_border: np.ndarray, kv: int) -> TreeFactor:
+    """The maps of the tree part: the stored entries (``rows``, ``cols`` at CSC ``pos``) that
+    touch it into its blocks, and each supernode's update A_pk X_k into its parent's block
+    (a later supernode's, or the band's and border's: ``local``, ``in_border``, ``kv`` as in
+    :class:`BorderedBandedLU`)."""
+    S = tree.ptr.size - 1
+    n = np.diff(tree.ptr)
+    m = np.diff(tree.set_ptr)
+    base = np.concatenate([[0], np.cumsum(n * n + 2 * m * n)]).astype(np.int64)
+    sup = np.full(N, S, np.int64)               # S: the rest, eliminated after the tree
+    sup[tree.unknowns] = np.repeat(np.arange(S), n)
+    lpos = np.zeros(N, np.int64)
+    lpos[tree.unknowns] = np.arange(tree.unknowns.size) - np.repeat(tree.ptr[:-1], n)
+    owner = np.repeat(np.arange(S, dtype=np.int64), m)
+    keys = owner * N + tree.parent_set
+    by_key = np.argsort(keys, kind="stable")
+    sorted_keys = keys[by_key]
+
+    def place_in_set(k: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """The position of unknown u in supernode k's parent set."""
+        at = np.minimum(np.searchsorted(sorted_keys, k * N + u), max(sorted_keys.size - 1, 0))
+        if not sorted_keys.size or (sorted_keys[at] != k * N + u).any():
+            raise ValueError("BorderedBandedLU: an entry couples a tree supernode outside its "
+                             "parent set")
+        return by_key[at] - tree.set_ptr[k]
+
+    sr, sc = sup[rows], sup[cols]
+    at = np.empty(rows.size, np.int64)
+    same = sr == sc
+    k = sr[same]
+    at[same] = base[k] + lpos[rows[same]] * n[k] + lpos[cols[same]]
+    down = sr < sc            # row in supernode k, column in its parent set: X_k^T
+    k = sr[down]
+    at[down] = base[k] + n[k] * n[k] + place_in_set(k, cols[down]) * n[k] + lpos[rows[down]]
+    up = sc < sr              # row in the parent set, column in supernode k: A_pk
+    k = sc[up]
+    at[up] = (base[k] + n[k] * n[k] + m[k] * n[k] + place_in_set(k, rows[up]) * n[k]
+              + lpos[cols[up]])
+    # A_pk X_k (m x m, row-major) into the parent's block
+    ks = np.repeat(np.arange(S, dtype=np.int64), m * m)
+    first = np.repeat(tree.set_ptr[:-1], m * m)
+    within = np.arange(ks.size) - np.repeat(np.concatenate([[0], np.cumsum(m * m)[:-1]]), m * m)
+    mk = m[ks]
+    u = tree.parent_set[first + within // np.maximum(mk, 1)]
+    v = tree.parent_set[first + within % np.maximum(mk, 1)]
+    q = sup[u]
+    if (q != sup[v]).any() or (q <= ks).any():
+        raise ValueError("BorderedBandedLU: a tree supernode's parent set must lie in one later "
+                         "supernode or in the rest")
+    kind = np.zeros(ks.size, np.int64)
+    ua = np.zeros(ks.size, np.int64)
+    ub = np.zeros(ks.size, np.int64)
+    t = q < S
+    ua[t] = base[q[t]] + lpos[u[t]] * n[q[t]] + lpos[v[t]]
+    rb, cb = in_border[u], in_border[v]
+    ri, ci = local[u], local[v]
+    for code, mask, fa, fb in ((1, ~rb & ~cb, kv + ri - ci, ci), (2, ~rb & cb, ci, ri),
+                               (3, rb & ~cb, ri, ci), (4, rb & cb, ri, ci)):
+        mask = mask & ~t
+        kind[mask], ua[mask], ub[mask] = code, fa[mask], fb[mask]
+    return TreeFactor(
+        ptr=tree.ptr.astype(np.int64), unknowns=tree.unknowns.astype(np.int64),
+        set_ptr=tree.set_ptr.astype(np.int64), parent_set=tree.parent_set.astype(np.int64),
+        base=base, val=np.zeros(max(int(base[-1]), 1)), piv=np.zeros(tree.unknowns.size, np.int64),
+        fill_pos=np.ascontiguousarray(pos, np.int64), fill_at=at,
+        upd_ptr=np.concatenate([[0], np.cumsum(m * m)]).astype(np.int64), upd_kind=kind,
+        upd_a=ua, upd_b=ub, work=np.zeros(N), work_k=np.zeros(int(n.max(initial=1))))
 
 
 def _band_storage(rows: int, cols: int) -> np.ndarray:
@@ -269,6 +406,97 @@ def _dense_solve(s: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
         b[i] = acc / s[i, i]
 
 
+@njit
+def _tree_factorize(t: TreeFactor, data: np.ndarray, ab: np.ndarray, xt: np.ndarray,
+                    a_ba: np.ndarray, s: np.ndarray) -> int:
+    """The tree part's elimination, children first: D_k = P L U, X_k = D_k^-1 A_kp,
+    A_pp -= A_pk X_k into the parent's block (``ab``, ``xt``, ``a_ba``, ``s`` already filled).
+    Returns 0, -1 (non-finite entry) or 1 + the tree position of a zero pivot."""
+    val = t.val
+    val[:] = 0.0
+    probe = 0.0
+    for e in range(t.fill_pos.size):
+        d = data[t.fill_pos[e]]
+        probe += 0.0 * d
+        val[t.fill_at[e]] += d
+    if probe != 0.0:
+        return -1
+    for k in range(t.ptr.size - 1):
+        lo = t.ptr[k]
+        n = t.ptr[k + 1] - lo
+        m = t.set_ptr[k + 1] - t.set_ptr[k]
+        b = t.base[k]
+        d_k = val[b:b + n * n].reshape((n, n))
+        piv = t.piv[lo:lo + n]
+        info = _dense_lu(d_k, piv)
+        if info != 0:
+            return lo + info
+        x_k = val[b + n * n:b + n * n + m * n].reshape((m, n))
+        l_k = val[b + n * n + m * n:b + n * n + 2 * m * n].reshape((m, n))
+        for j in range(m):
+            _dense_solve(d_k, piv, x_k[j])
+        u = t.upd_ptr[k]
+        for i in range(m):
+            for j in range(m):
+                c = 0.0
+                for r in range(n):
+                    c += l_k[i, r] * x_k[j, r]
+                kind, ua, ub = t.upd_kind[u], t.upd_a[u], t.upd_b[u]
+                if kind == 0:
+                    val[ua] -= c
+                elif kind == 1:
+                    ab[ua, ub] -= c
+                elif kind == 2:
+                    xt[ua, ub] -= c
+                elif kind == 3:
+                    a_ba[ua, ub] -= c
+                else:
+                    s[ua, ub] -= c
+                u += 1
+    return 0
+
+
+@njit
+def _tree_forward(t: TreeFactor) -> None:
+    """y_k = D_k^-1 w_k and w_p -= A_pk y_k, children first, in ``t.work``."""
+    w, val = t.work, t.val
+    for k in range(t.ptr.size - 1):
+        lo = t.ptr[k]
+        n = t.ptr[k + 1] - lo
+        so = t.set_ptr[k]
+        m = t.set_ptr[k + 1] - so
+        b = t.base[k]
+        y = t.work_k[:n]
+        for r in range(n):
+            y[r] = w[t.unknowns[lo + r]]
+        _dense_solve(val[b:b + n * n].reshape((n, n)), t.piv[lo:lo + n], y)
+        for r in range(n):
+            w[t.unknowns[lo + r]] = y[r]
+        o = b + n * n + m * n
+        for i in range(m):
+            acc = 0.0
+            for r in range(n):
+                acc += val[o + i * n + r] * y[r]
+            w[t.parent_set[so + i]] -= acc
+
+
+@njit
+def _tree_backward(t: TreeFactor, x: np.ndarray) -> None:
+    """x_k = y_k - X_k x_p, parents first (x_p already solved)."""
+    w, val = t.work, t.val
+    for k in range(t.ptr.size - 2, -1, -1):
+        lo = t.ptr[k]
+        n = t.ptr[k + 1] - lo
+        so = t.set_ptr[k]
+        m = t.set_ptr[k + 1] - so
+        o = t.base[k] + n * n
+        for r in range(n):
+            acc = w[t.unknowns[lo + r]]
+            for j in range(m):
+                acc -= val[o + j * n + r] * x[t.parent_set[so + j]]
+            x[t.unknowns[lo + r]] = acc
+
+
 @njit(inline="always")
 def _fill(block, data, pos, fr, fc, lo, hi):  # noqa: ANN001, ANN202
     """Adds the CSC entries ``data[pos[lo:hi]]`` into ``block[fr, fc]``; returns 0.0, or nan
@@ -286,7 +514,8 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
     """Fill the blocks from CSC ``data``, band LU of A_aa (dgbtf2), X = A_aa^-1 A_ab, Schur
     complement S = A_bb - A_ba X and its dense LU (dgetf2). Returns 0 (ok), 1 + k (zero or
     non-finite pivot in band column k of A_aa, 0 <= k < n_a), n_a + 1 + k (pivot k of the
-    Schur complement) or N + 1 (non-finite matrix entry)."""
+    Schur complement), N + 1 (non-finite matrix entry) or N + 2 + k (pivot of the tree
+    part's unknown k, :class:`TreeFactor`)."""
     ab, xt, a_ba, s = factor.ab, factor.xt, factor.a_ba, factor.s
     pos, fr, fc, ptr = factor.fill_pos, factor.fill_row, factor.fill_col, factor.fill_ptr
     ab[:, :] = 0.0
@@ -299,6 +528,10 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
                  + _fill(s, data, pos, fr, fc, ptr[3], ptr[4]))
     if nan_probe != 0.0:
         return factor.n + 1
+    if factor.tree.unknowns.size:
+        info = _tree_factorize(factor.tree, data, ab, xt, a_ba, s)
+        if info != 0:
+            return factor.n + 1 if info < 0 else factor.n + 1 + info
     info = _band_lu(ab, factor.kl, factor.ku, factor.piv)
     if info != 0:
         return info
@@ -319,11 +552,17 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
 
 @njit
 def bordered_solve(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None:
-    """x = A^-1 b (global numbering, x must not alias b): y = A_aa^-1 b_a,
-    x_b = S^-1 (b_b - A_ba y), x_a = y - X x_b (Schur complement); allocation-free."""
+    """x = A^-1 b (global numbering, x must not alias b): the tree part's forward pass, then
+    y = A_aa^-1 b_a, x_b = S^-1 (b_b - A_ba y), x_a = y - X x_b (Schur complement), then the
+    tree part's backward pass; allocation-free."""
     perm, border, wa, wb = factor.perm, factor.border, factor.work_a, factor.work_b
     xt, a_ba = factor.xt, factor.a_ba
     na, nb = factor.n_band, factor.n_border
+    tree = factor.tree.unknowns.size > 0
+    if tree:
+        factor.tree.work[:] = b
+        _tree_forward(factor.tree)
+        b = factor.tree.work
     for k in range(na):
         wa[k] = b[perm[k]]
     _band_solve(factor.ab, factor.kl, factor.ku, factor.piv, wa)
@@ -341,3 +580,5 @@ def bordered_solve(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None
             x[border[j]] = z
     for k in range(na):
         x[perm[k]] = wa[k]
+    if tree:
+        _tree_backward(factor.tree, x)

@@ -198,19 +198,21 @@ def factor_cost(n_band: int, n_border: int, bandwidth: int) -> float:
 
 
 class FactorPlan(NamedTuple):
-    """Border and band order of a :class:`~flexmbs.linalg.bordered.BorderedBandedLU`."""
+    """Border, band order and tree part of a
+    :class:`~flexmbs.linalg.bordered.BorderedBandedLU`."""
 
     border: np.ndarray      # int64: unknowns of the dense Schur complement
-    order: np.ndarray       # int64: the other unknowns in band order
+    order: np.ndarray       # int64: the band's unknowns in band order
     bandwidth: int          # half bandwidth of the band in that order (before pivoting)
-    cost: float             # factor_cost estimate
+    cost: float             # factor_cost estimate (+ the tree part's)
     keep: np.ndarray | None = None   # the stored positions planned for (None: all)
+    tree: TreePlan | None = None     # the bodies eliminated in tree order first
 
     def factorization(self, A: sp.csc_matrix) -> BorderedBandedLU:
         """The bordered banded LU of ``A``'s pattern with this plan."""
         from .bordered import BorderedBandedLU
 
-        return BorderedBandedLU(A, self.border, self.order, self.keep)
+        return BorderedBandedLU(A, self.border, self.order, self.keep, self.tree)
 
 
 def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
@@ -226,22 +228,50 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
     unknowns, or :func:`saddle_order` (unknowns from ``n_coords`` on are multipliers, with a
     zero diagonal block; ``owner``: a label per unknown, >= 0 for the coordinates of one rigid
     body, kept together; :data:`MASSLESS` for a coordinate without mass). Each border is
-    closed by :func:`close_border` (the band block must stay nonsingular). Computed once per
-    pattern. ``keep``: the stored positions to plan for (the others are zero whenever the
-    plan is used: a plan that follows the sliding joints), default all; ``search=False``:
-    only the ``suggested`` border (closed), e.g. a plan's border planned again for shifted
-    ``keep`` (a re-plan that follows the joints, in a few ms instead of tens)."""
+    closed by :func:`close_border` (the band block must stay nonsingular). The same search
+    once more for the rest after the bodies that :func:`peel_tree` eliminates in tree order
+    (trees of bodies: no band holds a branching tree), taken where its cost with the tree's
+    is lower. Computed once per pattern. ``keep``: the stored positions to plan for (the
+    others are zero whenever the plan is used: a plan that follows the sliding joints),
+    default all; ``search=False``: only the ``suggested`` border (closed), e.g. a plan's
+    border planned again for shifted ``keep`` (a re-plan that follows the joints, in a few
+    ms instead of tens)."""
     G, _ = _graph(A, keep)
+    N = G.shape[0]
+    suggested = np.unique(np.asarray(suggested, np.int64))
+    best = _plan_band(G, suggested, n_coords, owner, np.ones(N, bool), search)
+    tree = peel_tree(G, n_coords, owner)
+    if tree is not None:
+        rest = np.ones(N, bool)
+        rest[tree.unknowns] = False
+        cr, cc = tree.cliques(rest)         # the parent blocks in the rest the tree fills
+        off = cr != cc
+        on_rest = sp.diags(rest.astype(float))
+        Gr = (on_rest @ G @ on_rest
+              + sp.csr_matrix((np.ones(int(off.sum())), (cr[off], cc[off])), shape=G.shape)).tocsr()
+        Gr.eliminate_zeros()
+        Gr.data[:] = 1.0
+        with_tree = _plan_band(Gr, suggested[rest[suggested]], n_coords, owner, rest, search)
+        cost = with_tree.cost + tree.cost()
+        if cost < best.cost:
+            best = with_tree._replace(cost=cost, tree=tree)
+    return best._replace(keep=keep)
+
+
+def _plan_band(G: sp.csr_matrix, suggested: np.ndarray, n_coords: int,
+               owner: np.ndarray | None, among: np.ndarray, search: bool) -> FactorPlan:
+    """:func:`plan_factorization`'s search for the border and band order of the unknowns
+    ``among`` (a bool mask; the others are not in ``G``'s edges)."""
     N = G.shape[0]
     is_coord = np.arange(N) < n_coords
     degree = np.diff(G.indptr)
-    suggested = np.unique(np.asarray(suggested, np.int64))
     candidates = [suggested, np.zeros(0, np.int64)] if search else [suggested]
-    levels = np.unique(degree)
-    levels = levels[levels > 2 * max(float(np.median(degree)), 1.0)]
+    levels = np.unique(degree[among])
+    if levels.size:
+        levels = levels[levels > 2 * max(float(np.median(degree[among])), 1.0)]
     if levels.size and search:
         for d in levels[::-1][::max(1, levels.size // 6)]:
-            candidates.append(np.flatnonzero(degree >= d).astype(np.int64))
+            candidates.append(np.flatnonzero((degree >= d) & among).astype(np.int64))
     best: FactorPlan | None = None
     seen: set[bytes] = set()
     for border in candidates:
@@ -251,11 +281,11 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
         in_border = np.zeros(N, bool)
         in_border[border] = True
         if border.size:
-            in_border = close_border(G, in_border, n_coords, owner)
+            in_border = close_border(G, in_border, n_coords, owner) & among
         border = np.flatnonzero(in_border).astype(np.int64)
         if border.size > MAX_BORDER:
             continue
-        band = np.flatnonzero(~in_border).astype(np.int64)
+        band = np.flatnonzero(~in_border & among).astype(np.int64)
         order, w = _band_order(G, band)
         if band.size:
             alt = supernode_order(G, band, n_coords)
@@ -276,9 +306,121 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
                 order, w = alt, w_alt
         cost = factor_cost(band.size, border.size, w)
         if best is None or cost < best.cost:
-            best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost, keep)
+            best = FactorPlan(border, np.ascontiguousarray(order, np.int64), w, cost)
     assert best is not None
     return best
+
+class TreePlan(NamedTuple):
+    """Rigid bodies eliminated in tree order before the bordered band (:func:`peel_tree`):
+    supernode k holds ``unknowns[ptr[k]:ptr[k + 1]]`` (a body's coordinates, its own rows and
+    the rows of the joints to its parent), eliminated after its children; it couples
+    only to ``parent_set[set_ptr[k]:set_ptr[k + 1]]``, coordinates of its parent body (a later
+    supernode, or a body of the rest), none for a root."""
+
+    ptr: np.ndarray          # int64 (S + 1,)
+    unknowns: np.ndarray     # int64: global unknowns, supernode by supernode
+    set_ptr: np.ndarray      # int64 (S + 1,)
+    parent_set: np.ndarray   # int64: global unknowns
+
+    @property
+    def size(self) -> int:
+        """The number of unknowns eliminated in tree order."""
+        return int(self.unknowns.size)
+
+    def cliques(self, rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The (row, column) pairs that the elimination adds among the unknowns ``rest`` (a
+        bool mask): the parent sets that lie there, each a dense block."""
+        rows, cols = [], []
+        for k in range(self.ptr.size - 1):
+            p = self.parent_set[self.set_ptr[k]:self.set_ptr[k + 1]]
+            if p.size and rest[p[0]]:
+                rows.append(np.repeat(p, p.size))
+                cols.append(np.tile(p, p.size))
+        if not rows:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.concatenate(rows), np.concatenate(cols)
+
+    def cost(self) -> float:
+        """Estimated flops of one elimination plus :data:`SOLVES_PER_FACTOR` solves (dense LU
+        of each supernode, its solves with the parent set's columns, the update of the
+        parent's block), comparable with :func:`factor_cost`."""
+        n = np.diff(self.ptr).astype(float)
+        m = np.diff(self.set_ptr).astype(float)
+        factor = 2 * n**3 / 3 + 2 * m * n * n + 2 * m * m * n
+        solve = 2 * n * n + 4 * m * n
+        return float((factor + SOLVES_PER_FACTOR * solve).sum())
+
+
+def peel_tree(G: sp.csr_matrix, n_coords: int, owner: np.ndarray | None) -> TreePlan | None:
+    """The rigid bodies that can be eliminated leaf by leaf, children before parents (Baraff
+    1996, "Linear-time dynamics using Lagrange multipliers"): a body whose remaining
+    neighbours are, through the rows of the joints to it and directly, the coordinates of one
+    other body (its parent) is a leaf; with those joint rows and its own rows it forms a
+    supernode whose block [[H, J^T], [J, 0]] is nonsingular when the body has mass and the rows
+    are independent: the joint rows are functions of its pose with the parent held and at most
+    one own row (the normalisation, orthogonal to them) is allowed beside them, as for the
+    border's leaves (:func:`close_border`). A body left with no neighbours is a root (any own
+    rows: its joints to the ground). Eliminating a leaf fills only its parent's block, so a
+    chain or tree of bodies costs O(N) and no band or border holds it. ``G``: the symmetric
+    pattern graph; ``owner``: >= 0 labels the coordinates of one rigid body (with mass: a
+    statics plan, all :data:`MASSLESS`, peels nothing). None when no body is peeled."""
+    N = G.shape[0]
+    if owner is None or N == 0:
+        return None
+    lab = np.asarray(owner[:n_coords], np.int64)
+    bodies, atom_c = np.unique(lab[lab >= 0], return_inverse=True)
+    if not bodies.size:
+        return None
+    atom = np.full(N, -1, np.int64)       # the body an unknown belongs to (coordinates, own rows)
+    coords = np.flatnonzero(lab >= 0)
+    atom[coords] = atom_c.ravel()
+    # a row is a body's own when all its neighbours are that body's coordinates
+    indptr, indices = G.indptr, G.indices
+    for r in range(n_coords, N):
+        nbr = indices[indptr[r]:indptr[r + 1]]
+        if nbr.size and (nbr < n_coords).all():
+            a = atom[nbr]
+            if a[0] >= 0 and (a == a[0]).all():
+                atom[r] = a[0]
+    order = np.argsort(atom, kind="stable")
+    start = np.searchsorted(atom[order], np.arange(bodies.size + 1))
+    members = [order[start[a]:start[a + 1]] for a in range(bodies.size)]
+    alive = np.ones(N, bool)
+    peeled = np.zeros(bodies.size, bool)
+    supernodes: list[np.ndarray] = []
+    sets: list[np.ndarray] = []
+    queue = list(range(bodies.size))
+    while queue:
+        a = queue.pop()
+        if peeled[a]:
+            continue
+        mine = members[a]
+        own_rows = int((mine >= n_coords).sum())
+        ext = np.unique(np.concatenate([indices[indptr[u]:indptr[u + 1]] for u in mine]))
+        ext = ext[alive[ext] & (atom[ext] != a)]
+        link = ext[(ext >= n_coords) & (atom[ext] < 0)]
+        node = np.concatenate([mine, link]) if link.size else mine
+        if link.size:       # the joint rows' other coordinates join the neighbours
+            around = np.unique(np.concatenate([indices[indptr[u]:indptr[u + 1]] for u in link]))
+            ext = np.union1d(np.setdiff1d(ext, link), around[alive[around]])
+        parent_set = np.setdiff1d(ext, node)
+        if parent_set.size:
+            p = atom[parent_set[0]]
+            if (own_rows > 1 or p < 0 or (parent_set >= n_coords).any()
+                    or (atom[parent_set] != p).any()):
+                continue
+        alive[node] = False
+        peeled[a] = True
+        supernodes.append(node.astype(np.int64))
+        sets.append(parent_set.astype(np.int64))
+        if parent_set.size:
+            queue.append(int(atom[parent_set[0]]))
+    if not supernodes:
+        return None
+    return TreePlan(ptr=np.concatenate([[0], np.cumsum([s.size for s in supernodes])]).astype(np.int64),
+                    unknowns=np.concatenate(supernodes).astype(np.int64),
+                    set_ptr=np.concatenate([[0], np.cumsum([s.size for s in sets])]).astype(np.int64),
+                    parent_set=np.concatenate(sets).astype(np.int64))
 
 
 #: :func:`plan_factorization`'s ``owner`` label of a coordinate without mass (a sliding

@@ -19,7 +19,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ConvergenceError
-from ..linalg.bordered import BorderedBandedLU
 from .newton import SINGULAR, Factorization, SuperLUFactor
 
 if TYPE_CHECKING:
@@ -37,7 +36,7 @@ class PlannedLU:
 
     def __init__(self, asm: Assembly, *, mass: bool = True) -> None:
         plan = asm.factor_plan(mass=mass)
-        self.lu = BorderedBandedLU(asm.matrix, plan.border, plan.order)
+        self.lu = plan.factorization(asm.matrix)
 
     def factorize(self, A: sp.csc_matrix) -> None:
         """Factor ``A`` (the assembly's pattern)."""

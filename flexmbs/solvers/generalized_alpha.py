@@ -512,6 +512,14 @@ class _CompiledStepper:
     _KEPT_INFO = ("INFO_HAVE", "INFO_KSCALE", "INFO_RENEW", "INFO_CYC_STEPS", "INFO_CYC_ITS")
     _FACTOR_ARRAYS = ("ab", "piv", "xt", "a_ba", "s", "piv_s")
 
+    def _factor_arrays(self) -> dict[str, np.ndarray]:
+        """The factorisation's numeric arrays by name (the tree part's as ``tree_val`` and
+        ``tree_piv``)."""
+        f = self.lu.factor
+        out = {k: getattr(f, k) for k in self._FACTOR_ARRAYS}
+        out["tree_val"], out["tree_piv"] = f.tree.val, f.tree.piv
+        return out
+
     def snapshot(self) -> dict[str, np.ndarray]:
         """What the next steps depend on besides the state: whether a factorisation is held,
         its age in the renewal rule, the stiffness scale, the factors themselves and the
@@ -519,8 +527,8 @@ class _CompiledStepper:
         with the same factorisation (bit for bit, issue "nothing lost")."""
         cc = self.cc
         out = {"info": np.array([self.info[getattr(cc, k)] for k in self._KEPT_INFO])}
-        for k in self._FACTOR_ARRAYS:
-            out[k] = np.array(getattr(self.lu.factor, k), copy=True)
+        for k, a in self._factor_arrays().items():
+            out[k] = np.array(a, copy=True)
         if self.windows is not None:
             out["windows"] = self.windows.copy()
             out["plan_border"] = np.array(self.lu.factor.border, copy=True)
@@ -555,12 +563,12 @@ class _CompiledStepper:
         if self.windows is not None and windows is not None and border is not None \
                 and np.shape(windows) == self.windows.shape:
             self._plan_on(windows, np.asarray(border, np.int64))
-        if "info" not in saved or any(
-                k not in saved or np.shape(saved[k]) != getattr(self.lu.factor, k).shape
-                for k in self._FACTOR_ARRAYS):
+        arrays = self._factor_arrays()
+        if "info" not in saved or any(k not in saved or np.shape(saved[k]) != a.shape
+                                      for k, a in arrays.items()):
             return
-        for k in self._FACTOR_ARRAYS:
-            getattr(self.lu.factor, k)[...] = saved[k]
+        for k, a in arrays.items():
+            a[...] = saved[k]
         for value, k in zip(np.asarray(saved["info"], float), self._KEPT_INFO, strict=True):
             self.info[getattr(self.cc, k)] = value
         self.asm.stiffness_scale = float(self.info[self.cc.INFO_KSCALE])

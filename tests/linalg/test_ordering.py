@@ -101,7 +101,7 @@ def test_planned_lu_matches_superlu(shape, regularise):
     rng = np.random.default_rng(abs(hash(shape)) % 2**32)
     A, n, border, owner = SHAPES[shape](rng, regularise)
     plan = plan_factorization(A, border, n, owner)
-    lu = BorderedBandedLU(A, plan.border, plan.order)
+    lu = plan.factorization(A)
     assert lu.factorize(A.data), f"pivot failure {lu.info}"
     b = rng.standard_normal(A.shape[0])
     x = lu.solve(b)
@@ -139,7 +139,7 @@ def test_reverse_cuthill_mckee_starts_at_a_chain_end():
         widths.append(_bandwidth(G, _peripheral_rcm(G)))
         plan = plan_factorization(A, border, n, owner)
         assert plan.border.size == 0 and plan.bandwidth <= widths[-1]
-        lu = BorderedBandedLU(A, plan.border, plan.order)
+        lu = plan.factorization(A)
         assert lu.factorize(A.data)
         b = rng.standard_normal(A.shape[0])
         ref = spla.splu(A, permc_spec="COLAMD").solve(b)
@@ -169,11 +169,141 @@ def test_a_chain_of_spherical_joints_plans_to_the_width_of_one_link():
 def test_star_keeps_its_hub_in_the_border():
     """A star's hub couples to every joint: a band would be as wide as the star; the hub's
     coordinates (with the rows on the hub alone: normalisation, joint to the ground) form the
-    border, the leaves a narrow band."""
+    border, the leaves a narrow band (the band search alone: with the tree part the star is
+    a tree, below)."""
+    from flexmbs.linalg.ordering import _graph, _plan_band
+
     A, n, border, owner = _saddle(np.random.default_rng(3), 80, _star(80))
-    plan = plan_factorization(A, border, n, owner)
+    G, _ = _graph(A)
+    plan = _plan_band(G, border, n, owner, np.ones(A.shape[0], bool), True)
     assert 0 < plan.border.size <= 7 + 1 + 3
     assert plan.bandwidth <= 12
+
+
+def _tree_plan(A: sp.csc_matrix, n: int, owner: np.ndarray):
+    from flexmbs.linalg.ordering import _graph, peel_tree
+
+    return peel_tree(_graph(A)[0], n, owner)
+
+
+def _peeled_bodies(tree, owner: np.ndarray) -> list[int]:
+    """The bodies of the tree's supernodes, in elimination order."""
+    return [int(np.unique(owner[tree.unknowns[tree.ptr[k]:tree.ptr[k + 1]]][
+        owner[tree.unknowns[tree.ptr[k]:tree.ptr[k + 1]]] >= 0])[0]) for k in range(tree.ptr.size - 1)]
+
+
+def test_trees_of_bodies_are_eliminated_children_first():
+    """peel_tree (Baraff 1996): every body of a binary tree or a star, each after all of its
+    children, the root last with its ground joint; each supernode is a body's 7 coordinates,
+    its normalisation and the 3 rows of the joint to its parent, and couples only to its
+    parent's 7 coordinates."""
+    for joints in (_binary_tree(31), _star(12), _chain(9)):
+        nb = len(joints)
+        A, n, _, owner = _saddle(np.random.default_rng(nb), nb, joints)
+        tree = _tree_plan(A, n, owner)
+        assert tree is not None and tree.size == A.shape[0]
+        order = _peeled_bodies(tree, owner)
+        assert sorted(order) == list(range(nb))
+        rank = {b: k for k, b in enumerate(order)}
+        for child, parent in joints:
+            if parent >= 0:
+                assert rank[child] < rank[parent]
+        sizes, sets = np.diff(tree.ptr), np.diff(tree.set_ptr)
+        assert (sizes[:-1] == 7 + 1 + 3).all() and sizes[-1] == 7 + 1 + 3
+        assert (sets[:-1] == 7).all() and sets[-1] == 0
+
+
+def test_loops_and_doubly_held_bodies_stay_in_the_rest():
+    """A closed loop has no leaf (four-bar, a loop of 30); a body with a joint to the ground
+    besides the joint to its parent is not a leaf (its rows need not be independent on its
+    coordinates alone), so the chain it ends stays too; a tree hanging from a loop is
+    peeled up to the loop."""
+    for joints in (_loop(3), _loop(30)):
+        A, n, _, owner = _saddle(np.random.default_rng(1), len(joints) - 1, joints)
+        assert _tree_plan(A, n, owner) is None
+    A, n, _, owner = _saddle(np.random.default_rng(2), 5, _chain(5) + [(4, -1)])
+    assert _tree_plan(A, n, owner) is None
+    # a four-bar (bodies 0-2) with a binary tree of 7 bodies (3-9) hanging from body 1
+    joints = _loop(3) + [(3, 1)] + [(3 + k, 3 + (k - 1) // 2) for k in range(1, 7)]
+    A, n, _, owner = _saddle(np.random.default_rng(3), 10, joints)
+    tree = _tree_plan(A, n, owner)
+    assert sorted(_peeled_bodies(tree, owner)) == list(range(3, 10))
+    last = tree.parent_set[tree.set_ptr[-2]:tree.set_ptr[-1]]
+    assert set(owner[last]) == {1}          # the tree's root fills body 1's block only
+
+
+def _check_tree_lu(A: sp.csc_matrix, border: np.ndarray, tree, rng: np.random.Generator) -> None:
+    """The bordered LU with ``tree`` and ``border`` (band: the rest) against SuperLU, twice
+    (a refactorisation reuses the maps), and its twin."""
+    lu = BorderedBandedLU(A, border, tree=tree)
+    for _ in range(2):
+        assert lu.factorize(A.data), f"pivot failure {lu.info}"
+        b = rng.standard_normal(A.shape[0])
+        ref = spla.splu(A, permc_spec="COLAMD").solve(b)
+        assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
+        A = A.copy()
+        A.data = A.data * rng.uniform(0.9, 1.1, A.data.size)
+
+
+@pytest.mark.parametrize("regularise", [0.0, 1e-2], ids=["zero_block", "regularised"])
+def test_tree_part_matches_superlu(regularise):
+    """The tree part eliminated first, its roots' updates landing in every kind of block of
+    the rest: a tree whose root is a loop body in the band, in the border (band-border,
+    border-border entries), a body on a beam with a tree below it, and a whole binary tree."""
+    rng = np.random.default_rng(11)
+    joints = _loop(3) + [(3, 1)] + [(3 + k, 3 + (k - 1) // 2) for k in range(1, 7)]
+    A, n, _, owner = _saddle(rng, 10, joints, regularise=regularise)
+    tree = _tree_plan(A, n, owner)
+    rest = np.setdiff1d(np.arange(A.shape[0]), tree.unknowns)
+    from flexmbs.linalg.ordering import _graph
+
+    G = _graph(A)[0]
+    for pick in (np.zeros(0, np.int64), np.flatnonzero(owner == 1), rest[::2], rest):
+        in_border = np.zeros(A.shape[0], bool)
+        in_border[pick] = True
+        border = np.flatnonzero(close_border(G, in_border, n, owner) & ~np.isin(
+            np.arange(A.shape[0]), tree.unknowns))
+        _check_tree_lu(A, border, tree, rng)
+    # a border that splits body 1 (not a planned one): updates into all four blocks
+    border = np.flatnonzero(owner == 1)[:3]
+    kinds = np.bincount(BorderedBandedLU(A, border, tree=tree).factor.tree.upd_kind, minlength=5)
+    assert (kinds > 0).all()
+    _check_tree_lu(A, border, tree, rng)
+    # bodies 0-3 in a chain, body 0 on a beam node; a binary tree of 7 below body 3
+    joints = [(1, 0), (2, 1), (3, 2)] + [(4, 3)] + [(4 + k, 4 + (k - 1) // 2) for k in range(1, 7)]
+    A, n, border, owner = _saddle(rng, 11, joints, beam_elements=20, on_beam=(11,),
+                                  regularise=regularise)
+    tree = _tree_plan(A, n, owner)
+    assert sorted(_peeled_bodies(tree, owner)) == list(range(1, 11))
+    _check_tree_lu(A, np.zeros(0, np.int64), tree, rng)
+    A, n, border, owner = _saddle(rng, 63, _binary_tree(63), regularise=regularise)
+    _check_tree_lu(A, np.zeros(0, np.int64), _tree_plan(A, n, owner), rng)
+
+
+def test_a_singular_tree_block_is_reported():
+    """A first leaf without mass or rows (its block zero): the factorisation fails with the
+    pivot code of a tree unknown of that leaf (N + 2 + k, k < its size)."""
+    A, n, _, owner = _saddle(np.random.default_rng(4), 7, _binary_tree(7))
+    tree = _tree_plan(A, n, owner)
+    first = tree.unknowns[:tree.ptr[1]]
+    cols = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    A.data[np.isin(A.indices, first) & np.isin(cols, first)] = 0.0
+    lu = BorderedBandedLU(A, np.zeros(0, np.int64), tree=tree)
+    assert not lu.factorize(A.data)
+    assert A.shape[0] + 2 <= lu.info < A.shape[0] + 2 + first.size
+
+
+def test_a_binary_tree_costs_o_n():
+    """The plan of a binary tree of bodies: all of it in tree order, an estimated cost per
+    body that does not grow with the tree (the band's grew with its width: O(N^2) and
+    worse)."""
+    per_body = []
+    for nb in (15, 63, 255, 1023):
+        A, n, border, owner = _saddle(np.random.default_rng(nb), nb, _binary_tree(nb))
+        plan = plan_factorization(A, border, n, owner)
+        assert plan.tree is not None and plan.tree.size == A.shape[0]
+        per_body.append(plan.cost / nb)
+    assert max(per_body) <= 1.1 * min(per_body)
 
 
 def test_cost_estimate_prefers_the_given_border_for_a_sleeve_on_a_long_beam():
@@ -265,7 +395,7 @@ def test_example2_shape_band_block_is_nonsingular():
     plan = plan_factorization(A, border, n, owner)
     assert 0 < plan.border.size < border.size          # the hub's border, not the assembly's
     assert set(range(7, 14)) <= set(plan.border.tolist())
-    lu = BorderedBandedLU(A, plan.border, plan.order)
+    lu = plan.factorization(A)
     assert lu.factorize(A.data), f"pivot failure {lu.info}"
     b = rng.standard_normal(A.shape[0])
     ref = spla.splu(A, permc_spec="COLAMD").solve(b)
@@ -356,7 +486,7 @@ def test_a_clamped_beam_is_ordered_node_by_node():
         assert _bandwidth(G, reverse_cuthill_mckee(G, symmetric_mode=True)) > 11   # scalar
         plan = plan_factorization(A, np.zeros(0, np.int64), n)
         assert plan.border.size == 0 and plan.bandwidth == 11
-        lu = BorderedBandedLU(A, plan.border, plan.order)
+        lu = plan.factorization(A)
         assert lu.factorize(A.data) and lu.kl == lu.ku == 11
         b = rng.standard_normal(A.shape[0])
         ref = spla.splu(A, permc_spec="COLAMD").solve(b)
