@@ -209,7 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--eyelets", type=int, default=50)
     ap.add_argument("--fed", type=int, default=0, help="also a wire fed through this many rings")
     ap.add_argument("--tree", action="store_true",
-                    help="binary trees of links instead of chains (not O(N): see the README)")
+                    help="binary trees of links instead of chains (eliminated in tree order)")
     args = ap.parse_args(argv)
     run_flexmbs_chain(3, t_end=0.005)   # compile / load numba caches outside the timing
     have_exu = exudyn_available()

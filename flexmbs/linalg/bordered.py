@@ -234,6 +234,8 @@ def _tree_factor(tree: TreePlan, N: int, rows: np.ndarray, cols: np.ndarray, pos
 
     def place_in_set(k: np.ndarray, u: np.ndarray) -> np.ndarray:
         """The position of unknown u in supernode k's parent set."""
+        if not u.size:
+            return u
         at = np.minimum(np.searchsorted(sorted_keys, k * N + u), max(sorted_keys.size - 1, 0))
         if not sorted_keys.size or (sorted_keys[at] != k * N + u).any():
             raise ValueError("BorderedBandedLU: an entry couples a tree supernode outside its "

@@ -534,3 +534,12 @@ def test_a_plan_of_the_entries_in_use_puts_a_ring_beside_its_element():
     b = rng.standard_normal(B.shape[0])
     ref = spla.splu(values, permc_spec="COLAMD").solve(b)
     assert np.abs(lu.solve(b) - ref).max() <= SUPERLU_TOL * np.abs(ref).max()
+
+
+def test_a_lone_body_on_the_ground_beside_a_beam():
+    """A root without a parent set beside the rest (a pendulum on the ground and a cantilever):
+    the body is a tree of one supernode, the beam the band."""
+    A, n, border, owner = _saddle(np.random.default_rng(8), 1, [(0, -1)], beam_elements=6)
+    plan = plan_factorization(A, border, n, owner)
+    assert plan.tree is not None and np.diff(plan.tree.set_ptr).tolist() == [0]
+    _check_tree_lu(A, plan.border, plan.tree, np.random.default_rng(9))
