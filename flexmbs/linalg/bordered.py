@@ -36,36 +36,46 @@ if TYPE_CHECKING:
     from .ordering import TreePlan
 
 
-class TreeFactor(NamedTuple):
-    """The tree part's maps and storage (:class:`BorderedFactor`'s ``tree``); S supernodes.
-    ``val`` holds per supernode k, from ``base[k]``: D_k (n x n), then X_k^T (m x n: the
-    columns of A_kp, then of D_k^-1 A_kp), then A_pk (m x n), all row-major."""
+#: columns of :class:`TreeFactor`'s supernode table: where its unknowns and parent set start in
+#: ``maps``, their numbers n and m, its storage in ``val``, its first update in ``maps``, its
+#: first pivot in ``piv``
+SN_UNKNOWNS, SN_N, SN_SET, SN_M, SN_VAL, SN_UPDATE, SN_PIV, SN_COLUMNS = range(8)
 
-    ptr: np.ndarray         # int64 (S + 1,): supernode k is unknowns[ptr[k]:ptr[k + 1]] (n)
-    unknowns: np.ndarray    # int64: global unknowns of the supernodes
-    set_ptr: np.ndarray     # int64 (S + 1,): its parent set is parent_set[set_ptr[k]:...] (m)
-    parent_set: np.ndarray  # int64: global unknowns
-    base: np.ndarray        # int64 (S + 1,): supernode k's storage in val
+
+class TreeFactor(NamedTuple):
+    """The tree part's maps and storage (:class:`BorderedFactor`'s ``tree``), its integer maps
+    in one array (a factor is passed by value in every call: 5 arrays, not 15).
+
+    ``maps``: the supernode table (``n_super`` rows of :data:`SN_COLUMNS`, row-major), then
+    the supernodes' unknowns and parent sets (global), each supernode's updates of its parent's
+    block as triples (kind, a, b): A_pk X_k's m x m entries row-major, kind 0 ``val[a]``,
+    1 ``ab[a, b]``, 2 ``xt[a, b]``, 3 ``a_ba[a, b]``, 4 ``s[a, b]``; from ``o_fill`` the
+    ``n_fill`` pairs (CSC data position, place in ``val``) of the tree's entries. ``val``
+    holds per supernode D_k (n x n), then X_k^T (m x n: the columns of A_kp, then of
+    D_k^-1 A_kp), then A_pk (m x n), all row-major."""
+
+    n_super: int
+    o_fill: int
+    n_fill: int
+    maps: np.ndarray        # int64, read only (shared by a twin)
+    piv: np.ndarray         # int64: row interchanges of each D_k, local 0-based
     val: np.ndarray         # float64
-    piv: np.ndarray         # int64 (ptr[S],): row interchanges of each D_k, local 0-based
-    fill_pos: np.ndarray    # int64: CSC data positions of the tree's entries
-    fill_at: np.ndarray     # int64: their places in val
-    upd_ptr: np.ndarray     # int64 (S + 1,): A_pk X_k's m x m entries, row-major, go to
-    upd_kind: np.ndarray    # int64: 0 val[a], 1 ab[a, b], 2 xt[a, b], 3 a_ba[a, b], 4 s[a, b]
-    upd_a: np.ndarray       # int64
-    upd_b: np.ndarray       # int64
     work: np.ndarray        # float64 (N,): the right-hand side as the elimination changes it
     work_k: np.ndarray      # float64 (max n,)
+
+    def update_kinds(self) -> np.ndarray:
+        """The kind of every update entry (Python side: which blocks the tree fills)."""
+        if not self.n_super:
+            return np.zeros(0, np.int64)
+        first = int(self.maps[SN_UPDATE])
+        return self.maps[first:self.o_fill:3]
 
 
 def empty_tree() -> TreeFactor:
     """A :class:`TreeFactor` of no supernodes, typed like a real one."""
-    zi = np.zeros(1, np.int64)
-    z = np.zeros(0)
-    e = np.zeros(0, np.int64)
-    return TreeFactor(ptr=zi, unknowns=e, set_ptr=zi, parent_set=e, base=zi, val=z, piv=e,
-                      fill_pos=e, fill_at=e, upd_ptr=zi, upd_kind=e, upd_a=e, upd_b=e, work=z,
-                      work_k=z)
+    return TreeFactor(n_super=0, o_fill=0, n_fill=0, maps=np.zeros(0, np.int64),
+                      piv=np.zeros(0, np.int64), val=np.zeros(0), work=np.zeros(0),
+                      work_k=np.zeros(0))
 
 
 class BorderedFactor(NamedTuple):
@@ -192,7 +202,7 @@ class BorderedBandedLU:
                           a_ba=np.zeros_like(f.a_ba), s=np.zeros_like(f.s),
                           piv_s=np.zeros_like(f.piv_s), work_a=np.zeros_like(f.work_a),
                           work_b=np.zeros_like(f.work_b),
-                          tree=t._replace(val=np.zeros_like(t.val), piv=np.zeros_like(t.piv),
+                          tree=t._replace(piv=np.zeros_like(t.piv), val=np.zeros_like(t.val),
                                           work=np.zeros_like(t.work),
                                           work_k=np.zeros_like(t.work_k)))
 
@@ -276,13 +286,19 @@ def _tree_factor(tree: TreePlan, N: int, rows: np.ndarray, cols: np.ndarray, pos
                                (3, rb & ~cb, ri, ci), (4, rb & cb, ri, ci)):
         mask = mask & ~t
         kind[mask], ua[mask], ub[mask] = code, fa[mask], fb[mask]
-    return TreeFactor(
-        ptr=tree.ptr.astype(np.int64), unknowns=tree.unknowns.astype(np.int64),
-        set_ptr=tree.set_ptr.astype(np.int64), parent_set=tree.parent_set.astype(np.int64),
-        base=base, val=np.zeros(max(int(base[-1]), 1)), piv=np.zeros(tree.unknowns.size, np.int64),
-        fill_pos=np.ascontiguousarray(pos, np.int64), fill_at=at,
-        upd_ptr=np.concatenate([[0], np.cumsum(m * m)]).astype(np.int64), upd_kind=kind,
-        upd_a=ua, upd_b=ub, work=np.zeros(N), work_k=np.zeros(int(n.max(initial=1))))
+    o_unknowns = SN_COLUMNS * S
+    o_sets = o_unknowns + tree.unknowns.size
+    o_updates = o_sets + tree.parent_set.size
+    table = np.stack([o_unknowns + tree.ptr[:-1], n, o_sets + tree.set_ptr[:-1], m, base[:-1],
+                      o_updates + 3 * np.concatenate([[0], np.cumsum(m * m)[:-1]]),
+                      tree.ptr[:-1]], axis=1) if S else np.zeros((0, SN_COLUMNS), np.int64)
+    maps = np.concatenate([table.ravel(), tree.unknowns, tree.parent_set,
+                           np.stack([kind, ua, ub], axis=1).ravel(),
+                           np.stack([pos, at], axis=1).ravel()]).astype(np.int64)
+    return TreeFactor(n_super=S, o_fill=o_updates + 3 * ks.size, n_fill=pos.size,
+                      maps=np.ascontiguousarray(maps), piv=np.zeros(tree.unknowns.size, np.int64),
+                      val=np.zeros(max(int(base[-1]), 1)), work=np.zeros(N),
+                      work_k=np.zeros(int(n.max(initial=1))))
 
 
 def _band_storage(rows: int, cols: int) -> np.ndarray:
@@ -414,20 +430,18 @@ def _tree_factorize(t: TreeFactor, data: np.ndarray, ab: np.ndarray, xt: np.ndar
     """The tree part's elimination, children first: D_k = P L U, X_k = D_k^-1 A_kp,
     A_pp -= A_pk X_k into the parent's block (``ab``, ``xt``, ``a_ba``, ``s`` already filled).
     Returns 0, -1 (non-finite entry) or 1 + the tree position of a zero pivot."""
-    val = t.val
+    mp, val = t.maps, t.val
     val[:] = 0.0
     probe = 0.0
-    for e in range(t.fill_pos.size):
-        d = data[t.fill_pos[e]]
+    for e in range(t.o_fill, t.o_fill + 2 * t.n_fill, 2):
+        d = data[mp[e]]
         probe += 0.0 * d
-        val[t.fill_at[e]] += d
+        val[mp[e + 1]] += d
     if probe != 0.0:
         return -1
-    for k in range(t.ptr.size - 1):
-        lo = t.ptr[k]
-        n = t.ptr[k + 1] - lo
-        m = t.set_ptr[k + 1] - t.set_ptr[k]
-        b = t.base[k]
+    for k in range(t.n_super):
+        h = SN_COLUMNS * k
+        n, m, b, u, lo = mp[h + SN_N], mp[h + SN_M], mp[h + SN_VAL], mp[h + SN_UPDATE], mp[h + SN_PIV]
         d_k = val[b:b + n * n].reshape((n, n))
         piv = t.piv[lo:lo + n]
         info = _dense_lu(d_k, piv)
@@ -437,13 +451,12 @@ def _tree_factorize(t: TreeFactor, data: np.ndarray, ab: np.ndarray, xt: np.ndar
         l_k = val[b + n * n + m * n:b + n * n + 2 * m * n].reshape((m, n))
         for j in range(m):
             _dense_solve(d_k, piv, x_k[j])
-        u = t.upd_ptr[k]
         for i in range(m):
             for j in range(m):
                 c = 0.0
                 for r in range(n):
                     c += l_k[i, r] * x_k[j, r]
-                kind, ua, ub = t.upd_kind[u], t.upd_a[u], t.upd_b[u]
+                kind, ua, ub = mp[u], mp[u + 1], mp[u + 2]
                 if kind == 0:
                     val[ua] -= c
                 elif kind == 1:
@@ -454,49 +467,45 @@ def _tree_factorize(t: TreeFactor, data: np.ndarray, ab: np.ndarray, xt: np.ndar
                     a_ba[ua, ub] -= c
                 else:
                     s[ua, ub] -= c
-                u += 1
+                u += 3
     return 0
 
 
 @njit
 def _tree_forward(t: TreeFactor) -> None:
     """y_k = D_k^-1 w_k and w_p -= A_pk y_k, children first, in ``t.work``."""
-    w, val = t.work, t.val
-    for k in range(t.ptr.size - 1):
-        lo = t.ptr[k]
-        n = t.ptr[k + 1] - lo
-        so = t.set_ptr[k]
-        m = t.set_ptr[k + 1] - so
-        b = t.base[k]
+    mp, w, val = t.maps, t.work, t.val
+    for k in range(t.n_super):
+        h = SN_COLUMNS * k
+        iu, n, ip, m, b, lo = (mp[h + SN_UNKNOWNS], mp[h + SN_N], mp[h + SN_SET], mp[h + SN_M],
+                               mp[h + SN_VAL], mp[h + SN_PIV])
         y = t.work_k[:n]
         for r in range(n):
-            y[r] = w[t.unknowns[lo + r]]
+            y[r] = w[mp[iu + r]]
         _dense_solve(val[b:b + n * n].reshape((n, n)), t.piv[lo:lo + n], y)
         for r in range(n):
-            w[t.unknowns[lo + r]] = y[r]
+            w[mp[iu + r]] = y[r]
         o = b + n * n + m * n
         for i in range(m):
             acc = 0.0
             for r in range(n):
                 acc += val[o + i * n + r] * y[r]
-            w[t.parent_set[so + i]] -= acc
+            w[mp[ip + i]] -= acc
 
 
 @njit
 def _tree_backward(t: TreeFactor, x: np.ndarray) -> None:
     """x_k = y_k - X_k x_p, parents first (x_p already solved)."""
-    w, val = t.work, t.val
-    for k in range(t.ptr.size - 2, -1, -1):
-        lo = t.ptr[k]
-        n = t.ptr[k + 1] - lo
-        so = t.set_ptr[k]
-        m = t.set_ptr[k + 1] - so
-        o = t.base[k] + n * n
+    mp, w, val = t.maps, t.work, t.val
+    for k in range(t.n_super - 1, -1, -1):
+        h = SN_COLUMNS * k
+        iu, n, ip, m = mp[h + SN_UNKNOWNS], mp[h + SN_N], mp[h + SN_SET], mp[h + SN_M]
+        o = mp[h + SN_VAL] + n * n
         for r in range(n):
-            acc = w[t.unknowns[lo + r]]
+            acc = w[mp[iu + r]]
             for j in range(m):
-                acc -= val[o + j * n + r] * x[t.parent_set[so + j]]
-            x[t.unknowns[lo + r]] = acc
+                acc -= val[o + j * n + r] * x[mp[ip + j]]
+            x[mp[iu + r]] = acc
 
 
 @njit(inline="always")
@@ -530,7 +539,7 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
                  + _fill(s, data, pos, fr, fc, ptr[3], ptr[4]))
     if nan_probe != 0.0:
         return factor.n + 1
-    if factor.tree.unknowns.size:
+    if factor.tree.n_super:
         info = _tree_factorize(factor.tree, data, ab, xt, a_ba, s)
         if info != 0:
             return factor.n + 1 if info < 0 else factor.n + 1 + info
@@ -554,17 +563,26 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
 
 @njit
 def bordered_solve(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None:
-    """x = A^-1 b (global numbering, x must not alias b): the tree part's forward pass, then
-    y = A_aa^-1 b_a, x_b = S^-1 (b_b - A_ba y), x_a = y - X x_b (Schur complement), then the
-    tree part's backward pass; allocation-free."""
+    """x = A^-1 b (global numbering, x must not alias b): the tree part's forward pass, the
+    bordered band's solve (:func:`_solve_rest`), the tree part's backward pass;
+    allocation-free."""
+    tree = factor.tree
+    if tree.n_super:
+        tree.work[:] = b
+        _tree_forward(tree)
+        _solve_rest(factor, tree.work, x)
+        _tree_backward(tree, x)
+    else:
+        _solve_rest(factor, b, x)
+
+
+@njit(inline="always")
+def _solve_rest(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None:
+    """The bordered band's part of x = A^-1 b: y = A_aa^-1 b_a, x_b = S^-1 (b_b - A_ba y),
+    x_a = y - X x_b (Schur complement); writes x's band and border unknowns only."""
     perm, border, wa, wb = factor.perm, factor.border, factor.work_a, factor.work_b
     xt, a_ba = factor.xt, factor.a_ba
     na, nb = factor.n_band, factor.n_border
-    tree = factor.tree.unknowns.size > 0
-    if tree:
-        factor.tree.work[:] = b
-        _tree_forward(factor.tree)
-        b = factor.tree.work
     for k in range(na):
         wa[k] = b[perm[k]]
     _band_solve(factor.ab, factor.kl, factor.ku, factor.piv, wa)
@@ -582,5 +600,3 @@ def bordered_solve(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None
             x[border[j]] = z
     for k in range(na):
         x[perm[k]] = wa[k]
-    if tree:
-        _tree_backward(factor.tree, x)

@@ -266,7 +266,8 @@ def test_tree_part_matches_superlu(regularise):
         _check_tree_lu(A, border, tree, rng)
     # a border that splits body 1 (not a planned one): updates into all four blocks
     border = np.flatnonzero(owner == 1)[:3]
-    kinds = np.bincount(BorderedBandedLU(A, border, tree=tree).factor.tree.upd_kind, minlength=5)
+    kinds = np.bincount(BorderedBandedLU(A, border, tree=tree).factor.tree.update_kinds(),
+                        minlength=5)
     assert (kinds > 0).all()
     _check_tree_lu(A, border, tree, rng)
     # bodies 0-3 in a chain, body 0 on a beam node; a binary tree of 7 below body 3
