@@ -378,9 +378,111 @@ def kernel_work() -> KernelWork:
 
 
 @njit(inline="always")
-def _blend(w, x, e, c):  # noqa: ANN001, ANN202
-    """Σ_n w[n] x[e, 3n + c]: component c of S′q or S″q (or of S′q̇, S″q̇)."""
-    return w[0] * x[e, c] + w[1] * x[e, 3 + c] + w[2] * x[e, 6 + c] + w[3] * x[e, 9 + c]
+def _at(d, x, e, c):  # noqa: ANN001, ANN202
+    """Σ_n d[n] x[e, 3n + c] with the four shape-function values as scalars."""
+    return d[0] * x[e, c] + d[1] * x[e, 3 + c] + d[2] * x[e, 6 + c] + d[3] * x[e, 9 + c]
+
+
+@njit(inline="always")
+def _axial_point(q, v, e, k, rest, EA, dA):  # noqa: ANN001, ANN202
+    """The axial resultant at axial point k of element e (FORMULATION I §1.4): a = S′q, the
+    unit tangent t = a/|a|, |a|, t·ȧ, N = EA(|a|/μ − 1 − ε_off) + d_ε t·ȧ/μ and ȧ = S′q̇;
+    every quantity a scalar (both kernels: :func:`_internal_forces`, :func:`_internal_kernel`)."""
+    d = (rest.axial_dS[e, k, 0], rest.axial_dS[e, k, 1], rest.axial_dS[e, k, 2],
+         rest.axial_dS[e, k, 3])
+    mu = rest.axial_metric[e, k]
+    a0, a1, a2 = _at(d, q, e, 0), _at(d, q, e, 1), _at(d, q, e, 2)
+    u0, u1, u2 = _at(d, v, e, 0), _at(d, v, e, 1), _at(d, v, e, 2)
+    la = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    t0, t1, t2 = a0 / la, a1 / la, a2 / la
+    tad = t0 * u0 + t1 * u1 + t2 * u2
+    N = EA * (la / mu - 1.0 - rest.axial_offset[e, k]) + dA * tad / mu
+    return t0, t1, t2, la, tad, N, u0, u1, u2
+
+
+@njit(inline="always")
+def _bending_point(q, v, e, k, rest, EI, dB, scalar):  # noqa: ANN001, ANN202
+    """The bending terms at bending point k of element e (FORMULATION I §1.4): a = S′q,
+    b = S″q and their rates ȧ, ḃ, g = μ|a|², the curvature K = a×b/g, its rate
+    K̇ = B1 ȧ + B2 ḃ = (a×ḃ − b×ȧ)/g − 2μ(a·ȧ) K/g, the moment m_eff (vector law
+    EI(K − K_ref) + d_K K̇; scalar law m_s K/κ, κ = sqrt(K·K + δ²), m_s = EI(κ − |K_ref|_δ) + d_K κ̇)
+    and the force directions p = B1ᵀm_eff = (b×m_eff − 2μ(K·m_eff) a)/g and
+    s = B2ᵀm_eff = (m_eff×a)/g (B1 = (−b̃ − 2μ K aᵀ)/g, B2 = ã/g); every quantity a scalar.
+    Returns a, b, ȧ, ḃ, g, K, K̇, κ, κ̇, m_s (κ, κ̇, m_s zero for the vector law), m_eff, p, s."""
+    d = (rest.bending_dS[e, k, 0], rest.bending_dS[e, k, 1], rest.bending_dS[e, k, 2],
+         rest.bending_dS[e, k, 3])
+    h = (rest.bending_ddS[e, k, 0], rest.bending_ddS[e, k, 1], rest.bending_ddS[e, k, 2],
+         rest.bending_ddS[e, k, 3])
+    mu = rest.bending_metric[e, k]
+    a0, a1, a2 = _at(d, q, e, 0), _at(d, q, e, 1), _at(d, q, e, 2)
+    b0, b1, b2 = _at(h, q, e, 0), _at(h, q, e, 1), _at(h, q, e, 2)
+    u0, u1, u2 = _at(d, v, e, 0), _at(d, v, e, 1), _at(d, v, e, 2)
+    w0, w1, w2 = _at(h, v, e, 0), _at(h, v, e, 1), _at(h, v, e, 2)
+    g = mu * (a0 * a0 + a1 * a1 + a2 * a2)
+    ig = 1.0 / g
+    tm = 2.0 * mu
+    K0 = (a1 * b2 - a2 * b1) * ig
+    K1 = (a2 * b0 - a0 * b2) * ig
+    K2 = (a0 * b1 - a1 * b0) * ig
+    c = tm * (a0 * u0 + a1 * u1 + a2 * u2) * ig
+    Kd0 = ((a1 * w2 - a2 * w1) - (b1 * u2 - b2 * u1)) * ig - c * K0
+    Kd1 = ((a2 * w0 - a0 * w2) - (b2 * u0 - b0 * u2)) * ig - c * K1
+    Kd2 = ((a0 * w1 - a1 * w0) - (b0 * u1 - b1 * u0)) * ig - c * K2
+    kap = 0.0
+    kapd = 0.0
+    ms = 0.0
+    if scalar:
+        kap = math.sqrt(K0 * K0 + K1 * K1 + K2 * K2 + rest.delta_sq[e])
+        kapd = (K0 * Kd0 + K1 * Kd1 + K2 * Kd2) / kap
+        ms = EI * (kap - rest.rest_curvature_norm[e, k]) + dB * kapd
+        m0, m1, m2 = ms / kap * K0, ms / kap * K1, ms / kap * K2
+    else:
+        m0 = EI * (K0 - rest.rest_curvature[e, k, 0]) + dB * Kd0
+        m1 = EI * (K1 - rest.rest_curvature[e, k, 1]) + dB * Kd1
+        m2 = EI * (K2 - rest.rest_curvature[e, k, 2]) + dB * Kd2
+    c = tm * (K0 * m0 + K1 * m1 + K2 * m2) * ig
+    p0 = (b1 * m2 - b2 * m1) * ig - c * a0
+    p1 = (b2 * m0 - b0 * m2) * ig - c * a1
+    p2 = (b0 * m1 - b1 * m0) * ig - c * a2
+    s0 = (m1 * a2 - m2 * a1) * ig
+    s1 = (m2 * a0 - m0 * a2) * ig
+    s2 = (m0 * a1 - m1 * a0) * ig
+    return (a0, a1, a2, b0, b1, b2, u0, u1, u2, w0, w1, w2, g, K0, K1, K2, Kd0, Kd1, Kd2, kap,
+            kapd, ms, m0, m1, m2, p0, p1, p2, s0, s1, s2)
+
+
+@njit
+def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
+    """Q_int per element without its derivatives (FORMULATION I §1.4): the residual's kernel.
+    The quadrature points' terms are scalars (:func:`_axial_point`, :func:`_bending_point`),
+    held in registers: 4.6 → 2.4 µs for Example 1's 16 elements against the tangent kernel's
+    work arrays (:func:`_internal_kernel`, which states its forces with the same functions)."""
+    n_ax = rest.axial_weight.shape[1]
+    n_b = rest.bending_weight.shape[1]
+    for e in range(q.shape[0]):
+        EA = props.axial_stiffness[e]
+        EI = props.bending_stiffness[e]
+        dA = props.axial_damping[e]
+        dB = props.bending_damping[e]
+        for i in range(12):
+            force[e, i] = 0.0
+        for k in range(n_ax):
+            t0, t1, t2, _, _, N, _, _, _ = _axial_point(q, v, e, k, rest, EA, dA)
+            WN = rest.axial_weight[e, k] * N
+            for n in range(4):
+                f = WN * rest.axial_dS[e, k, n]
+                force[e, 3 * n] += f * t0
+                force[e, 3 * n + 1] += f * t1
+                force[e, 3 * n + 2] += f * t2
+        for k in range(n_b):
+            pt = _bending_point(q, v, e, k, rest, EI, dB, scalar)
+            W = rest.bending_weight[e, k]
+            for n in range(4):
+                dn = rest.bending_dS[e, k, n]
+                hn = rest.bending_ddS[e, k, n]
+                force[e, 3 * n] += W * (dn * pt[25] + hn * pt[28])
+                force[e, 3 * n + 1] += W * (dn * pt[26] + hn * pt[29])
+                force[e, 3 * n + 2] += W * (dn * pt[27] + hn * pt[30])
 
 
 @njit
@@ -453,15 +555,9 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
             mu = rest.axial_metric[e, k]
             for n in range(4):
                 ds[n] = rest.axial_dS[e, k, n]
-            for c in range(3):
-                a[c] = _blend(ds, q, e, c)
-                ad[c] = _blend(ds, v, e, c)
-            la = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
-            for c in range(3):
-                t[c] = a[c] / la
-            tad = t[0] * ad[0] + t[1] * ad[1] + t[2] * ad[2]
-            eps = la / mu - 1.0
-            N = EA * (eps - rest.axial_offset[e, k]) + dA * tad / mu
+            t0, t1, t2, la, tad, N, u0, u1, u2 = _axial_point(q, v, e, k, rest, EA, dA)
+            t[0], t[1], t[2] = t0, t1, t2
+            ad[0], ad[1], ad[2] = u0, u1, u2
             WN = W * N
             for n in range(4):
                 for c in range(3):
@@ -498,18 +594,16 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
             for n in range(4):
                 ds[n] = rest.bending_dS[e, k, n]
                 dds[n] = rest.bending_ddS[e, k, n]
-            for c in range(3):
-                a[c] = _blend(ds, q, e, c)
-                b[c] = _blend(dds, q, e, c)
-                ad[c] = _blend(ds, v, e, c)
-                bd[c] = _blend(dds, v, e, c)
-            g = mu * (a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+            (a[0], a[1], a[2], b[0], b[1], b[2], ad[0], ad[1], ad[2], bd[0], bd[1], bd[2], g,
+             K[0], K[1], K[2], Kd[0], Kd[1], Kd[2], kap, kapd, ms, meff[0], meff[1], meff[2],
+             p[0], p[1], p[2], s[0], s[1], s[2]) = _bending_point(q, v, e, k, rest, EI, dB, scalar)
             ig = 1.0 / g
-            K[0] = (a[1] * b[2] - a[2] * b[1]) * ig
-            K[1] = (a[2] * b[0] - a[0] * b[2]) * ig
-            K[2] = (a[0] * b[1] - a[1] * b[0]) * ig
             tm = 2.0 * mu
-            # B1 = (−b̃ − 2μ K aᵀ)/g,  B2 = ã/g
+            for n in range(4):
+                for c in range(3):
+                    force[e, 3 * n + c] += W * (ds[n] * p[c] + dds[n] * s[c])
+            # the tangent's operators B1 = (−b̃ − 2μ K aᵀ)/g, B2 = ã/g (p = B1ᵀm_eff,
+            # s = B2ᵀm_eff, K̇ = B1 ȧ + B2 ḃ in _bending_point)
             for c in range(3):
                 for d in range(3):
                     B1[c, d] = -tm * K[c] * a[d] * ig
@@ -526,27 +620,6 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
             B2[1, 2] = -a[0] * ig
             B2[2, 0] = -a[1] * ig
             B2[2, 1] = a[0] * ig
-            for c in range(3):
-                Kd[c] = (B1[c, 0] * ad[0] + B1[c, 1] * ad[1] + B1[c, 2] * ad[2]
-                         + B2[c, 0] * bd[0] + B2[c, 1] * bd[1] + B2[c, 2] * bd[2])
-            kap = 0.0
-            kapd = 0.0
-            ms = 0.0
-            if scalar:
-                kap = math.sqrt(K[0] * K[0] + K[1] * K[1] + K[2] * K[2] + rest.delta_sq[e])
-                kapd = (K[0] * Kd[0] + K[1] * Kd[1] + K[2] * Kd[2]) / kap
-                ms = EI * (kap - rest.rest_curvature_norm[e, k]) + dB * kapd
-                for c in range(3):
-                    meff[c] = ms / kap * K[c]
-            else:
-                for c in range(3):
-                    meff[c] = EI * (K[c] - rest.rest_curvature[e, k, c]) + dB * Kd[c]
-            for c in range(3):
-                p[c] = B1[0, c] * meff[0] + B1[1, c] * meff[1] + B1[2, c] * meff[2]
-                s[c] = B2[0, c] * meff[0] + B2[1, c] * meff[1] + B2[2, c] * meff[2]
-            for n in range(4):
-                for c in range(3):
-                    force[e, 3 * n + c] += W * (ds[n] * p[c] + dds[n] * s[c])
 
             if scalar and (want_k or want_c):
                 # k_q = DᵀK/κ has node blocks S′_n α + S″_n β
@@ -700,6 +773,10 @@ def internal_forces(q_e: np.ndarray, v_e: np.ndarray, props: CableProperties, re
     """
     want_k = stiffness_out is not None
     want_c = damping_out is not None
+    if not (want_k or want_c):
+        _internal_forces(q_e, v_e, props, rest, 1 if options.bending == "scalar" else 0,
+                         force_out)
+        return
     _internal_kernel(q_e, v_e, props, rest, 1 if options.bending == "scalar" else 0,
                      want_k, want_c, force_out,
                      stiffness_out if want_k else _NO_MATRIX,
@@ -822,8 +899,7 @@ def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r_q += Q_int(q, q̇) (+ M q̈ with inertia)`` of the elements (FORMULATION I §1.2, §1.4);
     returns the largest single force (an element force entry or a row of M q̈)."""
     gather_states(bm, q, v, mode)
-    _internal_kernel(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, FLAG[0], FLAG[0], bm.force,
-                     bm.empty, bm.empty, bm.work)
+    _internal_forces(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, bm.force)
     return add_residual(bm, qdd, mode, r)
 
 
