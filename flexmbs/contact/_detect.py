@@ -57,6 +57,11 @@ N_COLS = len(COLS)
 MAX_CANDIDATES = 8
 #: crossings of one section plane by the beam kept at most (a beam looping back in a tube)
 MAX_CROSSINGS = 4
+#: :func:`detect_section`'s float work (its vectors and candidate arrays, carved in order)
+DETECT_WORK = 4 * 3 + 3 * 2 + 3 * MAX_CANDIDATES + 3 * 3 + 10
+#: :func:`detect_section`'s int work past the sections: the search stack and the candidates'
+#: kinds, the line model's signs (its ``work`` holds ``n_sections + DETECT_INT_WORK``)
+DETECT_INT_WORK = 64 + MAX_CANDIDATES + 5
 #: section slots of a joint past its bore's sections: one per end of the beam (first node,
 #: last node), the tip sections of an open bore (:func:`place_tips`)
 N_TIPS = 2
@@ -163,7 +168,7 @@ def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list
 def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
                    open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
                    elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, paper,
-                   out):
+                   out, fwork):
     """Penetrating candidates of every section into ``out`` (rows of :data:`COLS`); returns the
     number of rows, or ``-1 - k`` if the beam axis lies outside the bore at section k (the gap
     |Q - P| - r_b would read "open" again: the caller must reject the iterate).
@@ -188,7 +193,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     bore it is the axis through the wall (an error), except at an end section of a bore with
     ``open_ends`` (the beam outside the mouth). Without ``open_ends`` every section must be
     crossed inside the bore. ``cross_n`` (zero on entry and on return), ``cross_e``,
-    ``cross_xi``, ``touched`` (ns,) and ``work`` (ns + 64) are work arrays; the first crossing
+    ``cross_xi``, ``touched`` (ns,), ``work`` (int, ns + :data:`DETECT_INT_WORK`) and ``fwork``
+    (float, :data:`DETECT_WORK`: nothing is allocated) are work arrays; the first crossing
     inside the bore of each section goes to ``(elem_out, xi_out)`` (the next step's start,
     ``(elem_ws, xi_ws)``; −1: not crossed inside the bore) and every row records its own
     crossing (columns ``elem_i``, ``xi_i``). ``out_list`` and ``ws_list`` list the sections
@@ -202,22 +208,26 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     n_reg = ns - tip_on.shape[0]
     ne = qe.shape[0]
     reach = 2.0 * R_out + r_b
-    n = np.empty(3)
-    ey = np.empty(3)
-    ez = np.empty(3)
-    origin = np.empty(3)
-    Y = np.empty(2)
-    Yp = np.empty(2)
-    Ypp = np.empty(2)
-    psis = np.empty(MAX_CANDIDATES)
-    phis = np.empty(MAX_CANDIDATES)
-    kinds = np.empty(MAX_CANDIDATES, np.int64)
-    depths = np.empty(MAX_CANDIDATES)
-    centre = np.empty(3)
-    xb = np.empty(3)
-    roots = np.empty(3)
+    n = fwork[0:3]
+    ey = fwork[3:6]
+    ez = fwork[6:9]
+    origin = fwork[9:12]
+    Y = fwork[12:14]
+    Yp = fwork[14:16]
+    Ypp = fwork[16:18]
+    o = 18
+    psis = fwork[o:o + MAX_CANDIDATES]
+    phis = fwork[o + MAX_CANDIDATES:o + 2 * MAX_CANDIDATES]
+    depths = fwork[o + 2 * MAX_CANDIDATES:o + 3 * MAX_CANDIDATES]
+    o += 3 * MAX_CANDIDATES
+    centre = fwork[o:o + 3]
+    xb = fwork[o + 3:o + 6]
+    roots = fwork[o + 6:o + 9]
+    lm_work = fwork[o + 9:o + 19]
     stack = work[:64]
-    near = work[64:]
+    kinds = work[64:64 + MAX_CANDIDATES]
+    lm_signs = work[64 + MAX_CANDIDATES:DETECT_INT_WORK]
+    near = work[DETECT_INT_WORK:]
     # ---- broad phase: the sections each element comes near, and its crossings with them
     n_touched = 0
     for e in range(ne):
@@ -284,7 +294,7 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
             if consistent:
                 # line-model seeds near contact, converged on the axis
                 m = line_model_points(shape, params, cy, cz, eax, eay, a, b, SHAPE_SAMPLES,
-                                      psis, kinds, depths)
+                                      psis, kinds, depths, lm_work, lm_signs)
                 for j in range(m):
                     if r_b - depths[j] <= -PAIR_MARGIN * (R_in - r_b) or count >= out.shape[0]:
                         continue
@@ -412,7 +422,7 @@ def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, t
     is a section like the bore's own: the same detection, contact law, friction history and
     exact tangent. ``tip_on[t]``: placed (the beam crosses it inside the bore);
     ``tip_station[t]``: its station along the bore. ``tip_reach``: the largest distance
-    between neighbouring sections; ``work``: int64 (n_sections + 64)."""
+    between neighbouring sections; ``work``: int64 (n_sections + 64 at least)."""
     n_tips = tip_on.shape[0]
     n_reg = origins.shape[0] - n_tips
     ne = qe.shape[0]

@@ -14,10 +14,11 @@ import numpy as np
 
 from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE
-from ..elements.rigid_body import rotation
+from ..elements.rigid_body import rotation_into
 from ._detect import (
     ANCHOR_COL,
     CROSSING_COL,
+    DETECT_WORK,
     FORCE_COL,
     GAP_COL,
     GEOMETRY_COL,
@@ -39,6 +40,11 @@ from .pair import (
 )
 from .sections import section_boundary
 from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
+
+#: :func:`clearance_forces`' float work (:attr:`ClearancePart.fwork`): :func:`detect_section`'s,
+#: then the hole body's pose, rotation and velocity, and a contact's arrays (carved in order)
+FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3 * 2 + N_GEO
+               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK)
 
 #: two contact points of one section are the same contact from one step to the next if the
 #: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
@@ -197,11 +203,19 @@ def clearance_update(rows, m, sections, approach, active, psi_track, anchor, stu
 
 @njit
 def _frame(q, body_dofs):  # noqa: ANN001, ANN202
-    """Hole body [r, p] and rotation A(p) (homogeneous)."""
+    """Hole body [r, p] and rotation A(p) (homogeneous) (:func:`_frame_into`)."""
     qb = np.empty(7)
+    A = np.empty((3, 3))
+    _frame_into(q, body_dofs, qb, A)
+    return qb, A
+
+
+@njit(inline="always")
+def _frame_into(q, body_dofs, qb, A):  # noqa: ANN001, ANN202
+    """Hole body [r, p] into ``qb`` and its rotation A(p) (homogeneous) into ``A``."""
     for i in range(7):
         qb[i] = q[body_dofs[i]]
-    return qb, rotation(qb[3:7])
+    rotation_into(qb[3:7], A)
 
 
 @njit(internal=True)
@@ -211,7 +225,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                      consistent, paper, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
-                     exact, r_q, K_out, C_out, elem_k, elem_i):
+                     exact, r_q, K_out, C_out, elem_k, elem_i, fwork):
     """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
@@ -225,10 +239,15 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     the contact point and of the section crossing to ``elem_k`` and ``elem_i``: the exact
     linearisation (``exact``) or Gauss–Newton ``k BᵀB`` (frozen hole point, no e_I columns).
     ``spin`` (pair.N_SPIN) work for the contact element's spin, ``paper`` as in
-    :func:`detect_section` (None: compiled out). Returns ``(rows, contacts, scale)``;
+    :func:`detect_section` (None: compiled out); ``fwork`` (:data:`FORCES_WORK`) holds every
+    work array (nothing is allocated). Returns ``(rows, contacts, scale)``;
     ``rows = −1 − k`` if the beam axis left the bore at section k."""
-    qb, A = _frame(q, body_dofs)
-    vb = np.empty(7)
+    o = DETECT_WORK
+    qb = fwork[o:o + 7]
+    A = fwork[o + 7:o + 16].reshape((3, 3))
+    vb = fwork[o + 16:o + 23]
+    o += 23
+    _frame_into(q, body_dofs, qb, A)
     for i in range(7):
         vb[i] = v[body_dofs[i]]
     ne = elem_dofs.shape[0]
@@ -238,22 +257,31 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
                        tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                        xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
-                       consistent, paper, rows)
+                       consistent, paper, rows, fwork[:DETECT_WORK])
     if m < 0:
         return m, 0, 0.0
-    Qc = np.empty(N_LOCAL)
-    K = np.empty((N_LOCAL, N_LOCAL))
-    C = np.empty((N_LOCAL, N_LOCAL))
-    KX = np.empty((N_LOCAL, N_EXT))
-    Qx = np.empty(N_LOCAL)
-    Y = np.empty(2)
-    Yp = np.empty(2)
-    Ypp = np.empty(2)
-    geo = np.empty(N_GEO)
-    hist = np.empty(N_HISTORY)
-    ve = np.empty(CENTERLINE_SIZE)
-    u_Q = np.empty(3)
-    pair_work = np.empty(PAIR_WORK)
+    Qc = fwork[o:o + N_LOCAL]
+    o += N_LOCAL
+    K = fwork[o:o + N_LOCAL * N_LOCAL].reshape((N_LOCAL, N_LOCAL))
+    o += N_LOCAL * N_LOCAL
+    C = fwork[o:o + N_LOCAL * N_LOCAL].reshape((N_LOCAL, N_LOCAL))
+    o += N_LOCAL * N_LOCAL
+    KX = fwork[o:o + N_LOCAL * N_EXT].reshape((N_LOCAL, N_EXT))
+    o += N_LOCAL * N_EXT
+    Qx = fwork[o:o + N_LOCAL]
+    o += N_LOCAL
+    Y = fwork[o:o + 2]
+    Yp = fwork[o + 2:o + 4]
+    Ypp = fwork[o + 4:o + 6]
+    o += 6
+    geo = fwork[o:o + N_GEO]
+    o += N_GEO
+    hist = fwork[o:o + N_HISTORY]
+    o += N_HISTORY
+    ve = fwork[o:o + CENTERLINE_SIZE]
+    o += CENTERLINE_SIZE
+    u_Q = fwork[o:o + 3]
+    pair_work = fwork[o + 3:o + 3 + PAIR_WORK]
     count = 0
     scale = 0.0
     for i in range(m):
@@ -408,8 +436,9 @@ class ClearancePart(NamedTuple):
     tips_due: np.ndarray             # (nj,) state: place the tip sections at q_start first
     spin: np.ndarray                 # work (N_SPIN,) a contact element's spin (element_spin)
     paper: np.ndarray                # (nj,) the paper's detection (not ``consistent``)
-    # (the last three are None in the kernel's copy when no joint of the model uses them:
-    # contact.joint._compiled_view, their code is then not compiled)
+    fwork: np.ndarray                # work (FORCES_WORK,) clearance_forces' arrays
+    # (tips_due, spin and paper are None in the kernel's copy when no joint of the model uses
+    # them: contact.joint._compiled_view, their code is then not compiled)
 
 
 def contact_capacity(max_sections: int) -> int:
@@ -436,7 +465,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
-        want_tangent, cl.exact[j], r, K, C, elem, elem_i)
+        want_tangent, cl.exact[j], r, K, C, elem, elem_i, cl.fwork)
     if m == _OVERFLOW:
         cl.n_candidates[j] = 0
         error[0] = ERR_TOO_MANY_CONTACTS

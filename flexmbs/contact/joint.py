@@ -28,6 +28,8 @@ from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ANCHOR_COL,
+    DETECT_INT_WORK,
+    DETECT_WORK,
     FORCE_COL,
     GAP_COL,
     GEOMETRY_COL,
@@ -43,6 +45,7 @@ from .clearance_term import (
     CONTACTS_PER_SECTION,
     ERR_LEFT_BORE,
     ERR_TOO_MANY_CONTACTS,
+    FORCES_WORK,
     ClearancePart,
     clearance_update,
     contact_capacity,
@@ -266,7 +269,7 @@ class SlidingClearanceJoint(Interaction):
                                   + self.beam_radius)
         self._cross = (np.zeros(slots, np.int64), np.zeros((slots, MAX_CROSSINGS), np.int64),
                        np.zeros((slots, MAX_CROSSINGS)), np.zeros(slots, np.int64),
-                       np.zeros(slots + 64, np.int64))
+                       np.zeros(slots + DETECT_INT_WORK, np.int64), np.zeros(DETECT_WORK))
         self._rows = np.zeros((MAX_CANDIDATES * slots, N_COLS))  # stationary points per section
         self._elem_out = np.zeros(slots, np.int64)  # crossings of the last evaluation
         self._xi_out = np.zeros(slots)
@@ -534,13 +537,13 @@ class SlidingClearanceJoint(Interaction):
         g = self.geometry
         m = detect_section(qe, g.lengths, np.ascontiguousarray(qb[:3]), A, self.state.origins,
                            self.state.axes, *g.tree, bool(self.hole.open_ends), self.state.tip_on,
-                           *self._cross,
+                           *self._cross[:5],
                            self.state.elem, self.state.xi, unknown, e_out, x_out, out_list,
                            self.beam_radius, shape, params,
                            float(section.bounding_radius()), float(section.inscribed_radius()),
                            self.detection == "consistent",
                            None if self.detection == "consistent" else np.ones(1, np.bool_),
-                           self._rows)
+                           self._rows, self._cross[5])
         return int(m)
 
     def _contacts_compiled(self, q: np.ndarray, v: np.ndarray, want_tangent: bool,
@@ -937,7 +940,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j.geometry.tree[3] for j in joints], (), 0, np.int64),
         np.array([j.hole.open_ends for j in joints], dtype=np.bool_),
         np.zeros(max_ns, i64), np.zeros((max_ns, MAX_CROSSINGS), i64),
-        np.zeros((max_ns, MAX_CROSSINGS)), np.zeros(max_ns, i64), np.zeros(max_ns + 64, i64),
+        np.zeros((max_ns, MAX_CROSSINGS)), np.zeros(max_ns, i64),
+        np.zeros(max_ns + DETECT_INT_WORK, i64),
         np.array([j.n_slots for j in joints], i64),
         np.array([j.beam_radius for j in joints], float),
         np.array([shapes[i][0] for i in range(nj)], i64),
@@ -969,7 +973,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j.state.tip_on for j in joints], (), False, np.bool_),
         pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
         np.array([j.geometry.tip_reach for j in joints], float), np.zeros(nj, np.bool_),
-        np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_))
+        np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
+        np.zeros(FORCES_WORK))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
     return part

@@ -133,9 +133,10 @@ _SIN_QUARTER = (0.0, _H, 1.0, _H, 0.0, -_H, -1.0, -_H)
 
 
 @njit
-def trig_quadratic_roots(al, be, ga, scale, phis, signs):  # noqa: ANN001, ANN201
+def trig_quadratic_roots(al, be, ga, scale, phis, signs, seeds):  # noqa: ANN001, ANN201
     """Roots of ``f(φ) = al sin φ cos φ + be sin φ + ga cos φ`` on [0, 2π) into ``phis`` (≥ 5)
-    with the sign of ``f′`` into ``signs``; returns their number (at most 4).
+    with the sign of ``f′`` into ``signs``; returns their number (at most 4). ``seeds`` (≥ 5)
+    is work.
 
     Closed form (FORMULATION II §3): with ``t = tan((φ − φ0)/2)``, ``f (1 + t²)²`` is a quartic
     in t; φ0 ∈ {kπ/4} maximises the leading coefficient ``f(φ0 + π)`` (no root near t = ∞),
@@ -160,7 +161,6 @@ def trig_quadratic_roots(al, be, ga, scale, phis, signs):  # noqa: ANN001, ANN20
     acs = 2.0 * al * (c0 * c0 - s0 * s0)
     c4, c3, c2, c1, cc0 = asc - u0, u1 - acs, -6.0 * asc, acs + u1, asc + u0
     cmax = max(abs(c4), abs(c3), abs(c2), abs(c1), abs(cc0))
-    seeds = np.empty(5)
     ns = quartic_real_roots(c4, c3, c2, c1, cc0, seeds)
     for i in range(ns):
         seeds[i] = phi0 + 2.0 * math.atan(seeds[i])

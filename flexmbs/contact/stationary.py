@@ -84,13 +84,14 @@ def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa:
 
 @njit
 def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, kind_out,  # noqa: ANN001, ANN201
-                      ell_out):
+                      ell_out, work, iwork):
     """Stationary points of the distance between the section wall and the tangent line of the
     beam axis (the seeds of :func:`stationary_pair`): crossing ``(cy, cz)``, major axis
     ``(eax, eay)`` and semi-axes ``a ≥ b`` of the section ellipse (``sin²θ = 1 − b²/a²``).
     Writes ψ, kind (+1 a minimum of the distance, i.e. a maximum of the penetration; −1 a
     maximum) and the line-model distance ℓ; returns their number. Circles in closed form, other
-    sections by ``samples`` samples of ``½ dℓ²/dψ``, bracketed Newton."""
+    sections by ``samples`` samples of ``½ dℓ²/dψ``, bracketed Newton. ``work`` (float, ≥ 10)
+    and ``iwork`` (int, ≥ 5) are work arrays."""
     s2 = max(0.0, 1.0 - (b / a) ** 2)
     count = 0
     if kind == SHAPE_CIRCLE:
@@ -103,9 +104,9 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
         scale = R * R + R * math.hypot(cy, cz)
         if max(abs(al), abs(be), abs(ga)) <= 1e-13 * scale:
             return 0          # a centred, aligned axis: the whole wall at one distance
-        phis = np.empty(5)
-        signs = np.empty(5, dtype=np.int64)
-        n = trig_quadratic_roots(al, be, ga, scale, phis, signs)
+        phis = work[:5]
+        signs = iwork[:5]
+        n = trig_quadratic_roots(al, be, ga, scale, phis, signs, work[5:10])
         alpha = math.atan2(eay, eax)
         for i in range(n):
             if count >= psi_out.size:
@@ -117,9 +118,9 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
             ell_out[count] = math.sqrt(max(ell2, 0.0))
             count += 1
         return count
-    Y = np.empty(2)
-    Yp = np.empty(2)
-    Ypp = np.empty(2)
+    Y = work[0:2]
+    Yp = work[2:4]
+    Ypp = work[4:6]
     h = 2.0 * np.pi / samples
     scale = 1e-13 * params[0] * params[0]
     F0, _, _ = _line_model_f(kind, params, cy, cz, eax, eay, s2, 0.0, Y, Yp, Ypp)

@@ -366,10 +366,18 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
 
 @njit
 def rotation(p):  # noqa: ANN001, ANN201
-    """``A(p)`` (3, 3), the homogeneous rotation matrix of FORMULATION I §5 (the one statement)."""
+    """``A(p)`` (3, 3), the homogeneous rotation matrix of FORMULATION I §5 (:func:`rotation_into`)."""
+    A = np.empty((3, 3))
+    rotation_into(p, A)
+    return A
+
+
+@njit
+def rotation_into(p, A):  # noqa: ANN001, ANN201
+    """``A(p)`` into ``A`` (3, 3), the homogeneous rotation matrix of FORMULATION I §5 (the one
+    statement)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
     d = e0 * e0 - e1 * e1 - e2 * e2 - e3 * e3
-    A = np.empty((3, 3))
     A[0, 0] = d + 2 * e1 * e1
     A[1, 1] = d + 2 * e2 * e2
     A[2, 2] = d + 2 * e3 * e3
@@ -379,7 +387,6 @@ def rotation(p):  # noqa: ANN001, ANN201
     A[2, 0] = 2 * (e1 * e3 - e0 * e2)
     A[1, 2] = 2 * (e2 * e3 - e0 * e1)
     A[2, 1] = 2 * (e2 * e3 + e0 * e1)
-    return A
 
 
 @njit(refcount=False)

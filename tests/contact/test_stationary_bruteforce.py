@@ -14,7 +14,13 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from flexmbs.contact._detect import MAX_CROSSINGS, N_COLS, detect_section
+from flexmbs.contact._detect import (
+    DETECT_INT_WORK,
+    DETECT_WORK,
+    MAX_CROSSINGS,
+    N_COLS,
+    detect_section,
+)
 from flexmbs.contact.bores import section_tree
 from flexmbs.contact.sections import SHAPE_CIRCLE, SHAPE_SUPERELLIPSE, section_boundary
 from flexmbs.elements.ancf_cable import shape_xi
@@ -66,12 +72,14 @@ def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in
     ws_e, ws_x = np.zeros(1, np.int64), np.full(1, 0.5)
     tree = section_tree(np.zeros((1, 3)), 2 * R_out + r_b)
     work = (np.zeros(1, np.int64), np.zeros((1, MAX_CROSSINGS), np.int64),
-            np.zeros((1, MAX_CROSSINGS)), np.zeros(1, np.int64), np.zeros(65, np.int64))
+            np.zeros((1, MAX_CROSSINGS)), np.zeros(1, np.int64),
+            np.zeros(1 + DETECT_INT_WORK, np.int64))
     m = detect_section(qe.reshape(1, 12), np.array([L_ELEM]), np.zeros(3), np.eye(3),
                        np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, False, np.zeros(0, np.bool_),
                        *work, ws_e,
                        ws_x, np.full(1, -1, np.int64), ws_e.copy(), ws_x.copy(),
-                       np.full(2, -1, np.int64), r_b, shape, params, R_out, R_in, True, None, rows)
+                       np.full(2, -1, np.int64), r_b, shape, params, R_out, R_in, True, None, rows,
+                       np.zeros(DETECT_WORK))
     if m < 0:
         return None
     return [(float(r[11]), float(r[10])) for r in rows[:m] if r[2] > 0]

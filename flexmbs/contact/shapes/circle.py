@@ -62,7 +62,7 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
         return np.empty(0), np.empty(0, dtype=np.int64)
     phis = np.empty(5)
     signs = np.empty(5, dtype=np.int64)
-    nf = trig_quadratic_roots(b * b - a * a, a * da, -b * db, scale, phis, signs)
+    nf = trig_quadratic_roots(b * b - a * a, a * da, -b * db, scale, phis, signs, np.empty(5))
     return phis[:nf], -signs[:nf]
 
 
