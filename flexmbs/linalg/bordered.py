@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from .._jit import njit
 
 if TYPE_CHECKING:
-    from .ordering import TreePlan
+    from .tree_plan import TreePlan
 
 
 #: columns of :class:`TreeFactor`'s supernode table: where its unknowns and parent set start in

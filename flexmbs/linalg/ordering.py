@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
+from .tree_plan import TreePlan
+
 if TYPE_CHECKING:
     from .bordered import BorderedBandedLU
 
@@ -252,7 +254,7 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
         Gr.eliminate_zeros()
         Gr.data[:] = 1.0
         with_tree = _plan_band(Gr, suggested[rest[suggested]], n_coords, owner, rest, search)
-        cost = with_tree.cost + tree.cost()
+        cost = with_tree.cost + tree_cost(tree)
         if cost < best.cost:
             best = with_tree._replace(cost=cost, tree=tree)
     return best._replace(keep=keep)
@@ -310,45 +312,15 @@ def _plan_band(G: sp.csr_matrix, suggested: np.ndarray, n_coords: int,
     assert best is not None
     return best
 
-class TreePlan(NamedTuple):
-    """Rigid bodies eliminated in tree order before the bordered band (:func:`peel_tree`):
-    supernode k holds ``unknowns[ptr[k]:ptr[k + 1]]`` (a body's coordinates, its own rows and
-    the rows of the joints to its parent), eliminated after its children; it couples
-    only to ``parent_set[set_ptr[k]:set_ptr[k + 1]]``, coordinates of its parent body (a later
-    supernode, or a body of the rest), none for a root."""
-
-    ptr: np.ndarray          # int64 (S + 1,)
-    unknowns: np.ndarray     # int64: global unknowns, supernode by supernode
-    set_ptr: np.ndarray      # int64 (S + 1,)
-    parent_set: np.ndarray   # int64: global unknowns
-
-    @property
-    def size(self) -> int:
-        """The number of unknowns eliminated in tree order."""
-        return int(self.unknowns.size)
-
-    def cliques(self, rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The (row, column) pairs that the elimination adds among the unknowns ``rest`` (a
-        bool mask): the parent sets that lie there, each a dense block."""
-        rows, cols = [], []
-        for k in range(self.ptr.size - 1):
-            p = self.parent_set[self.set_ptr[k]:self.set_ptr[k + 1]]
-            if p.size and rest[p[0]]:
-                rows.append(np.repeat(p, p.size))
-                cols.append(np.tile(p, p.size))
-        if not rows:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return np.concatenate(rows), np.concatenate(cols)
-
-    def cost(self) -> float:
-        """Estimated flops of one elimination plus :data:`SOLVES_PER_FACTOR` solves (dense LU
-        of each supernode, its solves with the parent set's columns, the update of the
-        parent's block), comparable with :func:`factor_cost`."""
-        n = np.diff(self.ptr).astype(float)
-        m = np.diff(self.set_ptr).astype(float)
-        factor = 2 * n**3 / 3 + 2 * m * n * n + 2 * m * m * n
-        solve = 2 * n * n + 4 * m * n
-        return float((factor + SOLVES_PER_FACTOR * solve).sum())
+def tree_cost(tree: TreePlan) -> float:
+    """Estimated flops of one elimination of the tree part plus :data:`SOLVES_PER_FACTOR`
+    solves (dense LU of each supernode, its solves with the parent set's columns, the update of
+    the parent's block), comparable with :func:`factor_cost`."""
+    n = np.diff(tree.ptr).astype(float)
+    m = np.diff(tree.set_ptr).astype(float)
+    factor = 2 * n**3 / 3 + 2 * m * n * n + 2 * m * m * n
+    solve = 2 * n * n + 4 * m * n
+    return float((factor + SOLVES_PER_FACTOR * solve).sum())
 
 
 def peel_tree(G: sp.csr_matrix, n_coords: int, owner: np.ndarray | None) -> TreePlan | None:
