@@ -346,28 +346,38 @@ def peel_tree(G: sp.csr_matrix, n_coords: int, owner: np.ndarray | None) -> Tree
     atom = np.full(N, -1, np.int64)       # the body an unknown belongs to (coordinates, own rows)
     coords = np.flatnonzero(lab >= 0)
     atom[coords] = atom_c.ravel()
-    # a row is a body's own when all its neighbours are that body's coordinates
+    # a row is a body's own when all its neighbours are that body's coordinates (multipliers
+    # are labelled -1 here, so a neighbouring multiplier disqualifies it)
     indptr, indices = G.indptr, G.indices
-    for r in range(n_coords, N):
-        nbr = indices[indptr[r]:indptr[r + 1]]
-        if nbr.size and (nbr < n_coords).all():
-            a = atom[nbr]
-            if a[0] >= 0 and (a == a[0]).all():
-                atom[r] = a[0]
+    start_r, end_r = indptr[n_coords:N], indptr[n_coords + 1:N + 1]
+    filled = end_r > start_r
+    if indices.size and filled.any():
+        label = atom[indices]
+        lo = np.minimum.reduceat(label, start_r[filled])
+        hi = np.maximum.reduceat(label, start_r[filled])
+        rows = n_coords + np.flatnonzero(filled)
+        own = (lo >= 0) & (lo == hi)
+        atom[rows[own]] = lo[own]
     order = np.argsort(atom, kind="stable")
     start = np.searchsorted(atom[order], np.arange(bodies.size + 1))
     members = [order[start[a]:start[a + 1]] for a in range(bodies.size)]
+    # only a body with at most one own row (a leaf) or with nothing outside it (a root) can be
+    # taken now; the others are looked at again when a child of theirs is taken
+    cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(indptr))
+    outside = (atom[cols] >= 0) & (atom[indices] != atom[cols])
+    has_outside = np.bincount(atom[cols[outside]], minlength=bodies.size) > 0
+    n_own = np.bincount(atom[n_coords:][atom[n_coords:] >= 0], minlength=bodies.size)
     alive = np.ones(N, bool)
     peeled = np.zeros(bodies.size, bool)
     supernodes: list[np.ndarray] = []
     sets: list[np.ndarray] = []
-    queue = list(range(bodies.size))
+    queue = np.flatnonzero((n_own <= 1) | ~has_outside).tolist()
     while queue:
         a = queue.pop()
         if peeled[a]:
             continue
         mine = members[a]
-        own_rows = int((mine >= n_coords).sum())
+        own_rows = int(n_own[a])
         ext = np.unique(np.concatenate([indices[indptr[u]:indptr[u + 1]] for u in mine]))
         ext = ext[alive[ext] & (atom[ext] != a)]
         link = ext[(ext >= n_coords) & (atom[ext] < 0)]
