@@ -869,7 +869,6 @@ class BeamPart(NamedTuple):
     force: np.ndarray
     stiff: np.ndarray                # work (n_elem, 12, 12): ∂Q_int/∂q, ∂Q_int/∂q̇
     damp: np.ndarray
-    empty: np.ndarray                # (0, 12, 12): no tangent in the residual
     work: KernelWork                 # scratch of _internal_kernel
 
 
@@ -884,7 +883,7 @@ def pack_beams(element_dofs: np.ndarray, props: CableProperties, options: CableO
         D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, 144), props, rest,
         1 if options.bending == "scalar" else 0, np.ascontiguousarray(mass_matrix(props)),
         np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12, 12)),
-        np.zeros((ne, 12, 12)), np.zeros((0, 12, 12)), kernel_work())
+        np.zeros((ne, 12, 12)), kernel_work())
 
 
 def _empty_rest() -> CableRest:
