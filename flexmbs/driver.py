@@ -32,6 +32,7 @@ from .constraints.joints import (
     joints_set_bases,
     norms_jacobian,
     norms_residual,
+    with_directors,
 )
 from .constraints.linear import LinearPart, linear_jacobian, linear_residual
 from .constraints.sliding import (
@@ -121,6 +122,19 @@ class SystemPart(NamedTuple):
             if present[kind.name] and kind.compiled_view is not None:
                 absent[kind.name] = kind.compiled_view(getattr(self, kind.name))
         return self._replace(**absent)
+
+    def complete(self) -> SystemPart:
+        """This system as the complete kernel of its element types receives it
+        (flexmbs.kernel.prepare): every optional kind's part (this system has them all, empty
+        where the model has none) and every compile-time feature in: the interactions' full
+        parts (no ``compiled_view``) and term tables with node directors (empty where none).
+        Models with the same element groups (types and count: one cable group; cables and one
+        rod group, ...) then share one type of system, hence one kernel (tested). Not the other
+        element types' parts: an empty rod group in the kernel of cable models cost Example 1
+        10 µs per step (0.64 -> 0.78 s per simulated second)."""
+        return self._replace(joints=with_directors(self.joints),
+                             drivers=with_directors(self.drivers),
+                             springs=with_directors(self.springs))
 
 
 #: the kinds of terms compiled only for models that have them (docs/design-notes.md, "Compile

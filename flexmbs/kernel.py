@@ -51,7 +51,8 @@ from .driver import jacobian, post_step, rebase_static, residual, set_bases
 from .steploop import alpha_run
 
 __all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE", "OP_SET_BASES",
-           "kernel", "kernels_cached", "prepare", "model_kind", "announce_compile"]
+           "KERNEL_CHOICES", "kernel", "kernels_cached", "prepare", "model_kind", "kernel_choice",
+           "announce_compile"]
 
 OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES = range(6)
 
@@ -90,51 +91,98 @@ def kernels_cached() -> bool:
 #: one line
 announce_compile: Callable[[float | None, str, bool], None] | None = None
 
+#: which kernel serves a model (:func:`prepare`; environment variable ``FLEXMBS_KERNEL``):
+#: ``"auto"`` its own kind's if compiled or cached, else the complete kernel of its element
+#: groups if that is, else its own kind's, compiled now; ``"own"`` always its own kind's;
+#: ``"complete"`` always the complete one (``flexmbs compile --complete``)
+KERNEL_CHOICES = ("auto", "own", "complete")
+
 #: kinds of model whose kernel this process has made ready (see :func:`prepare`)
 _READY: set[Any] = set()
 
 _TIMES_FILE = "flexmbs-compile-times.json"
 
 
-def model_kind(system: Any) -> str:
+def model_kind(system: Any, complete: bool = False) -> str:
     """A name of the kernel's specialisation for a packed system: its element types and the
-    optional kinds of terms it holds, e.g. ``BeamPart+bodies+clearance``."""
+    optional kinds of terms it holds, e.g. ``BeamPart+bodies+norms+clearance``; a system whose
+    every part is present (the complete kernel of its element groups, :func:`prepare`): e.g.
+    ``BeamPart+RodPart complete``."""
     from .driver import OPTIONAL_KINDS
 
     kinds = [type(p).__name__ for p in system.beams] or ["no beams"]
+    if complete:
+        return "+".join(kinds) + " complete"
     kinds += [k for k in OPTIONAL_KINDS if getattr(system, k) is not None]
     return "+".join(kinds)
 
 
-def prepare(args: tuple[Any, ...]) -> None:
-    """Make :func:`kernel` ready for the types of ``args`` (a call's arguments): nothing if it
-    is compiled in this process; loaded by the call if numba's cache holds it; else announced
-    (:data:`announce_compile`), compiled here and its duration recorded beside the cache (the
-    next compile's estimate). Never raises for numba's internals: the call compiles then."""
+def kernel_choice() -> str:
+    """The selection of :data:`KERNEL_CHOICES` in force (``FLEXMBS_KERNEL``, default ``auto``)."""
+    choice = os.environ.get("FLEXMBS_KERNEL", "auto").strip().lower() or "auto"
+    if choice not in KERNEL_CHOICES:
+        from .errors import FlexmbsError
+        raise FlexmbsError(f"environment variable FLEXMBS_KERNEL={choice!r}: expected one of "
+                           f"{', '.join(KERNEL_CHOICES)} (or unset it)")
+    return choice
+
+
+def prepare(args: tuple[Any, ...], complete: Any = None) -> Any:
+    """Make :func:`kernel` ready for a call's arguments ``args`` and return the packed system
+    to call it with: ``args[1]`` (the model's own kind, where the optional kinds it lacks are
+    None), or ``complete`` (the same model with every part present, empty where it has none:
+    the complete kernel of its element groups serves every model with them, somewhat slower,
+    docs/design-notes.md "Compile time: the complete kernels"), as
+    :func:`kernel_choice` says. Ready: compiled in this process, or in numba's cache (the call
+    loads it); otherwise announced (:data:`announce_compile`), compiled here and its duration
+    recorded beside the cache (the next compile's estimate). Never raises for numba's
+    internals: the call compiles then."""
+    own = args[1]
+    choice = kernel_choice()
+    if complete is None or complete is own:
+        choice = "own"
+    candidates = {"auto": (own, complete), "own": (own,), "complete": (complete,)}[choice]
     try:
-        sig = tuple(kernel.typeof_pyval(a) for a in args)
+        sigs = [_signature(args, system) for system in candidates]
     except Exception:   # no numba (FLEXMBS_DISABLE_JIT)  # noqa: BLE001
-        return
-    if sig in _READY or sig in kernel.overloads:
-        return
+        return candidates[0]
+    for system, sig in zip(candidates, sigs, strict=True):
+        if _is_ready(sig):
+            _READY.add(sig)
+            return system
+    system, sig = candidates[0], sigs[0]
     _READY.add(sig)
     try:
-        cache = kernel._cache
-        key = cache._index_key(sig, kernel.targetctx.codegen())
-        if key in cache._cache_file._load_index():
-            return
-        folder = Path(cache._cache_path)
+        folder = Path(kernel._cache._cache_path)
     except Exception:   # caching disabled or numba internals changed  # noqa: BLE001
-        return
-    kind = model_kind(args[1])
+        return system
+    kind = model_kind(system, complete=system is complete)
     times = _read_times(folder)
     estimate = times.get(kind, max(times.values(), default=None))
     if announce_compile is not None:
         announce_compile(estimate, kind, kind in times)
     start = time.perf_counter()
     kernel.compile(sig)
+    times = _read_times(folder)     # another process may have recorded a kind meanwhile
     times[kind] = round(time.perf_counter() - start, 1)
     _write_times(folder, times)
+    return system
+
+
+def _signature(args: tuple[Any, ...], system: Any) -> tuple[Any, ...]:
+    """numba's argument types of a call of :func:`kernel` with ``args`` and ``system``."""
+    return tuple(kernel.typeof_pyval(a) for a in (*args[:1], system, *args[2:]))
+
+
+def _is_ready(sig: tuple[Any, ...]) -> bool:
+    """Whether :func:`kernel` for ``sig`` is compiled in this process or in numba's cache."""
+    if sig in _READY or sig in kernel.overloads:
+        return True
+    try:
+        cache = kernel._cache
+        return cache._index_key(sig, kernel.targetctx.codegen()) in cache._cache_file._load_index()
+    except Exception:   # caching disabled or numba internals changed  # noqa: BLE001
+        return False
 
 
 def _read_times(folder: Path) -> dict[str, float]:

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import subprocess
+import sys
+import time
 from pathlib import Path
 from types import ModuleType
 
@@ -15,6 +18,34 @@ import flexmbs as fm
 #: run long validations in full only when asked (CI runs their fast form)
 FULL = os.environ.get("FLEXMBS_FULL", "") == "1"
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """The whole suite (no test paths named) first makes the complete kernels of cable and rod
+    models ready (``flexmbs compile --complete``, flexmbs.kernel.prepare), in two processes at
+    once: the tests' models then run on them instead of compiling one kernel per kind of model
+    (19 kinds: most of the suite's time from an empty cache). After the cable one, the own
+    kernels of the cantilever and of Example 1 (the README's), which tests compare with it.
+    Done by the controller of
+    ``pytest -n``, before its workers start; ``FLEXMBS_KERNEL`` other than ``auto`` leaves it
+    out, as does a run of chosen test files (their models compile their own kinds)."""
+    config = session.config
+    if hasattr(config, "workerinput") or os.environ.get("FLEXMBS_KERNEL", "auto") != "auto":
+        return
+    here = Path(__file__).resolve().parent
+    named = [a for a in config.args if Path(str(a).split("::")[0]).resolve() not in (here, here.parent)]
+    if named or os.environ.get("FLEXMBS_DISABLE_JIT", "") == "1":
+        return
+    start = time.perf_counter()
+    compile_ = [sys.executable, "-m", "flexmbs", "compile", "--quiet"]
+    rod = subprocess.Popen([*compile_, "--complete", "rod"])
+    codes = [subprocess.call([*compile_, "--complete", "cable"]),
+             subprocess.call([*compile_, "cable", str(EXAMPLES / "curved_beam_sleeve.toml")]),
+             rod.wait()]
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line(f"flexmbs: the complete kernels and two own kernels ready in "
+                            f"{time.perf_counter() - start:.0f} s (exit {codes})")
 
 
 def load_example(name: str) -> ModuleType:

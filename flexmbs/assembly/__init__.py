@@ -78,7 +78,13 @@ class Assembly:
         self.matrix, self.nnz = self.pattern.matrix, self.pattern.nnz
         self._data = self.matrix.data  # the array the matrix really holds
         packed = pack_system(owners, model, self)
-        self.groups, self.system, self.kernel_system = packed.groups, packed.system, packed.kernel_system
+        self.groups, self.system = packed.groups, packed.system
+        #: the systems the model's own kernel receives (the kinds it lacks are None) and the
+        #: complete kernel (every part and feature: SystemPart.complete); the kernel's argument,
+        #: :attr:`kernel_system`, is one of them, chosen at the first call
+        #: (:func:`flexmbs.kernel.prepare`)
+        self.lean_system = self.kernel_system = packed.kernel_system
+        self.complete_system = packed.complete_system
         self.joint_lists = packed.joint_lists
         self._python_terms = [obj for obj in model.interactions if obj.term_kind == ""]
         self.body_dof_table = self.system.bodies.dofs
@@ -260,7 +266,8 @@ class Assembly:
         args = (op, self.kernel_system, q, v, qdd, lam, fv.reshape(1, -1), mode,
                 np.array(coef, dtype=float), r, data, self._idle_run if run is None else run)
         if not self._kernel_ready:      # compiled, loaded, or compiled now with one line
-            prepare(args)
+            self.kernel_system = prepare(args, self.complete_system)
+            args = (op, self.kernel_system, *args[2:])
             self._kernel_ready = True
         value, code = kernel(*args)
         return float(value), int(code)

@@ -75,6 +75,9 @@ class PackedSystem(NamedTuple):
     #: what the compiled kernel receives: the kinds the model lacks are None, so that their
     #: code is not compiled for it (driver.OPTIONAL_KINDS)
     kernel_system: driver.SystemPart
+    #: what the complete kernel of its element types receives (every kind's part, every
+    #: feature: driver.SystemPart.complete), the same arrays
+    complete_system: driver.SystemPart
     joint_lists: dict[str, list[Any]]    # the interactions of every compiled kind
 
 
@@ -150,7 +153,7 @@ def pack_system(owners: list[TermOwner], model: Model, ctx: PackContext) -> Pack
         bases=np.zeros((sum(2 * g.dofs.shape[0] for g in groups
                             if g.element_type.rebase is not None), BASE_RECORD)))
     kernel_system = system.without_absent({owner.field: owner.present for owner in owners})
-    return PackedSystem(groups, system, kernel_system, interactions_by_kind(model))
+    return PackedSystem(groups, system, kernel_system, system.complete(), interactions_by_kind(model))
 
 
 def _pack_groups(specs: list[GroupSpec], ctx: PackContext) -> list[BeamGroup]:

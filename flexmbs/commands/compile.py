@@ -1,11 +1,13 @@
-"""``flexmbs compile [cable | rod | SCENARIO ...]``: compile (or load from numba's cache) the
-kernels of the named kinds of model ahead of a first run, and the one line a run prints while
-its kernels compile (issue "a first run in seconds")."""
+"""``flexmbs compile [--complete] [cable | rod | SCENARIO ...]``: compile (or load from numba's
+cache) the kernels of the named kinds of model ahead of a first run (with ``--complete``: the
+complete kernel of their element groups, which serves every model with those groups), and the
+one line a run prints while its kernels compile (issue "a first run in seconds")."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
 import time
 from collections.abc import Callable
@@ -26,6 +28,10 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
                     "scenario files, so that the first run starts at once (docs/cli.md).")
     comp.add_argument("targets", nargs="*", metavar="KIND_OR_SCENARIO",
                       help="cable, rod, or a scenario file (.toml); default: cable")
+    comp.add_argument("--complete", action="store_true",
+                      help="compile the complete kernel of each target's element groups instead, "
+                           "which serves every model with those groups, so that none compiles "
+                           "(somewhat slower per step than a model's own kernel)")
     comp.add_argument("--quiet", "-q", action="store_true", help="no output but errors")
 
 
@@ -59,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
 
     targets = list(args.targets) or ["cable"]
     restore = terminate_like_ctrl_c()
+    choice = os.environ.get("FLEXMBS_KERNEL")     # the kernels asked for, whatever it says
+    os.environ["FLEXMBS_KERNEL"] = "complete" if args.complete else "own"
     if not args.quiet:
         announce_compiles()
     try:
@@ -79,13 +87,18 @@ def run(args: argparse.Namespace) -> int:
 
             asm = Assembly(model)
             _compile_python_paths(asm)
+            kind = model_kind(asm.kernel_system, complete=asm.kernel_system is asm.complete_system)
             if not args.quiet:
-                print(f"flexmbs: {name}: kernels ready ({model_kind(asm.kernel_system)}, "
+                print(f"flexmbs: {name}: kernels ready ({kind}, "
                       f"{time.perf_counter() - start:.1f} s)", flush=True)
     except (KeyboardInterrupt, FlexmbsError, OSError) as exc:
         return failure_status(exc)
     finally:
         restore()
+        if choice is None:
+            os.environ.pop("FLEXMBS_KERNEL", None)
+        else:
+            os.environ["FLEXMBS_KERNEL"] = choice
     return EXIT_OK
 
 

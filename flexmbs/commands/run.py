@@ -145,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
     (:func:`~flexmbs.simulation.solve_static` or :func:`~flexmbs.simulation.simulate`); print
     one line."""
     from ..io.scenario import load_scenario
+    from ..kernel import kernel_choice
     from ..runs import run_scenario
 
     quiet = bool(args.quiet)
@@ -162,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
 
     restore = terminate_like_ctrl_c()
     try:
+        kernel_choice()     # a bad FLEXMBS_KERNEL is bad input, before anything is written
         sets = _resume_overrides(args) if args.resume is not None else overrides(args)
         sc = load_scenario(args.scenario, sets)
         sim = sc.simulation

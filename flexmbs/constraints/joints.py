@@ -20,7 +20,7 @@ translation, ``[r, r′]`` for :class:`BeamNodeRigid`), ground nothing.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -107,6 +107,15 @@ def _empty_table() -> TermTable:
 def _director_rows(vec_kind: np.ndarray) -> np.ndarray | None:
     rows = np.flatnonzero(vec_kind == NODE_DIRECTOR).astype(np.int64)
     return rows if rows.size else None
+
+
+def with_directors(part: Any) -> Any:
+    """``part`` (a packed part holding a :class:`TermTable` as ``table``) as the complete
+    kernel receives it (flexmbs.kernel.prepare): its node directors present, empty when it has
+    none, so that the director code is compiled in (``None`` prunes it, :func:`_node_director`)."""
+    if part.table.directors is not None:
+        return part
+    return part._replace(table=part.table._replace(directors=np.zeros(0, np.int64)))
 
 
 class _TableBuilder:
