@@ -19,7 +19,9 @@ linked and optimised again. Prints the table and the share of the first run that
 
 Kinds: ``cantilever`` (``flexmbs run examples/cantilever.toml --t-end 0.01``), ``example1``
 (``flexmbs run examples/curved_beam_sleeve.toml --t-end 0.01``), ``rod``
-(``python examples/helical_spring.py --t-end 5e-4``: a static solution, then 10 dynamic steps).
+(``python examples/helical_spring.py --t-end 5e-4``: a static solution, then 10 dynamic steps),
+``complete`` and ``complete-rod`` (``flexmbs compile --complete cable`` / ``rod``: the complete
+kernels that serve every model of one cable group / with a rod group).
 ``--cache DIR`` uses (and keeps) a given cache folder instead of an empty one, e.g. to time a
 warm start: two runs with the same ``--cache``.
 """
@@ -43,6 +45,8 @@ KINDS = {
     "cantilever": ["flexmbs", "run", "examples/cantilever.toml", "--t-end", "0.01"],
     "example1": ["flexmbs", "run", "examples/curved_beam_sleeve.toml", "--t-end", "0.01"],
     "rod": ["examples/helical_spring.py", "--t-end", "5e-4", "--dt", "5e-5"],
+    "complete": ["flexmbs", "compile", "--complete", "cable"],
+    "complete-rod": ["flexmbs", "compile", "--complete", "rod"],
 }
 
 
@@ -110,7 +114,8 @@ def _child(kind: str, out_json: str, out_dir: str) -> None:
     if argv[0] == "flexmbs":
         from flexmbs.cli import main
         assert Path(sys.modules["flexmbs"].__file__ or "").is_relative_to(ROOT)
-        code = main([*argv[1:], "--out", out_dir, "--overwrite", "--quiet"])
+        extra = ["--out", out_dir, "--overwrite"] if argv[1] == "run" else []
+        code = main([*argv[1:], *extra, "--quiet"])
     else:
         import runpy
         sys.argv = [argv[0], *argv[1:], "--out", out_dir]
