@@ -62,7 +62,7 @@ from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
 from .springs import SpringPart, springs_jacobian, springs_post_step, springs_residual
 
-__all__ = ["SystemPart", "residual", "jacobian", "constraint_velocity", "post_step", "rebase",
+__all__ = ["SystemPart", "residual", "jacobian", "constraint_velocity", "post_step",
            "rebase_static", "set_bases", "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS",
            "KIND_OF_ERROR", "STOPS_RUN", "stops_run"]
 
@@ -88,10 +88,11 @@ def stops_run(code):  # noqa: ANN001, ANN201
 
 
 class SystemPart(NamedTuple):
-    """The packed system. In the copy the kernel receives, the parts of the kinds of
-    :data:`OPTIONAL_KINDS` a model has none of are ``None`` (:meth:`without_absent`): their
-    kernels then start with ``if part is None: return ...``, which numba prunes by the argument's
-    type, so that nothing else of them is compiled for such a model."""
+    """The packed system (the driver's functions unpack it whole, in this order). In the copy
+    the kernel receives, the parts of the kinds of :data:`OPTIONAL_KINDS` a model has none of
+    are ``None`` (:meth:`without_absent`): their kernels then start with ``if part is None:
+    return ...``, which numba prunes by the argument's type, so that nothing else of them is
+    compiled for such a model."""
 
     n: int                           # coordinates
     m: int                           # multipliers
@@ -151,23 +152,31 @@ OPTIONAL_KINDS = ("bodies", "norms", "joints", *(kind.name for kind in INTERACTI
 COMPILED_TOGETHER = (("joints", "springs"),)
 
 
+# Each function below reads the packed system once, unpacked into its parts (numba stores every
+# variable, the system too, in a stack slot that LLVM's SROA splits into its ~1500-4000
+# scalars; reading ``sy.part`` loads the whole system again each time, and the inlined copies
+# of these functions multiplied that: docs/design-notes.md, "Compile time: the entry's copies
+# of the system").
+
+
 @njit(inline="always")
 def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     """``r = [r_q; r_lam]``; returns ``(scale, error code)``: the largest single force entering
     ``r_q`` (the force scale of the convergence test) and 0 or an ``ERR_*`` code."""
-    n = sy.n
+    n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, springs, drivers, \
+        error, _bases = sy
     for i in range(n, r.size):
         r[i] = 0.0
-    scale = loads_residual(sy.loads, q, fv, mode, r)
-    scale = max(scale, groups_residual(sy.beams, q, v, qdd, mode, r))
-    scale = max(scale, bodies_residual(sy.bodies, q, v, qdd, fv, mode, r))
-    scale = max(scale, springs_residual(sy.springs, q, v, mode, r))
-    linear_residual(sy.linear, n, q, lam, fv, mode, r)
-    norms_residual(sy.norms, n, q, lam, r)
-    joints_residual(sy.joints, n, q, lam, r)
-    drivers_residual(sy.drivers, n, q, lam, fv, mode, r)
-    scale = max(scale, sliding_residual(sy.sliding, n, q, v, lam, fv, r))
-    sc, code = clearance_terms(sy.clearance, q, v, FLAG[0], 0.0, 0.0, r, r, sy.error)
+    scale = loads_residual(loads, q, fv, mode, r)
+    scale = max(scale, groups_residual(beams, q, v, qdd, mode, r))
+    scale = max(scale, bodies_residual(bodies, q, v, qdd, fv, mode, r))
+    scale = max(scale, springs_residual(springs, q, v, mode, r))
+    linear_residual(linear, n, q, lam, fv, mode, r)
+    norms_residual(norms, n, q, lam, r)
+    joints_residual(joints, n, q, lam, r)
+    drivers_residual(drivers, n, q, lam, fv, mode, r)
+    scale = max(scale, sliding_residual(sliding, n, q, v, lam, fv, r))
+    sc, code = clearance_terms(clearance, q, v, FLAG[0], 0.0, 0.0, r, r, error)
     return max(scale, sc), code
 
 
@@ -175,21 +184,23 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
 def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """Iteration matrix into ``data``; returns ``(largest diagonal beam or spring stiffness,
     error code)``."""
+    _n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, springs, drivers, \
+        error, _bases = sy
     for i in range(data.size):
         data[i] = 0.0
     kscale = 0.0
-    kscale = max(kscale, groups_jacobian(sy.beams, q, v, qdd, mode, cM, cC, cK, data))
-    bodies_jacobian(sy.bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
-    loads_jacobian(sy.loads, q, fv, mode, cK, data)
-    kscale = max(kscale, springs_jacobian(sy.springs, q, v, mode, cC, cK, data))
-    linear_jacobian(sy.linear, data)
-    norms_jacobian(sy.norms, q, lam, cK, data)
-    joints_jacobian(sy.joints, q, lam, cK, data)
-    drivers_jacobian(sy.drivers, q, lam, fv, mode, cK, data)
-    code = sliding_jacobian(sy.sliding, q, v, lam, fv, cC, cK, data, sy.error)
+    kscale = max(kscale, groups_jacobian(beams, q, v, qdd, mode, cM, cC, cK, data))
+    bodies_jacobian(bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
+    loads_jacobian(loads, q, fv, mode, cK, data)
+    kscale = max(kscale, springs_jacobian(springs, q, v, mode, cC, cK, data))
+    linear_jacobian(linear, data)
+    norms_jacobian(norms, q, lam, cK, data)
+    joints_jacobian(joints, q, lam, cK, data)
+    drivers_jacobian(drivers, q, lam, fv, mode, cK, data)
+    code = sliding_jacobian(sliding, q, v, lam, fv, cC, cK, data, error)
     if code != 0:
         return kscale, code
-    _, code = clearance_terms(sy.clearance, q, v, FLAG[1], cC, cK, data, data, sy.error)
+    _, code = clearance_terms(clearance, q, v, FLAG[1], cC, cK, data, data, error)
     return kscale, code
 
 
@@ -198,27 +209,29 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     """Interaction state after a converged step, then the nodal frames re-based where needed
     (:func:`rebase`); must follow a :func:`residual` at this state (whose contact detection it
     reuses). Returns 0 or an ``ERR_*`` code (then nothing is changed)."""
-    code = groups_post_step(sy.beams, q, sy.error)
+    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, springs, _drivers, \
+        error, bases = sy
+    code = groups_post_step(beams, q, error)
     if code != 0:
         return code
-    code = sliding_post_step(sy.sliding, q, sy.error)
+    code = sliding_post_step(sliding, q, error)
     if code != 0:
         return code
-    clearance_post_step_all(sy.clearance, q)
-    springs_post_step(sy.springs, q)
-    rebase(sy, q, v, qdd, acc)
+    clearance_post_step_all(clearance, q)
+    springs_post_step(springs, q)
+    _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc)
     return 0
 
 
 @njit(inline="always")
-def rebase(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
+def _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc):  # noqa: ANN001, ANN202
     """Nodes whose tangent turned far from its base get a new chart (FORMULATION §2.4): the
     element groups change their coordinates (``q, v, qdd`` and the integrator's ``acc``; an
     empty array is left out) and record the new bases, which the joints and node moments
     holding those nodes then read. Returns the number of re-based nodes."""
-    count = groups_rebase(sy.beams, q, v, qdd, acc, sy.bases)
-    if count > 0:
-        set_bases(sy, sy.bases, count, False, q)   # q: the friction's step start, re-based
+    count = groups_rebase(beams, q, v, qdd, acc, bases)
+    if count > 0:   # q: the friction's step start, re-based
+        _set_bases(beams, joints, loads, clearance, bases, count, False, q)
     return count
 
 
@@ -226,31 +239,40 @@ def rebase(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
 def rebase_static(sy, q):  # noqa: ANN001, ANN201
     """After a converged static increment (following a residual at ``q``): the elements'
     checks, the joints' state as after a step (:func:`post_step`: slide elements, contact
-    tracking and friction anchors, ``q`` the next increment's start), then :func:`rebase` of
+    tracking and friction anchors, ``q`` the next increment's start), then the re-basing of
     ``q`` (no rates). Returns ``(re-based nodes, 0)`` or ``(0, error code)``."""
-    code = groups_post_step(sy.beams, q, sy.error)
+    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, springs, _drivers, \
+        error, bases = sy
+    code = groups_post_step(beams, q, error)
     if code != 0:
         return 0, code
-    code = sliding_post_step(sy.sliding, q, sy.error)
+    code = sliding_post_step(sliding, q, error)
     if code != 0:
         return 0, code
-    clearance_post_step_all(sy.clearance, q)
-    springs_post_step(sy.springs, q)
+    clearance_post_step_all(clearance, q)
+    springs_post_step(springs, q)
     empty = q[:0]
-    return rebase(sy, q, empty, empty, empty), 0
+    return _rebase(beams, joints, loads, clearance, bases, q, empty, empty, empty), 0
 
 
 @njit(inline="always")
 def set_bases(sy, log, stop, elements, q):  # noqa: ANN001, ANN201
     """Every holder of a node listed in ``log[:stop]`` (records ``[twist coordinate, t̄, D̄]``)
     takes its base: joints and node moments, and with ``elements`` the element groups too (a
-    resumed run; after :func:`rebase` they have them already). ``q``: the re-based start of the
+    resumed run; after a re-basing they have them already). ``q``: the re-based start of the
     next step (empty for a resumed run, whose start :meth:`Assembly.begin` sets)."""
+    _n, _m, beams, _bodies, loads, _linear, _norms, joints, _sliding, clearance, _springs, \
+        _drivers, _error, _bases = sy
+    _set_bases(beams, joints, loads, clearance, log, stop, elements, q)
+
+
+@njit(inline="always")
+def _set_bases(beams, joints, loads, clearance, log, stop, elements, q):  # noqa: ANN001, ANN202
     if elements:
-        groups_set_bases(sy.beams, log, stop)
-    joints_set_bases(sy.joints, log, stop)
-    loads_set_bases(sy.loads, log, stop)
-    clearance_set_bases(sy.clearance, log, stop, q)
+        groups_set_bases(beams, log, stop)
+    joints_set_bases(joints, log, stop)
+    loads_set_bases(loads, log, stop)
+    clearance_set_bases(clearance, log, stop, q)
 
 
 @njit

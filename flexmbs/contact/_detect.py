@@ -299,7 +299,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
                     if r_b - depths[j] <= -PAIR_MARGIN * (R_in - r_b) or count >= out.shape[0]:
                         continue
                     psi, kind, eP, xiP, ell, _, Q0, Q1, Q2 = stationary_pair(
-                        qe, lengths, origin, ey, ez, shape, params, psis[j], kinds[j], e, xi)
+                        qe, lengths, origin, ey, ez, shape, params, psis[j], kinds[j], e, xi,
+                        Y, Yp, Ypp)
                     if ell >= r_b:
                         continue
                     dup = False

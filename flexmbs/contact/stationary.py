@@ -228,7 +228,7 @@ def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, 
 
 
 @njit
-def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, elem0, xi0):  # noqa: ANN001, ANN201
+def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, elem0, xi0, Y, Yp, Ypp):  # noqa: ANN001, ANN201, E501
     """Converge one contact pair of a section from a seed (FORMULATION II §4b).
 
     First Newton on (ξ, ψ) together (:func:`_joint_newton`, 2–3 iterations, accepted when it
@@ -239,10 +239,7 @@ def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, ele
     each iterate projects the wall point on the axis (:func:`closest_point_kernel`, warm).
     Returns ``(psi, kind, elem, xi, ell, converged, Q₀, Q₁, Q₂)``: section angle, kind by the
     sign of D″ at the result, element and parameter of the axis point, distance ``|x − Y|`` and
-    the wall point."""
-    Y = np.empty(2)
-    Yp = np.empty(2)
-    Ypp = np.empty(2)
+    the wall point. ``Y, Yp, Ypp`` (2,): work arrays (the wall point and its derivatives)."""
     # the fast path: Newton on (ξ, ψ) together, from the seed's wall point projected once
     section_boundary(shape, params, psi0, Y, Yp, Ypp)
     r, rx, _ = element_point_values(qe[elem0], lengths[elem0], xi0)
