@@ -6,6 +6,7 @@ import importlib.util
 import os
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from types import ModuleType
@@ -24,11 +25,11 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     """The whole suite (no test paths named) first makes the complete kernels of cable and rod
     models ready (``flexmbs compile --complete``, flexmbs.kernel.prepare), in two processes at
     once: the tests' models then run on them instead of compiling one kernel per kind of model
-    (19 kinds: most of the suite's time from an empty cache). After the cable one, the own
-    kernels of the cantilever and of Example 1 (the README's), which tests compare with it.
-    Done by the controller of
-    ``pytest -n``, before its workers start; ``FLEXMBS_KERNEL`` other than ``auto`` leaves it
-    out, as does a run of chosen test files (their models compile their own kinds)."""
+    (19 kinds: most of the suite's time from an empty cache). After them, the own kernels of
+    the cantilever and of Example 1 (the README's), which tests compare with them. Done by the
+    controller of ``pytest -n``, before its workers start; ``FLEXMBS_KERNEL`` other than
+    ``auto`` leaves it out, as does a run of chosen test files (their models compile their
+    own kinds)."""
     config = session.config
     if hasattr(config, "workerinput") or os.environ.get("FLEXMBS_KERNEL", "auto") != "auto":
         return
@@ -38,10 +39,17 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         return
     start = time.perf_counter()
     compile_ = [sys.executable, "-m", "flexmbs", "compile", "--quiet"]
-    rod = subprocess.Popen([*compile_, "--complete", "rod"])
-    codes = [subprocess.call([*compile_, "--complete", "cable"]),
-             subprocess.call([*compile_, "cable", str(EXAMPLES / "curved_beam_sleeve.toml")]),
-             rod.wait()]
+    codes: list[int] = []
+
+    def chain(*commands: list[str]) -> None:
+        codes.extend(subprocess.call(cmd) for cmd in commands)
+
+    # two chains of about the same length (the rod kernel takes longest)
+    rod = threading.Thread(target=chain, args=([*compile_, "--complete", "rod"],
+                                               [*compile_, "cable"]))
+    rod.start()
+    chain([*compile_, "--complete", "cable"], [*compile_, str(EXAMPLES / "curved_beam_sleeve.toml")])
+    rod.join()
     reporter = config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None:
         reporter.write_line(f"flexmbs: the complete kernels and two own kernels ready in "
