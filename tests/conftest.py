@@ -28,14 +28,14 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     (19 kinds: most of the suite's time from an empty cache). After them, the own kernels of
     the cantilever and of Example 1 (the README's), which tests compare with them. Done by the
     controller of ``pytest -n``, before its workers start; ``FLEXMBS_KERNEL`` other than
-    ``auto`` leaves it out, as does a run of chosen test files (their models compile their
-    own kinds)."""
+    ``auto`` leaves it out, as does a run of chosen test files or ``-k`` (their models compile
+    their own kinds)."""
     config = session.config
     if hasattr(config, "workerinput") or os.environ.get("FLEXMBS_KERNEL", "auto") != "auto":
         return
     here = Path(__file__).resolve().parent
     named = [a for a in config.args if Path(str(a).split("::")[0]).resolve() not in (here, here.parent)]
-    if named or os.environ.get("FLEXMBS_DISABLE_JIT", "") == "1":
+    if named or getattr(config.option, "keyword", "") or os.environ.get("FLEXMBS_DISABLE_JIT", "") == "1":
         return
     start = time.perf_counter()
     compile_ = [sys.executable, "-m", "flexmbs", "compile", "--quiet"]
