@@ -22,7 +22,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 
 from .._jit import FLAG, njit
-from .group import add_matrix, add_residual, gather_states
+from .group import add_matrix, add_residual, gather_states, mass_pattern
 from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
 __all__ = [
@@ -359,12 +359,13 @@ def point_force_vector(xi: np.ndarray, length: np.ndarray, force: np.ndarray) ->
 # ---------------------------------------------------------------------------------------------
 # internal forces: numba kernel (FORMULATION I §1.4)
 class KernelWork(NamedTuple):
-    """Scratch of :func:`_internal_kernel`: its 3-vectors, its nodal shape-function rows and
-    its 3 × 3 operators (:func:`kernel_work`)."""
+    """Scratch of :func:`_internal_kernel`: its 3-vectors, its nodal shape-function rows, its
+    3 × 3 operators and the node blocks of :func:`_add_point_blocks` (:func:`kernel_work`)."""
 
     vec: np.ndarray      # (KERNEL_VECTORS, 3)
     node: np.ndarray     # (2, 4)
     mat: np.ndarray      # (KERNEL_MATRICES, 3, 3)
+    blocks: np.ndarray   # (8, 3, 3)
 
 
 #: sizes of :class:`KernelWork`
@@ -374,7 +375,7 @@ KERNEL_VECTORS, KERNEL_MATRICES = 14, 9
 def kernel_work() -> KernelWork:
     """Fresh scratch for :func:`_internal_kernel` (one per caller: the packed part keeps one)."""
     return KernelWork(np.zeros((KERNEL_VECTORS, 3)), np.zeros((2, 4)),
-                      np.zeros((KERNEL_MATRICES, 3, 3)))
+                      np.zeros((KERNEL_MATRICES, 3, 3)), np.zeros((8, 3, 3)))
 
 
 @njit(inline="always")
@@ -485,6 +486,28 @@ def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
                 force[e, 3 * n + 2] += W * (dn * pt[27] + hn * pt[30])
 
 
+@njit(inline="always")
+def _add_point_blocks(mat, e, W, ds, dds, P11, P12, P21, P22, TU):  # noqa: ANN001, ANN202
+    """``mat[e] += W Gᵀ [P11 P12; P21 P22] G``, G = [S′ ⊗ I; S″ ⊗ I]: node block (n, m)
+    += W (S′_nS′_m P11 + S′_nS″_m P12 + S″_nS′_m P21 + S″_nS″_m P22), in two stages
+    T_n = W(S′_n P11 + S″_n P21), U_n = W(S′_n P12 + S″_n P22) (``TU``, (8, 3, 3)), then
+    block (n, m) += S′_m T_n + S″_m U_n: 432 products per bending point instead of 576."""
+    for n in range(4):
+        wd = W * ds[n]
+        wh = W * dds[n]
+        for c in range(3):
+            for d in range(3):
+                TU[n, c, d] = wd * P11[c, d] + wh * P21[c, d]
+                TU[4 + n, c, d] = wd * P12[c, d] + wh * P22[c, d]
+    for n in range(4):
+        for m in range(4):
+            dm = ds[m]
+            hm = dds[m]
+            for c in range(3):
+                for d in range(3):
+                    mat[e, 3 * n + c, 3 * m + d] += TU[n, c, d] * dm + TU[4 + n, c, d] * hm
+
+
 @njit
 def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, damp, work):  # noqa: ANN001, ANN202, C901, PLR0912, PLR0915
     """Q_int, ∂Q_int/∂q, ∂Q_int/∂q̇ per element (FORMULATION I §1.4, derivation in the notes).
@@ -497,6 +520,9 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
     X = −2μ(p aᵀ + a pᵀ + (m·K) I)/g, Y = −2μ s aᵀ/g, Z = −m̃/g, p = B1ᵀm, s = B2ᵀm; and the
     Hessian contracted with q̇ (for the damping force's q-dependence) is S′_n E1 + S″_n E2 with
     E1 = (−ḃ̃ − ġB1 − 2μ(K̇aᵀ + Kȧᵀ))/g, E2 = (ȧ̃ − ġB2)/g, ġ = 2μ a·ȧ.
+    An element without damping (d_ε = d_K = 0) skips the damping's terms, which are zero:
+    ∂Q_int/∂q̇ (zeroed) and E1, E2 (with the two-stage blocks of :func:`_add_point_blocks`:
+    the 8-element cantilever's tangent 11.9 → 7.0 µs, Example 1's 16 elements 29.2 → 16.3 µs).
     """
     n_elem = q.shape[0]
     n_ax = rest.axial_weight.shape[1]
@@ -532,12 +558,15 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
     P12 = work.mat[6]
     P21 = work.mat[7]
     P22 = work.mat[8]
+    TU = work.blocks
 
     for e in range(n_elem):
         EA = EAv[e]
         EI = EIv[e]
         dA = dAv[e]
         dB = dBv[e]
+        # the damping matrix's terms only where the element has damping (zeroed above else)
+        wc = want_c and (dA != 0.0 or dB != 0.0)
         for i in range(12):
             force[e, i] = 0.0
         if want_k:
@@ -578,7 +607,7 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
                         for c in range(3):
                             for d in range(3):
                                 stiff[e, 3 * n + c, 3 * m + d] += cw * A3[c, d]
-            if want_c:
+            if wc:
                 c1 = dA / mu
                 for n in range(4):
                     for m in range(4):
@@ -621,31 +650,33 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
             B2[2, 0] = -a[1] * ig
             B2[2, 1] = a[0] * ig
 
-            if scalar and (want_k or want_c):
+            if scalar and (want_k or wc):
                 # k_q = DᵀK/κ has node blocks S′_n α + S″_n β
                 for c in range(3):
                     al[c] = (B1[0, c] * K[0] + B1[1, c] * K[1] + B1[2, c] * K[2]) / kap
                     be[c] = (B2[0, c] * K[0] + B2[1, c] * K[1] + B2[2, c] * K[2]) / kap
 
             if want_k:
-                gd = tm * (a[0] * ad[0] + a[1] * ad[1] + a[2] * ad[2])
-                # E1 = (−ḃ̃ − ġB1 − 2μ(K̇aᵀ + Kȧᵀ))/g,  E2 = (ȧ̃ − ġB2)/g
-                for c in range(3):
-                    for d in range(3):
-                        E1[c, d] = (-gd * B1[c, d] - tm * (Kd[c] * a[d] + K[c] * ad[d])) * ig
-                        E2[c, d] = -gd * B2[c, d] * ig
-                E1[0, 1] += bd[2] * ig
-                E1[0, 2] -= bd[1] * ig
-                E1[1, 0] -= bd[2] * ig
-                E1[1, 2] += bd[0] * ig
-                E1[2, 0] += bd[1] * ig
-                E1[2, 1] -= bd[0] * ig
-                E2[0, 1] -= ad[2] * ig
-                E2[0, 2] += ad[1] * ig
-                E2[1, 0] += ad[2] * ig
-                E2[1, 2] -= ad[0] * ig
-                E2[2, 0] -= ad[1] * ig
-                E2[2, 1] += ad[0] * ig
+                if dB != 0.0:
+                    gd = tm * (a[0] * ad[0] + a[1] * ad[1] + a[2] * ad[2])
+                    # E1 = (−ḃ̃ − ġB1 − 2μ(K̇aᵀ + Kȧᵀ))/g,  E2 = (ȧ̃ − ġB2)/g
+                    for c in range(3):
+                        for d in range(3):
+                            E1[c, d] = (-gd * B1[c, d]
+                                        - tm * (Kd[c] * a[d] + K[c] * ad[d])) * ig
+                            E2[c, d] = -gd * B2[c, d] * ig
+                    E1[0, 1] += bd[2] * ig
+                    E1[0, 2] -= bd[1] * ig
+                    E1[1, 0] -= bd[2] * ig
+                    E1[1, 2] += bd[0] * ig
+                    E1[2, 0] += bd[1] * ig
+                    E1[2, 1] -= bd[0] * ig
+                    E2[0, 1] -= ad[2] * ig
+                    E2[0, 2] += ad[1] * ig
+                    E2[1, 0] += ad[2] * ig
+                    E2[1, 2] -= ad[0] * ig
+                    E2[2, 0] -= ad[1] * ig
+                    E2[2, 1] += ad[0] * ig
                 # Hessian of K contracted with m_eff: X, Y, Z
                 mK = meff[0] * K[0] + meff[1] * K[1] + meff[2] * K[2]
                 cx = -tm * ig
@@ -679,15 +710,18 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
                     c0 = ms / kap
                     ce = EI - c0
                     for c in range(3):
-                        # ∂κ̇/∂q node blocks S′_n γ + S″_n η
-                        gam = ((B1[0, c] * Kd[0] + B1[1, c] * Kd[1] + B1[2, c] * Kd[2]
-                                + E1[0, c] * K[0] + E1[1, c] * K[1] + E1[2, c] * K[2]) / kap
-                               - kapd / kap * al[c])
-                        eta = ((B2[0, c] * Kd[0] + B2[1, c] * Kd[1] + B2[2, c] * Kd[2]
-                                + E2[0, c] * K[0] + E2[1, c] * K[1] + E2[2, c] * K[2]) / kap
-                               - kapd / kap * be[c])
-                        r1[c] = ce * al[c] + dB * gam
-                        r2[c] = ce * be[c] + dB * eta
+                        r1[c] = ce * al[c]
+                        r2[c] = ce * be[c]
+                        if dB != 0.0:
+                            # ∂κ̇/∂q node blocks S′_n γ + S″_n η
+                            gam = ((B1[0, c] * Kd[0] + B1[1, c] * Kd[1] + B1[2, c] * Kd[2]
+                                    + E1[0, c] * K[0] + E1[1, c] * K[1] + E1[2, c] * K[2])
+                                   / kap - kapd / kap * al[c])
+                            eta = ((B2[0, c] * Kd[0] + B2[1, c] * Kd[1] + B2[2, c] * Kd[2]
+                                    + E2[0, c] * K[0] + E2[1, c] * K[1] + E2[2, c] * K[2])
+                                   / kap - kapd / kap * be[c])
+                            r1[c] += dB * gam
+                            r2[c] += dB * eta
                     for c in range(3):
                         for d in range(3):
                             b11 = B1[0, c] * B1[0, d] + B1[1, c] * B1[1, d] + B1[2, c] * B1[2, d]
@@ -706,27 +740,26 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
                             b12 = B1[0, c] * B2[0, d] + B1[1, c] * B2[1, d] + B1[2, c] * B2[2, d]
                             b21 = B2[0, c] * B1[0, d] + B2[1, c] * B1[1, d] + B2[2, c] * B1[2, d]
                             b22 = B2[0, c] * B2[0, d] + B2[1, c] * B2[1, d] + B2[2, c] * B2[2, d]
-                            e11 = B1[0, c] * E1[0, d] + B1[1, c] * E1[1, d] + B1[2, c] * E1[2, d]
-                            e12 = B1[0, c] * E2[0, d] + B1[1, c] * E2[1, d] + B1[2, c] * E2[2, d]
-                            e21 = B2[0, c] * E1[0, d] + B2[1, c] * E1[1, d] + B2[2, c] * E1[2, d]
-                            e22 = B2[0, c] * E2[0, d] + B2[1, c] * E2[1, d] + B2[2, c] * E2[2, d]
-                            P11[c, d] += EI * b11 + dB * e11
-                            P12[c, d] += EI * b12 + dB * e12
-                            P21[c, d] += EI * b21 + dB * e21
-                            P22[c, d] += EI * b22 + dB * e22
-                for n in range(4):
-                    for m in range(4):
-                        c11 = W * ds[n] * ds[m]
-                        c12 = W * ds[n] * dds[m]
-                        c21 = W * dds[n] * ds[m]
-                        c22 = W * dds[n] * dds[m]
-                        for c in range(3):
-                            for d in range(3):
-                                stiff[e, 3 * n + c, 3 * m + d] += (
-                                    c11 * P11[c, d] + c12 * P12[c, d]
-                                    + c21 * P21[c, d] + c22 * P22[c, d])
+                            P11[c, d] += EI * b11
+                            P12[c, d] += EI * b12
+                            P21[c, d] += EI * b21
+                            P22[c, d] += EI * b22
+                            if dB != 0.0:
+                                e11 = (B1[0, c] * E1[0, d] + B1[1, c] * E1[1, d]
+                                       + B1[2, c] * E1[2, d])
+                                e12 = (B1[0, c] * E2[0, d] + B1[1, c] * E2[1, d]
+                                       + B1[2, c] * E2[2, d])
+                                e21 = (B2[0, c] * E1[0, d] + B2[1, c] * E1[1, d]
+                                       + B2[2, c] * E1[2, d])
+                                e22 = (B2[0, c] * E2[0, d] + B2[1, c] * E2[1, d]
+                                       + B2[2, c] * E2[2, d])
+                                P11[c, d] += dB * e11
+                                P12[c, d] += dB * e12
+                                P21[c, d] += dB * e21
+                                P22[c, d] += dB * e22
+                _add_point_blocks(stiff, e, W, ds, dds, P11, P12, P21, P22, TU)
 
-            if want_c:
+            if wc:
                 # A-vec: d_K DᵀD;  A-scal: d_K k_q k_qᵀ
                 for c in range(3):
                     for d in range(3):
@@ -744,17 +777,7 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
                                               + B2[2, c] * B1[2, d])
                             P22[c, d] = dB * (B2[0, c] * B2[0, d] + B2[1, c] * B2[1, d]
                                               + B2[2, c] * B2[2, d])
-                for n in range(4):
-                    for m in range(4):
-                        c11 = W * ds[n] * ds[m]
-                        c12 = W * ds[n] * dds[m]
-                        c21 = W * dds[n] * ds[m]
-                        c22 = W * dds[n] * dds[m]
-                        for c in range(3):
-                            for d in range(3):
-                                damp[e, 3 * n + c, 3 * m + d] += (
-                                    c11 * P11[c, d] + c12 * P12[c, d]
-                                    + c21 * P21[c, d] + c22 * P22[c, d])
+                _add_point_blocks(damp, e, W, ds, dds, P11, P12, P21, P22, TU)
 
 
 _NO_MATRIX = np.zeros((0, 12, 12))
@@ -864,6 +887,7 @@ class BeamPart(NamedTuple):
     rest: CableRest
     scalar: int                      # 1: scalar-curvature bending (CableOptions.bending)
     mass: np.ndarray                 # (n_elem, 12, 12) consistent mass (constant)
+    mass_rows: np.ndarray            # its non-zero pattern (group.mass_pattern)
     qe: np.ndarray                   # work (n_elem, 12): q, q̇ of the elements, Q_int
     ve: np.ndarray
     force: np.ndarray
@@ -879,9 +903,10 @@ def pack_beams(element_dofs: np.ndarray, props: CableProperties, options: CableO
     D = np.ascontiguousarray(element_dofs, dtype=np.int64)
     ne = D.shape[0]
     rest = rest_state(np.ascontiguousarray(q_ref[D]), props, options) if ne else _empty_rest()
+    mass = np.ascontiguousarray(mass_matrix(props))
     return BeamPart(
         D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, 144), props, rest,
-        1 if options.bending == "scalar" else 0, np.ascontiguousarray(mass_matrix(props)),
+        1 if options.bending == "scalar" else 0, mass, mass_pattern(mass),
         np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12, 12)),
         np.zeros((ne, 12, 12)), kernel_work())
 

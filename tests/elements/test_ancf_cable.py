@@ -226,6 +226,40 @@ def test_tangents_match_fd_with_damping_and_velocity(options: cable.CableOptions
     assert np.abs(C0).max() == 0.0
 
 
+@pytest.mark.parametrize("options", ALL_OPTIONS, ids=_ids)
+def test_tangents_match_fd_with_damping_on_some_elements(options: cable.CableOptions,
+                                                         rng: np.random.Generator) -> None:
+    """The kernel skips the damping's terms of an element without damping: element 0 has
+    axial damping only, element 1 bending damping only, element 2 none; the tangents still
+    match central differences, and the undamped element's ∂Q/∂q̇ is overwritten with zeros."""
+    q_ref, L, q = _perturbed_arc(rng)
+    v = rng.standard_normal(q.shape)
+    props = make_props(L, EA=np.array([100.0, 250.0, 80.0]), EI=np.array([1.0, 0.5, 2.0]),
+                       eps0=0.02)
+    props = props._replace(axial_damping=np.array([0.7, 0.0, 0.0]),
+                           bending_damping=np.array([0.0, 0.3, 0.0]))
+    rest = cable.rest_state(q_ref, props, options)
+    F = np.zeros((3, 12))
+    K = np.full((3, 12, 12), 4.0)
+    C = np.full((3, 12, 12), -3.0)
+    cable.internal_forces(q, v, props, rest, options, F, K, C)
+    K_fd = np.zeros_like(K)
+    C_fd = np.zeros_like(C)
+    for i in range(12):
+        dq = np.zeros(12)
+        dq[i] = FD_STEP
+        K_fd[:, :, i] = (forces(q + dq, v, props, rest, options)
+                         - forces(q - dq, v, props, rest, options)) / (2 * FD_STEP)
+        C_fd[:, :, i] = (forces(q, v + dq, props, rest, options)
+                         - forces(q, v - dq, props, rest, options)) / (2 * FD_STEP)
+    np.testing.assert_allclose(K, K_fd, rtol=0, atol=RTOL_FD * np.abs(K).max())
+    np.testing.assert_allclose(C, C_fd, rtol=0, atol=RTOL_FD * np.abs(C).max())
+    assert np.abs(C[0]).max() > 0.0 and np.abs(C[1]).max() > 0.0
+    assert np.abs(C[2]).max() == 0.0
+    # the undamped element's tangent is the symmetric Hessian of its strain energy
+    np.testing.assert_allclose(K[2], K[2].T, rtol=0, atol=1e-12 * np.abs(K[2]).max())
+
+
 def test_outputs_are_overwritten_and_force_only_matches(rng: np.random.Generator) -> None:
     q_ref, L, q = _perturbed_arc(rng)
     v = rng.standard_normal(q.shape)
