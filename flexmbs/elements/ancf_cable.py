@@ -22,7 +22,7 @@ from typing import Literal, NamedTuple
 import numpy as np
 
 from .._jit import FLAG, njit
-from .group import add_matrix, add_residual, gather_states, mass_pattern
+from .group import add_matrix, add_residual, gather_states
 from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
 __all__ = [
@@ -887,7 +887,6 @@ class BeamPart(NamedTuple):
     rest: CableRest
     scalar: int                      # 1: scalar-curvature bending (CableOptions.bending)
     mass: np.ndarray                 # (n_elem, 12, 12) consistent mass (constant)
-    mass_rows: np.ndarray            # its non-zero pattern (group.mass_pattern)
     qe: np.ndarray                   # work (n_elem, 12): q, q̇ of the elements, Q_int
     ve: np.ndarray
     force: np.ndarray
@@ -906,7 +905,7 @@ def pack_beams(element_dofs: np.ndarray, props: CableProperties, options: CableO
     mass = np.ascontiguousarray(mass_matrix(props))
     return BeamPart(
         D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, 144), props, rest,
-        1 if options.bending == "scalar" else 0, mass, mass_pattern(mass),
+        1 if options.bending == "scalar" else 0, mass,
         np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12, 12)),
         np.zeros((ne, 12, 12)), kernel_work())
 

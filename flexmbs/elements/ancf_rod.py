@@ -61,7 +61,7 @@ from ._rod_derivatives import (
     twist_h,
 )
 from .ancf_cable import hermite_basis
-from .group import add_matrix, add_residual, gather_states, mass_pattern
+from .group import add_matrix, add_residual, gather_states
 from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
 __all__ = ["LAYOUT", "RodProperties", "RodRest", "RodPart", "base_frames", "internal_forces",
@@ -1004,7 +1004,6 @@ class RodPart(NamedTuple):
     props: RodProperties
     rest: RodRest
     mass: np.ndarray                 # (n_elem, 14, 14)
-    mass_rows: np.ndarray            # its non-zero pattern (group.mass_pattern)
     work: RodWork
     qe: np.ndarray                   # work (n_elem, 14): q, q̇ of the elements, Q_int
     ve: np.ndarray
@@ -1039,9 +1038,8 @@ def pack_rods(element_dofs: np.ndarray, props: RodProperties, options: object, q
     t_bar, d_bar = nodal_bases(D, q_ref) if ne else (np.zeros((0, 2, 3)), np.zeros((0, 2, 3)))
     rest = rest_state(np.ascontiguousarray(q_ref[D]), props, t_bar, d_bar)
     n = ELEMENT_SIZE
-    mass = np.ascontiguousarray(mass_matrix(props))
     return RodPart(D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, n * n), props,
-                   rest, mass, mass_pattern(mass), new_work(), np.zeros((ne, n)),
+                   rest, np.ascontiguousarray(mass_matrix(props)), new_work(), np.zeros((ne, n)),
                    np.zeros((ne, n)), np.zeros((ne, n)), np.zeros((ne, n, n)), np.zeros((ne, n, n)),
                    np.zeros((1, n, n)), np.array([REBASE_LIMIT, TURN_LIMIT]))
 

@@ -2,12 +2,11 @@
 loop, whatever their element.
 
 Every element module packs a group of its elements into a named tuple (its *part*) holding at
-least ``dofs (n_elem, n)``, ``pos (n_elem, n*n)`` (matrix positions), ``mass (n_elem, n, n)``,
-its pattern ``mass_rows`` (:func:`mass_pattern`) and the work arrays ``qe, ve, force
-(n_elem, n)``, ``stiff, damp (n_elem, n, n)``, and states its internal forces in a kernel.
-What is common to all elements — gathering the element states, adding ``Q_int + M q̈`` into
-the residual and ``cK K + cC C + cM M`` into the matrix — is stated once here
-(:func:`gather_states`, :func:`add_residual`, :func:`add_matrix`).
+least ``dofs (n_elem, n)``, ``pos (n_elem, n*n)`` (matrix positions), ``mass (n_elem, n, n)``
+and the work arrays ``qe, ve, force (n_elem, n)``, ``stiff, damp (n_elem, n, n)``, and states
+its internal forces in a kernel. What is common to all elements — gathering the element
+states, adding ``Q_int + M q̈`` into the residual and ``cK K + cC C + cM M`` into the matrix —
+is stated once here (:func:`gather_states`, :func:`add_residual`, :func:`add_matrix`).
 
 The driver sums a tuple of parts of *different* types (several element types in one model) by
 :func:`groups_residual` and :func:`groups_jacobian`, which take the parts at the fixed positions
@@ -31,21 +30,9 @@ from .._jit import HAVE_NUMBA, njit
 from ..terms import WITH_DAMPING, WITH_INERTIA
 from .layout import ELEMENT_TYPES, ElementType
 
-__all__ = ["mass_pattern", "gather_states", "add_residual", "add_matrix", "element_residual",
-           "element_jacobian", "element_post_step", "element_rebase", "element_set_bases", "groups_residual",
+__all__ = ["gather_states", "add_residual", "add_matrix", "element_residual", "element_jacobian",
+           "element_post_step", "element_rebase", "element_set_bases", "groups_residual",
            "groups_jacobian", "groups_post_step", "groups_rebase", "groups_set_bases"]
-
-
-def mass_pattern(mass: np.ndarray) -> np.ndarray:
-    """The non-zero pattern of a part's mass matrices ``mass (n_elem, n, n)`` (their union), row
-    by row in one int64 array: ``n + 1`` row pointers into the array itself, then each row's
-    columns in ascending order (:func:`add_residual`'s M q̈ skips the zeros: the cable's mass
-    S̄ ⊗ I₃ has 48 of its 144 entries non-zero)."""
-    n = mass.shape[1]
-    nonzero = np.any(mass != 0.0, axis=0)
-    counts = nonzero.sum(axis=1)
-    ptr = n + 1 + np.concatenate(([0], np.cumsum(counts)))
-    return np.concatenate((ptr, np.nonzero(nonzero)[1])).astype(np.int64)
 
 
 @njit(inline="always")
@@ -62,11 +49,9 @@ def gather_states(part, q, v, mode):  # noqa: ANN001, ANN201
 @njit(inline="always")
 def add_residual(part, qdd, mode, r):  # noqa: ANN001, ANN201
     """``r += Q_int (+ M q̈ with inertia)`` from ``part.force``; returns the largest single force
-    (an element force entry or a row of M q̈). M q̈ over the mass's non-zero pattern
-    (``part.mass_rows``, :func:`mass_pattern`): the same sums, without their zero terms."""
+    (an element force entry or a row of M q̈)."""
     inertia = mode[WITH_INERTIA] != 0.0
     dofs = part.dofs
-    rows = part.mass_rows
     n = dofs.shape[1]
     scale = 0.0
     for e in range(dofs.shape[0]):
@@ -76,8 +61,7 @@ def add_residual(part, qdd, mode, r):  # noqa: ANN001, ANN201
                 scale = abs(s)
             if inertia:
                 acc = 0.0
-                for k in range(rows[i], rows[i + 1]):
-                    j = rows[k]
+                for j in range(n):
                     acc += part.mass[e, i, j] * qdd[dofs[e, j]]
                 if abs(acc) > scale:
                     scale = abs(acc)
