@@ -103,8 +103,8 @@ def idle_factor() -> BorderedFactor:
     return BorderedFactor(
         n=0, n_band=0, n_border=0, kl=0, ku=0, perm=zi, border=zi, fill_pos=zi, fill_row=zi,
         fill_col=zi, fill_ptr=zi, ab=np.zeros((2, 2), order="F"),   # 2x2: typed F-contiguous
-        piv=zi, xt=np.zeros((0, 0)), a_ba=np.zeros((0, 0)), s=np.zeros((0, 0)), piv_s=zi,
-        work_a=z, work_b=z, tree=empty_tree())
+        piv=zi, u_top=zi, u_inv=z, xt=np.zeros((0, 0)), a_ba=np.zeros((0, 0)),
+        s=np.zeros((0, 0)), piv_s=zi, work_a=z, work_b=z, tree=empty_tree())
 
 
 @njit

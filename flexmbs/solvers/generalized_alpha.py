@@ -510,7 +510,7 @@ class _CompiledStepper:
 
     #: entries of ``info`` that steer the next steps (counters excluded: the summary adds them)
     _KEPT_INFO = ("INFO_HAVE", "INFO_KSCALE", "INFO_RENEW", "INFO_CYC_STEPS", "INFO_CYC_ITS")
-    _FACTOR_ARRAYS = ("ab", "piv", "xt", "a_ba", "s", "piv_s")
+    _FACTOR_ARRAYS = ("ab", "piv", "u_top", "u_inv", "xt", "a_ba", "s", "piv_s")
 
     def _factor_arrays(self) -> dict[str, np.ndarray]:
         """The factorisation's numeric arrays by name (the tree part's as ``tree_val`` and
