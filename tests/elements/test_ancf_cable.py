@@ -199,15 +199,8 @@ def test_force_is_gradient_of_strain_energy(options: cable.CableOptions,
     np.testing.assert_allclose(F, G, rtol=0, atol=RTOL_FD * np.abs(F).max())
 
 
-@pytest.mark.parametrize("options", ALL_OPTIONS, ids=_ids)
-def test_tangents_match_fd_with_damping_and_velocity(options: cable.CableOptions,
-                                                     rng: np.random.Generator) -> None:
-    q_ref, L, q = _perturbed_arc(rng)
-    v = rng.standard_normal(q.shape)
-    props = make_props(L, EA=np.array([100.0, 250.0, 80.0]), EI=np.array([1.0, 0.5, 2.0]),
-                       d_eps=0.7, d_K=0.3, eps0=0.02)
-    rest = cable.rest_state(q_ref, props, options)
-    F, K, C = forces(q, v, props, rest, options, matrices=True)
+def _assert_tangents_match_fd(K, C, q, v, props, rest, options):  # noqa: ANN001, ANN202
+    """``K = ∂Q/∂q`` and ``C = ∂Q/∂q̇`` against central differences of the forces."""
     K_fd = np.zeros_like(K)
     C_fd = np.zeros_like(C)
     for i in range(12):
@@ -219,6 +212,18 @@ def test_tangents_match_fd_with_damping_and_velocity(options: cable.CableOptions
                          - forces(q, v - dq, props, rest, options)) / (2 * FD_STEP)
     np.testing.assert_allclose(K, K_fd, rtol=0, atol=RTOL_FD * np.abs(K).max())
     np.testing.assert_allclose(C, C_fd, rtol=0, atol=RTOL_FD * np.abs(C).max())
+
+
+@pytest.mark.parametrize("options", ALL_OPTIONS, ids=_ids)
+def test_tangents_match_fd_with_damping_and_velocity(options: cable.CableOptions,
+                                                     rng: np.random.Generator) -> None:
+    q_ref, L, q = _perturbed_arc(rng)
+    v = rng.standard_normal(q.shape)
+    props = make_props(L, EA=np.array([100.0, 250.0, 80.0]), EI=np.array([1.0, 0.5, 2.0]),
+                       d_eps=0.7, d_K=0.3, eps0=0.02)
+    rest = cable.rest_state(q_ref, props, options)
+    F, K, C = forces(q, v, props, rest, options, matrices=True)
+    _assert_tangents_match_fd(K, C, q, v, props, rest, options)
     # the damping force depends on q: removing it must change the stiffness
     props0 = props._replace(axial_damping=np.zeros(3), bending_damping=np.zeros(3))
     _, K0, C0 = forces(q, v, props0, rest, options, matrices=True)
@@ -243,17 +248,7 @@ def test_tangents_match_fd_with_damping_on_some_elements(options: cable.CableOpt
     K = np.full((3, 12, 12), 4.0)
     C = np.full((3, 12, 12), -3.0)
     cable.internal_forces(q, v, props, rest, options, F, K, C)
-    K_fd = np.zeros_like(K)
-    C_fd = np.zeros_like(C)
-    for i in range(12):
-        dq = np.zeros(12)
-        dq[i] = FD_STEP
-        K_fd[:, :, i] = (forces(q + dq, v, props, rest, options)
-                         - forces(q - dq, v, props, rest, options)) / (2 * FD_STEP)
-        C_fd[:, :, i] = (forces(q, v + dq, props, rest, options)
-                         - forces(q, v - dq, props, rest, options)) / (2 * FD_STEP)
-    np.testing.assert_allclose(K, K_fd, rtol=0, atol=RTOL_FD * np.abs(K).max())
-    np.testing.assert_allclose(C, C_fd, rtol=0, atol=RTOL_FD * np.abs(C).max())
+    _assert_tangents_match_fd(K, C, q, v, props, rest, options)
     assert np.abs(C[0]).max() > 0.0 and np.abs(C[1]).max() > 0.0
     assert np.abs(C[2]).max() == 0.0
     # the undamped element's tangent is the symmetric Hessian of its strain energy
