@@ -453,12 +453,14 @@ def _bending_point(q, v, e, k, rest, EI, dB, scalar):  # noqa: ANN001, ANN202
             kapd, ms, m0, m1, m2, p0, p1, p2, s0, s1, s2)
 
 
-@njit
+@njit(inline="always")
 def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
     """Q_int per element without its derivatives (FORMULATION I §1.4): the residual's kernel.
     The quadrature points' terms are scalars (:func:`_axial_point`, :func:`_bending_point`),
     held in registers: 4.6 → 2.4 µs for Example 1's 16 elements against the tangent kernel's
-    work arrays (:func:`_internal_kernel`, which states its forces with the same functions)."""
+    work arrays (:func:`_internal_kernel`, which states its forces with the same functions).
+    Inlined into the residual (:func:`beam_residual`): a call passing the section's
+    properties and rest state cost 0.06 µs of the 8-element cantilever's 2.07 µs."""
     n_ax = rest.axial_weight.shape[1]
     n_b = rest.bending_weight.shape[1]
     for e in range(q.shape[0]):
