@@ -490,6 +490,17 @@ def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
+def _add_skew(M, x, s):  # noqa: ANN001, ANN202
+    """``M += s x̃`` (x̃ the cross-product matrix of x: x̃ y = x × y)."""
+    M[0, 1] -= s * x[2]
+    M[0, 2] += s * x[1]
+    M[1, 0] += s * x[2]
+    M[1, 2] -= s * x[0]
+    M[2, 0] -= s * x[1]
+    M[2, 1] += s * x[0]
+
+
+@njit(inline="always")
 def _add_point_blocks(mat, e, W, ds, dds, P11, P12, P21, P22, TU):  # noqa: ANN001, ANN202
     """``mat[e] += W Gᵀ [P11 P12; P21 P22] G``, G = [S′ ⊗ I; S″ ⊗ I]: node block (n, m)
     += W (S′_nS′_m P11 + S′_nS″_m P12 + S″_nS′_m P21 + S″_nS″_m P22), in two stages
@@ -640,18 +651,8 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
                 for d in range(3):
                     B1[c, d] = -tm * K[c] * a[d] * ig
                     B2[c, d] = 0.0
-            B1[0, 1] += b[2] * ig
-            B1[0, 2] -= b[1] * ig
-            B1[1, 0] -= b[2] * ig
-            B1[1, 2] += b[0] * ig
-            B1[2, 0] += b[1] * ig
-            B1[2, 1] -= b[0] * ig
-            B2[0, 1] = -a[2] * ig
-            B2[0, 2] = a[1] * ig
-            B2[1, 0] = a[2] * ig
-            B2[1, 2] = -a[0] * ig
-            B2[2, 0] = -a[1] * ig
-            B2[2, 1] = a[0] * ig
+            _add_skew(B1, b, -ig)       # −b̃/g
+            _add_skew(B2, a, ig)        # ã/g
 
             if scalar and (want_k or wc):
                 # k_q = DᵀK/κ has node blocks S′_n α + S″_n β
@@ -668,18 +669,8 @@ def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, da
                             E1[c, d] = (-gd * B1[c, d]
                                         - tm * (Kd[c] * a[d] + K[c] * ad[d])) * ig
                             E2[c, d] = -gd * B2[c, d] * ig
-                    E1[0, 1] += bd[2] * ig
-                    E1[0, 2] -= bd[1] * ig
-                    E1[1, 0] -= bd[2] * ig
-                    E1[1, 2] += bd[0] * ig
-                    E1[2, 0] += bd[1] * ig
-                    E1[2, 1] -= bd[0] * ig
-                    E2[0, 1] -= ad[2] * ig
-                    E2[0, 2] += ad[1] * ig
-                    E2[1, 0] += ad[2] * ig
-                    E2[1, 2] -= ad[0] * ig
-                    E2[2, 0] -= ad[1] * ig
-                    E2[2, 1] += ad[0] * ig
+                    _add_skew(E1, bd, -ig)      # −ḃ̃/g
+                    _add_skew(E2, ad, ig)       # ȧ̃/g
                 # Hessian of K contracted with m_eff: X, Y, Z
                 mK = meff[0] * K[0] + meff[1] * K[1] + meff[2] * K[2]
                 cx = -tm * ig
