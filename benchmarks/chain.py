@@ -171,7 +171,7 @@ def run_flexmbs_eyelets(n_eyelets: int, *, h: float = 1e-3, t_end: float = 0.05)
     asm = res.assembly
     plan = asm.factor_plan()
     # the compiled loop's plan follows the rings where that is cheaper (generalized_alpha)
-    following = asm.factor_plan(windows=asm.sliding_windows(ga.FOLLOW_REACH))
+    following = asm.factor_plan(windows=asm.contact_windows(ga.FOLLOW_REACH))
     follows = following.cost < ga.FOLLOW_COST_RATIO * plan.cost
     used = following if follows else plan
     return dict(steps=s.steps, us_per_step=1e6 * res.wall_time / s.steps,

@@ -33,6 +33,7 @@ import numpy as np
 from ._jit import njit
 from .driver import constraint_velocity, jacobian, post_step, residual, stops_run
 from .linalg.bordered import BorderedFactor, bordered_factorize, bordered_solve, empty_tree
+from .linalg.sparse_lu import empty_sparse
 
 STATUS_CONVERGED = 0   # all steps done
 STATUS_FAILED = 2      # the current step failed and was restored to its start
@@ -104,7 +105,8 @@ def idle_factor() -> BorderedFactor:
         n=0, n_band=0, n_border=0, kl=0, ku=0, perm=zi, border=zi, fill_pos=zi, fill_row=zi,
         fill_col=zi, fill_ptr=zi, ab=np.zeros((2, 2), order="F"),   # 2x2: typed F-contiguous
         piv=zi, u_top=zi, u_inv=z, xt=np.zeros((0, 0)), a_ba=np.zeros((0, 0)),
-        s=np.zeros((0, 0)), piv_s=zi, work_a=z, work_b=z, tree=empty_tree())
+        s=np.zeros((0, 0)), piv_s=zi, work_a=z, work_b=z, tree=empty_tree(),
+        sparse=empty_sparse())
 
 
 @njit

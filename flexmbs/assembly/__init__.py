@@ -27,7 +27,7 @@ import scipy.sparse as sp
 
 from .. import driver
 from ..constraints.drivers import JointDriver
-from ..constraints.sliding import ERR_OFF_PLAN
+from ..constraints.interaction import InteractionKind
 from ..elements import rigid_body as rb
 from ..elements.layout import BASE_RECORD, ElementType
 from ..errors import FlexmbsError, ModelError
@@ -75,6 +75,9 @@ class Assembly:
         self.functions = FunctionTable()
         owners = term_owners(model, numbering, rows, loads, self)
         self.pattern = SparsePattern(self.n_total, (b for owner in owners for b in owner.blocks))
+        following = {kind.name for kind in driver.INTERACTION_KINDS if kind.follow is not None}
+        self._fixed_blocks = [b for owner in owners if owner.field not in following
+                              for b in owner.blocks]
         self.matrix, self.nnz = self.pattern.matrix, self.pattern.nnz
         self._data = self.matrix.data  # the array the matrix really holds
         packed = pack_system(owners, model, self)
@@ -93,7 +96,7 @@ class Assembly:
         self._idle_run = idle_run()
         self._kernel_ready = False
         self._plans: dict[tuple[bool, bytes | None], Any] = {}
-        self._window_index: tuple[np.ndarray, ...] | None = None
+        self._window_index: list[tuple[np.ndarray, np.ndarray, np.ndarray, list]] | None = None
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -385,22 +388,24 @@ class Assembly:
         return owner
 
     def factor_plan(self, *, mass: bool = True, windows: np.ndarray | None = None,
-                    border: np.ndarray | None = None) -> Any:
+                    border: np.ndarray | None = None, sparse: bool | None = None) -> Any:
         """The factorisation plan of the iteration matrix
         (:func:`flexmbs.linalg.ordering.plan_factorization` of this pattern with
         :meth:`border_indices` and :meth:`coordinate_owners`), computed once. ``mass``: the
         matrix has c_M M on every coordinate that has mass (dynamics, velocity corrector,
         initial accelerations); without (statics, stiffness only) every coordinate is labelled
         massless, which closes every nonempty border over the whole matrix (docs/design-notes.md,
-        "One factorisation for every solver"). ``windows`` (:meth:`sliding_windows`): a plan
-        that follows the sliding joints, holding their slide coordinates' and multipliers'
-        entries with their beam only on those elements (the last one is kept); ``border``:
-        with ``windows``, plan only that border (a re-plan keeps the border it had)."""
+        "One factorisation for every solver"). ``windows`` (:meth:`contact_windows`): a plan
+        that follows the sliding and clearance joints, holding their own unknowns' entries
+        with their beam only on those elements (the last one is kept); ``border``:
+        with ``windows``, plan only that border (a re-plan keeps the border it had), or with
+        ``sparse`` only the sparse LU (a re-plan of a sparse plan)."""
         from ..linalg.ordering import MASSLESS, plan_factorization
 
         key = (mass, None if windows is None else
                np.asarray(windows, np.int64).tobytes()
-               + (b"" if border is None else b"|" + np.asarray(border, np.int64).tobytes()))
+               + (b"" if border is None else b"|" + np.asarray(border, np.int64).tobytes())
+               + (b"" if sparse is None else b"|s%d" % sparse))
         if key not in self._plans:
             owner = self.coordinate_owners()
             if not mass:
@@ -412,89 +417,135 @@ class Assembly:
             suggested = self.border_indices() if windows is None or border is None else border
             self._plans[key] = plan_factorization(
                 self.matrix, suggested, self.n_coords, owner, keep,
-                search=windows is None or border is None)
+                search=windows is None or border is None,
+                sparse=sparse if windows is not None else None)
         return self._plans[key]
 
-    def sliding_windows(self, reach: int) -> np.ndarray | None:
-        """Per sliding joint the elements ``[k − reach, k + reach]`` around its current
-        element k, clipped to its beam, as ``(n_joints, 2)`` ranges ``[lo, hi)``: where a plan
-        that follows the joints holds their entries (:meth:`factor_plan`); None without
-        sliding joints."""
-        joints = self.joint_lists["sliding"]
-        if not joints:
+    def _following(self) -> list[tuple[InteractionKind, list[Any]]]:
+        """The kinds whose members the plan may follow along their beams, with their members
+        (:class:`~flexmbs.constraints.interaction.Following`), in :data:`driver.
+        INTERACTION_KINDS` order: the order of the rows of :meth:`contact_windows`."""
+        return [(kind, self.joint_lists[kind.name]) for kind in driver.INTERACTION_KINDS
+                if kind.follow is not None and self.joint_lists[kind.name]]
+
+    def contact_windows(self, reach: int, widen: tuple[int, int, int] | None = None
+                        ) -> np.ndarray | None:
+        """Per member of a following kind (the sliding joints, then the clearance joints) the
+        elements ``[lo, hi)`` of its beam the plan holds its entries on: ``reach`` elements
+        either side of where it is at the step's start (its current element; its sections'
+        crossings), as ``(n_members, 2)``; None without such members. ``widen = (code, member,
+        element)``: a driver error that found the member outside its window (its element is
+        added)."""
+        following = self._following()
+        if not following:
             return None
-        part = self.system.sliding
-        k = part.element.astype(np.int64)
-        return np.stack([np.maximum(k - reach, 0),
-                         np.minimum(k + reach + 1, part.n_elem)], axis=1).astype(np.int64)
+        out = []
+        for kind, _ in following:
+            assert kind.follow is not None
+            w = kind.follow.current(getattr(self.system, kind.name), reach)
+            if widen is not None and widen[0] == kind.follow.off_plan:
+                j, e = widen[1], widen[2]
+                lo, hi = (w[j] if w[j, 1] > w[j, 0] else (e, e + 1))
+                w[j] = min(lo, max(e - reach, 0)), max(hi, e + reach + 1)
+                n_elem = len(kind.follow.elements(self.joint_lists[kind.name][j]))
+                w[j, 1] = min(w[j, 1], n_elem)
+            out.append(w)
+        return np.ascontiguousarray(np.concatenate(out), dtype=np.int64)
 
-    def follow_sliding(self, windows: np.ndarray | None) -> None:
-        """The elements the factorisation's plan holds each sliding joint's entries on
-        (:meth:`sliding_windows`; None: its whole beam): the Jacobian of a joint outside its
-        window reports ``sliding.ERR_OFF_PLAN`` instead of writing entries the plan left out."""
-        joints = self.joint_lists["sliding"]
-        if not joints:
-            return
-        part = self.system.sliding
-        if windows is None:
-            part.window[:, 0] = 0
-            part.window[:, 1] = part.n_elem
-        else:
-            part.window[:] = windows
+    def follow(self, windows: np.ndarray | None) -> None:
+        """The elements the factorisation's plan holds every following member's entries on
+        (:meth:`contact_windows`; None: its whole beam): a member's Jacobian outside its window
+        reports its kind's ``off_plan`` code instead of writing entries the plan left out."""
+        at = 0
+        for kind, objs in self._following():
+            part = getattr(self.system, kind.name)
+            if windows is None:
+                part.window[:, 0] = 0
+                part.window[:, 1] = [len(kind.follow.elements(obj)) for obj in objs]   # type: ignore[union-attr]
+            else:
+                part.window[:] = windows[at:at + len(objs)]
+            at += len(objs)
 
-    @staticmethod
-    def off_plan(code: int) -> bool:
-        """Whether a driver error ``code`` says a sliding joint left the elements the plan
-        follows it on (:meth:`follow_sliding`): the step is to be retried after a new plan."""
-        return code == ERR_OFF_PLAN
+    def off_plan(self, code: int) -> bool:
+        """Whether a driver error ``code`` says a member left the elements the plan follows it
+        on (:meth:`follow`): the step is to be retried after a new plan."""
+        return any(kind.follow is not None and code == kind.follow.off_plan
+                   for kind, _ in self._following())
 
     def _window_entries(self, windows: np.ndarray) -> np.ndarray:
-        """The stored positions a plan following the sliding joints reads: all but each
-        joint's slide coordinate and multipliers against its beam's coordinates outside the
-        elements of its window (zero while the joint is on them: only its current element's
-        entries are written). One pass over the stored positions (a re-plan's set-up)."""
+        """The stored positions a plan following the members on ``windows`` reads: all but a
+        member's own unknowns against its beam's coordinates outside its window's elements
+        (zero while it is inside: only the elements it is on are written), unless another
+        member with the same own unknowns and beam has them in its window, or an owner that
+        does not follow reserved them. One pass over the candidate positions (a re-plan's
+        set-up)."""
         if self._window_index is None:
-            self._window_index = self._sliding_window_index()
-        own, joint_beam, beam_of, first, last, rows, cols = self._window_index
-        lo, hi = np.asarray(windows, np.int64).T
+            self._window_index = self._following_index()
         keep = np.ones(self.matrix.nnz, bool)
-        for a, b in ((rows, cols), (cols, rows)):
-            j = own[a]
-            at = np.flatnonzero(j >= 0)
-            j, d = j[at], b[at]
-            outside = (beam_of[d] == joint_beam[j]) & ((first[d] >= hi[j]) | (last[d] < lo[j]))
-            keep[at[outside]] = False
+        windows = np.asarray(windows, np.int64)
+        for pos, dloc, fixed, members in self._window_index:
+            covered = fixed.copy()
+            for i, first, last in members:
+                lo, hi = windows[i]
+                covered |= (first[dloc] < hi) & (last[dloc] >= lo)
+            keep[pos[~covered]] = False
         return keep
 
-    def _sliding_window_index(self) -> tuple[np.ndarray, ...]:
-        """What :meth:`_window_entries` reads, built once: per unknown the sliding joint it is
-        own to (its slide coordinate, its multipliers; −1 else), per joint its beam, per
-        unknown its beam (−1 else) and the first and last of that beam's elements whose
-        centreline holds it (none: a rod's twist, outside every window), and the stored
-        positions' rows and columns."""
+    def _following_index(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, list]]:
+        """What :meth:`_window_entries` reads, built once: per group of members with the same
+        own unknowns and beam, the stored positions of their (own, beam) entries both ways, the
+        beam coordinate of each (its place in the group's list), whether an owner that does
+        not follow reserved it, and per member (its row in the windows) the first and last of
+        its elements holding each coordinate (none: outside every window)."""
+        groups: dict[tuple[bytes, int], tuple[np.ndarray, np.ndarray, list]] = {}
+        i = 0
+        for kind, objs in self._following():
+            assert kind.follow is not None
+            for obj in objs:
+                own = np.unique(kind.follow.own(obj, self))
+                elems = np.asarray(kind.follow.elements(obj), np.int64)
+                dofs = np.unique(np.asarray(self.beam_dofs(obj.beam), np.int64))
+                key = (own.tobytes(), id(obj.beam))
+                if key not in groups:
+                    groups[key] = (own, dofs, [])
+                local = np.searchsorted(dofs, np.where(elems >= 0, elems, dofs[0]))
+                e = np.repeat(np.arange(elems.shape[0], dtype=np.int64), elems.shape[1])
+                ok = (elems >= 0).ravel()
+                first = np.full(dofs.size, np.iinfo(np.int64).max, np.int64)
+                last = np.full(dofs.size, -1, np.int64)
+                np.minimum.at(first, local.ravel()[ok], e[ok])
+                np.maximum.at(last, local.ravel()[ok], e[ok])
+                groups[key][2].append((i, first, last))
+                i += 1
+        fixed_keys = self._fixed_keys()
         N = self.n_total
-        joints = self.joint_lists["sliding"]
-        own = np.full(N, -1, np.int64)
-        beam_of = np.full(N, -1, np.int64)
-        first = np.full(N, np.iinfo(np.int64).max, np.int64)
-        last = np.full(N, -1, np.int64)
-        beams: dict[int, int] = {}
-        joint_beam = np.empty(len(joints), np.int64)
-        for j, joint in enumerate(joints):
-            g = joint.geometry
-            rows = self.multiplier_rows(joint.constraints()[0])
-            own[g.s_dof] = j
-            own[self.n_coords + rows[rows >= 0]] = j
-            b = beams.setdefault(id(joint.beam), len(beams))
-            joint_beam[j] = b
-            beam_of[g.beam_dofs] = b
-            elem = np.repeat(np.arange(g.elem_dofs.shape[0], dtype=np.int64), g.elem_dofs.shape[1])
-            np.minimum.at(first, g.elem_dofs.ravel(), elem)
-            np.maximum.at(last, g.elem_dofs.ravel(), elem)
-        A = self.matrix
-        cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
-        rows = A.indices[:cols.size].astype(np.int64)
-        return own, joint_beam, beam_of, first, last, rows, cols
+        out = []
+        for own, dofs, members in groups.values():
+            pos, dloc, keys = [], [], []
+            for rows, cols, d_axis in ((own, dofs, 1), (dofs, own, 0)):
+                p = self.pattern.positions_present(rows, cols).reshape(rows.size, cols.size)
+                d = np.broadcast_to((np.arange(dofs.size)[None, :] if d_axis else
+                                     np.arange(dofs.size)[:, None]), p.shape)
+                k = (cols[None, :] * N + rows[:, None])
+                ok = p >= 0
+                pos.append(p[ok])
+                dloc.append(d[ok])
+                keys.append(k[ok])
+            kk = np.concatenate(keys)
+            at = np.minimum(np.searchsorted(fixed_keys, kk), max(fixed_keys.size - 1, 0))
+            fixed = (fixed_keys[at] == kk) if fixed_keys.size else np.zeros(kk.size, bool)
+            out.append((np.concatenate(pos), np.concatenate(dloc).astype(np.int64), fixed, members))
+        return out
+
+    def _fixed_keys(self) -> np.ndarray:
+        """The sorted keys ``col N + row`` of the entries reserved by owners that do not follow
+        their beams (they stay in every plan)."""
+        N = self.n_total
+        keys = [np.zeros(0, np.int64)]
+        for rows, cols in self._fixed_blocks:
+            r, c = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
+            keys.append((c[None, :] * N + r[:, None]).ravel())
+        return np.unique(np.concatenate(keys))
 
     def _matrix_at(self, q: np.ndarray, t: float, cM: float) -> sp.csc_matrix:
         """The iteration matrix with ``cM`` M and no stiffness (Φ_q in its borders)."""

@@ -27,6 +27,28 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 @dataclass(frozen=True, kw_only=True)
+class Following:
+    """How the factorisation's plan follows the members of a kind along their beams (the
+    sliding joint's current element, the clearance joint's contacts): the plan holds a
+    member's *own* unknowns against its beam only on the elements of its *window*
+    ``[lo, hi)``, stored in the part's ``window`` array (n_members, 2), and the member's
+    Jacobian reports ``off_plan`` (member in ``error[1]``, element in ``error[2]``) instead of
+    writing an entry outside it; the step is then retried on a new plan
+    (:meth:`flexmbs.assembly.Assembly.follow`).
+
+    ``own(obj, dofs)``: the member's unknowns whose entries against its beam follow it (the
+    slide coordinate and multipliers; the hole body's coordinates); ``elements(obj)``: its
+    beam's coordinates per element, (n_elem, k), −1 padded; ``current(part, reach)``: every
+    member's window at the state the next step starts from, ``reach`` elements either side of
+    the elements it is on."""
+
+    off_plan: int
+    own: Callable[[Any, DofMap], np.ndarray]
+    elements: Callable[[Any], np.ndarray]
+    current: Callable[[Any, int], np.ndarray]
+
+
+@dataclass(frozen=True, kw_only=True)
 class InteractionKind:
     """The record of one compiled interaction kind, declared by the module that owns its
     physics and listed once in :data:`flexmbs.driver.INTERACTION_KINDS` (docs/extending.md):
@@ -54,6 +76,9 @@ class InteractionKind:
     contact points); ``residual()``, when given, evaluates that residual first (the state is
     not one a converged step just left), leaving the steps' state as it was.
 
+    ``follow``: a kind whose members' entries the factorisation's plan may hold only near
+    where they are on their beams (:class:`Following`).
+
     ``name``: the interactions' ``term_kind`` and the field of
     :class:`~flexmbs.driver.SystemPart` holding the part; ``pattern(obj, dofs)``: the blocks
     ``(rows, cols)`` one interaction writes; ``pack(objs, ctx)``: the part of all of them
@@ -72,6 +97,7 @@ class InteractionKind:
     energy: tuple[str, Callable[[Any, np.ndarray, np.ndarray], float]] | None = None
     observe: Callable[[Any, list[Any], np.ndarray, np.ndarray, Callable[[], None] | None],
                       None] | None = None
+    follow: Following | None = None
 
 
 class ModelParts(Protocol):

@@ -43,7 +43,7 @@ from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
 from ..terms import pad_stack
 from .base import Constraint
-from .interaction import Interaction, InteractionKind, ModelParts
+from .interaction import Following, Interaction, InteractionKind, ModelParts
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
@@ -561,7 +561,7 @@ class SlidingPart(NamedTuple):
     pos_s_lam: np.ndarray            # (nj, 3)
     window: np.ndarray               # (nj, 2) state: the elements [lo, hi) the factorisation's
                                      # plan holds the joint's entries on (the whole beam unless
-                                     # Assembly.follow_sliding set it)
+                                     # Assembly.follow set it)
     ql: np.ndarray                   # work (N_SLIDE,)
     phi: np.ndarray
     jac: np.ndarray
@@ -769,6 +769,23 @@ def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
     return 0
 
 
-#: the sliding joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`)
+def _own_unknowns(joint: SlidingJoint, dofs: DofMap) -> np.ndarray:
+    """The slide coordinate and the kept multipliers: what couples with the joint's beam."""
+    rows = dofs.multiplier_rows(joint.constraints()[0])
+    return np.concatenate([[joint.geometry.s_dof], dofs.n_coords + rows[rows >= 0]]).astype(np.int64)
+
+
+def _current_windows(part: SlidingPart, reach: int) -> np.ndarray:
+    """``reach`` elements either side of every joint's current element, clipped to its beam."""
+    k = part.element.astype(np.int64)
+    return np.stack([np.maximum(k - reach, 0), np.minimum(k + reach + 1, part.n_elem)],
+                    axis=1).astype(np.int64)
+
+
+#: the sliding joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`);
+#: the plan may follow its current element (:class:`~flexmbs.constraints.interaction.Following`)
 SLIDING = InteractionKind(name="sliding", pattern=sliding_pattern, pack=pack_sliding,
-                          errors=(ERR_END_OF_BEAM, ERR_OFF_PLAN), stops=(ERR_END_OF_BEAM,))
+                          errors=(ERR_END_OF_BEAM, ERR_OFF_PLAN), stops=(ERR_END_OF_BEAM,),
+                          follow=Following(off_plan=ERR_OFF_PLAN, own=_own_unknowns,
+                                           elements=lambda joint: joint.geometry.elem_dofs,
+                                           current=_current_windows))

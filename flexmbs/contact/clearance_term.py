@@ -362,6 +362,10 @@ ERR_LEFT_BORE = 1
 #: error code: more contacts at once than the tangent's work arrays hold (joint in
 #: ``error[1]``, contacts in ``error[2]``; :data:`CONTACTS_PER_SECTION`)
 ERR_TOO_MANY_CONTACTS = 3
+#: error code of the tangent: a contact's element lies outside the elements the factorisation's
+#: plan follows the joint on (``window``; joint in ``error[1]``, element in ``error[2]``); the
+#: step is retried after a new plan (:meth:`flexmbs.assembly.Assembly.follow_contacts`)
+ERR_CONTACT_OFF_PLAN = 5
 #: contacts per section the tangent's work arrays hold on average (plus
 #: :data:`EXTRA_CONTACTS`): a section has one, two past a²/b > R, a third with a local minimum;
 #: sized by the candidates instead (MAX_CANDIDATES per section) they took 60 kB per section
@@ -437,6 +441,9 @@ class ClearancePart(NamedTuple):
     spin: np.ndarray                 # work (N_SPIN,) a contact element's spin (element_spin)
     paper: np.ndarray                # (nj,) the paper's detection (not ``consistent``)
     fwork: np.ndarray                # work (FORCES_WORK,) clearance_forces' arrays
+    window: np.ndarray               # (nj, 2) state: the elements [lo, hi) the factorisation's
+                                     # plan holds the joint's (body, beam) entries on (the whole
+                                     # beam unless Assembly.follow_contacts set it)
     # (tips_due, spin and paper are None in the kernel's copy when no joint of the model uses
     # them: contact.joint._compiled_view, their code is then not compiled)
 
@@ -511,6 +518,15 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
             scale = sc
         if not want_tangent:
             continue
+        lo, hi = cl.window[j, 0], cl.window[j, 1]
+        for i in range(cnt):
+            eP = cl.kelem[i]
+            eI = cl.kelem_i[i]
+            if eP < lo or eP >= hi or eI < lo or eI >= hi:
+                error[0] = ERR_CONTACT_OFF_PLAN
+                error[1] = j
+                error[2] = eP if eP < lo or eP >= hi else eI
+                return scale, ERR_CONTACT_OFF_PLAN
         for i in range(cnt):
             eP = cl.kelem[i]
             eI = cl.kelem_i[i]

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from ..constraints.interaction import Interaction, InteractionKind, MatrixSink, ModelParts
+from ..constraints.interaction import Following, Interaction, InteractionKind, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
@@ -43,6 +43,7 @@ from ._detect import (
 from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole, section_tree
 from .clearance_term import (
     CONTACTS_PER_SECTION,
+    ERR_CONTACT_OFF_PLAN,
     ERR_LEFT_BORE,
     ERR_TOO_MANY_CONTACTS,
     FORCES_WORK,
@@ -706,6 +707,10 @@ class SlidingClearanceJoint(Interaction):
         ``detail``: the iterate is rejected so that the step or load increment is cut, instead
         of losing the contact silently. (``ERR_TOO_MANY_CONTACTS``: ``detail`` contacts at once,
         more than the tangent holds.)"""
+        if code == ERR_CONTACT_OFF_PLAN:
+            return ConvergenceError(
+                f"joint '{self.name}': a contact on element {detail} of beam "
+                f"'{self.beam.name}' lies outside the elements the factorisation follows it on")
         if code == ERR_TOO_MANY_CONTACTS:
             return ConvergenceError(
                 f"joint '{self.name}': more than {detail} contact points at once, the most "
@@ -974,7 +979,8 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
         np.array([j.geometry.tip_reach for j in joints], float), np.zeros(nj, np.bool_),
         np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
-        np.zeros(FORCES_WORK))
+        np.zeros(FORCES_WORK),
+        c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
     return part
@@ -1034,11 +1040,35 @@ def _observe_clearance(part: ClearancePart, joints: list[SlidingClearanceJoint],
         joints[i].keep_records(q, v, part.rows[i, :int(part.n_candidates[i])])
 
 
+def _joint_elements(joint: SlidingClearanceJoint) -> np.ndarray:
+    """Every element's coordinates of the joint's beam, its centreline's and its nodes' twists
+    (−1 padded for a cable): what the hole body's entries couple with."""
+    g = joint.geometry
+    return np.concatenate([g.elem_dofs, g.twist_dofs], axis=1).astype(np.int64)
+
+
+def _current_windows(part: ClearancePart, reach: int) -> np.ndarray:
+    """Per joint the elements its sections cross at the step's start (``elem_ws``), ``reach``
+    either side, clipped to its beam; none crossed: an empty window (a contact found later
+    re-plans)."""
+    out = np.zeros((part.r_b.size, 2), np.int64)
+    for j in range(part.r_b.size):
+        ns, ne = int(part.n_sec[j]) - N_TIPS, int(part.n_elem[j])
+        crossed = np.concatenate([part.elem_ws[j, :ns], part.elem_ws[j, ns:][part.tip_on[j]]])
+        crossed = crossed[crossed >= 0]
+        if crossed.size:
+            out[j] = max(int(crossed.min()) - reach, 0), min(int(crossed.max()) + reach + 1, ne)
+    return out
+
+
 #: the clearance joint's term kind (:class:`~flexmbs.constraints.interaction.InteractionKind`);
 #: a joint without a compiled form at the moment is switched off here and evaluated in Python;
 #: its contact potential is the energy "contact"
 CLEARANCE = InteractionKind(
     name="clearance", pattern=clearance_pattern, pack=pack_clearance,
-    errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS),
+    errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS, ERR_CONTACT_OFF_PLAN),
     enable=_enable_clearance, begin=_begin_clearance, compiled_view=_compiled_view,
-    energy=("contact", SlidingClearanceJoint.contact_energy), observe=_observe_clearance)
+    energy=("contact", SlidingClearanceJoint.contact_energy), observe=_observe_clearance,
+    follow=Following(off_plan=ERR_CONTACT_OFF_PLAN,
+                     own=lambda joint, dofs: np.asarray(joint.geometry.body_dofs, np.int64),
+                     elements=_joint_elements, current=_current_windows))

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._jit import njit
+from .sparse_lu import SparseFactor, SparseHandles, empty_sparse, sparse_factorize, sparse_solve
 
 if TYPE_CHECKING:
     from .tree_plan import TreePlan
@@ -103,6 +104,7 @@ class BorderedFactor(NamedTuple):
     work_a: np.ndarray      # float64 (n_a,): the solve's band unknowns; the band LU's multipliers
     work_b: np.ndarray      # float64 (n_b,)
     tree: TreeFactor        # the bodies eliminated before the band (none: empty_tree())
+    sparse: SparseFactor    # KLU on the whole matrix instead (n = 0: not used)
 
 
 class BorderedBandedLU:
@@ -110,7 +112,8 @@ class BorderedBandedLU:
     Schur complement + dgetf2), all in numba; see the module docstring."""
 
     def __init__(self, A: sp.csc_matrix, border: np.ndarray, order: np.ndarray | None = None,
-                 keep: np.ndarray | None = None, tree: TreePlan | None = None) -> None:
+                 keep: np.ndarray | None = None, tree: TreePlan | None = None,
+                 sparse: bool = False) -> None:
         """``border``: the unknowns of the dense Schur complement; ``order``: the band's in
         band order (default: reverse Cuthill-McKee of all unknowns in neither the border nor
         the tree), e.g. from :func:`flexmbs.linalg.ordering.plan_factorization`; ``keep``: the
@@ -118,13 +121,21 @@ class BorderedBandedLU:
         all; the others must be zero in every matrix it factorises (a plan that follows the
         sliding joints, :meth:`flexmbs.assembly.Assembly.factor_plan`); ``tree``: the
         unknowns eliminated in tree order first (their entries must lie within a supernode
-        or between it and its parent set)."""
+        or between it and its parent set); ``sparse``: the whole matrix's kept entries by
+        KLU instead (:mod:`flexmbs.linalg.sparse_lu`; no border, band or tree)."""
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
         A = sp.csc_matrix(A)
         N = A.shape[0]
         if A.shape != (N, N):
             raise ValueError("BorderedBandedLU: the matrix must be square")
+        self._sparse: SparseHandles | None = None
+        if sparse:
+            self._sparse = SparseHandles(A, keep)
+            border = np.zeros(0, np.int64)
+            order = np.zeros(0, np.int64)
+            keep = np.zeros(A.nnz, bool)      # nothing in the (empty) band and border
+            tree = None
         border = np.unique(np.asarray(border, np.int64))
         if border.size and (border[0] < 0 or border[-1] >= N):
             raise ValueError("BorderedBandedLU: border index out of range")
@@ -137,6 +148,8 @@ class BorderedBandedLU:
                 raise ValueError("BorderedBandedLU: the tree's unknowns must be distinct and "
                                  "outside the border")
         band = np.flatnonzero(~in_border & ~in_tree).astype(np.int64)
+        if sparse:
+            band = np.zeros(0, np.int64)
         cols = np.repeat(np.arange(N, dtype=np.int64), np.diff(A.indptr))
         rows = A.indices[:cols.size].astype(np.int64)
         read = np.ones(cols.size, bool) if keep is None else np.asarray(keep, bool)
@@ -190,10 +203,12 @@ class BorderedBandedLU:
             u_top=np.zeros(na, np.int64), u_inv=np.zeros(na),
             xt=np.zeros((nb, na)), a_ba=np.zeros((nb, na)), s=np.zeros((nb, nb)),
             piv_s=np.zeros(nb, np.int64), work_a=np.zeros(na), work_b=np.zeros(nb),
-            tree=tree_factor)
+            tree=tree_factor,
+            sparse=empty_sparse() if self._sparse is None else self._sparse.factor())
         self.nnz = rows.size
         self.kl, self.ku, self.n_band, self.n_border = kl, ku, na, nb
         self.n_tree = 0 if tree is None else tree.size
+        self.sparse = sparse
         self.info = -1
 
     def twin(self) -> BorderedFactor:
@@ -209,7 +224,8 @@ class BorderedBandedLU:
                           work_b=np.zeros_like(f.work_b),
                           tree=t._replace(piv=np.zeros_like(t.piv), val=np.zeros_like(t.val),
                                           work=np.zeros_like(t.work),
-                                          work_k=np.zeros_like(t.work_k)))
+                                          work_k=np.zeros_like(t.work_k)),
+                          sparse=f.sparse if self._sparse is None else self._sparse.factor())
 
     def factorize(self, data: np.ndarray) -> bool:
         """Factor the matrix with CSC ``data`` (pattern of construction). False if singular;
@@ -560,7 +576,10 @@ def bordered_factorize(factor: BorderedFactor, data: np.ndarray) -> int:
     complement S = A_bb - A_ba X and its dense LU (dgetf2). Returns 0 (ok), 1 + k (zero or
     non-finite pivot in band column k of A_aa, 0 <= k < n_a), n_a + 1 + k (pivot k of the
     Schur complement), N + 1 (non-finite matrix entry) or N + 2 + k (pivot of the tree
-    part's unknown k, :class:`TreeFactor`)."""
+    part's unknown k, :class:`TreeFactor`); a sparse factor (``factor.sparse.n``):
+    :func:`~flexmbs.linalg.sparse_lu.sparse_factorize`'s codes."""
+    if factor.sparse.n:
+        return sparse_factorize(factor.sparse, data)
     ab, xt, a_ba, s = factor.ab, factor.xt, factor.a_ba, factor.s
     pos, fr, fc, ptr = factor.fill_pos, factor.fill_row, factor.fill_col, factor.fill_ptr
     ab[:, :] = 0.0
@@ -601,6 +620,9 @@ def bordered_solve(factor: BorderedFactor, b: np.ndarray, x: np.ndarray) -> None
     """x = A^-1 b (global numbering, x must not alias b): the tree part's forward pass, the
     bordered band's solve (:func:`_solve_rest`), the tree part's backward pass;
     allocation-free."""
+    if factor.sparse.n:
+        sparse_solve(factor.sparse, b, x)
+        return
     tree = factor.tree
     if tree.n_super:
         tree.work[:] = b

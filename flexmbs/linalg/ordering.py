@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
+from . import klu
+from .sparse_lu import sparse_cost
 from .tree_plan import TreePlan
 
 if TYPE_CHECKING:
@@ -209,17 +211,18 @@ class FactorPlan(NamedTuple):
     cost: float             # factor_cost estimate (+ the tree part's)
     keep: np.ndarray | None = None   # the stored positions planned for (None: all)
     tree: TreePlan | None = None     # the bodies eliminated in tree order first
+    sparse: bool = False             # KLU on the whole matrix instead (flexmbs.linalg.sparse_lu)
 
     def factorization(self, A: sp.csc_matrix) -> BorderedBandedLU:
         """The bordered banded LU of ``A``'s pattern with this plan."""
         from .bordered import BorderedBandedLU
 
-        return BorderedBandedLU(A, self.border, self.order, self.keep, self.tree)
+        return BorderedBandedLU(A, self.border, self.order, self.keep, self.tree, self.sparse)
 
 
 def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
                        owner: np.ndarray | None = None, keep: np.ndarray | None = None,
-                       search: bool = True) -> FactorPlan:
+                       search: bool = True, sparse: bool | None = None) -> FactorPlan:
     """The border (unknowns of the dense Schur complement) and band order with the least
     :func:`factor_cost` among these borders: ``suggested`` (e.g.
     :meth:`flexmbs.assembly.Assembly.border_indices`), none (the whole saddle-point system in
@@ -237,7 +240,13 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
     others are zero whenever the plan is used: a plan that follows the sliding joints),
     default all; ``search=False``: only the ``suggested`` border (closed), e.g. a plan's
     border planned again for shifted ``keep`` (a re-plan that follows the joints, in a few
-    ms instead of tens)."""
+    ms instead of tens). Last, the sparse LU of the whole matrix
+    (:func:`~flexmbs.linalg.sparse_lu.sparse_cost`, where KLU is installed) is taken where it
+    costs less than all of those (many bodies on several beams: no band holds them, and a
+    border of all of them is dense); ``sparse``: True plans it without the search, False
+    never."""
+    if sparse:
+        return _sparse_plan(A, keep)
     G, _ = _graph(A, keep)
     N = G.shape[0]
     suggested = np.unique(np.asarray(suggested, np.int64))
@@ -257,7 +266,18 @@ def plan_factorization(A: sp.csc_matrix, suggested: np.ndarray, n_coords: int,
         cost = with_tree.cost + tree_cost(tree)
         if cost < best.cost:
             best = with_tree._replace(cost=cost, tree=tree)
+    if sparse is None and klu.AVAILABLE and N > 1:
+        alternative = _sparse_plan(A, keep)
+        if alternative.cost < best.cost:
+            return alternative
     return best._replace(keep=keep)
+
+
+def _sparse_plan(A: sp.csc_matrix, keep: np.ndarray | None) -> FactorPlan:
+    """The plan of KLU on the kept entries (its cost in the band's flops)."""
+    empty = np.zeros(0, np.int64)
+    return FactorPlan(empty, empty, 0, sparse_cost(A, keep, SOLVES_PER_FACTOR), keep=keep,
+                      sparse=True)
 
 
 def _plan_band(G: sp.csr_matrix, suggested: np.ndarray, n_coords: int,

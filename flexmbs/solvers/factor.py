@@ -51,8 +51,10 @@ class PlannedLU:
 def static_factorization(asm: Assembly) -> Factorization:
     """The factorisation of the static (stiffness-only) iteration matrix: the planned LU with
     every coordinate massless when it costs at most :data:`STATIC_COST_RATIO` times the
-    dynamic plan, else SuperLU (a hub coupled to a whole beam leaves only a band as wide as
-    the beam or one dense block, both cubic in the size)."""
-    if asm.factor_plan(mass=False).cost <= STATIC_COST_RATIO * asm.factor_plan(mass=True).cost:
+    dynamic plan or when it is KLU's sparse LU, else SuperLU (a hub coupled to a whole beam
+    leaves only a band as wide as the beam or one dense block, both cubic in the size; KLU
+    plans it where installed)."""
+    plan = asm.factor_plan(mass=False)
+    if plan.sparse or plan.cost <= STATIC_COST_RATIO * asm.factor_plan(mass=True).cost:
         return PlannedLU(asm, mass=False)
     return SuperLUFactor()

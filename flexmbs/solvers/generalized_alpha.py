@@ -27,6 +27,7 @@ from ..budget import check_times
 from ..driver import constraint_velocity
 from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
+from ..linalg.sparse_lu import ST_HAVE, sparse_restore
 from ..steploop import step_error
 from .factor import PlannedLU
 from .newton import Newton, NewtonOptions
@@ -354,8 +355,8 @@ class _PythonStepper:
 
     replans = 0     # the Python loop's plan holds every entry (none follows the joints)
 
-    def replan(self) -> None:
-        raise AssertionError("the Python loop's plan does not follow the sliding joints")
+    def replan(self, again: bool = False) -> None:
+        raise AssertionError("the Python loop's plan does not follow the joints")
 
     def release(self) -> None:
         return None
@@ -440,6 +441,9 @@ FOLLOW_REACH = 1
 #: ... and is used when its estimated cost is below this fraction of the plan of the whole
 #: reserved pattern (a few joints on long beams keep the fixed plan: no re-planning)
 FOLLOW_COST_RATIO = 0.25
+#: new plans for one step before it counts as failed (each adds the elements where the step
+#: found a joint outside its windows; a sliding joint's needs one)
+MAX_REPLANS = 8
 
 
 class _CompiledStepper:
@@ -478,12 +482,12 @@ class _CompiledStepper:
         plan = asm.factor_plan()
         self.windows: np.ndarray | None = None
         self.replans = 0
-        windows = asm.sliding_windows(FOLLOW_REACH)
+        windows = asm.contact_windows(FOLLOW_REACH)
         if windows is not None:
             following = asm.factor_plan(windows=windows)
             if following.cost < FOLLOW_COST_RATIO * plan.cost:
                 self.windows, plan = windows, following
-        asm.follow_sliding(self.windows)
+        asm.follow(self.windows)
         self.lu: BorderedBandedLU = plan.factorization(asm.matrix)
         self.stopped: Exception | None = None
         self.tolerance = 0.0
@@ -518,6 +522,9 @@ class _CompiledStepper:
         f = self.lu.factor
         out = {k: getattr(f, k) for k in self._FACTOR_ARRAYS}
         out["tree_val"], out["tree_piv"] = f.tree.val, f.tree.piv
+        sf = f.sparse      # KLU's factors are C memory: the values that give them again
+        out["sparse_ax"], out["sparse_ax_full"] = sf.Ax, sf.Ax_full
+        out["sparse_state"], out["sparse_values"] = sf.state, sf.values
         return out
 
     def snapshot(self) -> dict[str, np.ndarray]:
@@ -532,37 +539,48 @@ class _CompiledStepper:
         if self.windows is not None:
             out["windows"] = self.windows.copy()
             out["plan_border"] = np.array(self.lu.factor.border, copy=True)
+            out["plan_sparse"] = np.array(self.lu.sparse)
         return out
 
-    def _plan_on(self, windows: np.ndarray, border: np.ndarray) -> None:
-        """Factorise with the plan that follows the sliding joints on ``windows`` with the
-        dense ``border`` (the first such plan's: a re-plan only orders the band again)."""
+    def _plan_on(self, windows: np.ndarray, border: np.ndarray, sparse: bool) -> None:
+        """Factorise with the plan that follows the joints on ``windows`` with the dense
+        ``border`` (the first such plan's: a re-plan only orders the band again) or, with
+        ``sparse``, KLU's (a re-plan analyses the new pattern)."""
         self.windows = np.asarray(windows, np.int64).copy()
-        self.asm.follow_sliding(self.windows)
-        plan = self.asm.factor_plan(windows=self.windows, border=border)
+        self.asm.follow(self.windows)
+        plan = self.asm.factor_plan(windows=self.windows, border=border, sparse=sparse)
         self.lu = plan.factorization(self.asm.matrix)
         if self.velocity:
             self.factor_v = self.lu.twin()
         self.invalidate()
 
-    def replan(self) -> None:
-        """A sliding joint left the elements the plan follows it on: a new plan around every
-        joint's current element (the next step refreshes the factorisation)."""
-        windows = self.asm.sliding_windows(FOLLOW_REACH)
+    def replan(self, again: bool = False) -> None:
+        """A joint left the elements the plan follows it on: a new plan around where every
+        joint is at the step's start, and around the element the failed step found it on
+        (the next step refreshes the factorisation); ``again``: the step failed on the last
+        new plan too (its windows are kept as well)."""
+        err = self.asm.system.error
+        windows = self.asm.contact_windows(FOLLOW_REACH, (int(self.info[self.cc.INFO_CODE]),
+                                                          int(err[1]), int(err[2])))
         assert windows is not None
-        self._plan_on(windows, self.lu.factor.border)
+        if again and self.windows is not None:
+            empty = windows[:, 1] <= windows[:, 0]
+            lo = np.where(empty, self.windows[:, 0], np.minimum(windows[:, 0], self.windows[:, 0]))
+            hi = np.where(empty, self.windows[:, 1], np.maximum(windows[:, 1], self.windows[:, 1]))
+            windows = np.stack([lo, hi], axis=1)
+        self._plan_on(windows, self.lu.factor.border, self.lu.sparse)
         self.replans += 1
 
     def release(self) -> None:
         """The run is over: every plan holds the sliding joints' whole beams again."""
-        self.asm.follow_sliding(None)
+        self.asm.follow(None)
 
     def restore(self, saved: dict[str, np.ndarray]) -> None:
         """Take over a :meth:`snapshot` (ignored unless every array fits this model)."""
         windows, border = saved.get("windows"), saved.get("plan_border")
         if self.windows is not None and windows is not None and border is not None \
                 and np.shape(windows) == self.windows.shape:
-            self._plan_on(windows, np.asarray(border, np.int64))
+            self._plan_on(windows, np.asarray(border, np.int64), bool(saved.get("plan_sparse", False)))
         arrays = self._factor_arrays()
         if "info" not in saved or any(k not in saved or np.shape(saved[k]) != a.shape
                                       for k, a in arrays.items()):
@@ -571,6 +589,9 @@ class _CompiledStepper:
             a[...] = saved[k]
         for value, k in zip(np.asarray(saved["info"], float), self._KEPT_INFO, strict=True):
             self.info[getattr(self.cc, k)] = value
+        sf = self.lu.factor.sparse
+        if sf.n and sf.state[ST_HAVE] and sparse_restore(sf) != 0:
+            self.invalidate()
         self.asm.stiffness_scale = float(self.info[self.cc.INFO_KSCALE])
 
     def invalidate(self) -> None:
@@ -688,7 +709,7 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             observer(state)
 
     observe(False)
-    replanned = False
+    replans_here = 0
     try:
         while state.t < t_end - t_eps:
             t_out = min(k_out * out_dt, t_end)
@@ -710,21 +731,23 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
             tolerance = options.step_tolerance if h_step > h_min * (1 + 1e-12) else 0.0
             try:
                 done = stepper.advance(h_step, n_chunk, t_start, tolerance)
-                replanned = False
+                replans_here = 0
             except _StepFailure as exc:
                 done = exc.done
                 stats.steps += done
                 state.t = t_start + done * h_step
                 if exc.replan:
-                    # a sliding joint moved past its planned elements: plan anew (the new plan
-                    # holds every joint's current element, so once per step at most)
-                    if replanned and not done:
+                    # a joint moved past its planned elements: plan anew (the new plan holds
+                    # every joint where it starts the step and where the step found it; a
+                    # step re-planned again keeps the last plan's elements too, so the
+                    # windows only grow until the step converges)
+                    again = replans_here > 0 and not done
+                    replans_here = replans_here + 1 if again else 1
+                    if replans_here > MAX_REPLANS:
                         raise ConvergenceError(f"step from t = {state.t:.6g}: {exc}") from None
-                    stepper.replan()
-                    replanned = True
+                    stepper.replan(again)
                     h_matrix = None
                     continue
-                replanned = False
                 stats.rejected_steps += 1
                 stats.error_rejections += int(exc.error)
                 if not options.adaptive or h_step <= h_min * (1 + 1e-12):

@@ -13,6 +13,7 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.errors import ConvergenceError
 from flexmbs.io.scenario import load_scenario
+from flexmbs.linalg import klu, ordering
 from flexmbs.linalg.bordered import BorderedBandedLU
 from flexmbs.solvers.factor import PlannedLU, static_factorization
 from flexmbs.solvers.newton import SuperLUFactor
@@ -55,6 +56,13 @@ def _matrix(asm: Assembly, kind: str, rng: np.random.Generator) -> sp.csc_matrix
     asm.evaluate(q, v, None if static else np.zeros(n), lam, 0.0, np.zeros(n), np.zeros(m),
                  matrix=coef, with_damping=not static)
     return asm.matrix.copy()
+
+
+def _massless(asm: Assembly) -> np.ndarray:
+    """The coordinate owners of a stiffness-only plan (every coordinate without mass)."""
+    owner = asm.coordinate_owners()
+    owner[:asm.n_coords] = ordering.MASSLESS
+    return owner
 
 
 def _agrees(factor, A: sp.csc_matrix, rng: np.random.Generator,  # noqa: ANN001
@@ -100,7 +108,8 @@ def test_dynamic_plan_is_unsafe_for_the_static_matrix():
     """The flat Example 2: the dynamic plan's border (panel 2, hinge CD, tie EF) leaves panel
     1 and the bar held in the band only by their stiffness, none without mass: the static
     matrix (nonsingular: SuperLU solves it) has a singular band block. The stiffness-only
-    plan closes the border over the whole matrix; being dense, statics takes SuperLU."""
+    plan closes the border over the whole matrix; being dense, statics takes KLU's sparse LU
+    (which pivots across the whole matrix) where installed, else SuperLU; either solves it."""
     rng = np.random.default_rng(5)
     asm = Assembly(_model("solar_array_wing_flat"))
     A = _matrix(asm, "static", rng)
@@ -110,8 +119,15 @@ def test_dynamic_plan_is_unsafe_for_the_static_matrix():
     assert not lu.factorize(A.data)
     assert lu.info - 1 < lu.n_band          # a zero pivot of the band block
     static = asm.factor_plan(mass=False)
-    assert static.border.size == A.shape[0]
-    assert isinstance(static_factorization(asm), SuperLUFactor)
+    banded = ordering.plan_factorization(asm.matrix, asm.border_indices(), asm.n_coords,
+                                         _massless(asm), sparse=False)
+    assert banded.border.size == A.shape[0]
+    factorization = static_factorization(asm)
+    if klu.AVAILABLE:
+        assert static.sparse and isinstance(factorization, PlannedLU)
+        assert _agrees(factorization, A, rng, _conditioned(A))
+    else:
+        assert isinstance(factorization, SuperLUFactor)
     assert _agrees(SuperLUFactor(), A, rng, 0.0)
 
 

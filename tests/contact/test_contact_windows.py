@@ -1,0 +1,135 @@
+"""Plans that follow the contacts (issue 52, item 1): a clearance joint's hole body is held
+against its beam only on the elements its sections cross, a few either side; a contact found
+outside them re-plans the step. The same motion as the plan of the whole reserved pattern, on
+the band and on the sparse LU, and a resumed run bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import flexmbs as fm
+import flexmbs.solvers.generalized_alpha as ga
+from flexmbs.assembly import Assembly
+from flexmbs.linalg import klu, ordering
+
+
+def _eyelets(n_elem: int = 30, pull: float = 0.03, shared: bool = False) -> tuple[fm.Model, fm.Beam]:
+    """A steel wire (r = 0.3 mm) through three fixed eyelets (bore 1.2 mm, 2 mm long, 3
+    sections), sagging under gravity, pulled 3 cm along its axis in 0.2 s by its first node
+    (its slope held): every contact slides over several elements. ``shared``: a second wire
+    through the same eyelets, its end tied to the last eyelet by a spring."""
+    model = fm.Model(gravity=(0.0, 0.0, -9.81))
+    wires = []
+    for y in ((0.0, 0.5e-3) if shared else (0.0,)):
+        wire = model.add_beam(fm.line((-0.05, y, 0.0), (0.25, y, 0.0), elements=n_elem),
+                              section=fm.CircularSection(0.3e-3),
+                              material=fm.Material(E=2e11, rho=7850.0), damping=1e-4,
+                              name=f"wire{len(wires)}")
+        wires.append(wire)
+    bodies = []
+    for k, x in enumerate((0.05, 0.1, 0.15)):
+        body = model.add_rigid_body(mass=0.01, inertia=(1e-6, 1e-6, 1e-6),
+                                    pose=fm.Pose((x, 0.0, 0.0)), name=f"eyelet{k}")
+        model.fix_body(body)
+        bodies.append(body)
+        for w, wire in enumerate(wires):
+            y = 0.5e-3 * w
+            model.add_joint(fm.SlidingClearanceJoint(
+                wire, body, hole=fm.CircleHole(radius=1.2e-3 if not shared else 1.6e-3,
+                                               length=2e-3, sections=3),
+                hole_point=(0.0, y, 0.0), contact=fm.LinearPenalty(stiffness=1e5),
+                name=f"bore{k}_{w}"))
+    wire = wires[0]
+    model.prescribe(wire.first_node, [0], fm.Ramp(start=0.0, end=0.2, value=pull, smooth=True))
+    model.prescribe(wire.first_node, [1, 2, 4, 5])
+    if shared:
+        model.add_spring_damper(wires[1].last_node, bodies[-1], stiffness=10.0, name="anchor")
+        model.prescribe(wires[1].first_node, [1, 2, 4, 5])
+    return model, wire
+
+
+def _run(tmp_path, follow: bool, t_end: float = 0.2, *, resume: bool = False,
+         sparse: bool = False):  # noqa: ANN202
+    ratio, cost = ga.FOLLOW_COST_RATIO, ordering.factor_cost
+    ga.FOLLOW_COST_RATIO = np.inf if follow else 0.0
+    if sparse:            # every band and border dearer than the sparse LU
+        ordering.factor_cost = lambda *a: np.inf  # type: ignore[assignment]
+    try:
+        model, wire = _eyelets()
+        res = fm.simulate(model, t_end=t_end, dt=1e-3, output_interval=0.02,
+                          record_energy=False, out=tmp_path / "run", resume=resume,
+                          integrator=fm.GeneralizedAlpha(
+                              rho_inf=0.8, newton=fm.NewtonOptions(modified=False)))
+        asm = res.assembly
+        res.extra["sparse"] = asm.factor_plan(windows=asm.contact_windows(1)).sparse
+    finally:
+        ga.FOLLOW_COST_RATIO, ordering.factor_cost = ratio, cost
+    return res, wire
+
+
+def test_a_plan_that_follows_the_contacts_gives_the_same_motion(tmp_path):
+    """Full Newton (a fresh matrix at every iteration): the run on plans that hold each
+    eyelet against the wire's elements near its sections equals the run on the whole
+    reserved pattern's plan to round-off; the contacts moved on (re-plans), and afterwards
+    every joint holds its whole beam again."""
+    follow, wire = _run(tmp_path / "follow", True)
+    fixed, _ = _run(tmp_path / "fixed", False)
+    assert follow.stats.replans >= 1 and fixed.stats.replans == 0
+    x0 = follow.assembly.node_dofs(wire.first_node)[0]
+    assert follow.q[-1, x0] - follow.q[0, x0] == pytest.approx(0.03, rel=1e-9)
+    assert np.abs(follow.q - fixed.q).max() < 1e-10
+    part = follow.assembly.system.clearance
+    assert (part.window[:, 0] == 0).all() and (part.window[:, 1] == wire.n_elem).all()
+
+
+@pytest.mark.skipif(not klu.AVAILABLE, reason="no SuiteSparse KLU library (Windows)")
+def test_the_sparse_plan_follows_the_contacts_and_resumes_bit_for_bit(tmp_path):
+    """The same on KLU's sparse LU (forced: this model's band is cheaper): the motion of the
+    band's run to round-off, and a run stopped at 0.1 s and resumed equals the uninterrupted
+    one bit for bit (the factors rebuilt from the values a checkpoint keeps)."""
+    band, _ = _run(tmp_path / "band", True)
+    full, _ = _run(tmp_path / "full", True, sparse=True)
+    assert full.extra["sparse"] and not band.extra["sparse"]
+    assert full.stats.replans >= 1
+    assert np.abs(full.q - band.q).max() < 1e-10
+    _run(tmp_path / "part", True, 0.1, sparse=True)
+    part, _ = _run(tmp_path / "part", True, 0.2, resume=True, sparse=True)
+    np.testing.assert_array_equal(part.q[-1], full.q[-1])
+    np.testing.assert_array_equal(part.lam[-1], full.lam[-1])
+
+
+def test_a_following_plan_drops_exactly_the_hole_bodies_entries_outside_the_windows(rng):
+    """The stored positions a following plan reads, by their definition: all but each hole
+    body's coordinates against its wire's coordinates outside the window's elements, unless
+    another joint of the same body and wire holds them, and never those another term
+    reserves (a spring from the second wire's end to the last eyelet)."""
+    model, _ = _eyelets(shared=True)
+    asm = Assembly(model)
+    A = asm.matrix
+    cols = np.repeat(np.arange(asm.n_total), np.diff(A.indptr))
+    rows = A.indices
+    joints = asm.joint_lists["clearance"]
+    anchored = asm.body_dofs(model.body("eyelet2"))
+    anchor_node = asm.node_dofs(model.beam("wire1").last_node)[:3]   # the spring's ends
+    for _ in range(5):
+        windows = []
+        expected = np.ones(A.nnz, bool)
+        for joint in joints:
+            g = joint.geometry
+            lo = int(rng.integers(0, g.elem_dofs.shape[0]))
+            hi = int(rng.integers(lo + 1, g.elem_dofs.shape[0] + 1))
+            windows.append((lo, hi))
+        for joint, (lo, hi) in zip(joints, windows, strict=True):
+            g = joint.geometry
+            inside = np.unique(g.elem_dofs[lo:hi])
+            outside = np.setdiff1d(g.beam_dofs, inside)
+            drop = ((np.isin(rows, g.body_dofs) & np.isin(cols, outside))
+                    | (np.isin(cols, g.body_dofs) & np.isin(rows, outside)))
+            if np.array_equal(g.body_dofs, anchored):    # the spring's entries
+                drop &= ~((np.isin(rows, anchored) & np.isin(cols, anchor_node))
+                          | (np.isin(cols, anchored) & np.isin(rows, anchor_node)))
+            expected &= ~drop
+        keep = asm._window_entries(np.array(windows, np.int64))
+        assert (~expected).sum() > 0
+        np.testing.assert_array_equal(keep, expected)
