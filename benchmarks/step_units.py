@@ -31,7 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     sys.path.insert(0, str(HERE))
 
     from cantilever import build_flexmbs
-    from unit_loops import best_of, loop_factorize, loop_solve
+    from unit_loops import best_of, loop_factorize, loop_matrix, loop_residual, loop_solve
 
     import flexmbs as fm
     from flexmbs import driver as cm
@@ -45,16 +45,6 @@ def main(argv: list[str] | None = None) -> int:
     def loop_groups(parts, q, v, qdd, mode, data, n):  # noqa: ANN001, ANN202
         for _ in range(n):
             groups_jacobian(parts, q, v, qdd, mode, 1.0, 0.05, 1e-8, data)
-
-    @njit(refcount=False)
-    def loop_matrix(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN202
-        for _ in range(n):
-            cm.jacobian(m, q, v, qdd, lam, fv, mode, 1.0, 0.05, 1e-8, data)
-
-    @njit(refcount=False)
-    def loop_residual(m, q, v, qdd, lam, fv, mode, r, n):  # noqa: ANN001, ANN202
-        for _ in range(n):
-            cm.residual(m, q, v, qdd, lam, fv, mode, r)
 
     print(f"flexmbs from {Path(fm.__file__).parent}; unit costs [us], best of 7 x 1000 calls")
     print(f"{'model':14s} {'groups':>7s} {'matrix':>7s} {'residual':>9s} {'factor':>7s} "

@@ -175,13 +175,16 @@ class _OutOfTime(Exception):
 
 
 def run_dynamic(n_disks: int, steps: int, dt: float, *, warmup: int = 2, every: int = 10,
-                max_wall: float | None = None, log: bool = False, **kw) -> dict:
+                max_wall: float | None = None, log: bool = False, retreats: int | None = None,
+                **kw) -> dict:
     """``warmup`` steps on one build (compiles or loads the kernels), then ``steps`` steps
     on a fresh build, timed from the integration's start (the initial accelerations solved,
     the first output) to the last step, counters from the integrator; outputs (and progress
     lines with ``log``) every ``every`` steps; stops after ``max_wall`` seconds of
-    integration (None: no limit). Generalized-alpha, rho_inf = 0.5, adaptive steps."""
-    opts = fm.GeneralizedAlpha(rho_inf=0.5)
+    integration (None: no limit). Generalized-alpha, rho_inf = 0.5, adaptive steps;
+    ``retreats``: Newton's halvings of a rejected iterate (None: the default)."""
+    opts = fm.GeneralizedAlpha(rho_inf=0.5) if retreats is None else fm.GeneralizedAlpha(
+        rho_inf=0.5, newton=fm.NewtonOptions(retreats=retreats))
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -235,6 +238,44 @@ def run_dynamic(n_disks: int, steps: int, dt: float, *, warmup: int = 2, every: 
             "status": status}
 
 
+def unit_costs(n_disks: int, t_end: float = 0.03, **kw) -> dict:
+    """Unit costs [us] of a compiled step at the state after ``t_end`` (contacts closed):
+    the iteration matrix, the residual, the factorisation of the plan the run uses (the one
+    that follows the contacts) and one solve, each the best of 3 repeats of compiled loops
+    (benchmarks/unit_loops.py); with the plan's kind and the planned entries."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from unit_loops import best_of, loop_factorize, loop_matrix, loop_residual, loop_solve
+
+    from flexmbs import driver
+    from flexmbs.terms import dynamic_mode
+
+    model, _ = build(n_disks, **kw)
+    asm = Assembly(model)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = fm.simulate(asm, t_end=t_end, dt=1e-3, output_interval=t_end, record_energy=False,
+                          integrator=fm.GeneralizedAlpha(rho_inf=0.5))
+    st = res.final_state
+    m, mode = asm.kernel_system, dynamic_mode()
+    fv = asm.functions.table(st.t, 1e-3, 1)[0]
+    r = np.zeros(asm.n_total)
+    x = np.zeros_like(r)
+    data = np.zeros_like(asm.matrix.data)
+    windows = asm.contact_windows(1)
+    asm.follow(windows)
+    plan = asm.factor_plan(windows=windows)
+    driver.jacobian(m, st.q, st.v, st.qdd, st.lam, fv, mode, 1.0, 0.05, 1e-8, data)
+    lu = plan.factorization(asm.matrix)
+    lu.factorize(data)
+    out = {"unknowns": asm.n_total, "planned": int(plan.keep.sum()), "sparse": plan.sparse,
+           "matrix_us": best_of(loop_matrix, (m, st.q, st.v, st.qdd, st.lam, fv, mode, data), 20, 3),
+           "residual_us": best_of(loop_residual, (m, st.q, st.v, st.qdd, st.lam, fv, mode, r), 50, 3),
+           "factor_us": best_of(loop_factorize, (lu.factor, data), 10, 3),
+           "solve_us": best_of(loop_solve, (lu.factor, r, x), 50, 3)}
+    asm.follow(None)
+    return out
+
+
 def run_static(n_disks: int, load_steps: int, **kw) -> dict:
     """Static equilibrium under the full tensions (time ``t_ramp``) by load stepping; where
     it fails if it does."""
@@ -266,6 +307,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--static", action="store_true", help="static solve instead of dynamics")
     ap.add_argument("--load-steps", type=int, default=10, help="static load increments")
     ap.add_argument("--mu", type=float, default=0.0, help="friction coefficient of the bores")
+    ap.add_argument("--units", type=int, nargs="*", default=None, metavar="DISKS",
+                    help="unit costs of a compiled step at these disk counts instead of a run")
+    ap.add_argument("--retreats", type=int, default=None,
+                    help="Newton's halvings of an iterate the model rejects (default: the "
+                         "integrator's)")
     ap.add_argument("--stiffness", type=float, default=STIFFNESS, help="contact penalty [N/m]")
     ap.add_argument("--tendon-elements", type=int, default=None,
                     help="elements of the 420 mm tendons (default 57: 7.4 mm elements)")
@@ -280,6 +326,15 @@ def main(argv: list[str] | None = None) -> int:
     kw = {"tensions": tuple(a.tensions), "mu": a.mu, "tendon_elements": a.tendon_elements,
           "stiffness": a.stiffness, "shift_long": a.shift}
 
+    if a.units:
+        print(f"{'disks':>5s} {'unknowns':>8s} {'planned':>8s} {'plan':>6s} {'matrix':>8s} "
+              f"{'residual':>8s} {'factor':>8s} {'solve':>7s}  [us]")
+        for d in a.units:
+            u = unit_costs(d, **kw)
+            print(f"{d:5d} {u['unknowns']:8d} {u['planned']:8d} "
+                  f"{'KLU' if u['sparse'] else 'band':>6s} {u['matrix_us']:8.0f} "
+                  f"{u['residual_us']:8.0f} {u['factor_us']:8.0f} {u['solve_us']:7.0f}", flush=True)
+        return 0
     model, handles = build(a.disks, **kw)
     _, info = describe(model)
     elements = [t.n_elem for t in handles["tendons"]]
@@ -300,7 +355,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"static: FAILED after {r['wall_s']:.2f} s: {r['error']}")
         return 0 if r["status"] == "converged" else 1
     r = run_dynamic(a.disks, a.steps, a.dt, every=a.every, max_wall=a.max_wall or None,
-                    log=a.progress, **kw)
+                    log=a.progress, retreats=a.retreats, **kw)
     print(f"warm-up (build + 2 steps, compile or cache load) {r['warmup_s']:.1f} s")
     print(f"dynamic ({r['status']}): {r['steps']} steps to t = {r['t']:.4g} s "
           f"({r['rejected']} rejected), "

@@ -1,5 +1,6 @@
-"""Timing loops shared by the unit-cost benchmarks (``contact.py``, ``eyelet_plan.py``): the
-bordered banded LU's factorisation and solve called ``n`` times inside numba (no Python
+"""Timing loops shared by the unit-cost benchmarks (``contact.py``, ``eyelet_plan.py``,
+``step_units.py``, ``tendon_robot.py``): the iteration matrix, the residual, the factorisation
+and solve called ``n`` times inside numba (no Python
 dispatch per call), compiled without reference counting like the compiled entry, and the best
 of several repeats."""
 
@@ -9,6 +10,7 @@ import time
 
 import numpy as np
 
+from flexmbs import driver
 from flexmbs._jit import njit
 from flexmbs.linalg.bordered import bordered_factorize, bordered_solve
 
@@ -23,6 +25,19 @@ def loop_factorize(factor, data, n):  # noqa: ANN001, ANN201
 def loop_solve(factor, b, x, n):  # noqa: ANN001, ANN201
     for _ in range(n):
         bordered_solve(factor, b, x)
+
+
+@njit(refcount=False)
+def loop_matrix(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN201
+    """The whole iteration matrix (cM, cC, cK = 1, 0.05, 1e-8), ``n`` times."""
+    for _ in range(n):
+        driver.jacobian(m, q, v, qdd, lam, fv, mode, 1.0, 0.05, 1e-8, data)
+
+
+@njit(refcount=False)
+def loop_residual(m, q, v, qdd, lam, fv, mode, r, n):  # noqa: ANN001, ANN201
+    for _ in range(n):
+        driver.residual(m, q, v, qdd, lam, fv, mode, r)
 
 
 def best_of(fn, args, n: int, repeats: int = 7) -> float:  # noqa: ANN001

@@ -82,6 +82,7 @@ class AlphaRun(NamedTuple):
     indices: np.ndarray         # int64 (nnz,): ... (Φ_q v from its constraint rows)
     velocity_rows: np.ndarray   # (m,) 1.0: Φ_q v = 0 held; 0.0: a row with Φ_t, kept as is
     step_tolerance: float       # local error a step may have (step_error), 0: not checked
+    retreats: int               # halvings of an iterate the model rejects (NewtonOptions)
 
 
 def idle_run() -> AlphaRun:
@@ -94,7 +95,7 @@ def idle_run() -> AlphaRun:
                     full_newton=False, rtol=0.0, ctol=0.0, floor_factor=0.0, refresh_ratio=0.0,
                     refresh_iterations=0.0, refresh_cost=0.0, keep_acceleration=False,
                     info=np.zeros(INFO_SIZE), velocity=False, factor_v=idle_factor(),
-                    indptr=zi, indices=zi, velocity_rows=z, step_tolerance=0.0)
+                    indptr=zi, indices=zi, velocity_rows=z, step_tolerance=0.0, retreats=0)
 
 
 def idle_factor() -> BorderedFactor:
@@ -184,7 +185,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
     (n_steps, h, am, af, gamma, beta, a, backup, factor, rhs, dx, a_star, max_it, full_newton,
      rtol, ctol, floor_factor, refresh_ratio, refresh_iterations, refresh_cost,
      keep_acceleration, info, velocity, factor_v, indptr, indices, velocity_rows,
-     step_tolerance) = run
+     step_tolerance, retreats) = run
     n = q.size
     m = lam.size
     bp = (1 - am) / (h * h * beta * (1 - af))
@@ -223,13 +224,28 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, A
         factored_v = False      # its matrix factorised at this step's q
         fac = factor
         err = np.inf
+        alpha = 1.0             # the part of the last increment applied (retreats)
         while status < 0:
             scale, code = residual(model, q, v, qdd, lam, fvk, mode, r)
             info[INFO_RES] += 1.0
             if code != 0:
+                if not corrector and info[INFO_IT] > 0 and alpha > 0.5 ** retreats:
+                    # an iterate the model rejects (a beam axis through a bore wall): back
+                    # towards the last accepted one by halving the increment, as
+                    # solvers.newton.Newton._evaluate does
+                    alpha *= 0.5
+                    for i in range(n):
+                        d = alpha * dx[i]
+                        q[i] -= d
+                        v[i] -= gp * d
+                        qdd[i] -= bp * d
+                    for i in range(m):
+                        lam[i] -= alpha * dx[n + i] / s
+                    continue
                 info[INFO_CODE] = code
                 status = STATUS_FAILED
                 break
+            alpha = 1.0
             if corrector and factored_v:
                 constraint_velocity(indptr, indices, n, data, v, velocity_rows, 1.0 / gp, r)
             if not corrector or factored_v:

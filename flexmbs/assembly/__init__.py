@@ -498,27 +498,35 @@ class Assembly:
         not follow reserved it, and per member (its row in the windows) the first and last of
         its elements holding each coordinate (none: outside every window)."""
         groups: dict[tuple[bytes, int], tuple[np.ndarray, np.ndarray, list]] = {}
+        spans: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         i = 0
         for kind, objs in self._following():
             assert kind.follow is not None
             for obj in objs:
                 own = np.unique(kind.follow.own(obj, self))
                 elems = np.asarray(kind.follow.elements(obj), np.int64)
-                dofs = np.unique(np.asarray(self.beam_dofs(obj.beam), np.int64))
+                span_key = (id(obj.beam), elems.tobytes())      # members of one beam share it
+                if span_key not in spans:
+                    dofs = np.unique(np.asarray(self.beam_dofs(obj.beam), np.int64))
+                    local = np.searchsorted(dofs, np.where(elems >= 0, elems, dofs[0]))
+                    e = np.repeat(np.arange(elems.shape[0], dtype=np.int64), elems.shape[1])
+                    ok = (elems >= 0).ravel()
+                    first = np.full(dofs.size, np.iinfo(np.int64).max, np.int64)
+                    last = np.full(dofs.size, -1, np.int64)
+                    np.minimum.at(first, local.ravel()[ok], e[ok])
+                    np.maximum.at(last, local.ravel()[ok], e[ok])
+                    spans[span_key] = (dofs, first, last)
+                dofs, first, last = spans[span_key]
                 key = (own.tobytes(), id(obj.beam))
                 if key not in groups:
                     groups[key] = (own, dofs, [])
-                local = np.searchsorted(dofs, np.where(elems >= 0, elems, dofs[0]))
-                e = np.repeat(np.arange(elems.shape[0], dtype=np.int64), elems.shape[1])
-                ok = (elems >= 0).ravel()
-                first = np.full(dofs.size, np.iinfo(np.int64).max, np.int64)
-                last = np.full(dofs.size, -1, np.int64)
-                np.minimum.at(first, local.ravel()[ok], e[ok])
-                np.maximum.at(last, local.ravel()[ok], e[ok])
                 groups[key][2].append((i, first, last))
                 i += 1
-        fixed_keys = self._fixed_keys()
         N = self.n_total
+        is_own = np.zeros(N, bool)
+        for own, _, _ in groups.values():
+            is_own[own] = True
+        fixed_keys = self._fixed_keys(is_own)
         out = []
         for own, dofs, members in groups.values():
             pos, dloc, keys = [], [], []
@@ -537,14 +545,19 @@ class Assembly:
             out.append((np.concatenate(pos), np.concatenate(dloc).astype(np.int64), fixed, members))
         return out
 
-    def _fixed_keys(self) -> np.ndarray:
-        """The sorted keys ``col N + row`` of the entries reserved by owners that do not follow
-        their beams (they stay in every plan)."""
+    def _fixed_keys(self, own: np.ndarray) -> np.ndarray:
+        """The sorted keys ``col N + row`` of the entries in a row or column of the ``own``
+        unknowns (a bool mask) that owners which do not follow their beams reserved (they stay
+        in every plan)."""
         N = self.n_total
         keys = [np.zeros(0, np.int64)]
         for rows, cols in self._fixed_blocks:
             r, c = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
-            keys.append((c[None, :] * N + r[:, None]).ravel())
+            r_own, c_own = own[r], own[c]
+            if r_own.any():
+                keys.append((c[None, :] * N + r[r_own][:, None]).ravel())
+            if c_own.any():
+                keys.append((c[c_own][None, :] * N + r[:, None]).ravel())
         return np.unique(np.concatenate(keys))
 
     def _matrix_at(self, q: np.ndarray, t: float, cM: float) -> sp.csc_matrix:

@@ -64,7 +64,7 @@ from .._jit import njit
 
 __all__ = [
     "AVAILABLE", "KLU_OK", "KLU_SINGULAR", "KLU_OUT_OF_MEMORY", "KLU_INVALID", "KLU_TOO_LARGE",
-    "LIBRARY", "flops", "singular_column",
+    "LIBRARY", "flops", "singular_column", "symbolic_estimate",
     "new_common", "klu_setup", "klu_configure", "klu_status", "klu_rcond",
     "klu_analyse", "klu_factorise", "klu_refactorise", "klu_solve_inplace",
     "klu_free_numeric", "klu_free_symbolic",
@@ -395,3 +395,15 @@ def flops(symbolic: int, numeric: int, common: np.ndarray) -> tuple[float, int]:
                    ctypes.c_void_p(common.ctypes.data))
     lnz, unz = struct.unpack("=2i", ctypes.string_at(numeric + 8, 8))   # n, nblocks, lnz, unz
     return float(common.view(np.float64)[_D_FLOPS]), int(lnz) + int(unz)
+
+
+def symbolic_estimate(symbolic: int) -> tuple[float, float, float]:
+    """AMD's estimates in a symbolic analysis (``Symbolic->est_flops, lnz, unz``): the
+    factorisation's operations and the entries of L and U when no pivot leaves the diagonal
+    (no numeric factorisation needed)."""
+    if not AVAILABLE:
+        raise ImportError(MISSING)
+    if not symbolic:
+        raise ValueError("klu.symbolic_estimate: no analysis")
+    _, est_flops, lnz, unz = struct.unpack("=4d", ctypes.string_at(symbolic, 32))
+    return float(est_flops), float(lnz), float(unz)

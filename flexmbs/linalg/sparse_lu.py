@@ -33,8 +33,8 @@ from . import klu
 REFACTOR_DROP = 1e-3
 #: KLU's flops are worth this many of the band's in time (left-looking by columns, indirect
 #: addressing, no blocking; measured on the tendon robot's following plan: KLU's refactorisation
-#: and 8 solves 4.0 ms for a weighted cost of 7.0e7, the band's 5.6 ms for 9.7e7)
-SPARSE_FLOP_WEIGHT = 9.0
+#: and 8 solves 4.0 ms for an estimate of 5.9e6 flops, the band's 5.6 ms for 9.7e7)
+SPARSE_FLOP_WEIGHT = 12.0
 #: and a factorisation costs at least this many flops (the symbolic objects' overhead)
 SPARSE_OVERHEAD = 2.0e4
 
@@ -118,26 +118,24 @@ def _free(handles: np.ndarray, common: np.ndarray) -> None:
 
 def sparse_cost(A: sp.csc_matrix, keep: np.ndarray | None, solves: float) -> float:
     """Estimated cost of one KLU factorisation plus ``solves`` solves, in the band's flops
-    (:func:`flexmbs.linalg.ordering.factor_cost`): KLU's own count of the factorisation's
-    operations for values that need no pivoting (its fill-reducing order's fill), ``4 nnz(L +
-    U)`` per solve, weighted by :data:`SPARSE_FLOP_WEIGHT`."""
+    (:func:`flexmbs.linalg.ordering.factor_cost`): the operations and the entries of L and U
+    that AMD's analysis of the kept pattern predicts when no pivot leaves the diagonal
+    (``klu.symbolic_estimate``; no numeric factorisation: the analysis of the tendon robot's
+    whole reserved pattern takes 88 ms, a factorisation more), ``2 nnz(L + U)`` per solve,
+    weighted by :data:`SPARSE_FLOP_WEIGHT`."""
     A = sp.csc_matrix(A, copy=True)
     A.sort_indices()
-    Ap, Ai, src = _kept_csc(A, keep)
-    n = A.shape[0]
-    cols = np.repeat(np.arange(n), np.diff(Ap).astype(np.int64))
-    Ax = np.where(Ai == cols, 4.0 * n, 1.0 / (1.0 + (np.arange(Ai.size) % 7)))  # no pivoting
+    Ap, Ai, _ = _kept_csc(A, keep)
     common = klu.new_common()
     handles = np.zeros(2, np.int64)
     try:
-        handles[0] = klu.klu_analyse(n, Ap, Ai, common)
-        handles[1] = klu.klu_factorise(Ap, Ai, Ax, handles[0], common) if handles[0] else 0
-        if not handles[1]:
+        handles[0] = klu.klu_analyse(A.shape[0], Ap, Ai, common)
+        if not handles[0]:
             return np.inf
-        flops, lu_nnz = klu.flops(int(handles[0]), int(handles[1]), common)
+        flops, lnz, unz = klu.symbolic_estimate(int(handles[0]))
     finally:
         _free(handles, common)
-    return SPARSE_FLOP_WEIGHT * (max(flops, SPARSE_OVERHEAD) + solves * 4.0 * lu_nnz)
+    return SPARSE_FLOP_WEIGHT * (max(flops, SPARSE_OVERHEAD) + solves * 2.0 * (lnz + unz))
 
 
 @njit

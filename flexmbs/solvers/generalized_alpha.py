@@ -626,7 +626,7 @@ class _CompiledStepper:
             refresh_cost=float(o.refresh_cost), keep_acceleration=self.keep_acceleration,
             info=self.info, velocity=self.velocity, factor_v=self.factor_v,
             indptr=self.pattern[0], indices=self.pattern[1], velocity_rows=self.velocity_rows,
-            step_tolerance=float(tolerance))
+            step_tolerance=float(tolerance), retreats=int(o.retreats))
         value, _ = kernel(OP_STEPS, asm.kernel_system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
                           self._coef, self.r, self.data, run)
         status = int(value)

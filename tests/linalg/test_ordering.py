@@ -8,6 +8,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from flexmbs.linalg import klu
 from flexmbs.linalg.bordered import BorderedBandedLU
 from flexmbs.linalg.ordering import close_border, plan_factorization
 
@@ -308,11 +309,16 @@ def test_a_binary_tree_costs_o_n():
 
 
 def test_cost_estimate_prefers_the_given_border_for_a_sleeve_on_a_long_beam():
-    """A few bodies coupled along a whole beam (Example 1's sleeve): the bordered form."""
+    """A few bodies coupled along a whole beam (Example 1's sleeve): among the bands, the
+    bordered form. Where KLU is installed its sparse LU is cheaper still and taken (measured
+    on this matrix: a refactorisation 169 µs against the bordered form's 8.9 ms)."""
     rng = np.random.default_rng(5)
     A, n, border, owner = _saddle(rng, 1, [(0, -1)], beam_elements=60, on_beam=tuple(range(61)))
-    plan = plan_factorization(A, border, n, owner)
+    plan = plan_factorization(A, border, n, owner, sparse=False)
     assert plan.border.size > 0 and plan.bandwidth <= 20
+    if klu.AVAILABLE:
+        chosen = plan_factorization(A, border, n, owner)
+        assert chosen.sparse and chosen.cost < plan.cost
 
 
 def _hinged(rng: np.random.Generator, joints: list[tuple[int, int, int]], n_bodies: int,
