@@ -46,6 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
     from .solvers.newton import NewtonOptions
     from .solvers.static import StaticOptions
     from .sweeps import sweep
+    from .tendons import Tendon, TendonParts
 
 _LAZY = {
     "SlidingJoint": ".constraints.sliding",
@@ -89,6 +90,8 @@ _LAZY = {
     "NewtonOptions": ".solvers.newton",
     "StaticOptions": ".solvers.static",
     "sweep": ".sweeps",
+    "Tendon": ".tendons",
+    "TendonParts": ".tendons",
 }
 
 
@@ -125,5 +128,5 @@ __all__ = [
     "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",
     "RedundantConstraintError", "Result", "RigidBody", "ScenarioError", "SimulationStopped",
     "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
-    "modes", "polyline", "read_curve", "simulate", "solve_static", "sweep",
+    "modes", "polyline", "read_curve", "simulate", "solve_static", "sweep", "Tendon", "TendonParts",
 ]

@@ -25,6 +25,7 @@ from .springs import SpringDamper, check_table
 
 if TYPE_CHECKING:  # pragma: no cover
     from .constraints.interaction import Interaction
+    from .tendons import Tendon, TendonParts
 
 ArrayLike3 = Sequence[float] | np.ndarray
 
@@ -536,14 +537,17 @@ class Model:
         """A motor on ``joint``: its relative rotation about the joint axis (``motion =
         "rotation"``, a revolute joint) or slide along it (``"slide"``, a prismatic joint) follows
         ``value(t) = value(0) + function(t)`` (:mod:`flexmbs.constraints.drivers`). The driving
-        torque (force) is its reaction (``reaction`` probe, :meth:`Result.reaction`)."""
+        torque (force) is its reaction (``reaction`` probe, :meth:`Result.reaction`). A generic
+        joint of a beam node (which has no rotation to lock) takes a slide driver too: the
+        node's slide along the joint's x axis."""
         kind = "add_driver"
         if not isinstance(joint, ConstraintSpec) or not any(c is joint for c in self.constraints) \
                 or joint.frame_a is None:
             raise ModelError(f"{kind}: joint must be a revolute, prismatic or generic joint of "
                              f"this model (got {joint!r})")
         free_rotation = joint.rotation == (0, 1, 1)
-        free_slide = joint.translation[0] == 0 and joint.rotation[1:] == (1, 1)
+        free_slide = joint.translation[0] == 0 and (joint.rotation[1:] == (1, 1)
+                                                    or isinstance(joint.a, Node))
         if motion is None:
             if free_rotation == free_slide:
                 raise ModelError(f"{kind}: joint '{joint.name}' ({joint.kind}) needs motion = "
@@ -555,7 +559,8 @@ class Model:
                              f"'{joint.name}' has rotation mask {list(joint.rotation)}")
         if motion == "slide" and not free_slide:
             raise ModelError(f"{kind}: a slide driver needs a joint whose x translation is free "
-                             f"and whose y, z rotations are locked (prismatic); '{joint.name}' "
+                             f"and whose y, z rotations are locked (prismatic; or a joint of a "
+                             f"beam node, x translation free); '{joint.name}' "
                              f"has translation {list(joint.translation)}, rotation "
                              f"{list(joint.rotation)}")
         if motion not in ("rotation", "slide"):
@@ -576,6 +581,15 @@ class Model:
         joint.name = self._unique(joint.name, "joint")
         self.interactions.append(joint)
         return joint
+
+    def add_tendon(self, tendon: Tendon) -> TendonParts:
+        """A wire through holes in a sequence of bodies, anchored and pulled
+        (:class:`flexmbs.Tendon`, :mod:`flexmbs.tendons`): its beam, a clearance joint per hole,
+        the anchor, the hold of its start and its tension load or pull driver, named after the
+        tendon; the route is checked before anything is added."""
+        from .tendons import add_tendon
+
+        return add_tendon(self, tendon)
 
     # ------------------------------------------------------------------ force elements
     def add_spring_damper(self, a: Node | RigidBody | Ground, b: Node | RigidBody | Ground = GROUND,

@@ -71,7 +71,7 @@ from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
 
 __all__ = ["SlidingClearanceJoint", "Hole", "CircleHole", "SuperellipseHole", "CurvedBore",
-           "CLEARANCE", "MAX_POINTS", "TANGENTS", "DETECTIONS"]
+           "CLEARANCE", "MAX_POINTS", "TANGENTS", "DETECTIONS", "hole_frame"]
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
@@ -161,10 +161,36 @@ class ClearanceState(NamedTuple):
                    t_bar=part.t_bar[i, :n_elem], q_start=part.q_start)
 
 
+def _unit_axis(axis: Any, what: str) -> np.ndarray:
+    """``axis`` as a unit vector (3 finite numbers, not zero)."""
+    try:
+        a = np.asarray(axis, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        a = np.zeros(0)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.linalg.norm(a) > 0:
+        shown = a.tolist() if a.size else axis
+        raise ModelError(f"{what}: axis must be 3 finite numbers, not all zero (got {shown!r}); "
+                         "give the hole's direction in body coordinates, e.g. [1, 0, 0]")
+    return a / np.linalg.norm(a)
+
+
+def hole_frame(axis: Any) -> np.ndarray:
+    """The axes (columns: ``axis``, e_y, e_z; body coordinates) of a straight bore along the unit
+    ``axis``: e_y is body y made normal to it (body z when the axis is within 26° of body y, the
+    rule of :class:`CurvedBore`'s ``up``), e_z = axis × e_y. Body x gives the identity, so a
+    section's e_y and e_z (a superellipse's ``a`` and ``b``) stay body y and z there."""
+    a = np.asarray(axis, dtype=float)
+    up = np.array([0.0, 1.0, 0.0]) if abs(a[1]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    ey = up - (up @ a) * a
+    ey = ey / np.linalg.norm(ey)
+    return np.column_stack([a, ey, np.cross(a, ey)])
+
+
 class SlidingClearanceJoint(Interaction):
     """Beam through a rigid hole with clearance, penalty contact per hole section.
 
-    ``hole``: :class:`Hole` (axis = body x through ``hole_point``, body coordinates);
+    ``hole``: :class:`Hole` (through ``hole_point`` along ``axis``, body coordinates, default
+    body x: :func:`hole_frame` turns the bore's sections so that their normal is ``axis``);
     ``contact``: a normal force law (default linear penalty); ``friction``: optional
     :class:`~flexmbs.contact.laws.Friction` (or its coefficient: the stick law; with
     ``friction_velocity``, the regularised law); the stick law's default tangential stiffness is
@@ -202,7 +228,7 @@ class SlidingClearanceJoint(Interaction):
                  friction_velocity: float | None = None,
                  hole_point=(0.0, 0.0, 0.0), beam_radius: float | None = None,
                  tangent: str = "exact", detection: str | None = None,
-                 name: str | None = None) -> None:
+                 name: str | None = None, axis: Any = (1.0, 0.0, 0.0)) -> None:
         self.beam = beam
         self.body = body
         self.hole = hole
@@ -210,6 +236,7 @@ class SlidingClearanceJoint(Interaction):
         self.friction = as_friction(friction, friction_velocity)
         self.hole_point = np.asarray(hole_point, float).reshape(3)
         self.name = name or f"clearance_{body.name}"
+        self.axis = _unit_axis(axis, f"joint '{self.name}'")
         if tangent not in TANGENTS:
             raise ModelError(f"joint '{self.name}': tangent must be one of {', '.join(TANGENTS)} "
                              f"(got {tangent!r})")
@@ -242,6 +269,13 @@ class SlidingClearanceJoint(Interaction):
         # end of the beam lies inside the bore: _detect.place_tips); the per-section state
         # below has a slot for each
         origins, axes = hole.frames()
+        if np.any(self.axis != (1.0, 0.0, 0.0)):      # the bore turned from body x to axis
+            if isinstance(hole, CurvedBore):
+                raise ModelError(f"joint '{self.name}': axis turns a straight bore; a bore "
+                                 "along a path runs along its path (give the path in body "
+                                 "coordinates and drop axis)")
+            turn = hole_frame(self.axis)
+            origins, axes = origins @ turn.T, np.einsum("ij,kjl->kil", turn, axes)
         slots = ns + N_TIPS
         sec_origins = np.zeros((slots, 3))
         sec_origins[:ns] = origins + self.hole_point

@@ -14,7 +14,8 @@ from .tables import show_value, tomllib
 __all__ = ["ARRAY_KEYS", "apply_override", "parse_value"]
 
 #: top-level keys holding arrays of tables (``[[beams]]``), addressed by entry name or index
-ARRAY_KEYS = ("beams", "rigid_bodies", "constraints", "joints", "loads", "springs", "probes")
+ARRAY_KEYS = ("beams", "rigid_bodies", "constraints", "joints", "tendons", "loads", "springs",
+              "probes")
 
 
 def apply_override(raw: dict[str, Any], assignment: str) -> None:

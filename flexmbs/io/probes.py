@@ -292,6 +292,42 @@ class ContactForceProbe(Probe):
             raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
 
 
+class TendonTensionProbe(Probe):
+    """The axial force N = EA(ε − ε0) [N] of a tendon's wire (its elastic part) at the actuator,
+    column ``<name>_a``, and at each hole, ``<name>_1`` ... ``<name>_<n>`` in route order, where
+    the hole's clearance joint is on the wire now (its slide coordinate):
+    :meth:`TendonParts.axial_forces <flexmbs.tendons.TendonParts.axial_forces>`."""
+
+    def __init__(self, name: str, tendon: Any) -> None:
+        self.name = _check_name(name)
+        if not hasattr(tendon, "axial_forces"):
+            raise ModelError(f"probe '{name}': expected a tendon (what Model.add_tendon returns), "
+                             f"got {tendon!r}")
+        self.tendon = tendon
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_a"] + [f"{self.name}_{k + 1}" for k in range(len(self.tendon.holes))]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return np.asarray(self.tendon.axial_forces(asm, state.q), dtype=float)
+
+    def check(self, asm: Any) -> None:
+        if not any(b is self.tendon.beam for b in asm.model.beams):
+            raise ModelError(f"probe '{self.name}': tendon '{self.tendon.name}' is not part of "
+                             "the model")
+
+
+class TendonDisplacementProbe(TendonTensionProbe):
+    """How far a tendon's start has moved back along the route's first direction [m] (positive:
+    pulled): :meth:`TendonParts.pulled <flexmbs.tendons.TendonParts.pulled>`."""
+
+    def columns(self) -> list[str]:
+        return [self.name]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        return np.array([self.tendon.pulled(asm, state.q)])
+
+
 def probe_columns(probes: list[Probe] | tuple[Probe, ...]) -> list[str]:
     """All columns of ``probes`` in order; duplicate names are a :class:`ModelError`."""
     cols: list[str] = []

@@ -36,6 +36,7 @@ from .builders import (
     build_entry,
     build_probe,
     build_rigid_body,
+    build_tendon,
     read_simulation,
 )
 from .overrides import ARRAY_KEYS, apply_override
@@ -125,6 +126,8 @@ def build_scenario(raw: dict[str, Any], path: str | os.PathLike[str]) -> Scenari
         build_entry(CONSTRAINTS, t, ctx)
     for t in root.tables("joints", need_name=True):
         ctx.joints[t.raw["name"]] = build_entry(JOINTS, t, ctx)
+    for t in root.tables("tendons", need_name=True):
+        build_tendon(t, ctx)
     for t in root.tables("loads", need_name=False):
         build_entry(LOADS, t, ctx)
     for t in root.tables("springs", need_name=False):

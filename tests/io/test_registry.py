@@ -58,7 +58,8 @@ def test_the_registries_hold_the_documented_names() -> None:
     assert LOADS.names() == ("point", "distributed")
     assert SPRINGS.names() == ("translational", "rotational")
     assert set(PROBES) == {"beam_point", "body_position", "body_orientation", "body_point",
-                           "energy", "slide_coordinate", "contact_force", "joint_reaction", "reaction"}
+                           "energy", "slide_coordinate", "contact_force", "joint_reaction", "reaction",
+                           "tendon_tension", "tendon_displacement"}
 
 
 def test_scenario_and_python_fail_with_the_same_message() -> None:

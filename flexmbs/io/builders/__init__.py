@@ -13,8 +13,9 @@ probe           :data:`PROBES`       :mod:`.probes`
 spring          :data:`SPRINGS`      :mod:`.springs` (``[[springs]] type = ...``)
 ==============  ===================  ======================================================
 
-Rigid bodies (:mod:`.bodies`) and the ``[simulation]`` table (:mod:`.simulation`) have one form
-each and no registry. Importing this package registers every built-in builder.
+Rigid bodies (:mod:`.bodies`), tendons (:mod:`.tendons`) and the ``[simulation]`` table
+(:mod:`.simulation`) have one form each and no registry. Importing this package registers every
+built-in builder.
 """
 
 from .beams import ELEMENTS, build_beam
@@ -26,7 +27,8 @@ from .loads import LOADS
 from .probes import PROBES, build_probe
 from .simulation import INTEGRATORS, SimulationSettings, read_simulation
 from .springs import SPRINGS
+from .tendons import build_tendon
 
 __all__ = ["CONSTRAINTS", "ELEMENTS", "INTEGRATORS", "JOINTS", "LOADS", "PROBES", "SPRINGS", "Builder",
            "BuildContext", "SimulationSettings", "build_beam", "build_entry", "build_probe",
-           "build_rigid_body", "read_simulation"]
+           "build_rigid_body", "build_tendon", "read_simulation"]

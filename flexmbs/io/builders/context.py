@@ -33,6 +33,8 @@ class BuildContext:
     beams: dict[str, Beam] = field(default_factory=dict)
     bodies: dict[str, RigidBody] = field(default_factory=dict)
     joints: dict[str, Any] = field(default_factory=dict)
+    #: built ``[[tendons]]`` by name (:class:`~flexmbs.tendons.TendonParts`)
+    tendons: dict[str, Any] = field(default_factory=dict)
     #: bodies placed with ``pose = { on_beam, s, rest = "bore" }``: name -> (rest direction or
     #: None for gravity, key path of the pose); their clearance joint moves them to rest
     resting: dict[str, tuple[Any, str]] = field(default_factory=dict)

@@ -103,7 +103,7 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     from ...contact.joint import DETECTIONS, TANGENTS, Hole, SlidingClearanceJoint
 
     t.allow(("name", "type", "beam", "body", "hole", "contact", "beam_radius", "tangent",
-             "detection"))
+             "detection", "axis"))
     beam = ctx.beam(t)
     body = ctx.body(t)
     h = t.table("hole")
@@ -122,12 +122,18 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     tangent = t.choice("tangent", TANGENTS, "exact", what="tangent")
     detection = (t.choice("detection", DETECTIONS, "consistent", what="detection")
                  if t.has("detection") else None)
+    if t.has("axis") and h.has("path"):
+        raise ScenarioError(f"{t.key('axis')}: turns a straight bore; a bore along a path runs "
+                            f"along its path ({h.key('path')}, body coordinates): drop axis")
+    axis = t.vector("axis", (1.0, 0.0, 0.0))
+    if not np.linalg.norm(axis) > 0:
+        raise t.fail("axis", "the hole's direction in body coordinates, not zero", t.raw["axis"])
     with at(h.path):        # the hole against the beam: "joints[j].hole: the hole ... "
         joint = SlidingClearanceJoint(
             beam, body, hole=hole, contact=contact_law, friction=friction,
             hole_point=h.vector("point", (0.0, 0.0, 0.0)),
             beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
-            tangent=tangent, detection=detection, name=t.raw["name"])
+            tangent=tangent, detection=detection, name=t.raw["name"], axis=axis)
     if body.name in ctx.resting:      # pose = { on_beam, s, rest = "bore" }
         direction, where = ctx.resting.pop(body.name)
         if direction is None:

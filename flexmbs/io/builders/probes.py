@@ -105,3 +105,23 @@ def _reaction(t: Table, ctx: BuildContext) -> probes.Probe:
 
 PROBES.register("joint_reaction",
                 _joint_probe(probes.JointReactionProbe, "reaction_force", "sliding"))
+
+
+def _tendon_probe(cls: type[Any]) -> Builder:
+    """Builder of a probe on a tendon (``tendon = "name"``, a ``[[tendons]]`` entry)."""
+
+    def build(t: Table, ctx: BuildContext) -> probes.Probe:
+        t.allow(("name", "type", "tendon"))
+        name = t.string("tendon")
+        tendon = ctx.tendons.get(name)
+        if tendon is None:
+            raise ScenarioError(f"{t.key('tendon')}: no tendon named '{name}' (tendons: "
+                                f"{', '.join(ctx.tendons) or 'none'})")
+        probe: probes.Probe = cls(t.raw["name"], tendon)
+        return probe
+
+    return build
+
+
+PROBES.register("tendon_tension", _tendon_probe(probes.TendonTensionProbe))
+PROBES.register("tendon_displacement", _tendon_probe(probes.TendonDisplacementProbe))
