@@ -23,6 +23,17 @@ class ConvergenceError(FlexmbsError):
     """A nonlinear solve failed; the message names the worst equation and its object."""
 
 
+class OffPlanError(ConvergenceError):
+    """A joint's Jacobian fell outside the elements the factorisation's plan follows it on
+    (:meth:`flexmbs.assembly.Assembly.follow`): the solve is to be re-planned and repeated, not
+    shortened. ``widen`` = (error code, member, element) for
+    :meth:`~flexmbs.assembly.Assembly.contact_windows`."""
+
+    def __init__(self, message: str, widen: tuple[int, int, int]) -> None:
+        super().__init__(message)
+        self.widen = widen
+
+
 class RedundantConstraintError(ModelError):
     """The constraint Jacobian is rank deficient; the message lists the dependent equations."""
 

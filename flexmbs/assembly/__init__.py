@@ -30,7 +30,7 @@ from ..constraints.drivers import JointDriver
 from ..constraints.interaction import InteractionKind
 from ..elements import rigid_body as rb
 from ..elements.layout import BASE_RECORD, ElementType
-from ..errors import FlexmbsError, ModelError
+from ..errors import FlexmbsError, ModelError, OffPlanError
 from ..kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
 from ..model import Beam, Model, Node, RigidBody
 from ..springs import spring_energy
@@ -251,6 +251,10 @@ class Assembly:
             cM, cC, cK = matrix
             kscale, code = self._kernel(OP_JACOBIAN, q, v, acc, lam, fv, mode, self._data,
                                         (cM, cC, cK))
+            if code and self.off_plan(code):
+                err = self.system.error
+                raise OffPlanError(str(self.error_exception(code, q, t)),
+                                   (int(code), int(err[1]), int(err[2])))
             if code:
                 raise self.error_exception(code, q, t)
             if kscale > 0:

@@ -29,7 +29,7 @@ from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
 from ..linalg.sparse_lu import ST_HAVE, sparse_restore
 from ..steploop import step_error
-from .factor import PlannedLU
+from .factor import FOLLOW_COST_RATIO, FOLLOW_REACH, MAX_REPLANS, PlannedLU
 from .newton import Newton, NewtonOptions
 
 #: values of :attr:`GeneralizedAlpha.constraint_level` (the scenario key of the same name)
@@ -435,15 +435,6 @@ class _StepFailure(Exception):
         self.replan = replan        # a sliding joint left the elements the plan follows
 
 
-#: a plan that follows the sliding joints (:meth:`Assembly.factor_plan` with windows) holds
-#: each joint's entries on this many elements either side of its current one
-FOLLOW_REACH = 1
-#: ... and is used when its estimated cost is below this fraction of the plan of the whole
-#: reserved pattern (a few joints on long beams keep the fixed plan: no re-planning)
-FOLLOW_COST_RATIO = 0.25
-#: new plans for one step before it counts as failed (each adds the elements where the step
-#: found a joint outside its windows; a sliding joint's needs one)
-MAX_REPLANS = 8
 
 
 class _CompiledStepper:

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import ConvergenceError, ModelError
+from ..errors import ConvergenceError, ModelError, OffPlanError
 from ..steploop import renew_jacobian
 
 if TYPE_CHECKING:
@@ -256,6 +256,8 @@ class Newton:
         while True:
             try:
                 return problem.evaluate(need)
+            except OffPlanError:     # not the iterate's fault: the caller plans again
+                raise
             except ConvergenceError:
                 if retreat is None or alpha <= 0.5 ** retreats:
                     raise
@@ -272,6 +274,8 @@ class Newton:
             problem.apply(dx, alpha)
             try:
                 r_q, r_lam, scale = problem.evaluate(False)
+            except OffPlanError:
+                raise
             except ConvergenceError:    # a rejected iterate: a shorter step
                 problem.restore(saved)
                 alpha *= 0.5

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..assembly import Assembly
-from ..errors import ConvergenceError, FlexmbsError, ModelError
-from .factor import static_factorization
+from ..errors import ConvergenceError, FlexmbsError, ModelError, OffPlanError
+from .factor import MAX_REPLANS, FollowingStaticLU, static_factorization
 from .newton import Newton, NewtonOptions
 
 
@@ -100,34 +100,59 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
     asm.begin(q)
     prob = _StaticStep(asm, q, lam, t)
     prob.stabilizer = o.stabilizer
-    newton = Newton(o.newton, asm.length_scale, static_factorization(asm))
-    factor, inc = 0.0, 1.0 / o.load_steps
-    n_inc = 0
-    while factor < 1.0:
-        trial = min(1.0, factor + inc)
+    factor = static_factorization(asm)
+    newton = Newton(o.newton, asm.length_scale, factor)
+    try:
+        n_inc = _load_steps(asm, prob, newton, factor, o, t)
+    finally:
+        if isinstance(factor, FollowingStaticLU):
+            factor.release()
+    return StaticResult(q, lam, n_inc, newton.total.iterations)
+
+
+def _load_steps(asm: Assembly, prob: _StaticStep, newton: Newton, factor: object,
+                o: StaticOptions, t: float) -> int:
+    """The load factor from 0 to 1 in adaptive increments; returns their number. An increment
+    whose Jacobian left the plan's windows (:class:`~flexmbs.errors.OffPlanError`) is solved
+    again on a plan that holds where it went (at most ``MAX_REPLANS`` times), not halved."""
+    q, lam = prob.q, prob.lam
+    load, inc = 0.0, 1.0 / o.load_steps
+    n_inc = replans = 0
+    while load < 1.0:
+        trial = min(1.0, load + inc)
         saved = prob.save()
         prob.load = trial
         try:
             st = newton.solve(prob, full=True)
+        except OffPlanError as exc:
+            prob.restore(saved)
+            replans += 1
+            if replans > MAX_REPLANS or not isinstance(factor, FollowingStaticLU):
+                raise ConvergenceError(f"static solve failed at load factor {load:.4g}: "
+                                       f"{exc}") from None
+            factor.replan(exc.widen, again=replans > 1)
+            continue
         except ConvergenceError as exc:
             prob.restore(saved)
             inc *= 0.5
             if inc < o.min_increment:
                 raise ConvergenceError(
-                    f"static solve failed at load factor {factor:.4g} (increment below "
+                    f"static solve failed at load factor {load:.4g} (increment below "
                     f"{o.min_increment:g}): {exc}") from None
             continue
+        replans = 0
         try:
             asm.static_increment_done(q, lam, t, trial)   # joints' state, nodal charts (§2.4)
         except FlexmbsError as exc:    # a node turned past the frames' limit: smaller increment
             prob.restore(saved)
             inc *= 0.5
             if inc < o.min_increment:
-                raise ConvergenceError(f"static solve failed at load factor {factor:.4g}: "
+                raise ConvergenceError(f"static solve failed at load factor {load:.4g}: "
                                        f"{exc}") from None
             continue
-        factor = trial
+        load = trial
         n_inc += 1
         if st.iterations <= o.easy_iterations:
             inc *= 1.5
-    return StaticResult(q, lam, n_inc, newton.total.iterations)
+    return n_inc
+
