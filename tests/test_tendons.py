@@ -245,7 +245,7 @@ def _run(model: fm.Model, t_end: float = 0.05) -> tuple[Assembly, fm.Result]:
 
 def test_frictionless_tendon_carries_its_tension_through_every_hole():
     """Reference: a frictionless wire over supports keeps its tension (the capstan with μ = 0):
-    at the actuator and at every hole N = T, and the anchor holds T. Three fixed disks, the
+    in every span between actuator, holes and anchor N = T, and the anchor holds T. Three fixed disks, the
     middle hole 0.1 mm off the line (the wire bends over it: a contact force of T × the turn,
     ~0.02 N), T = 2 N ramped in over 20 ms, damped wire, state after 50 ms. Tolerance 2e-4 T:
     the bending of the wire over the hole edges (EI/T ~ (1.8 mm)²) changes N by ~ T φ² with the

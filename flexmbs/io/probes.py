@@ -293,9 +293,9 @@ class ContactForceProbe(Probe):
 
 
 class TendonTensionProbe(Probe):
-    """The axial force N = EA(ε − ε0) [N] of a tendon's wire (its elastic part) at the actuator,
-    column ``<name>_a``, and at each hole, ``<name>_1`` ... ``<name>_<n>`` in route order, where
-    the hole's clearance joint is on the wire now (its slide coordinate):
+    """The tension along a tendon's route: the axial force N = EA(ε − ε0) [N] of its wire (the
+    elastic part) in the middle of every free span, columns ``<name>_0`` (the actuator's span,
+    start → hole 1) ... ``<name>_<n>`` (last hole → anchor):
     :meth:`TendonParts.axial_forces <flexmbs.tendons.TendonParts.axial_forces>`."""
 
     def __init__(self, name: str, tendon: Any) -> None:
@@ -306,7 +306,7 @@ class TendonTensionProbe(Probe):
         self.tendon = tendon
 
     def columns(self) -> list[str]:
-        return [f"{self.name}_a"] + [f"{self.name}_{k + 1}" for k in range(len(self.tendon.holes))]
+        return [f"{self.name}_{k}" for k in range(len(self.tendon.holes) + 1)]
 
     def evaluate(self, asm: Any, state: Any) -> np.ndarray:
         return np.asarray(self.tendon.axial_forces(asm, state.q), dtype=float)

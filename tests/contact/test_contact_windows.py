@@ -135,3 +135,31 @@ def test_a_following_plan_drops_exactly_the_hole_bodies_entries_outside_the_wind
         keep = asm._window_entries(np.array(windows, np.int64))
         assert (~expected).sum() > 0
         np.testing.assert_array_equal(keep, expected)
+
+
+def test_statics_on_a_plan_that_follows_the_contacts(monkeypatch):
+    """solve_static on the following plan (solvers.factor.FollowingStaticLU): the wire pulled 3
+    cm through the sagging eyelets leaves its windows (OffPlanError: the increment is solved
+    again on a wider plan, not halved) and ends at the equilibrium of the whole reserved
+    pattern's plan to round-off; afterwards every joint holds its whole beam again."""
+    import flexmbs.solvers.factor as factor
+
+    solutions, replans = [], []
+    original = factor.FollowingStaticLU.replan
+
+    def counted(self, widen, again):  # noqa: ANN001, ANN202
+        replans.append(widen)
+        original(self, widen, again)
+
+    monkeypatch.setattr(factor.FollowingStaticLU, "replan", counted)
+    for follow in (True, False):
+        monkeypatch.setattr(factor, "FOLLOW_COST_RATIO", np.inf if follow else 0.0)
+        model, wire = _eyelets()
+        asm = Assembly(model)
+        st = fm.solve_static(asm, fm.StaticOptions(load_steps=4), t=0.2)
+        solutions.append(st.q)
+        assert [tuple(w) for w in asm.system.clearance.window] == [(0, wire.n_elem)] * 3
+        if follow:
+            assert len(replans) >= 1
+    assert len(replans) >= 1
+    np.testing.assert_allclose(solutions[0], solutions[1], rtol=0, atol=1e-12)

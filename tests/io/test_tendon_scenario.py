@@ -95,10 +95,10 @@ def test_tendon_scenario_builds_and_runs(tmp_path):
     assert main(["run", str(path), "--out", str(out), "-q"]) == 0
     with open(out / "probes.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert list(rows[0])[:6] == ["t", "N_a", "N_1", "N_2", "N_3", "pulled"]
+    assert list(rows[0])[:6] == ["t", "N_0", "N_1", "N_2", "N_3", "pulled"]
     last = {k: float(v) for k, v in rows[-1].items()}
     assert last["t"] == pytest.approx(0.04)
-    for col in ("N_a", "N_1", "N_2", "N_3"):
+    for col in ("N_0", "N_1", "N_2", "N_3"):
         assert last[col] == pytest.approx(2.0, abs=1e-3), col
     assert last["pulled"] > 0.0
     assert abs(last["F2_x"]) > 1e-3
