@@ -83,7 +83,8 @@ def hole_angles(shift_long: float = 0.0) -> list[float]:
 def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), mu: float = 0.0,
           tendon_elements: int | None = None, *, stiffness: float = STIFFNESS,
           shift_long: float = 0.0, t_ramp: float = T_RAMP, rod_damping: float = 0.0,
-          tendon_damping: float = 0.0) -> tuple[fm.Model, dict]:
+          tendon_damping: float = 0.0, only: tuple[int, ...] | None = None,
+          sections: int = HOLE_SECTIONS, tip_force: float = 0.0) -> tuple[fm.Model, dict]:
     """The robot with ``n_disks`` disks (spacing 400 mm / n_disks, 2 backbone elements per
     spacing, tendons 1-3 ending at disk ``n_disks // 2``) and tendon ``tensions`` [N] (1..6).
 
@@ -91,7 +92,9 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
     element length; None: elements of about :data:`TENDON_ELEMENT`. ``mu``: friction
     coefficient of every bore (0: none); ``stiffness``: the linear penalty [N/m];
     ``shift_long``: turn tendons 4-6 by that many degrees (0: they share the holes of 1-3);
-    ``t_ramp``: the tensions' smooth ramp [s]. Returns (model, handles): ``backbone``,
+    ``t_ramp``: the tensions' smooth ramp [s]; ``only``: build only these tendons (1..6);
+    ``sections``: contact sections per bore; ``tip_force``: a force along +z at the backbone's
+    tip [N], ramped as the tensions. Returns (model, handles): ``backbone``,
     ``plate``, ``disks``, ``tendons``, ``bores`` (per tendon its clearance joints),
     ``tension_loads`` (per tendon its load or None), ``ends`` (spherical joints), ``holds``."""
     if n_disks < 2:
@@ -120,6 +123,8 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
     law = fm.LinearPenalty(stiffness=stiffness)
     tendons, bores, loads, ends, holds = [], [], [], [], []
     for i, angle in enumerate(hole_angles(shift_long)):
+        if only is not None and i + 1 not in only:
+            continue
         end = mid if i < 3 else n_disks
         a = math.radians(angle)
         x, y = PITCH_R * math.cos(a), PITCH_R * math.sin(a)
@@ -133,7 +138,7 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
             point = AXIS_Z.T @ (np.array([x, y, body.pose.position[2]]) - body.pose.position)
             joints.append(model.add_joint(fm.SlidingClearanceJoint(
                 tendon, body, hole=fm.CircleHole(radius=TENDON_R + CLEARANCE,
-                                                 length=HOLE_LENGTH, sections=HOLE_SECTIONS),
+                                                 length=HOLE_LENGTH, sections=sections),
                 hole_point=point, contact=law, friction=friction,
                 name=f"bore_t{i + 1}_{body.name}")))
         ends.append(model.spherical(tendon.last_node, disks[end - 1], name=f"anchor_t{i + 1}"))
@@ -147,6 +152,10 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
         tendons.append(tendon)
         bores.append(joints)
         loads.append(load)
+    if tip_force:
+        model.add_point_load(backbone.last_node, (0.0, 0.0, tip_force),
+                             function=fm.Ramp(start=0.0, end=t_ramp, value=1.0, smooth=True),
+                             name="tip_force")
     return model, {"backbone": backbone, "plate": plate, "disks": disks, "tendons": tendons,
                    "bores": bores, "tension_loads": loads, "ends": ends, "holds": holds}
 
@@ -299,6 +308,29 @@ def run_static(n_disks: int, load_steps: int, **kw) -> dict:
     return out
 
 
+#: the issue's four static load cases (tensions of tendons 1..6 [N], tip force [N]) and two
+#: with taut tendons only
+STATIC_CASES = {
+    "(0,2,0,1,0,1)": ((0, 2, 0, 1, 0, 1), 0.0, None),
+    "(4,0,0,0,2,0)": ((4, 0, 0, 0, 2, 0), 0.0, None),
+    "(2,0,0,0,2,0)": ((2, 0, 0, 0, 2, 0), 0.0, None),
+    "(4,0,0,0,0,1)+0.1N": ((4, 0, 0, 0, 0, 1), 0.1, None),
+    "t4 only, 1 N": ((0, 0, 0, 1, 0, 0), 0.0, (4,)),
+    "t2,t4,t6 only": ((0, 2, 0, 1, 0, 1), 0.0, (2, 4, 6)),
+}
+
+
+def static_cases(disks: int, sections: int, load_steps: int = 10) -> None:
+    """Print the static solve of every :data:`STATIC_CASES` entry (a fresh build each)."""
+    for name, (tensions, tip, only) in STATIC_CASES.items():
+        r = run_static(disks, load_steps, tensions=tensions, tip_force=tip, only=only,
+                       sections=sections)
+        what = (f"{r['increments']} increments, {r['newton']} iterations" if r["status"] ==
+                "converged" else r["error"][:110])
+        print(f"{disks:3d} disks, {sections} section(s), {name:>20s}: {r['status']:9s} "
+              f"{r['wall_s']:7.2f} s  {what}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--disks", type=int, default=20)
@@ -320,11 +352,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-wall", type=float, default=240.0,
                     help="stop the timed run after this many seconds (0: no limit)")
     ap.add_argument("--progress", action="store_true", help="print a line per output")
+    ap.add_argument("--sections", type=int, default=HOLE_SECTIONS,
+                    help="contact sections per bore (the issue: 3)")
+    ap.add_argument("--static-cases", action="store_true",
+                    help="static solves of the issue's four load cases and two taut ones")
     ap.add_argument("--shift", type=float, default=0.0,
                     help="turn tendons 4-6 by this angle [deg] (0: share the holes of 1-3)")
     a = ap.parse_args(argv)
     kw = {"tensions": tuple(a.tensions), "mu": a.mu, "tendon_elements": a.tendon_elements,
-          "stiffness": a.stiffness, "shift_long": a.shift}
+          "stiffness": a.stiffness, "shift_long": a.shift, "sections": a.sections}
+    if a.static_cases:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model, _ = build(2, sections=a.sections)      # compile or load the kernels
+            fm.solve_static(Assembly(model), fm.StaticOptions(load_steps=2), t=0.0)
+        static_cases(a.disks, a.sections, a.load_steps)
+        return 0
 
     if a.units:
         print(f"{'disks':>5s} {'unknowns':>8s} {'planned':>8s} {'plan':>6s} {'matrix':>8s} "
