@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -25,7 +25,6 @@ from .springs import SpringDamper, check_table
 
 if TYPE_CHECKING:  # pragma: no cover
     from .constraints.interaction import Interaction
-    from .tendons import Tendon, TendonParts
 
 ArrayLike3 = Sequence[float] | np.ndarray
 
@@ -582,14 +581,17 @@ class Model:
         self.interactions.append(joint)
         return joint
 
-    def add_tendon(self, tendon: Tendon) -> TendonParts:
+    def add_tendon(self, tendon: Any) -> Any:
         """A wire through holes in a sequence of bodies, anchored and pulled
         (:class:`flexmbs.Tendon`, :mod:`flexmbs.tendons`): its beam, a clearance joint per hole,
         the anchor, the hold of its start and its tension load or pull driver, named after the
-        tendon; the route is checked before anything is added."""
-        from .tendons import add_tendon
-
-        return add_tendon(self, tendon)
+        tendon; the route is checked before anything is added. Returns its
+        :class:`flexmbs.TendonParts`. (The tendon adds itself: this module composes no
+        tendon, so the tendons module, above the model and the contact joints, stays above.)"""
+        add = getattr(tendon, "add_to", None)
+        if add is None:
+            raise ModelError(f"add_tendon: expected a flexmbs.Tendon (got {tendon!r})")
+        return add(self)
 
     # ------------------------------------------------------------------ force elements
     def add_spring_damper(self, a: Node | RigidBody | Ground, b: Node | RigidBody | Ground = GROUND,

@@ -128,6 +128,10 @@ class Tendon:
             raise ModelError(f"tendon '{name}': give exactly one of tension [N] (a force pulling "
                              "the start) and pulled_length [m] (the start's displacement)")
 
+    def add_to(self, model: Model) -> TendonParts:
+        """:func:`add_tendon` (what :meth:`Model.add_tendon` calls)."""
+        return add_tendon(model, self)
+
     @property
     def hole_radius(self) -> float:
         """Radius of every hole: the wire's radius plus the clearance."""
