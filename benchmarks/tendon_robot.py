@@ -84,7 +84,8 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
           tendon_elements: int | None = None, *, stiffness: float = STIFFNESS,
           shift_long: float = 0.0, t_ramp: float = T_RAMP, rod_damping: float = 0.0,
           tendon_damping: float = 0.0, only: tuple[int, ...] | None = None,
-          sections: int = HOLE_SECTIONS, tip_force: float = 0.0) -> tuple[fm.Model, dict]:
+          sections: int = HOLE_SECTIONS, tip_force: float = 0.0, onset: float = 0.0
+          ) -> tuple[fm.Model, dict]:
     """The robot with ``n_disks`` disks (spacing 400 mm / n_disks, 2 backbone elements per
     spacing, tendons 1-3 ending at disk ``n_disks // 2``) and tendon ``tensions`` [N] (1..6).
 
@@ -94,7 +95,8 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
     ``shift_long``: turn tendons 4-6 by that many degrees (0: they share the holes of 1-3);
     ``t_ramp``: the tensions' smooth ramp [s]; ``only``: build only these tendons (1..6);
     ``sections``: contact sections per bore; ``tip_force``: a force along +z at the backbone's
-    tip [N], ramped as the tensions. Returns (model, handles): ``backbone``,
+    tip [N], ramped as the tensions; ``onset``: the penalty's smooth onset [m]. Returns
+    (model, handles): ``backbone``,
     ``plate``, ``disks``, ``tendons``, ``bores`` (per tendon its clearance joints),
     ``tension_loads`` (per tendon its load or None), ``ends`` (spherical joints), ``holds``."""
     if n_disks < 2:
@@ -120,7 +122,7 @@ def build(n_disks: int = 20, tensions: tuple[float, ...] = (0, 2, 0, 1, 0, 1), m
         disks.append(disk)
 
     friction = fm.Friction(mu=mu) if mu else None
-    law = fm.LinearPenalty(stiffness=stiffness)
+    law = fm.LinearPenalty(stiffness=stiffness, onset=onset)
     tendons, bores, loads, ends, holds = [], [], [], [], []
     for i, angle in enumerate(hole_angles(shift_long)):
         if only is not None and i + 1 not in only:
@@ -320,14 +322,15 @@ STATIC_CASES = {
 }
 
 
-def static_cases(disks: int, sections: int, load_steps: int = 10) -> None:
+def static_cases(disks: int, sections: int, load_steps: int = 10, onset: float = 0.0) -> None:
     """Print the static solve of every :data:`STATIC_CASES` entry (a fresh build each)."""
     for name, (tensions, tip, only) in STATIC_CASES.items():
         r = run_static(disks, load_steps, tensions=tensions, tip_force=tip, only=only,
-                       sections=sections)
+                       sections=sections, onset=onset)
         what = (f"{r['increments']} increments, {r['newton']} iterations" if r["status"] ==
                 "converged" else r["error"][:110])
-        print(f"{disks:3d} disks, {sections} section(s), {name:>20s}: {r['status']:9s} "
+        print(f"{disks:3d} disks, {sections} section(s), onset {onset:g}, {name:>20s}: "
+              f"{r['status']:9s} "
               f"{r['wall_s']:7.2f} s  {what}", flush=True)
 
 
@@ -354,19 +357,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--progress", action="store_true", help="print a line per output")
     ap.add_argument("--sections", type=int, default=HOLE_SECTIONS,
                     help="contact sections per bore (the issue: 3)")
+    ap.add_argument("--onset", type=float, default=0.0,
+                    help="the penalty's smooth onset [m] (LinearPenalty(onset=...))")
     ap.add_argument("--static-cases", action="store_true",
                     help="static solves of the issue's four load cases and two taut ones")
     ap.add_argument("--shift", type=float, default=0.0,
                     help="turn tendons 4-6 by this angle [deg] (0: share the holes of 1-3)")
     a = ap.parse_args(argv)
     kw = {"tensions": tuple(a.tensions), "mu": a.mu, "tendon_elements": a.tendon_elements,
-          "stiffness": a.stiffness, "shift_long": a.shift, "sections": a.sections}
+          "stiffness": a.stiffness, "shift_long": a.shift, "sections": a.sections,
+          "onset": a.onset}
     if a.static_cases:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model, _ = build(2, sections=a.sections)      # compile or load the kernels
             fm.solve_static(Assembly(model), fm.StaticOptions(load_steps=2), t=0.0)
-        static_cases(a.disks, a.sections, a.load_steps)
+        static_cases(a.disks, a.sections, a.load_steps, a.onset)
         return 0
 
     if a.units:

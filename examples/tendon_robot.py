@@ -8,6 +8,7 @@ The robot of ``benchmarks/tendon_robot.py``, built as a user would, with
 (the same holes) at the last. Every tendon passes a 1 mm hole (20 µm clearance, linear penalty
 1e6 N/m, one contact section: the holes are shorter than the wire's elements) in the plate and
 in every disk below its anchor, starts 20 mm below the plate and is pulled there by its tension.
+The penalty rises smoothly over the first 0.2 µm of penetration (``LinearPenalty(onset=...)``).
 
 The load cases (tensions of tendons 1..6 in N), by name:
 
@@ -61,6 +62,9 @@ CASES: dict[str, tuple[tuple[float, ...], float]] = {
 #: body x along global z: the disks' cylinders (drawn in ParaView) run along the backbone
 AXIS_Z = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 RAMP, BACKBONE_DAMPING, WIRE_DAMPING = 0.1, 0.4, 1e-3
+#: the holes' linear penalty rises smoothly over the first 1 % of the clearance (the Tendon's
+#: default: ``flexmbs.tendons.ONSET``)
+ONSET = 1e-2 * CLEARANCE
 TOML = Path(__file__).with_suffix(".toml")
 
 
@@ -107,7 +111,7 @@ def build(case: str = "mixed", disks: int = 20, mu: float = 0.0
             name=f"t{i + 1}", route=[(plate, hole)] + [(b, hole) for b in bodies[:end - 1]],
             anchor=(bodies[end - 1], hole), lead=LEAD, radius=WIRE_R, material=STEEL,
             clearance=CLEARANCE, damping=WIRE_DAMPING, tension=tension,
-            contact=fm.LinearPenalty(stiffness=1e6), friction=mu or None)))
+            contact=fm.LinearPenalty(stiffness=1e6, onset=ONSET), friction=mu or None)))
     if tip_force:
         model.add_point_load(backbone.last_node, (0.0, 0.0, 1.0), function=ramp(tip_force),
                              name="tip_force")
@@ -182,7 +186,7 @@ def scenario(case: str = "mixed", disks: int = 20, mu: float = 0.0) -> str:
                   f"density = {STEEL.rho!r}", f"poisson_ratio = {STEEL.nu!r}",
                   f"damping = {WIRE_DAMPING!r}", f"clearance = {CLEARANCE!r}",
                   f"tension = {tension}",
-                  "contact = { law = \"linear\", stiffness = 1e6"
+                  f"contact = {{ law = \"linear\", stiffness = 1e6, onset = {ONSET!r}"
                   + (f", friction = {mu!r}" if mu else "") + " }"]
     if tip_force:
         lines += ["", "[[loads]]", 'type = "point"', 'name = "tip_force"', 'beam = "backbone"',

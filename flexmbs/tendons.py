@@ -45,6 +45,14 @@ __all__ = ["Tendon", "TendonLayout", "TendonParts", "add_tendon", "sections_per_
 
 #: turns of the route sharper than this at a hole are refused (degrees)
 MAX_TURN = 90.0
+#: the holes' default contact: a linear penalty of this stiffness [N/m] (the clearance joint's
+#: default) ...
+DEFAULT_STIFFNESS = 1e6
+#: ... with a smooth onset over this fraction of the clearance (LinearPenalty(onset=...)): a
+#: slack wire grazes its holes, and the plain linear law's jump of stiffness at first touch
+#: keeps Newton cycling between contact sets (design notes, "Statics of tendon-routed
+#: structures"); a loaded contact sits half of it (0.5 % of the clearance) deeper
+ONSET = 1e-2
 
 
 def _positive(name: str, key: str, value: Any, *, allow_zero: bool = False) -> float:
@@ -68,8 +76,9 @@ class Tendon:
     ``element_length`` or ``elements`` (default: half the mean route segment), ``damping``
     [s] (stiffness-proportional, as :meth:`Model.add_beam`). The holes: ``clearance`` (hole
     radius − wire radius), ``hole_length``, ``hole_sections`` (default :func:`sections_per_hole`),
-    ``contact`` (a normal force law;
-    default the clearance joint's) and ``friction`` (as :class:`SlidingClearanceJoint` takes it).
+    ``contact`` (default a linear penalty of :data:`DEFAULT_STIFFNESS` with a smooth onset over
+    :data:`ONSET` of the clearance) and ``friction`` (as :class:`SlidingClearanceJoint` takes
+    it).
     Actuation, exactly one of ``tension`` [N] (number or time function: a force on the start
     node back along the route's first direction) and ``pulled_length`` [m] (time function: the
     start node driven back along it)."""
@@ -413,6 +422,7 @@ def add_tendon(model: Model, tendon: Tendon) -> TendonParts:
     fails. Prefer :meth:`Model.add_tendon <flexmbs.model.Model.add_tendon>`."""
     from .contact.bores import CircleHole
     from .contact.joint import SlidingClearanceJoint
+    from .contact.laws import LinearPenalty
     from .model import GROUND
 
     if not isinstance(tendon, Tendon):
@@ -442,6 +452,9 @@ def add_tendon(model: Model, tendon: Tendon) -> TendonParts:
         assert tendon.section is not None
         beam = model.add_beam(lay.centerline, section=tendon.section, damping=tendon.damping,
                               name=name)
+    contact = tendon.contact
+    if contact is None:
+        contact = LinearPenalty(stiffness=DEFAULT_STIFFNESS, onset=ONSET * tendon.clearance)
     sections = tendon.hole_sections
     if sections is None:
         sections = sections_per_hole(tendon.hole_length,
@@ -450,7 +463,7 @@ def add_tendon(model: Model, tendon: Tendon) -> TendonParts:
     for k, (body, point) in enumerate(tendon.route):
         joints.append(model.add_joint(SlidingClearanceJoint(
             beam, body, hole=CircleHole(tendon.hole_radius, tendon.hole_length, int(sections)),
-            hole_point=point, axis=body.pose.rotation.T @ lay.axes[k], contact=tendon.contact,
+            hole_point=point, axis=body.pose.rotation.T @ lay.axes[k], contact=contact,
             friction=tendon.friction, beam_radius=tendon.radius, name=holes[k])))
     anchor = model.spherical(beam.last_node, tendon.anchor[0], point=lay.anchor,
                              name=f"{name}_anchor")

@@ -58,6 +58,7 @@ from .clearance_term import (
 from .geometry import closest_point, section_state
 from .laws import (
     N_FRICTION,
+    N_LAW,
     ForceLaw,
     Friction,
     LinearPenalty,
@@ -988,7 +989,7 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.array([j.hole.section.bounding_radius() for j in joints], float),
         np.array([j.hole.section.inscribed_radius() for j in joints], float),
         np.array([j.detection == "consistent" for j in joints], dtype=np.bool_),
-        c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, 5)),
+        c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, N_LAW)),
         c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
         np.array([j.compiled_form() for j in joints], dtype=np.bool_),
         np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),

@@ -48,6 +48,7 @@ __all__ = [
     "LAWS",
     "get_law",
     "law_force",
+    "N_LAW",
     "law_energy",
     "coulomb_force",
     "coulomb_return_map",
@@ -61,13 +62,20 @@ __all__ = [
 @njit
 def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
     """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d δ̇`` (FORMULATION II §5), ``law`` =
-    ``[K, n, χ, c_d, v_min]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0 for ``δ ≤ 0`` and clamped at 0."""
+    ``[K, n, χ, c_d, v_min, onset]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0 for ``δ ≤ 0`` and clamped
+    at 0. With n = 1 and ``onset`` δ₀ > 0 the elastic part is ``Kδ²/(2δ₀)`` below δ₀ and
+    ``K(δ − δ₀/2)`` above: C¹, its stiffness grows from 0 instead of jumping to K at first touch
+    (:class:`LinearPenalty`)."""
     if delta <= 0.0:
         return 0.0, 0.0, 0.0
-    K, n, chi, c_d = law[0], law[1], law[2], law[3]
+    K, n, chi, c_d, onset = law[0], law[1], law[2], law[3], law[5]
     if n == 1.0:
-        fe = K * delta
-        ke = K
+        if delta < onset:        # the smooth onset: ke grows from 0 to K over the first ``onset``
+            fe = 0.5 * K * delta * delta / onset
+            ke = K * delta / onset
+        else:
+            fe = K * (delta - 0.5 * onset)
+            ke = K
     else:
         fe = K * delta**n
         ke = n * fe / delta
@@ -89,10 +97,15 @@ def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
 @njit
 def law_energy(law, delta):  # noqa: ANN001, ANN201
     """Potential ``Φ(δ) = Kδⁿ⁺¹/(n + 1)`` of the elastic part of :func:`law_force` (``Φ′ = Kδⁿ``;
-    0 for ``δ ≤ 0``): the section potential of FORMULATION II §4b. The damping terms have none."""
+    0 for ``δ ≤ 0``; with an onset δ₀: ``Kδ³/(6δ₀)``, then ``K(δ²/2 − δ₀δ/2 + δ₀²/6)``): the
+    section potential of FORMULATION II §4b. The damping terms have none."""
     if delta <= 0.0:
         return 0.0
-    n = law[1]
+    n, onset = law[1], law[5]
+    if n == 1.0 and onset > 0.0:
+        if delta < onset:
+            return law[0] * delta**3 / (6.0 * onset)
+        return law[0] * (0.5 * delta * delta - 0.5 * onset * delta + onset * onset / 6.0)
     return law[0] * delta ** (n + 1.0) / (n + 1.0)
 
 
@@ -169,6 +182,10 @@ def tangential_force(fric, stuck, f_n, d, v_t, F, dF_dd, dF_dv, dF_dfn, d_new): 
     return 1.0 if sticking else 0.0
 
 
+#: entries of a force law's parameters (:meth:`ForceLaw.parameters`)
+N_LAW = 6
+
+
 @runtime_checkable
 class ForceLaw(Protocol):
     """Normal force law ``f_N(δ, δ̇; δ̇⁽⁻⁾)`` (FORMULATION II §5)."""
@@ -179,7 +196,8 @@ class ForceLaw(Protocol):
         ...
 
     def parameters(self) -> np.ndarray:
-        """``[K, n, χ, c_d, v_min]`` of the common form evaluated by :func:`law_force`."""
+        """``[K, n, χ, c_d, v_min, onset]`` (:data:`N_LAW`) of the common form evaluated by
+        :func:`law_force`."""
         ...
 
 
@@ -217,17 +235,25 @@ class _CommonForm:
 
 @dataclass(frozen=True, kw_only=True)
 class LinearPenalty(_CommonForm):
-    """Linear penalty + viscous damping ``f = kδ + c_d δ̇`` (FORMULATION II §5, Exudyn's choice)."""
+    """Linear penalty + viscous damping ``f = kδ + c_d δ̇`` (FORMULATION II §5, Exudyn's choice).
+
+    ``onset`` δ₀ [m] (default 0): the force grows quadratically over the first δ₀ of
+    penetration, ``kδ²/(2δ₀)``, then ``k(δ − δ₀/2)``: the law is C¹, so a contact that only
+    grazes (a slack wire in its holes) does not throw Newton between "open, no stiffness" and
+    "closed, stiffness k"; a loaded contact sits δ₀/2 deeper (design notes, "Statics of
+    tendon-routed structures"). A small fraction of the clearance, e.g. 1e-3 of it."""
 
     stiffness: float
     damping: float = 0.0
+    onset: float = 0.0
 
     def __post_init__(self) -> None:
         _positive("LinearPenalty", "stiffness", self.stiffness)
         _positive("LinearPenalty", "damping", self.damping, allow_zero=True)
+        _positive("LinearPenalty", "onset", self.onset, allow_zero=True)
 
     def parameters(self) -> np.ndarray:
-        return np.array([self.stiffness, 1.0, 0.0, self.damping, 0.0], dtype=float)
+        return np.array([self.stiffness, 1.0, 0.0, self.damping, 0.0, self.onset], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -242,7 +268,7 @@ class Hertz(_CommonForm):
         _exponent("Hertz", self.exponent)
 
     def parameters(self) -> np.ndarray:
-        return np.array([self.stiffness, self.exponent, 0.0, 0.0, 0.0], dtype=float)
+        return np.array([self.stiffness, self.exponent, 0.0, 0.0, 0.0, 0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -266,8 +292,8 @@ class HuntCrossley(_CommonForm):
 
     def parameters(self) -> np.ndarray:
         chi = 1.5 * (1.0 - self.restitution)
-        return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity],
-                        dtype=float)
+        return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity,
+                         0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -288,8 +314,8 @@ class LankaraniNikravesh(_CommonForm):
 
     def parameters(self) -> np.ndarray:
         chi = 0.75 * (1.0 - self.restitution**2)
-        return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity],
-                        dtype=float)
+        return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity,
+                         0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)

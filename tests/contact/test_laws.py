@@ -22,6 +22,7 @@ FD_RTOL = 1e-6
 
 LAW_CASES = [
     LinearPenalty(stiffness=1e6, damping=30.0),
+    LinearPenalty(stiffness=1e6, damping=30.0, onset=2e-4),     # δ = 1e-4, 3e-5 in the onset
     Hertz(stiffness=1e9, exponent=1.5),
     Hertz(stiffness=1e7, exponent=1.1),
     HuntCrossley(stiffness=1e9, exponent=1.5, restitution=0.7),
@@ -56,6 +57,30 @@ def test_values() -> None:
     # e = 1: purely elastic
     f1 = LankaraniNikravesh(stiffness=1e9, restitution=1.0).force(d, dd, v0)[0]
     assert f1 == pytest.approx(1e9 * d**1.5)
+
+
+def test_the_linear_penalty_s_smooth_onset() -> None:
+    """Reference: f = kδ²/(2δ₀) below the onset δ₀, k(δ − δ₀/2) above; f and ∂f/∂δ continuous
+    at δ₀ (and ∂f/∂δ = 0 at first touch: C¹); the potential (law_energy) is its integral
+    (Simpson's rule is exact on the piecewise cubic); onset 0 is the plain law."""
+    from scipy.integrate import quad
+
+    from flexmbs.contact.laws import law_energy
+
+    k, d0 = 1e6, 2e-7
+    law = LinearPenalty(stiffness=k, onset=d0)
+    assert law.force(0.5 * d0, 0.0, 0.0) == pytest.approx((k * d0 / 8, 0.5 * k, 0.0))
+    assert law.force(3 * d0, 0.0, 0.0) == pytest.approx((2.5 * k * d0, k, 0.0))
+    below, above = law.force(d0 * (1 - 1e-12), 0.0, 0.0), law.force(d0 * (1 + 1e-12), 0.0, 0.0)
+    assert below[0] == pytest.approx(above[0], rel=1e-9) and below[1] == pytest.approx(above[1])
+    assert law.force(1e-15, 0.0, 0.0)[1] == pytest.approx(k * 1e-15 / d0)
+    p = law.parameters()
+    for delta in (0.3 * d0, d0, 4 * d0):
+        exact = quad(lambda x: law.force(x, 0.0, 0.0)[0], 0.0, delta, points=[d0], epsabs=0)[0]
+        assert law_energy(p, delta) == pytest.approx(exact, rel=1e-10)
+    assert LinearPenalty(stiffness=k).force(1e-6, 0.0, 0.0) == (1.0, k, 0.0)
+    with pytest.raises(ModelError, match="onset must be a finite number >= 0"):
+        LinearPenalty(stiffness=k, onset=-1e-9)
 
 
 @pytest.mark.parametrize("law", LAW_CASES, ids=lambda x: type(x).__name__)

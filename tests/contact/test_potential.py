@@ -359,3 +359,23 @@ def test_the_contact_potential_is_reported_with_the_energies():
     state = SimpleNamespace(q=q, v=v, t=0.0)
     assert EnergyProbe("e", "contact").evaluate(asm, state)[0] == pytest.approx(expected)
     assert EnergyProbe("e", "spring").evaluate(asm, state)[0] == 0.0
+
+
+@pytest.mark.parametrize("onset", [1e-7, 1e-3])
+def test_the_smooth_onset_keeps_the_potential_s_gradient_and_the_exact_tangent(onset):  # noqa: ANN001
+    """The linear law with a smooth onset (LinearPenalty(onset=...): C¹, quadratic below the
+    onset): the forces stay the gradient of the section potential and the exact tangent equals
+    central differences, with the penetrations beyond the onset (1e-7 m) and within it (1e-3
+    m), two points per section at 55°."""
+    law = fm.LinearPenalty(stiffness=STIFFNESS, onset=onset)
+    model, joint, body, _ = eyelet_on_wire(math.radians(55.0), 1.23e-3, law=law)
+    asm = Assembly(model)
+    q = _bent(asm, joint)
+    err, _ = gradient_error(joint, body, asm, q)
+    assert err < GRADIENT_TOL
+    depths = [-res.gap for _k, _j, _kind, _e, res, *_ in joint._observed(q, np.zeros_like(q))]
+    assert depths and all(d > 0 for d in depths)
+    assert all(d > onset for d in depths) if onset < 1e-6 else all(d < onset for d in depths)
+    model, joint, body, _ = eyelet_on_wire(math.radians(55.0), 1.23e-3, free=True, law=law)
+    asm = Assembly(model)
+    _checked_tangent(asm, joint, body, _bent(asm, joint), np.zeros(asm.n_coords))

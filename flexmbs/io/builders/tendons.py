@@ -64,8 +64,10 @@ def build_tendon(t: Table, ctx: BuildContext) -> TendonParts:
     if which is None:
         raise ScenarioError(f"{t.path}: missing actuation: give tension = <N or time function> "
                             "or pulled_length = <m or time function>")
-    c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
-    contact, friction = read_contact_law(c), read_friction(c)
+    contact, friction = None, None       # the Tendon's default law, no friction
+    if t.has("contact"):
+        c = t.table("contact")
+        contact, friction = read_contact_law(c), read_friction(c)
     with at(t.path):
         spec = Tendon(
             name=t.raw["name"], route=route, anchor=anchor, lead=t.number("lead", gt=0.0),
