@@ -18,11 +18,11 @@ The load cases (tensions of tendons 1..6 in N), by name:
 - ``tip_force``: (4, 0, 0, 0, 0, 1) and a 0.1 N force along +z at the tip.
 
 The tensions ramp in over 0.1 s and the robot comes to rest under stiffness-proportional
-damping (backbone 0.4 s: its first bending mode critically damped; wires 1 ms). This is a
-damped dynamic run, not :func:`flexmbs.solve_static`: with slack tendons (a zero tension) the
-static load stepping does not converge yet (issue 52, item 3: ``docs/design-notes.md``,
-"Statics of tendon-routed structures"); one tendon, or a few taut ones on up to 10 disks, it
-solves (``tests/physics/test_tendon_robot.py``). ``--mu`` adds stick friction at every hole.
+damping (backbone 0.4 s: its first bending mode critically damped; wires 1 ms). ``--static``
+solves the equilibrium with :func:`flexmbs.solve_static` instead. With slack tendons (a zero
+tension) it converges for ``mixed`` (20 disks: 40 s) and ``opposed_light`` (10 disks: 104
+s), not yet for the two cases with 4 N on tendon 1 (issue 52, item 3: ``docs/design-notes.md``,
+"Statics of tendon-routed structures"). ``--mu`` adds stick friction at every hole.
 
 Prints the tip's position and each tendon's tension in its spans (actuator to anchor); with
 ``--out`` writes the run (ParaView series with the disks, ``probes.csv`` with the disk centres,
@@ -30,7 +30,7 @@ the tip and the tensions) for ``examples/figures/tendon_robot.py``.
 
 The same robot as a scenario file: ``examples/tendon_robot.toml`` (``--write-toml`` writes it).
 
-    python examples/tendon_robot.py [--case mixed] [--disks 20] [--mu 0] [--out DIR]
+    python examples/tendon_robot.py [--case mixed] [--disks 20] [--mu 0] [--out DIR] [--static]
     flexmbs run examples/tendon_robot.toml
 """
 
@@ -62,6 +62,8 @@ CASES: dict[str, tuple[tuple[float, ...], float]] = {
 #: body x along global z: the disks' cylinders (drawn in ParaView) run along the backbone
 AXIS_Z = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 RAMP, BACKBONE_DAMPING, WIRE_DAMPING = 0.1, 0.4, 1e-3
+#: the wires' element length: 57 elements on the 420 mm tendons, as the issue's model
+WIRE_ELEMENT = (LEAD + LENGTH) / 57
 #: the holes' linear penalty rises smoothly over the first 1 % of the clearance (the Tendon's
 #: default: ``flexmbs.tendons.ONSET``)
 ONSET = 1e-2 * CLEARANCE
@@ -111,6 +113,7 @@ def build(case: str = "mixed", disks: int = 20, mu: float = 0.0
             name=f"t{i + 1}", route=[(plate, hole)] + [(b, hole) for b in bodies[:end - 1]],
             anchor=(bodies[end - 1], hole), lead=LEAD, radius=WIRE_R, material=STEEL,
             clearance=CLEARANCE, damping=WIRE_DAMPING, tension=tension,
+            element_length=WIRE_ELEMENT,
             contact=fm.LinearPenalty(stiffness=1e6, onset=ONSET), friction=mu or None)))
     if tip_force:
         model.add_point_load(backbone.last_node, (0.0, 0.0, 1.0), function=ramp(tip_force),
@@ -184,7 +187,8 @@ def scenario(case: str = "mixed", disks: int = 20, mu: float = 0.0) -> str:
                   f'anchor = {{ body = "disk{end}", point = {_vec(hole)} }}', f"lead = {LEAD!r}",
                   f"radius = {WIRE_R!r}", f"youngs_modulus = {STEEL.E!r}",
                   f"density = {STEEL.rho!r}", f"poisson_ratio = {STEEL.nu!r}",
-                  f"damping = {WIRE_DAMPING!r}", f"clearance = {CLEARANCE!r}",
+                  f"damping = {WIRE_DAMPING!r}", f"element_length = {WIRE_ELEMENT!r}",
+                  f"clearance = {CLEARANCE!r}",
                   f"tension = {tension}",
                   f"contact = {{ law = \"linear\", stiffness = 1e6, onset = {ONSET!r}"
                   + (f", friction = {mu!r}" if mu else "") + " }"]
@@ -215,6 +219,35 @@ def probes(parts: dict) -> list:
     return out
 
 
+def report(asm, q: np.ndarray, parts: dict) -> None:  # noqa: ANN001
+    """Print the tip's position and every tendon's span tensions and pulled length at ``q``."""
+    tip = q[asm.node_dofs(parts["backbone"].last_node)[:3]]
+    print(f"tip at ({1e3 * tip[0]:.2f}, {1e3 * tip[1]:.2f}, {1e3 * tip[2]:.2f}) mm")
+    for t in parts["tendons"]:
+        N = t.axial_forces(asm, q)
+        print(f"  {t.name}: span tensions {np.array2string(N, precision=4, max_line_width=200)} N, "
+              f"pulled {1e3 * t.pulled(asm, q):.3f} mm")
+
+
+def static(model: fm.Model, parts: dict, args: argparse.Namespace) -> int:
+    """The equilibrium under the full loads by load stepping (``--static``)."""
+    from flexmbs.assembly import Assembly
+
+    asm = Assembly(model)
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            st = fm.solve_static(asm, fm.StaticOptions(load_steps=10), t=RAMP)
+        except fm.FlexmbsError as exc:
+            print(f"static solve failed after {time.perf_counter() - t0:.1f} s: {exc}")
+            return 1
+    print(f"case {args.case} (static): {st.load_increments} load increments, "
+          f"{st.newton_iterations} Newton iterations, {time.perf_counter() - t0:.2f} s")
+    report(asm, st.q, parts)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default="mixed", help=f"load case: {', '.join(CASES)}")
@@ -223,6 +256,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--t-end", type=float, default=2.0, help="time to come to rest [s]")
     ap.add_argument("--dt", type=float, default=5e-3)
     ap.add_argument("--out", type=Path, default=None, help="output folder")
+    ap.add_argument("--static", action="store_true",
+                    help="solve the equilibrium (solve_static) instead of the damped run")
     ap.add_argument("--write-toml", type=Path, nargs="?", const=TOML, default=None,
                     metavar="FILE", help=f"write the scenario file (default {TOML.name}) and stop")
     args = ap.parse_args(argv)
@@ -231,6 +266,8 @@ def main(argv: list[str] | None = None) -> int:
         print(args.write_toml)
         return 0
     model, parts = build(args.case, args.disks, args.mu)
+    if args.static:
+        return static(model, parts, args)
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -239,18 +276,12 @@ def main(argv: list[str] | None = None) -> int:
                           out=args.out, probes=probes(parts) if args.out else ())
     wall = time.perf_counter() - t0
     asm, q = res.assembly, res.final_state.q
-    tip = q[asm.node_dofs(parts["backbone"].last_node)[:3]]
-    tip_before = q[asm.node_dofs(parts["backbone"].last_node)[:3]]
-    if len(res.q) > 1:
-        tip_before = res.q[-2][asm.node_dofs(parts["backbone"].last_node)[:3]]
+    d = asm.node_dofs(parts["backbone"].last_node)[:3]
+    moved = np.linalg.norm(q[d] - res.q[-2][d]) if len(res.q) > 1 else 0.0
     print(f"case {args.case}: tensions {CASES[args.case][0]} N, tip force "
-          f"{CASES[args.case][1]} N, mu = {args.mu}")
-    print(f"tip at ({1e3 * tip[0]:.2f}, {1e3 * tip[1]:.2f}, {1e3 * tip[2]:.2f}) mm; moved "
-          f"{1e6 * np.linalg.norm(tip - tip_before):.2f} um over the last output interval")
-    for t in parts["tendons"]:
-        N = t.axial_forces(asm, q)
-        print(f"  {t.name}: span tensions {np.array2string(N, precision=4, max_line_width=200)} N, "
-              f"pulled {1e3 * t.pulled(asm, q):.3f} mm")
+          f"{CASES[args.case][1]} N, mu = {args.mu}; the tip moved {1e6 * moved:.2f} um over "
+          "the last output interval")
+    report(asm, q, parts)
     s = res.stats
     print(f"{s.steps} steps ({s.rejected_steps} rejected), {s.newton_iterations} Newton "
           f"iterations; wall {wall:.1f} s")
