@@ -23,6 +23,8 @@ solves the equilibrium with :func:`flexmbs.solve_static` instead. With slack ten
 tension) it converges for ``mixed`` (20 disks: 40 s) and ``opposed_light`` (10 disks: 104
 s), not yet for the two cases with 4 N on tendon 1 (issue 52, item 3: ``docs/design-notes.md``,
 "Statics of tendon-routed structures"). ``--mu`` adds stick friction at every hole.
+``--loop`` pulls tendon 4 up to 2 N and releases it, without friction and with ``--mu``
+(default 0.1): the tip's pull-release hysteresis.
 
 Prints the tip's position and each tendon's tension in its spans (actuator to anchor); with
 ``--out`` writes the run (ParaView series with the disks, ``probes.csv`` with the disk centres,
@@ -31,6 +33,7 @@ the tip and the tensions) for ``examples/figures/tendon_robot.py``.
 The same robot as a scenario file: ``examples/tendon_robot.toml`` (``--write-toml`` writes it).
 
     python examples/tendon_robot.py [--case mixed] [--disks 20] [--mu 0] [--out DIR] [--static]
+    python examples/tendon_robot.py --loop [--mu 0.1] [--out DIR]   # the pull-release loop
     flexmbs run examples/tendon_robot.toml
 """
 
@@ -70,10 +73,11 @@ ONSET = 1e-2 * CLEARANCE
 TOML = Path(__file__).with_suffix(".toml")
 
 
-def build(case: str = "mixed", disks: int = 20, mu: float = 0.0
-          ) -> tuple[fm.Model, dict]:
+def build(case: str = "mixed", disks: int = 20, mu: float = 0.0,
+          pull: fm.TimeFunction | None = None) -> tuple[fm.Model, dict]:
     """The robot under load case ``case``; returns the model and its parts (``backbone``,
-    ``disks``, ``tendons``: :class:`flexmbs.TendonParts`)."""
+    ``disks``, ``tendons``: :class:`flexmbs.TendonParts`). ``pull``: instead, tendon 4 alone
+    pulled by this tension [N] (the others slack; the pull-release loop)."""
     if case not in CASES:
         raise SystemExit(f"--case: unknown load case {case!r} (known: {', '.join(CASES)})")
     if disks < 2:
@@ -109,13 +113,15 @@ def build(case: str = "mixed", disks: int = 20, mu: float = 0.0
         hole = AXIS_Z.T @ np.array([PITCH_R * math.cos(a), PITCH_R * math.sin(a), 0.0])
         end = disks // 2 if i < 3 else disks
         tension = ramp(tensions[i]) if tensions[i] else 0.0
+        if pull is not None:
+            tension = pull if i == 3 else 0.0
         tendons.append(model.add_tendon(fm.Tendon(
             name=f"t{i + 1}", route=[(plate, hole)] + [(b, hole) for b in bodies[:end - 1]],
             anchor=(bodies[end - 1], hole), lead=LEAD, radius=WIRE_R, material=STEEL,
             clearance=CLEARANCE, damping=WIRE_DAMPING, tension=tension,
             element_length=WIRE_ELEMENT,
             contact=fm.LinearPenalty(stiffness=1e6, onset=ONSET), friction=mu or None)))
-    if tip_force:
+    if tip_force and pull is None:
         model.add_point_load(backbone.last_node, (0.0, 0.0, 1.0), function=ramp(tip_force),
                              name="tip_force")
     return model, {"backbone": backbone, "disks": bodies, "tendons": tendons}
@@ -248,6 +254,38 @@ def static(model: fm.Model, parts: dict, args: argparse.Namespace) -> int:
     return 0
 
 
+#: the pull-release loop: tendon 4's tension [N] rises to this and falls back, each in ...
+LOOP_PEAK = 2.0
+#: ... this time [s] (about five times the backbone's damping time: nearly quasi-static)
+LOOP_TIME = 2.0
+
+
+def loop(args: argparse.Namespace) -> int:
+    """``--loop``: tendon 4 pulled up to :data:`LOOP_PEAK` and released, without friction and
+    with ``--mu`` (default 0.1), the tip's displacement against the actuator's tension; each
+    run written to ``--out``/mu_<mu> for ``examples/figures/tendon_robot.py``."""
+    pull = fm.Table(times=[0.0, LOOP_TIME, 2 * LOOP_TIME, 2.5 * LOOP_TIME],
+                    values=[0.0, LOOP_PEAK, 0.0, 0.0])
+    for mu in (0.0, args.mu or 0.1):
+        model, parts = build(disks=args.disks, mu=mu, pull=pull)
+        out = None if args.out is None else args.out / f"mu_{mu:g}"
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = fm.simulate(model, t_end=2.5 * LOOP_TIME, dt=args.dt,
+                              output_interval=LOOP_TIME / 20,
+                              integrator=fm.GeneralizedAlpha(rho_inf=0.5), record_energy=False,
+                              out=out, probes=probes(parts) if out else ())
+        asm, t4 = res.assembly, parts["tendons"][3]
+        tip = asm.node_dofs(parts["backbone"].last_node)[:3]
+        print(f"mu = {mu:g} ({time.perf_counter() - t0:.0f} s): tension [N], tip displacement [mm]")
+        for k in range(0, len(res.t), 5):  # every quarter of a ramp
+            n = t4.axial_forces(asm, res.q[k])[0]
+            u = np.linalg.norm(res.q[k][tip] - asm.q_ref[tip])
+            print(f"  t = {res.t[k]:4.1f} s  {n:7.4f}  {1e3 * u:8.3f}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default="mixed", help=f"load case: {', '.join(CASES)}")
@@ -256,6 +294,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--t-end", type=float, default=2.0, help="time to come to rest [s]")
     ap.add_argument("--dt", type=float, default=5e-3)
     ap.add_argument("--out", type=Path, default=None, help="output folder")
+    ap.add_argument("--loop", action="store_true",
+                    help="tendon 4 pulled to 2 N and released, with and without friction "
+                         "(--mu, default 0.1): the tip's hysteresis")
     ap.add_argument("--static", action="store_true",
                     help="solve the equilibrium (solve_static) instead of the damped run")
     ap.add_argument("--write-toml", type=Path, nargs="?", const=TOML, default=None,
@@ -265,6 +306,8 @@ def main(argv: list[str] | None = None) -> int:
         args.write_toml.write_text(scenario(args.case, args.disks, args.mu), encoding="utf-8")
         print(args.write_toml)
         return 0
+    if args.loop:
+        return loop(args)
     model, parts = build(args.case, args.disks, args.mu)
     if args.static:
         return static(model, parts, args)

@@ -12,7 +12,7 @@ import numpy as np
 
 from .data import Run
 
-__all__ = ["robot_shapes", "robot_tensions"]
+__all__ = ["robot_loop", "robot_shapes", "robot_tensions"]
 
 
 def _disks(run: Run, frame: int = -1) -> np.ndarray:
@@ -73,5 +73,26 @@ def robot_tensions(runs: dict[str, Run]) -> Any:
         ax.set_ylabel("tension [N]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def robot_loop(runs: dict[str, Run], tendon: str = "t4") -> Any:
+    """One figure: the last disk's displacement [mm] against ``tendon``'s tension at its
+    actuator (span 0) [N] over every run (a pull-release loop; one line per run)."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    for label, run in runs.items():
+        column = f"N_{tendon}_0"
+        if column not in run.probes:
+            raise ValueError(f"{run.directory}: probes.csv has no {column} column (the "
+                             f"tendon_tension probe of {tendon})")
+        p = np.array([_disks(run, k)[-1] for k in range(run.probes["t"].size)])
+        ax.plot(run.probes[column], 1e3 * np.linalg.norm(p - p[0], axis=1), "-", label=label)
+    ax.set_xlabel(f"tension of {tendon} at its actuator [N]")
+    ax.set_ylabel("displacement of the last disk [mm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig

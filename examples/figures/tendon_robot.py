@@ -6,7 +6,9 @@ exists; use ``--rerun``), then draws into ``docs/figures/`` with postprocess/ (w
 the output folders):
 
 - ``robot_shapes.png``: the backbone through the disk centres, every case, three views;
-- ``robot_tensions.png``: the tension in every span of each loaded tendon, per case.
+- ``robot_tensions.png``: the tension in every span of each loaded tendon, per case;
+- ``robot_loop.png``: the last disk's displacement against tendon 4's pull, up to 2 N and
+  back, without friction and with μ = 0.1 (``examples/tendon_robot.py --loop``).
 
     python examples/figures/tendon_robot.py [--disks 20] [--mu 0] [--rerun]
 """
@@ -34,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from postprocess.data import read_run
     from postprocess.figures import save_figures
-    from postprocess.robot import robot_shapes, robot_tensions
+    from postprocess.robot import robot_loop, robot_shapes, robot_tensions
 
     runs = {}
     for case in tendon_robot.CASES:
@@ -43,8 +45,14 @@ def main(argv: list[str] | None = None) -> int:
             tendon_robot.main(["--case", case, "--disks", str(args.disks), "--mu", str(args.mu),
                                "--out", str(out)])
         runs[case] = read_run(out)
+    loop = args.runs / "loop"
+    if args.rerun or not (loop / "mu_0.1" / "probes.csv").is_file():
+        tendon_robot.main(["--loop", "--disks", str(args.disks), "--mu", "0.1",
+                           "--out", str(loop)])
+    loops = {f"mu = {mu}": read_run(loop / f"mu_{mu}") for mu in ("0", "0.1")}
     paths = save_figures({"robot_shapes": robot_shapes(runs),
-                          "robot_tensions": robot_tensions(runs)}, args.figures, ["png"])
+                          "robot_tensions": robot_tensions(runs),
+                          "robot_loop": robot_loop(loops)}, args.figures, ["png"])
     for p in paths:
         print(p)
     return 0

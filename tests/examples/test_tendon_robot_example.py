@@ -46,7 +46,7 @@ def test_a_short_run_writes_what_the_figures_read(example, tmp_path, capsys):
     sys.path.insert(0, str(ROOT))
     try:
         from postprocess.data import read_run
-        from postprocess.robot import robot_shapes, robot_tensions
+        from postprocess.robot import robot_loop, robot_shapes, robot_tensions
     finally:
         sys.path.remove(str(ROOT))
     run = read_run(out)
@@ -55,7 +55,8 @@ def test_a_short_run_writes_what_the_figures_read(example, tmp_path, capsys):
     assert np.abs(run.probes["N_t1_0"]).max() < 0.05      # tendon 1 is not pulled: slack
     import matplotlib.pyplot as plt
 
-    for fig in (robot_shapes({"mixed": run}), robot_tensions({"mixed": run})):
+    for fig in (robot_shapes({"mixed": run}), robot_tensions({"mixed": run}),
+                robot_loop({"mixed": run})):
         assert fig.axes
         plt.close(fig)
 
@@ -103,3 +104,19 @@ def test_the_static_solve_of_the_mixed_case(example, capsys):
     for name, T in (("t2", 2.0), ("t4", 1.0), ("t6", 1.0), ("t1", 0.0), ("t5", 0.0)):
         values = np.array(lines[name].split("[")[1].split("]")[0].split(), float)
         np.testing.assert_allclose(values, T, rtol=0, atol=1e-3 * max(T, 1.0))
+
+
+def test_the_pull_release_loop_runs_both_frictions(example, tmp_path, capsys, monkeypatch):
+    """--loop (shortened): tendon 4 pulled and released without friction and with μ = 0.1,
+    each run in its folder with the actuator's tension rising and falling."""
+    monkeypatch.setattr(example, "LOOP_TIME", 0.02)
+    assert example.main(["--loop", "--disks", "2", "--out", str(tmp_path), "--dt", "2e-3"]) == 0
+    assert "mu = 0.1" in capsys.readouterr().out
+    sys.path.insert(0, str(ROOT))
+    try:
+        from postprocess.data import read_run
+    finally:
+        sys.path.remove(str(ROOT))
+    for mu in ("0", "0.1"):
+        n = read_run(tmp_path / f"mu_{mu}").probes["N_t4_0"]
+        assert n.max() > 1.0 and abs(n[-1]) < 0.1 * n.max()
