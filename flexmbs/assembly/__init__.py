@@ -432,14 +432,15 @@ class Assembly:
         return [(kind, self.joint_lists[kind.name]) for kind in driver.INTERACTION_KINDS
                 if kind.follow is not None and self.joint_lists[kind.name]]
 
-    def contact_windows(self, reach: int, widen: tuple[int, int, int] | None = None
-                        ) -> np.ndarray | None:
+    def contact_windows(self, reach: int, widen: tuple[int, int, int] | None = None,
+                        keep: np.ndarray | None = None) -> np.ndarray | None:
         """Per member of a following kind (the sliding joints, then the clearance joints) the
         elements ``[lo, hi)`` of its beam the plan holds its entries on: ``reach`` elements
         either side of where it is at the step's start (its current element; its sections'
         crossings), as ``(n_members, 2)``; None without such members. ``widen = (code, member,
         element)``: a driver error that found the member outside its window (its element is
-        added)."""
+        added); ``keep``: earlier windows that the new ones contain (a re-plan that failed
+        again: the windows only grow)."""
         following = self._following()
         if not following:
             return None
@@ -454,7 +455,12 @@ class Assembly:
                 n_elem = len(kind.follow.elements(self.joint_lists[kind.name][j]))
                 w[j, 1] = min(w[j, 1], n_elem)
             out.append(w)
-        return np.ascontiguousarray(np.concatenate(out), dtype=np.int64)
+        windows = np.ascontiguousarray(np.concatenate(out), dtype=np.int64)
+        if keep is not None:
+            empty = windows[:, 1] <= windows[:, 0]
+            windows[:, 0] = np.where(empty, keep[:, 0], np.minimum(windows[:, 0], keep[:, 0]))
+            windows[:, 1] = np.where(empty, keep[:, 1], np.maximum(windows[:, 1], keep[:, 1]))
+        return windows
 
     def follow(self, windows: np.ndarray | None) -> None:
         """The elements the factorisation's plan holds every following member's entries on

@@ -82,15 +82,10 @@ class FollowingStaticLU:
         """A joint left its windows (``widen``: the error's code, member, element): a plan
         around where every joint is now and where the solve found it; ``again``: the last new
         plan failed too (its windows are kept: they only grow)."""
-        windows = self.asm.contact_windows(FOLLOW_REACH, widen)
+        windows = self.asm.contact_windows(FOLLOW_REACH, widen,
+                                           keep=self.windows if again else None)
         assert windows is not None
-        if again:
-            empty = windows[:, 1] <= windows[:, 0]
-            old = self.windows
-            windows = np.stack([np.where(empty, old[:, 0], np.minimum(windows[:, 0], old[:, 0])),
-                                np.where(empty, old[:, 1], np.maximum(windows[:, 1], old[:, 1]))],
-                               axis=1)
-        self.windows = np.ascontiguousarray(windows, dtype=np.int64)
+        self.windows = windows
         self.asm.follow(self.windows)
         plan = self.asm.factor_plan(mass=False, windows=self.windows,
                                     border=self.lu.factor.border, sparse=self.lu.sparse)

@@ -551,14 +551,10 @@ class _CompiledStepper:
         (the next step refreshes the factorisation); ``again``: the step failed on the last
         new plan too (its windows are kept as well)."""
         err = self.asm.system.error
-        windows = self.asm.contact_windows(FOLLOW_REACH, (int(self.info[self.cc.INFO_CODE]),
-                                                          int(err[1]), int(err[2])))
+        windows = self.asm.contact_windows(
+            FOLLOW_REACH, (int(self.info[self.cc.INFO_CODE]), int(err[1]), int(err[2])),
+            keep=self.windows if again else None)
         assert windows is not None
-        if again and self.windows is not None:
-            empty = windows[:, 1] <= windows[:, 0]
-            lo = np.where(empty, self.windows[:, 0], np.minimum(windows[:, 0], self.windows[:, 0]))
-            hi = np.where(empty, self.windows[:, 1], np.maximum(windows[:, 1], self.windows[:, 1]))
-            windows = np.stack([lo, hi], axis=1)
         self._plan_on(windows, self.lu.factor.border, self.lu.sparse)
         self.replans += 1
 

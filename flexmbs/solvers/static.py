@@ -19,9 +19,9 @@ class StaticOptions:
     ``load_steps`` is the initial number of increments; a failed increment is halved (down to
     ``min_increment``), an easy one (``<= easy_iterations`` Newton iterations) grows by 1.5.
     Contacts that close and open within an increment cost a few iterations each, so "easy" is
-    8, with 40 iterations at most: one tendon on the 20-disk robot takes 11 increments (236
-    iterations, 1.2 s) where 4 and 30 took 376 (2 875, 11.5 s); design notes, "Statics of
-    tendon-routed structures".
+    8, with 40 iterations at most: one tendon on the 20-disk robot (plain linear penalty)
+    takes 11 increments (236 iterations, 1.2 s) where 4 and 30 took 376 (2 875, 11.5 s);
+    design notes, "Statics of tendon-routed structures".
     ``stabilizer`` (FORMULATION §6.5, Exudyn's stabilizerODE2term) adds the mass-proportional
     term ``c_s (1 - load^2) M`` to the Newton matrix only: it regularises slack cables and
     contacts that are not yet closed in the first increments, and vanishes at full load, so
