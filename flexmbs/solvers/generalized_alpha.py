@@ -89,6 +89,10 @@ class GeneralizedAlpha:
                              "constant_acceleration)")
         if not 0.0 <= self.rho_inf <= 1.0:
             raise ModelError(f"rho_inf must be in [0, 1] (got {self.rho_inf})")
+        if self.newton.slope_search:
+            raise ModelError("newton.slope_search applies to static solves (integrator = "
+                             "\"static\"), which switch it on themselves where plain Newton "
+                             "fails; remove it from the time integrator's options")
         if self.scheme == "hht" and self.rho_inf < 0.5:
             raise ModelError(f"HHT needs rho_inf in [0.5, 1] (got {self.rho_inf})")
         if self.scheme not in ("generalized_alpha", "hht"):

@@ -42,6 +42,14 @@ class NewtonOptions:
     ``(refresh_cost + iterations) / solves`` (``refresh_cost`` = cost of a refresh in
     iterations; ``inf`` disables the rule). The default 5 is the measured ratio of refresh to
     iteration cost of the compiled integrator (3.6-6.2 on the benchmarks).
+
+    ``slope_search``: when an iterate's error grew, move back along the step to where the
+    residual's work on the step, ``g(a) = dq . r_q(q + a dq)``, has fallen to half its
+    magnitude at the start (:data:`SLOPE_ACCEPT`). For a problem that is the gradient of a
+    potential (statics without friction) ``g`` is the potential's slope along the step and
+    the search an inexact minimisation along it; it breaks the cycles of plain Newton between
+    contact sets (a slack tendon in its holes: design notes, "Statics of tendon-routed
+    structures"). The static solver switches it on itself when an increment fails without it.
     """
 
     max_iterations: int = 25
@@ -52,6 +60,7 @@ class NewtonOptions:
     refresh_iterations: float = 10.0  # ... or more further iterations are predicted
     refresh_cost: float = 5.0         # renewal rule between steps (cost of a refresh, iterations)
     line_search: bool = False
+    slope_search: bool = False
     retreats: int = 0                # halvings of a step whose iterate the model rejects
     divergence_limit: float = 1e8   # error growth factor that counts as divergence
     roundoff_factor: float = 20.0
@@ -70,6 +79,9 @@ class NewtonOptions:
         r = self.retreats
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r < 0:
             raise ModelError(f"NewtonOptions: retreats must be an integer >= 0 (got {r!r})")
+        if self.line_search and self.slope_search:
+            raise ModelError("NewtonOptions: line_search and slope_search are exclusive; "
+                             "set one of them")
         if not (isinstance(self.refresh_cost, (int, float)) and self.refresh_cost >= 0):
             raise ModelError(f"NewtonOptions: refresh_cost must be >= 0 or inf "
                              f"(got {self.refresh_cost!r})")
@@ -87,6 +99,11 @@ class StepProblem(Protocol):
     def describe(self, index: int) -> str: ...
     def stiffness_scale(self) -> float: ...
 
+
+#: the slope search stops where ``|g(a)| <= SLOPE_ACCEPT * |g(0)|`` (a strong-Wolfe curvature
+#: condition), after at most :data:`SLOPE_EVALUATIONS` residuals
+SLOPE_ACCEPT = 0.5
+SLOPE_EVALUATIONS = 10
 
 #: the message of a singular iteration matrix (every factorisation)
 SINGULAR = ("the iteration matrix is singular: the model has an unconstrained motion (a free "
@@ -197,10 +214,16 @@ class Newton:
             self._rhs = np.zeros(problem.n)
         rhs = self._rhs
         retreat: tuple[object, np.ndarray] | None = None
+        slope = 0.0
         for it in range(o.max_iterations + 1):
             r_q, r_lam, scale = self._evaluate(problem, need, stats, retreat, o.retreats)
             stats.residual_evaluations += 1
             err, worst = self.error(r_q, r_lam, scale, problem.stiffness_scale())
+            if o.slope_search and retreat is not None and err > max(err_prev, 1.0) \
+                    and self._slope_search(problem, retreat, slope, r_q, stats):
+                r_q, r_lam, scale = problem.evaluate(need)
+                stats.residual_evaluations += 1
+                err, worst = self.error(r_q, r_lam, scale, problem.stiffness_scale())
             stats.history.append(err)
             if not np.isfinite(err):
                 raise ConvergenceError(f"Newton produced a non-finite residual at iteration {it} "
@@ -228,6 +251,7 @@ class Newton:
                 its_since = 0
             problem.scaled_rhs(r_q, r_lam, rhs)
             dx = self.lu.solve(rhs)  # type: ignore[union-attr]
+            slope = float(dx[:r_q.size] @ r_q)    # the step's work on the residual, g(0)
             if o.line_search:
                 self._line_search(problem, dx, err)
                 retreat = None
@@ -266,6 +290,46 @@ class Newton:
             alpha *= 0.5
             problem.apply(dx, alpha)
             stats.residual_evaluations += 1
+
+    @staticmethod
+    def _slope_search(problem: StepProblem, retreat: tuple[object, np.ndarray], g0: float,
+                      r_q: np.ndarray, stats: NewtonStats) -> bool:
+        """Move the iterate to ``saved + a dx``, ``0 < a < 1``, where ``|g(a)| <= SLOPE_ACCEPT
+        |g(0)|`` (``g(a) = dq . r_q`` there; ``r_q`` is the residual at ``a = 1``), by regula
+        falsi on the bracket ``g(0) < 0 < g(1)``, each trial kept a tenth of the bracket inside
+        it (an iterate the model rejects bisects). False, and the iterate left at ``a = 1``,
+        when there is no bracket: the step does not overshoot a minimum along it. See
+        :class:`NewtonOptions`."""
+        saved, dx = retreat
+        dq = dx[:r_q.size]
+        g1 = float(dq @ r_q)
+        if not g0 < 0.0 < g1:
+            return False
+        lo, g_lo, hi, g_hi = 0.0, g0, 1.0, g1
+        for _ in range(SLOPE_EVALUATIONS):
+            if math.isfinite(g_hi):     # the secant's root, kept a tenth inside the bracket
+                a = lo - g_lo * (hi - lo) / (g_hi - g_lo)
+                a = min(max(a, lo + 0.1 * (hi - lo)), hi - 0.1 * (hi - lo))
+            else:
+                a = 0.5 * (lo + hi)
+            problem.restore(saved)
+            problem.apply(dx, a)
+            stats.residual_evaluations += 1
+            try:
+                r, _, _ = problem.evaluate(False)
+            except OffPlanError:
+                raise
+            except ConvergenceError:        # a rejected iterate: the bracket's far end
+                hi, g_hi = a, math.inf
+                continue
+            g = float(dq @ r)
+            if abs(g) <= SLOPE_ACCEPT * -g0:
+                return True
+            if g < 0.0:
+                lo, g_lo = a, g
+            else:
+                hi, g_hi = a, g
+        return True
 
     def _line_search(self, problem: StepProblem, dx: np.ndarray, err0: float) -> None:
         saved = problem.save()

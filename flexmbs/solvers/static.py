@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -27,7 +27,11 @@ class StaticOptions:
     contacts that are not yet closed in the first increments, and vanishes at full load, so
     the equilibrium found is unchanged. Newton halves a step whose iterate the model rejects
     (``newton.retreats``, 10 here): the load factor does not scale a penetration the model
-    starts with, so halving the increment would not help.
+    starts with, so halving the increment would not help. An increment that plain Newton
+    cannot solve is solved again, and the rest of the path, with Newton's slope search
+    (``NewtonOptions.slope_search``) before increments are halved: slack tendons among their
+    holes make plain Newton cycle between contact sets (design notes, "Statics of
+    tendon-routed structures").
     """
 
     load_steps: int = 1
@@ -44,6 +48,8 @@ class StaticResult:
     lam: np.ndarray
     load_increments: int
     newton_iterations: int
+    #: the load factor from which Newton's slope search was on (None: plain Newton throughout)
+    slope_search_from: float | None = None
 
 
 class _StaticStep:
@@ -107,21 +113,23 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
     factor = static_factorization(asm)
     newton = Newton(o.newton, asm.length_scale, factor)
     try:
-        n_inc = _load_steps(asm, prob, newton, factor, o, t)
+        n_inc, slope_from = _load_steps(asm, prob, newton, factor, o, t)
     finally:
         if isinstance(factor, FollowingStaticLU):
             factor.release()
-    return StaticResult(q, lam, n_inc, newton.total.iterations)
+    return StaticResult(q, lam, n_inc, newton.total.iterations, slope_from)
 
 
 def _load_steps(asm: Assembly, prob: _StaticStep, newton: Newton, factor: object,
-                o: StaticOptions, t: float) -> int:
-    """The load factor from 0 to 1 in adaptive increments; returns their number. An increment
+                o: StaticOptions, t: float) -> tuple[int, float | None]:
+    """The load factor from 0 to 1 in adaptive increments; returns their number and the load
+    factor from which the slope search was on (see :class:`StaticOptions`). An increment
     whose Jacobian left the plan's windows (:class:`~flexmbs.errors.OffPlanError`) is solved
     again on a plan that holds where it went (at most ``MAX_REPLANS`` times), not halved."""
     q, lam = prob.q, prob.lam
     load, inc = 0.0, 1.0 / o.load_steps
     n_inc = replans = 0
+    slope_from = 0.0 if newton.options.slope_search else None
     while load < 1.0:
         trial = min(1.0, load + inc)
         saved = prob.save()
@@ -138,6 +146,11 @@ def _load_steps(asm: Assembly, prob: _StaticStep, newton: Newton, factor: object
             continue
         except ConvergenceError as exc:
             prob.restore(saved)
+            if not newton.options.slope_search and not newton.options.line_search:
+                # plain Newton failed: this increment and the rest with the slope search
+                newton.options = replace(newton.options, slope_search=True)
+                slope_from = load
+                continue
             inc *= 0.5
             if inc < o.min_increment:
                 raise ConvergenceError(
@@ -158,5 +171,5 @@ def _load_steps(asm: Assembly, prob: _StaticStep, newton: Newton, factor: object
         n_inc += 1
         if st.iterations <= o.easy_iterations:
             inc *= 1.5
-    return n_inc
+    return n_inc, slope_from
 

@@ -151,22 +151,45 @@ def test_input_errors_are_clear():
 
 def test_beam_leaving_the_bore_is_an_error_not_an_open_contact():
     """Example 2 with 0.3 mm clearance, 0.5 mm anchor steps and the Gauss-Newton tangent:
-    Newton pushes the wire axis through the bore wall. The unsigned gap |Q - P| - r_b would
-    read "open" again and the solve would converge with the wire outside the grommet; instead
-    the iterate is rejected with a message naming the joint and the section (static increments
-    are then cut). (The exact tangent converges here: test_example2_preload_converges...; so
-    does the Gauss-Newton tangent with the consistent detection, hence the paper's here; and
-    the static solver's Newton halves such a step before it fails, hence retreats = 0.)"""
+    plain Newton from the reference state to half the load pushes the wire axis through the
+    bore wall. The unsigned gap |Q - P| - r_b would read "open" again and the solve would
+    converge with the wire outside the grommet; instead the iterate is rejected with a message
+    naming the joint and the section. The static solver (load steps, then its slope search
+    where plain Newton fails) finds the equilibrium with the wire inside the bore, touching
+    its wall at every section. (The exact tangent converges here:
+    test_example2_preload_converges...; so does the Gauss-Newton tangent with the consistent
+    detection, hence the paper's here; retreats = 0: Newton would halve such a step.)"""
     from pathlib import Path
 
     from flexmbs.io.scenario import load_scenario
+    from flexmbs.solvers.factor import static_factorization
+    from flexmbs.solvers.newton import Newton
+    from flexmbs.solvers.static import _StaticStep
 
     sc = load_scenario(Path(__file__).resolve().parents[2] / "examples" / "solar_array_wing_flat.toml",
                        ["joints.grommet.hole.radius=1.1e-3", "simulation.load_steps=10",
                         "joints.grommet.tangent=gauss_newton", "joints.grommet.detection=paper",
                         "simulation.newton.retreats=0"])
+    options = sc.static_options()
+    asm = Assembly(sc.model)
+    q = asm.q_ref.copy()
+    asm.begin(q)
+    half = _StaticStep(asm, q, np.zeros(asm.n_mult), 0.0)
+    half.load, half.stabilizer = 0.5, options.stabilizer
+    newton = Newton(options.newton, asm.length_scale, static_factorization(asm))
     with pytest.raises(fm.ConvergenceError, match="joint 'grommet': the beam axis left the bore"):
-        fm.solve_static(Assembly(sc.model), sc.static_options())
+        newton.solve(half, full=True)
+
+    asm = Assembly(sc.model)
+    st = fm.solve_static(asm, options)
+    assert st.slope_search_from is not None
+    grommet = next(j for j in sc.model.interactions if j.name == "grommet")
+    rows = grommet.section_records(st.q, np.zeros_like(st.q), 0.0)
+    clearance = 1.1e-3 - grommet.beam_radius
+    assert len(rows) == len(grommet.stations)
+    for row in rows:
+        assert row["contacts"] >= 1
+        assert math.hypot(row["cy"], row["cz"]) == pytest.approx(clearance, abs=2e-5)
 
 
 def test_full_newton_converges_quadratically_with_the_exact_tangent():

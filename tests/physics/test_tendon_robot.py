@@ -204,3 +204,40 @@ def test_statics_and_a_long_damped_dynamic_run_agree():
     assert np.linalg.norm(q_end[asm2.body_dofs(disks2[-1])[:3]] - st.q[tip]) < 5e-4 * moved
     np.testing.assert_allclose(parts2.axial_forces(asm2, q_end), parts.axial_forces(asm, st.q),
                                rtol=0, atol=1e-3)
+
+
+def test_a_slack_tendon_beside_a_pulled_one_adds_only_its_bending_stiffness():
+    """Reference: a tendon that nothing pulls carries no moment but its bending, so beside a
+    tendon pulled by T it stiffens the bend by its share of the bending stiffness: the disks
+    move by ``EI_w / (EI_b + EI_w)`` (6.3e-4 here) less than with the pulled tendon alone
+    (measured 5.3e-4 to 6.0e-4: the wire also bends within its clearance). Plain Newton
+    cycles between the slack wire's contact sets from the first increment; the static solver
+    goes on with the slope search (``StaticResult.slope_search_from``). The free body
+    balances: the plate's fixation, the holds of both starts and the pull."""
+    T = 2.0
+    ref, st_ref, _, disks_ref = static(4, tension=T)
+    model, parts, disks = robot(4, tension=T)
+    hole = AXIS_Z.T @ np.array([-OFFSET, 0.0, 0.0])
+    plate = model.body("plate")
+    model.add_tendon(fm.Tendon(
+        name="t2", route=[(plate, hole)] + [(d, hole) for d in disks[:-1]],
+        anchor=(disks[-1], hole), lead=0.02, radius=WIRE_R, clearance=0.02e-3,
+        material=STEEL, tension=0.0))
+    asm = Assembly(model)
+    st = fm.solve_static(asm, fm.StaticOptions(load_steps=10))
+    assert st.slope_search_from is not None
+    share = STEEL.E * WIRE_R**4 / (NITI.E * ROD_R**4)
+    share /= 1.0 + share
+    for d_ref, d in zip(disks_ref, disks, strict=True):
+        u_ref = st_ref.q[ref.body_dofs(d_ref)[:3]] - ref.q_ref[ref.body_dofs(d_ref)[:3]]
+        u = st.q[asm.body_dofs(d)[:3]] - asm.q_ref[asm.body_dofs(d)[:3]]
+        assert np.linalg.norm(u - u_ref) / np.linalg.norm(u_ref) == pytest.approx(share, rel=0.3)
+    fixed = reactions(asm, st.q, st.lam, "plate_fixed")[0]
+    holds = [reactions(asm, st.q, st.lam, name)[0] for name in ("t1_hold", "t2_hold")]
+    start = st.q[asm.node_dofs(parts.beam.first_node)[:3]]
+    pull = T * parts.pull
+    force = fixed.force + sum(h.force for h in holds) + pull
+    moment = (fixed.moment + np.cross(fixed.point, fixed.force) + np.cross(start, pull)
+              + sum(h.moment + np.cross(h.point, h.force) for h in holds))
+    assert np.abs(force).max() < 1e-8 * T
+    assert np.abs(moment).max() < 1e-8 * T * LENGTH
