@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 import flexmbs as fm
+from flexmbs.assembly import Assembly
 
 LENGTH, ROD_R = 0.4, 0.7e-3
 NITI = fm.Material(E=54e9, rho=6450.0, nu=0.3)
@@ -237,8 +238,6 @@ def report(asm, q: np.ndarray, parts: dict) -> None:  # noqa: ANN001
 
 def static(model: fm.Model, parts: dict, args: argparse.Namespace) -> int:
     """The equilibrium under the full loads by load stepping (``--static``)."""
-    from flexmbs.assembly import Assembly
-
     asm = Assembly(model)
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -263,20 +262,28 @@ LOOP_TIME = 2.0
 def loop(args: argparse.Namespace) -> int:
     """``--loop``: tendon 4 pulled up to :data:`LOOP_PEAK` and released, without friction and
     with ``--mu`` (default 0.1), the tip's displacement against the actuator's tension; each
-    run written to ``--out``/mu_<mu> for ``examples/figures/tendon_robot.py``."""
+    run written to ``--out``/mu_<mu> for ``examples/figures/tendon_robot.py``. With
+    ``--static`` the loop is a sequence of equilibria (:func:`flexmbs.solve_quasi_static`),
+    without the damped run's lag."""
     pull = fm.Table(times=[0.0, LOOP_TIME, 2 * LOOP_TIME, 2.5 * LOOP_TIME],
                     values=[0.0, LOOP_PEAK, 0.0, 0.0])
     for mu in (0.0, args.mu or 0.1):
         model, parts = build(disks=args.disks, mu=mu, pull=pull)
         out = None if args.out is None else args.out / f"mu_{mu:g}"
         t0 = time.perf_counter()
+        asm = Assembly(model)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = fm.simulate(model, t_end=2.5 * LOOP_TIME, dt=args.dt,
-                              output_interval=LOOP_TIME / 20,
-                              integrator=fm.GeneralizedAlpha(rho_inf=0.5), record_energy=False,
-                              out=out, probes=probes(parts) if out else ())
-        asm, t4 = res.assembly, parts["tendons"][3]
+            if args.static:     # equilibria every 0.1 s, the friction state carried along
+                res = fm.solve_quasi_static(asm, np.linspace(0.0, 2.5 * LOOP_TIME, 51), out=out,
+                                            probes=probes(parts) if out else ())
+            else:
+                res = fm.simulate(asm, t_end=2.5 * LOOP_TIME, dt=args.dt,
+                                  output_interval=LOOP_TIME / 20,
+                                  integrator=fm.GeneralizedAlpha(rho_inf=0.5),
+                                  record_energy=False, out=out,
+                                  probes=probes(parts) if out else ())
+        t4 = parts["tendons"][3]
         tip = asm.node_dofs(parts["backbone"].last_node)[:3]
         print(f"mu = {mu:g} ({time.perf_counter() - t0:.0f} s): tension [N], tip displacement [mm]")
         for k in range(0, len(res.t), 5):  # every quarter of a ramp
@@ -298,7 +305,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="tendon 4 pulled to 2 N and released, with and without friction "
                          "(--mu, default 0.1): the tip's hysteresis")
     ap.add_argument("--static", action="store_true",
-                    help="solve the equilibrium (solve_static) instead of the damped run")
+                    help="solve the equilibrium (solve_static) instead of the damped run; with "
+                         "--loop, equilibria along the loop (solve_quasi_static)")
     ap.add_argument("--write-toml", type=Path, nargs="?", const=TOML, default=None,
                     metavar="FILE", help=f"write the scenario file (default {TOML.name}) and stop")
     args = ap.parse_args(argv)

@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
     from .geometry.curves import Centerline, arc, line, polyline
     from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
     from .model import GROUND, Beam, Model, Node, Pose, RigidBody
-    from .simulation import Result, modes, simulate, solve_static
+    from .simulation import Result, modes, simulate, solve_quasi_static, solve_static
     from .solvers.generalized_alpha import GeneralizedAlpha
     from .solvers.newton import NewtonOptions
     from .solvers.static import StaticOptions
@@ -86,6 +86,7 @@ _LAZY = {
     "modes": ".simulation",
     "simulate": ".simulation",
     "solve_static": ".simulation",
+    "solve_quasi_static": ".simulation",
     "GeneralizedAlpha": ".solvers.generalized_alpha",
     "NewtonOptions": ".solvers.newton",
     "StaticOptions": ".solvers.static",
@@ -128,5 +129,6 @@ __all__ = [
     "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",
     "RedundantConstraintError", "Result", "RigidBody", "ScenarioError", "SimulationStopped",
     "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
-    "modes", "polyline", "read_curve", "simulate", "solve_static", "sweep", "Tendon", "TendonParts",
+    "modes", "polyline", "read_curve", "simulate", "solve_quasi_static", "solve_static", "sweep",
+    "Tendon", "TendonParts",
 ]

@@ -3,9 +3,9 @@
 
 :func:`run_scenario` claims the folder (lock, refusal of another run's folder, see
 :mod:`flexmbs.io.folder`), records how the run was made (scenario file, its SHA-1, the
-overrides) in ``summary.json["metadata"]`` and calls :func:`~flexmbs.simulation.solve_static`
-or :func:`~flexmbs.simulation.simulate`. Errors propagate (the CLI and the sweep turn them into
-one line each).
+overrides) in ``summary.json["metadata"]`` and calls :func:`~flexmbs.simulation.solve_static`,
+:func:`~flexmbs.simulation.solve_quasi_static` or :func:`~flexmbs.simulation.simulate`. Errors
+propagate (the CLI and the sweep turn them into one line each).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from .budget import check_run
 from .io.folder import claim
 from .io.output import check_output
 from .io.scenario import Scenario
-from .simulation import checkpoint_time, simulate, solve_static
+from .simulation import checkpoint_time, simulate, solve_quasi_static, solve_static
 
 __all__ = ["RunOutcome", "run_scenario", "scenario_digest"]
 
@@ -73,6 +73,13 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
                               probes=sc.probes, name=sc.name, metadata=metadata,
                               output_frames=sim.output_frames)
             return RunOutcome(sc.name, folder, "completed", sim.t_end, 0, st.newton_iterations, 0)
+        if sim.integrator == "quasi_static":
+            qs = solve_quasi_static(asm, sim.quasi_static_times(), sc.static_options(),
+                                    redundant_constraints=sim.redundant_constraints, out=folder,
+                                    probes=sc.probes, name=sc.name, metadata=metadata,
+                                    output_frames=sim.output_frames)
+            return RunOutcome(sc.name, folder, "completed", sim.t_end, len(qs.t),
+                              qs.newton_iterations, 0)
         # where a progress bar starts; simulate() reports a missing or unreadable checkpoint
         start = (checkpoint_time(folder) if resume else None) or 0.0
         callback = progress(start, sim.t_end, sc.name) if progress is not None else None

@@ -31,7 +31,8 @@ from .solvers.generalized_alpha import (
     consistent_initial_state,
     integrate,
 )
-from .solvers.static import StaticOptions, StaticResult
+from .solvers.static import QuasiStaticResult, StaticOptions, StaticResult
+from .solvers.static import solve_quasi_static as _solve_quasi_static
 from .solvers.static import solve_static as _solve_static
 
 
@@ -126,28 +127,81 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
         model, redundant_constraints=redundant_constraints)
     if out is None:
         return _solve_static(asm, options, t=t)
-    run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
-    t0 = time.perf_counter()
-    with OutputWriter(out, run_name, asm, probes=probes, metadata=metadata,
-                      write_vtu=write_vtu, output_frames=output_frames) as writer:
-        try:
-            st = _solve_static(asm, options, t=t)
-        except ConvergenceError as exc:
-            writer.finish(f"failed: {failure_reason(exc)}", stats={"steps": 0},
-                          wall_time=time.perf_counter() - t0)
-            raise
-        zero = np.zeros_like(st.q)
-        state = State(t, st.q, zero, zero.copy(), zero.copy(), st.lam)
-        asm.observe(state.q, state.v, state.lam, t)
-        writer.write(state, contacts=interaction_outputs(asm, state),
-                     sections=interaction_sections(asm, state),
-                     checkpoint_extra={"scenario": run_name, "n_coords": int(asm.n_coords),
-                                       "n_mult": int(asm.n_mult)})
-        writer.finish("completed", stats={"steps": 0, "newton_iterations": st.newton_iterations,
-                                          "rejected_steps": 0,
-                                          "load_increments": st.load_increments},
-                      wall_time=time.perf_counter() - t0)
+    with _EquilibriumWriter(asm, out, name, probes, metadata, write_vtu, output_frames) as w:
+        st = w.run(lambda: _solve_static(asm, options, t=t))
+        w.frame(t, st.q, st.lam)
+        w.done(st.newton_iterations, st.load_increments)
     return st
+
+
+def solve_quasi_static(model: Model | Assembly, times: Sequence[float] | np.ndarray,
+                       options: StaticOptions | None = None, *,
+                       redundant_constraints: str = "error",
+                       out: str | os.PathLike | None = None, probes: Sequence[Probe] = (),
+                       name: str | None = None, metadata: dict | None = None,
+                       write_vtu: bool = True, output_frames: str = "multiblock"
+                       ) -> QuasiStaticResult:
+    """Equilibria of ``model`` at the increasing ``times``, each continued from the last
+    (:func:`flexmbs.solvers.static.solve_quasi_static`): a slow pull and release through
+    holes with friction traces its hysteresis. With ``out`` every equilibrium is a frame of
+    the output folder (as :func:`solve_static` writes one); the frames written before a
+    failure stay readable and the summary says where it stopped."""
+    asm = model if isinstance(model, Assembly) else Assembly(
+        model, redundant_constraints=redundant_constraints)
+    if out is None:
+        return _solve_quasi_static(asm, times, options)
+    with _EquilibriumWriter(asm, out, name, probes, metadata, write_vtu, output_frames) as w:
+        res = w.run(lambda: _solve_quasi_static(asm, times, options, on_equilibrium=w.frame))
+        w.done(res.newton_iterations, res.load_increments, steps=len(res.t))
+    return res
+
+
+class _EquilibriumWriter:
+    """The output folder of a static or quasi-static solve: one frame per equilibrium (zero
+    velocity), the summary's status and statistics."""
+
+    def __init__(self, asm: Assembly, out: str | os.PathLike, name: str | None,
+                 probes: Sequence[Probe], metadata: dict | None, write_vtu: bool,
+                 output_frames: str) -> None:
+        self.asm = asm
+        self.run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
+        self.t0 = time.perf_counter()
+        self.frames = 0
+        self.writer = OutputWriter(out, self.run_name, asm, probes=probes, metadata=metadata,
+                                   write_vtu=write_vtu, output_frames=output_frames)
+
+    def __enter__(self) -> _EquilibriumWriter:
+        self.writer.__enter__()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.writer.__exit__(*exc)
+
+    def run(self, solve: Callable[[], Any]) -> Any:
+        try:
+            return solve()
+        except ConvergenceError as exc:
+            self.writer.finish(f"failed: {failure_reason(exc)}", stats={"steps": self.frames},
+                               wall_time=time.perf_counter() - self.t0)
+            raise
+
+    def frame(self, t: float, q: np.ndarray, lam: np.ndarray) -> None:
+        zero = np.zeros_like(q)
+        state = State(t, q.copy(), zero, zero.copy(), zero.copy(), lam.copy())
+        self.asm.observe(state.q, state.v, state.lam, t)
+        self.writer.write(state, contacts=interaction_outputs(self.asm, state),
+                          sections=interaction_sections(self.asm, state),
+                          checkpoint_extra={"scenario": self.run_name,
+                                            "n_coords": int(self.asm.n_coords),
+                                            "n_mult": int(self.asm.n_mult)})
+        self.frames += 1
+
+    def done(self, newton_iterations: int, load_increments: int, steps: int = 0) -> None:
+        self.writer.finish("completed", stats={"steps": steps,
+                                               "newton_iterations": newton_iterations,
+                                               "rejected_steps": 0,
+                                               "load_increments": load_increments},
+                           wall_time=time.perf_counter() - self.t0)
 
 
 def modes(model: Model | Assembly, *, n_modes: int | None = None, static: bool = False,

@@ -37,6 +37,27 @@ def one_error_line(err: str) -> str:
     return lines[0]
 
 
+def test_quasi_static_integrator_writes_an_equilibrium_per_output_time(tmp_path, capsys):
+    """Equilibria at 0, 0.25, ..., 1 (output_interval), each from the last: under constant
+    gravity every one is the static deflection q L^4 / (8 EI) (within 1 %); the folder has
+    one frame and one probes row per equilibrium; a quasi-static run has nothing to resume."""
+    out = tmp_path / "qs"
+    assert main(["run", CANTILEVER, "--set", "simulation.integrator=quasi_static", "--set",
+                 "simulation.output_interval=0.25", "--quiet", "--out", str(out)]) == EXIT_OK
+    assert [t for t, _ in read_pvd(out / "cantilever.pvd")] == [0.0, 0.25, 0.5, 0.75, 1.0]
+    rows = list(csv.reader((out / "probes.csv").open()))
+    r, E, rho = 5e-3, 2.1e11, 7800.0
+    q, EI = rho * np.pi * r**2 * 9.81, E * np.pi * r**4 / 4
+    assert [float(row[0]) for row in rows[1:]] == [0.0, 0.25, 0.5, 0.75, 1.0]
+    for row in rows[1:]:
+        assert float(row[3]) == pytest.approx(-q / (8 * EI), rel=1e-2)
+    assert summary(out)["status"] == "completed"
+    capsys.readouterr()
+    assert main(["run", CANTILEVER, "--set", "simulation.integrator=quasi_static", "--set",
+                 "simulation.output_interval=0.25", "--resume", str(out)]) == EXIT_BAD_INPUT
+    assert "quasi_static scenario has nothing to resume" in one_error_line(capsys.readouterr().err)
+
+
 def test_run_writes_output_folder(tmp_path, capsys):
     out = tmp_path / "cant"
     assert main(["run", CANTILEVER, "--t-end", "0.05", "--quiet", "--out", str(out)]) == EXIT_OK

@@ -175,8 +175,9 @@ def run(args: argparse.Namespace) -> int:
             if not out.is_dir():
                 error(f"cannot resume: {out} is not a folder")
                 return EXIT_BAD_INPUT
-            if sim.integrator == "static":
-                error("--resume: a static scenario has nothing to resume")
+            if sim.integrator in ("static", "quasi_static"):
+                error(f"--resume: a {sim.integrator} scenario has nothing to resume (its "
+                      "equilibria are solved again from the start)")
                 return EXIT_BAD_INPUT
         else:
             if args.out is not None and not args.out.strip():

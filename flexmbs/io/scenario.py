@@ -74,9 +74,10 @@ class Scenario:
     joints: dict[str, Any] = field(default_factory=dict)   #: built ``[[joints]]`` by name
 
     def integrator_options(self) -> GeneralizedAlpha | None:
-        """Options of the time integrator; ``None`` for ``integrator = "static"``."""
+        """Options of the time integrator; ``None`` for ``integrator = "static"`` and
+        ``"quasi_static"`` (equilibria only)."""
         sim = self.simulation
-        if sim.integrator == "static":
+        if sim.integrator in ("static", "quasi_static"):
             return None
         return GeneralizedAlpha(rho_inf=sim.rho_inf, scheme=sim.integrator,  # type: ignore[arg-type]
                                 newton=sim.newton_options(), adaptive=sim.adaptive,
@@ -87,7 +88,8 @@ class Scenario:
                                 step_tolerance=sim.step_tolerance)
 
     def static_options(self) -> StaticOptions:
-        """Options of the static solver (``integrator = "static"`` or ``initial_static``)."""
+        """Options of the static solver (``integrator = "static"``, ``"quasi_static"`` or
+        ``initial_static``)."""
         return StaticOptions(load_steps=self.simulation.load_steps,
                              stabilizer=self.simulation.static_stabilizer,
                              newton=self.simulation.newton_options(static=True))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -103,73 +104,139 @@ def solve_static(asm: Assembly, options: StaticOptions | None = None, *,
                  q0: np.ndarray | None = None, t: float = 0.0) -> StaticResult:
     """Static equilibrium under the loads at time ``t`` (inertia and damping ignored)."""
     o = options or StaticOptions()
-    if o.load_steps < 1:
-        raise ModelError(f"load_steps must be >= 1 (got {o.load_steps})")
     q = (asm.q_ref if q0 is None else q0).copy()
     lam = np.zeros(asm.n_mult)
-    asm.begin(q)
-    prob = _StaticStep(asm, q, lam, t)
-    prob.stabilizer = o.stabilizer
-    factor = static_factorization(asm)
-    newton = Newton(o.newton, asm.length_scale, factor)
-    try:
-        n_inc, slope_from = _load_steps(asm, prob, newton, factor, o, t)
-    finally:
-        if isinstance(factor, FollowingStaticLU):
-            factor.release()
-    return StaticResult(q, lam, n_inc, newton.total.iterations, slope_from)
+    with _Path(asm, q, lam, o) as path:
+        n_inc = path.follow(t, t, 0.0, 1.0, 1.0 / o.load_steps)
+    return StaticResult(q, lam, n_inc, path.newton.total.iterations, path.slope_search_from)
 
 
-def _load_steps(asm: Assembly, prob: _StaticStep, newton: Newton, factor: object,
-                o: StaticOptions, t: float) -> tuple[int, float | None]:
-    """The load factor from 0 to 1 in adaptive increments; returns their number and the load
-    factor from which the slope search was on (see :class:`StaticOptions`). An increment
-    whose Jacobian left the plan's windows (:class:`~flexmbs.errors.OffPlanError`) is solved
-    again on a plan that holds where it went (at most ``MAX_REPLANS`` times), not halved."""
-    q, lam = prob.q, prob.lam
-    load, inc = 0.0, 1.0 / o.load_steps
-    n_inc = replans = 0
-    slope_from = 0.0 if newton.options.slope_search else None
-    while load < 1.0:
-        trial = min(1.0, load + inc)
-        saved = prob.save()
-        prob.load = trial
-        try:
-            st = newton.solve(prob, full=True)
-        except OffPlanError as exc:
-            prob.restore(saved)
-            replans += 1
-            if replans > MAX_REPLANS or not isinstance(factor, FollowingStaticLU):
-                raise ConvergenceError(f"static solve failed at load factor {load:.4g}: "
-                                       f"{exc}") from None
-            factor.replan(exc.widen, again=replans > 1)
-            continue
-        except ConvergenceError as exc:
-            prob.restore(saved)
-            if not newton.options.slope_search and not newton.options.line_search:
-                # plain Newton failed: this increment and the rest with the slope search
-                newton.options = replace(newton.options, slope_search=True)
-                slope_from = load
+@dataclass
+class QuasiStaticResult:
+    """Equilibria at ``t[k]`` (rows of ``q`` and ``lam``), each continued from the last."""
+
+    t: np.ndarray
+    q: np.ndarray
+    lam: np.ndarray
+    load_increments: int
+    newton_iterations: int
+    #: the time from which Newton's slope search was on (None: plain Newton throughout)
+    slope_search_from: float | None = None
+
+
+def solve_quasi_static(asm: Assembly, times: Sequence[float] | np.ndarray,
+                       options: StaticOptions | None = None,
+                       *, q0: np.ndarray | None = None,
+                       on_equilibrium: Callable[[float, np.ndarray, np.ndarray], None] | None = None
+                       ) -> QuasiStaticResult:
+    """A sequence of equilibria at the increasing ``times``: the first by load stepping from
+    the reference (as :func:`solve_static`), each next one continued from the last with the
+    time as the path parameter (loads, prescribed motions and drivers at the intermediate
+    times; sub-steps halved where Newton fails and grown where it is easy). The joints' state
+    (friction anchors, contact tracking) is carried from increment to increment, so a loop of
+    loads shows the friction's hysteresis. ``on_equilibrium(t, q, lam)`` is called at each
+    time (the arrays are the solver's own: copy what you keep)."""
+    o = options or StaticOptions()
+    ts = np.asarray(times, dtype=float)
+    if ts.ndim != 1 or ts.size < 1 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0):
+        raise ModelError("times: an increasing sequence of finite times (got "
+                         f"{np.asarray(times).tolist()!r:.80})")
+    q = (asm.q_ref if q0 is None else q0).copy()
+    lam = np.zeros(asm.n_mult)
+    qs, lams = np.empty((ts.size, q.size)), np.empty((ts.size, lam.size))
+    n_inc = 0
+    with _Path(asm, q, lam, o) as path:
+        for k, tk in enumerate(ts):
+            if k == 0:
+                n_inc += path.follow(tk, tk, 0.0, 1.0, 1.0 / o.load_steps)
+            else:
+                n_inc += path.follow(ts[k - 1], tk, 1.0, 1.0, 1.0)
+            qs[k], lams[k] = q, lam
+            if on_equilibrium is not None:
+                on_equilibrium(float(tk), q, lam)
+    slope = path.slope_search_from
+    return QuasiStaticResult(ts, qs, lams, n_inc, path.newton.total.iterations, slope)
+
+
+class _Path:
+    """Newton along a path of equilibria: each increment moves the time and the load factor
+    by a share of a segment (:meth:`follow`), solved from the last equilibrium. The
+    factorisation and Newton (with its slope search, once on) serve every segment."""
+
+    def __init__(self, asm: Assembly, q: np.ndarray, lam: np.ndarray, o: StaticOptions) -> None:
+        if o.load_steps < 1:
+            raise ModelError(f"load_steps must be >= 1 (got {o.load_steps})")
+        self.asm, self.o = asm, o
+        asm.begin(q)
+        self.prob = _StaticStep(asm, q, lam, 0.0)
+        self.prob.stabilizer = o.stabilizer
+        self.factor = static_factorization(asm)
+        self.newton = Newton(o.newton, asm.length_scale, self.factor)
+        self.slope_search_from: float | None = 0.0 if o.newton.slope_search else None
+
+    def __enter__(self) -> _Path:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if isinstance(self.factor, FollowingStaticLU):
+            self.factor.release()
+
+    def follow(self, t0: float, t1: float, load0: float, load1: float, first: float) -> int:
+        """From the equilibrium at ``(t0, load0)`` to ``(t1, load1)`` in adaptive increments
+        (the first a share ``first`` of the segment); returns their number. A failed increment
+        is halved (down to ``min_increment``), an easy one (``<= easy_iterations``) grows by
+        1.5. An increment that plain Newton cannot solve is solved again with the slope
+        search, which stays on. An increment whose Jacobian left the plan's windows
+        (:class:`~flexmbs.errors.OffPlanError`) is solved again on a plan that holds where it
+        went (at most ``MAX_REPLANS`` times), not halved."""
+        asm, prob, newton, factor, o = self.asm, self.prob, self.newton, self.factor, self.o
+        q, lam = prob.q, prob.lam
+
+        def where(s: float) -> str:
+            return (f"load factor {load0 + s * (load1 - load0):.4g}" if t1 == t0 else
+                    f"t = {t0 + s * (t1 - t0):.6g}")
+
+        s, inc = 0.0, first
+        n_inc = replans = 0
+        while s < 1.0:
+            trial = min(1.0, s + inc)
+            saved = prob.save()
+            prob.t = t0 + trial * (t1 - t0) if trial < 1.0 else t1
+            prob.load = load0 + trial * (load1 - load0)
+            try:
+                st = newton.solve(prob, full=True)
+            except OffPlanError as exc:
+                prob.restore(saved)
+                replans += 1
+                if replans > MAX_REPLANS or not isinstance(factor, FollowingStaticLU):
+                    raise ConvergenceError(f"static solve failed at {where(s)}: {exc}") from None
+                factor.replan(exc.widen, again=replans > 1)
                 continue
-            inc *= 0.5
-            if inc < o.min_increment:
-                raise ConvergenceError(
-                    f"static solve failed at load factor {load:.4g} (increment below "
-                    f"{o.min_increment:g}): {exc}") from None
-            continue
-        replans = 0
-        try:
-            asm.static_increment_done(q, lam, t, trial)   # joints' state, nodal charts (§2.4)
-        except FlexmbsError as exc:    # a node turned past the frames' limit: smaller increment
-            prob.restore(saved)
-            inc *= 0.5
-            if inc < o.min_increment:
-                raise ConvergenceError(f"static solve failed at load factor {load:.4g}: "
-                                       f"{exc}") from None
-            continue
-        load = trial
-        n_inc += 1
-        if st.iterations <= o.easy_iterations:
-            inc *= 1.5
-    return n_inc, slope_from
-
+            except ConvergenceError as exc:
+                prob.restore(saved)
+                if not newton.options.slope_search and not newton.options.line_search:
+                    # plain Newton failed: this increment and the rest with the slope search
+                    newton.options = replace(newton.options, slope_search=True)
+                    self.slope_search_from = (load0 + s * (load1 - load0) if t1 == t0
+                                              else t0 + s * (t1 - t0))
+                    continue
+                inc *= 0.5
+                if inc < o.min_increment:
+                    raise ConvergenceError(
+                        f"static solve failed at {where(s)} (increment below "
+                        f"{o.min_increment:g}): {exc}") from None
+                continue
+            replans = 0
+            try:    # joints' state, nodal charts (§2.4)
+                asm.static_increment_done(q, lam, prob.t, prob.load)
+            except FlexmbsError as exc:    # a node turned past the frames' limit: smaller increment
+                prob.restore(saved)
+                inc *= 0.5
+                if inc < o.min_increment:
+                    raise ConvergenceError(f"static solve failed at {where(s)}: {exc}") from None
+                continue
+            s = trial
+            n_inc += 1
+            if st.iterations <= o.easy_iterations:
+                inc *= 1.5
+        return n_inc

@@ -44,3 +44,12 @@ def test_load_stepping_grows_and_reports_increments():
     st = fm.solve_static(model, fm.StaticOptions(load_steps=8))
     assert 2 <= st.load_increments <= 8   # easy increments grow the step
     assert np.isfinite(st.q).all()
+
+
+@pytest.mark.parametrize("times", [[], [0.0, 0.0], [1.0, 0.5], [0.0, float("nan")], [[0.0, 1.0]]])
+def test_quasi_static_times_must_increase(times):
+    model = fm.Model()
+    model.add_beam(fm.line((0, 0, 0), (1, 0, 0), elements=2), section=fm.CircularSection(1e-3),
+                   material=fm.Material(E=1e9, rho=1e3))
+    with pytest.raises(fm.ModelError, match="times: an increasing sequence"):
+        fm.solve_quasi_static(model, times)

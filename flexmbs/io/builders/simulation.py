@@ -15,7 +15,7 @@ from ..tables import MISSING, Table
 
 __all__ = ["INTEGRATORS", "PREDICTORS", "SimulationSettings", "read_simulation"]
 
-INTEGRATORS = ("generalized_alpha", "hht", "static")
+INTEGRATORS = ("generalized_alpha", "hht", "static", "quasi_static")
 PREDICTORS = ("constant_acceleration", "zero_acceleration")
 
 _NEWTON_KEYS = {"max_iterations": "int", "relative_tolerance": "pos", "constraint_tolerance": "pos",
@@ -46,6 +46,14 @@ class SimulationSettings:
     constraint_level: str = "position"         #: "position" | "position_velocity"
     step_tolerance: float = 0.0                #: local error per step; 0: fixed steps
     newton: dict[str, Any] = field(default_factory=dict)  #: NewtonOptions overrides
+
+    def quasi_static_times(self) -> np.ndarray:
+        """The equilibria of ``integrator = "quasi_static"``: from 0 every ``output_interval``
+        (default ``dt``) to ``t_end`` (the last interval shorter if it does not divide)."""
+        every = self.output_interval or self.dt
+        n = int(np.floor(self.t_end / every * (1 + 1e-12)))
+        times = every * np.arange(n + 1)
+        return times if times[-1] >= self.t_end * (1 - 1e-12) else np.append(times, self.t_end)
 
     def newton_options(self, *, static: bool = False) -> NewtonOptions:
         """NewtonOptions with the ``[simulation.newton]`` keys applied (static: full Newton)."""
