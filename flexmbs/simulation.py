@@ -37,7 +37,33 @@ from .solvers.static import solve_static as _solve_static
 
 @dataclass
 class Result:
-    """Time histories at the output times, with accessors by model object."""
+    """Time histories at the output times, with accessors by model object.
+
+    Returned by :func:`simulate`, not made by hand.
+
+    Parameters
+    ----------
+    assembly : Assembly
+        The assembled model (numbering of the coordinates).
+    t : ndarray, shape (n_out,)
+        Output times [s].
+    q, v : ndarray, shape (n_out, n_coords)
+        Coordinates and velocities at the output times.
+    lam : ndarray, shape (n_out, n_mult)
+        Constraint multipliers at the output times.
+    energy : dict of str to ndarray
+        Energy histories by kind (``"total"`` among them), when recorded.
+    stats : IntegrationStats
+        Steps, Newton iterations, factorisations, rejected steps.
+    wall_time : float
+        Wall time of the run [s].
+    final_state : State
+        The state at the end of the run.
+    status : str, default "completed"
+        How the run ended.
+    extra : dict
+        Further results, e.g. ``extra["probes"]``, the probe values.
+    """
 
     assembly: Assembly
     t: np.ndarray
@@ -111,16 +137,49 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
                  t: float = 0.0, redundant_constraints: str = "error",
                  out: str | os.PathLike | None = None, probes: Sequence[Probe] = (),
                  name: str | None = None, metadata: dict | None = None,
-                 write_vtu: bool = True, output_frames: str = "multiblock") -> StaticResult:
+                 write_vtu: bool = True, output_frames: str = "multiblock",
+                 vtk_compression: bool = True) -> StaticResult:
     """Static equilibrium of ``model`` under its loads at time ``t`` (load stepping with
     ``options``).
 
-    With ``out`` the equilibrium is written as the output folder of DESIGN.md ("Output folder")
-    with one frame at ``t`` (zero velocity): ``<name>.pvd`` + ``vtu/``, ``probes.csv`` with
-    ``probes``, ``contacts.csv``, ``checkpoint.npz`` and ``summary.json`` (``name`` defaults to
-    the model name; ``metadata`` is stored in the summary; ``output_frames``: ``"multiblock"``
-    or ``"merged"``, see :mod:`flexmbs.io.frames`). A solve that does not converge
-    leaves the folder with ``status: "failed: ..."`` and raises :class:`ConvergenceError`.
+    With ``out`` the equilibrium is written as the output folder (the docs' "Command line"
+    page, "Output folder") with one frame at ``t`` (zero velocity): ``<name>.pvd`` +
+    ``vtu/``, ``probes.csv`` with ``probes``, ``contacts.csv``, ``checkpoint.npz`` and
+    ``summary.json`` (``name`` defaults to the model name; ``metadata`` is stored in the
+    summary; ``output_frames``: ``"multiblock"`` or ``"merged"``, see
+    :mod:`flexmbs.io.frames`). A solve that does not converge leaves the folder with
+    ``status: "failed: ..."`` and raises :class:`ConvergenceError`.
+
+    Parameters
+    ----------
+    model : Model or Assembly
+        The model.
+    options : StaticOptions, optional
+        Load stepping and Newton options.
+    t : float, default 0
+        Time at which the loads' time functions are evaluated [s].
+    redundant_constraints : {"error", "drop"}, default "error"
+        What to do with redundant constraint equations.
+    out : str or os.PathLike, optional
+        Output folder (default: none written).
+    probes : sequence of Probe, optional
+        Probes written to ``probes.csv``.
+    name : str, optional
+        Name of the output files (default: the model's name).
+    metadata : dict, optional
+        Stored in ``summary.json``.
+    write_vtu : bool, default True
+        Write the VTK frame.
+    output_frames : {"multiblock", "merged"}, default "multiblock"
+        Form of the frame.
+    vtk_compression : bool, default True
+        zlib-compress the frame's data arrays.
+
+    Returns
+    -------
+    StaticResult
+        The equilibrium ``q``, the multipliers ``lam``, and the numbers of load increments and
+        Newton iterations.
     """
     asm = model if isinstance(model, Assembly) else Assembly(
         model, redundant_constraints=redundant_constraints)
@@ -129,7 +188,8 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
     run_name = str(name if name is not None else getattr(asm.model, "name", "model"))
     t0 = time.perf_counter()
     with OutputWriter(out, run_name, asm, probes=probes, metadata=metadata,
-                      write_vtu=write_vtu, output_frames=output_frames) as writer:
+                      write_vtu=write_vtu, output_frames=output_frames,
+                      vtu_encoding="zlib" if vtk_compression else "binary") as writer:
         try:
             st = _solve_static(asm, options, t=t)
         except ConvergenceError as exc:
@@ -152,7 +212,25 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
 
 def modes(model: Model | Assembly, *, n_modes: int | None = None, static: bool = False,
           redundant_constraints: str = "error") -> Modes:
-    """Linearised modes about the reference (or, with ``static=True``, the loaded equilibrium)."""
+    """Linearised modes about the reference (or, with ``static=True``, the loaded equilibrium).
+
+    Parameters
+    ----------
+    model : Model or Assembly
+        The model.
+    n_modes : int, optional
+        Number of modes, the lowest; only these are computed (default: all).
+    static : bool, default False
+        Linearise about the static equilibrium under the loads instead of the reference.
+    redundant_constraints : {"error", "drop"}, default "error"
+        What to do with redundant constraint equations.
+
+    Returns
+    -------
+    Modes
+        ``omega`` (angular frequencies [rad/s], ascending), ``frequencies`` [Hz] and
+        ``shapes`` (n_coords, n_modes), mass-normalised.
+    """
     if n_modes is not None and (isinstance(n_modes, bool) or not isinstance(n_modes, int)
                                 or n_modes < 1):
         raise ModelError(f"modes: n_modes must be an integer >= 1 or None (got {n_modes!r})")
@@ -217,21 +295,69 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
              probes: Sequence[Probe] = (), name: str | None = None,
              static_options: StaticOptions | None = None, resume: bool = False,
              metadata: dict | None = None, write_vtu: bool = True,
-             output_frames: str = "multiblock") -> Result:
+             output_frames: str = "multiblock", vtk_compression: bool = True) -> Result:
     """Implicit dynamic simulation from the model's initial state (or its static equilibrium,
     ``initial_static=True``, solved with ``static_options``) to ``t_end`` with step ``dt``;
     results every ``output_interval``.
 
-    With ``out`` the output folder of DESIGN.md ("Output folder") is written as the run goes
+    With ``out`` the output folder (the docs' "Command line" page, "Output folder") is written
+    as the run goes
     (``<name>.pvd`` + ``vtu/``, ``probes.csv`` with ``probes``, ``contacts.csv``,
     ``checkpoint.npz``, ``summary.json``; ``name`` defaults to the model name) and stays valid
     if the run fails (``status: "failed: ..."``) or is interrupted (``"interrupted"``);
     ``output_frames``: ``"multiblock"`` (a ``.vtm`` of named blocks per frame) or ``"merged"``
-    (one ``.vtu`` grid per frame), see :mod:`flexmbs.io.frames`.
+    (one ``.vtu`` grid per frame), see :mod:`flexmbs.io.frames`; ``vtk_compression``: the
+    frames' data arrays zlib-compressed (default; ``False`` writes them uncompressed).
     ``resume=True`` continues the stopped run in ``out`` from its ``checkpoint.npz`` to
     ``t_end``, appending to its files (see :func:`resume_point`); the returned history then
     starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``.
     A :class:`ConvergenceError` carries the history so far as ``partial_result``.
+
+    Parameters
+    ----------
+    model : Model or Assembly
+        The model.
+    t_end : float
+        End time [s].
+    dt : float
+        Time step [s] (the largest, with step-error control).
+    integrator : GeneralizedAlpha, optional
+        Integrator options (default ``GeneralizedAlpha()``).
+    output_interval : float, optional
+        Time between outputs [s] (default: every step).
+    initial_static : bool, default False
+        Start from the static equilibrium at t = 0.
+    record_energy : bool, default True
+        Record the energies at the outputs.
+    observer : callable, optional
+        ``observer(state)`` at every output.
+    progress : callable, optional
+        ``progress(state, stats)`` as the integrator goes.
+    redundant_constraints : {"error", "drop"}, default "error"
+        What to do with redundant constraint equations.
+    out : str or os.PathLike, optional
+        Output folder (default: none written).
+    probes : sequence of Probe, optional
+        Probes written to ``probes.csv``.
+    name : str, optional
+        Name of the output files (default: the model's name).
+    static_options : StaticOptions, optional
+        Options of the initial static solve.
+    resume : bool, default False
+        Continue the stopped run in ``out``.
+    metadata : dict, optional
+        Stored in ``summary.json``.
+    write_vtu : bool, default True
+        Write the VTK frames.
+    output_frames : {"multiblock", "merged"}, default "multiblock"
+        Form of the frames.
+    vtk_compression : bool, default True
+        zlib-compress the frames' data arrays.
+
+    Returns
+    -------
+    Result
+        Time histories at the output times, with accessors by model object.
     """
     check_run(model.model if isinstance(model, Assembly) else model, t_end=t_end, dt=dt,
               output_interval=output_interval, out=out)
@@ -263,7 +389,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
             meta["resumed_from"] = resume_t
         writer = OutputWriter(out, run_name, asm, probes=probes, metadata=meta,
                               write_vtu=write_vtu, resume_at=resume_t,
-                              output_frames=output_frames)
+                              output_frames=output_frames,
+                              vtu_encoding="zlib" if vtk_compression else "binary")
     run = _RunRecord(asm, probes, writer, record_energy=record_energy, resume_t=resume_t,
                      observer=observer, progress=progress, previous=previous)
     # the writer ends the folder whatever ends the run (summary.json: "completed", "failed:
