@@ -28,6 +28,19 @@ class StaticOptions:
     the equilibrium found is unchanged. Newton halves a step whose iterate the model rejects
     (``newton.retreats``, 10 here): the load factor does not scale a penetration the model
     starts with, so halving the increment would not help.
+
+    Parameters
+    ----------
+    load_steps : int, default 1
+        Initial number of load increments.
+    min_increment : float, default 1e-4
+        Smallest load increment.
+    stabilizer : float, default 0
+        c_s [1/s^2] of the mass-proportional stabiliser.
+    easy_iterations : int, default 8
+        Newton iterations up to which an increment counts as easy (the next grows by 1.5).
+    newton : NewtonOptions, optional
+        Newton settings (default: full Newton, 40 iterations, 10 retreats).
     """
 
     load_steps: int = 1
