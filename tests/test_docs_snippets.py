@@ -3,6 +3,7 @@ tutorial (docs/getting-started.md), in order, in an empty folder."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import shlex
 from pathlib import Path
@@ -38,12 +39,14 @@ def test_tutorial_code_blocks_run(tmp_path, monkeypatch):
     assert [lang for lang, _ in blocks].count("python") >= 4
     monkeypatch.chdir(tmp_path)
     namespace: dict = {}
+    missing = []
     for lang, code in blocks:
         if lang == "python":
-            if "import pandas" in code:
-                pytest.importorskip("pandas")
-            if "import pyvista" in code:
-                pytest.importorskip("pyvista")
+            needs = [m for m in ("pandas", "pyvista") if f"import {m}" in code]
+            lacking = [m for m in needs if importlib.util.find_spec(m) is None]
+            if lacking:         # the test extra has them; elsewhere the other blocks still run
+                missing.extend(lacking)
+                continue
             exec(compile(code, "getting-started.md", "exec"), namespace)
         elif lang == "toml":
             name = code.splitlines()[0].lstrip("# ").strip()
@@ -60,3 +63,5 @@ def test_tutorial_code_blocks_run(tmp_path, monkeypatch):
                     words.append("--quiet")
                 assert main(words[1:]) == 0, line
     assert namespace["run"].summary["status"] == "completed"
+    if missing:
+        pytest.skip(f"the blocks that import {', '.join(missing)} did not run (not installed)")
