@@ -138,7 +138,7 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
                  out: str | os.PathLike | None = None, probes: Sequence[Probe] = (),
                  name: str | None = None, metadata: dict | None = None,
                  write_vtu: bool = True, output_frames: str = "multiblock",
-                 vtk_compression: bool = True) -> StaticResult:
+                 vtk_compression: bool = False) -> StaticResult:
     """Static equilibrium of ``model`` under its loads at time ``t`` (load stepping with
     ``options``).
 
@@ -172,7 +172,7 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
         Write the VTK frame.
     output_frames : {"multiblock", "merged"}, default "multiblock"
         Form of the frame.
-    vtk_compression : bool, default True
+    vtk_compression : bool, default False
         zlib-compress the frame's data arrays.
 
     Returns
@@ -295,7 +295,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
              probes: Sequence[Probe] = (), name: str | None = None,
              static_options: StaticOptions | None = None, resume: bool = False,
              metadata: dict | None = None, write_vtu: bool = True,
-             output_frames: str = "multiblock", vtk_compression: bool = True) -> Result:
+             output_frames: str = "multiblock", vtk_compression: bool = False) -> Result:
     """Implicit dynamic simulation from the model's initial state (or its static equilibrium,
     ``initial_static=True``, solved with ``static_options``) to ``t_end`` with step ``dt``;
     results every ``output_interval``.
@@ -307,7 +307,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     if the run fails (``status: "failed: ..."``) or is interrupted (``"interrupted"``);
     ``output_frames``: ``"multiblock"`` (a ``.vtm`` of named blocks per frame) or ``"merged"``
     (one ``.vtu`` grid per frame), see :mod:`flexmbs.io.frames`; ``vtk_compression``: the
-    frames' data arrays zlib-compressed (default; ``False`` writes them uncompressed).
+    frames' data arrays zlib-compressed (default ``False``: uncompressed base64).
     ``resume=True`` continues the stopped run in ``out`` from its ``checkpoint.npz`` to
     ``t_end``, appending to its files (see :func:`resume_point`); the returned history then
     starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``.
@@ -351,8 +351,9 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         Write the VTK frames.
     output_frames : {"multiblock", "merged"}, default "multiblock"
         Form of the frames.
-    vtk_compression : bool, default True
-        zlib-compress the frames' data arrays.
+    vtk_compression : bool, default False
+        zlib-compress the frames' data arrays (28 % smaller, the encoding about 12 times the
+        CPU time).
 
     Returns
     -------

@@ -290,3 +290,20 @@ def test_run_verbose_prints_the_solver_counters(tmp_path, capsys):
     assert rows and float(rows[-1][1]) == pytest.approx(0.03)
     assert sum(int(r[3]) for r in rows) == summary(out)["stats"]["steps"]
     assert main(["run", CANTILEVER, "-q", "-v"]) == EXIT_BAD_INPUT     # one or the other
+
+
+def test_compressed_frames_on_request_are_read_back(tmp_path):
+    """simulation.vtk_compression = true: zlib-compressed pieces (VTK's compressor attribute)
+    that pyvista reads to the same points as the uncompressed default."""
+    pv = pytest.importorskip("pyvista")
+    points = {}
+    for flag in ("false", "true"):
+        out = tmp_path / flag
+        assert main(["run", CANTILEVER, "--t-end", "0.02", "-q", "--out", str(out),
+                     "--set", f"simulation.vtk_compression={flag}"]) == EXIT_OK
+        piece = sorted((out / "vtu").glob("*_beams_0.vtp"))[-1]
+        assert ('compressor="vtkZLibDataCompressor"' in piece.read_text()) == (flag == "true")
+        reader = pv.get_reader(str(out / "cantilever.pvd"))
+        reader.set_active_time_value(reader.time_values[-1])
+        points[flag] = reader.read()[0]["beams"]["rod"].points
+    np.testing.assert_array_equal(points["true"], points["false"])

@@ -223,7 +223,7 @@ class OutputWriter:
     def __init__(self, directory: str | os.PathLike, name: str, asm: Any, *,
                  probes: Sequence[Probe] = (), write_vtu: bool = True, checkpoints: bool = True,
                  metadata: dict | None = None, samples_per_element: int = 8,
-                 vtu_encoding: str = "zlib", resume_at: float | None = None,
+                 vtu_encoding: str = "binary", resume_at: float | None = None,
                  checkpoint_interval: float = 10.0, output_frames: str = "multiblock",
                  background: bool = True) -> None:
         # before the folder is touched: what can refuse the output
