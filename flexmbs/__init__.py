@@ -1,6 +1,6 @@
 """flexmbs: flexible multibody dynamics with ANCF beams and sliding joints with clearance.
 
-Short public API (see DESIGN.md, "Python API")::
+Short public API (the docs site's "API reference" and "Getting started" pages)::
 
     import flexmbs as fm
     model = fm.Model(gravity=(0, 0, -9.81))
@@ -112,7 +112,22 @@ def __dir__() -> list[str]:
 
 
 def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (meshio import cost)
-    """Read a beam centreline from a mesh file (gmsh .msh, .vtu, ...); see geometry.mesh_input."""
+    """Read a beam centreline from a mesh file (gmsh .msh, .vtu, ...); see geometry.mesh_input.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The mesh file (any format meshio reads).
+    **kwargs
+        ``group`` (gmsh physical curve name), ``elements`` (resample to that many equal
+        elements), ``tangents_field`` (point data to use as tangents); see
+        :func:`flexmbs.geometry.mesh_input.read_curve`.
+
+    Returns
+    -------
+    Centerline
+        The curve's nodes, tangents and element lengths.
+    """
     from .geometry.mesh_input import read_curve as _read_curve
 
     return _read_curve(path, **kwargs)

@@ -10,7 +10,17 @@ from .errors import ModelError
 
 @dataclass(frozen=True, kw_only=True)
 class Material:
-    """Linear elastic isotropic material (SI units)."""
+    """Linear elastic isotropic material (SI units).
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus [Pa].
+    rho : float
+        Density [kg/m^3].
+    nu : float, default 0.3
+        Poisson's ratio (the shear modulus of the rod's torsion, ``G = E / (2 (1 + nu))``).
+    """
 
     E: float
     rho: float
@@ -32,7 +42,13 @@ class Material:
 
 @dataclass(frozen=True)
 class CircularSection:
-    """Solid circular cross-section of radius ``radius``."""
+    """Solid circular cross-section of radius ``radius``.
+
+    Parameters
+    ----------
+    radius : float
+        Radius [m].
+    """
 
     radius: float
 
@@ -59,7 +75,23 @@ class BeamStiffness:
     """Beam section resultants given directly: EA [N], EI [N m^2], rho A [kg/m]; optional GJ
     [N m^2] and twist inertia rho J_p [kg m] (the torsion-capable rod's; default for the twist
     inertia: rho A (2 EI)/EA, the polar radius of gyration of a section with I2 = I3 = EI/E),
-    and the radius of a circular section (contact, output)."""
+    and the radius of a circular section (contact, output).
+
+    Parameters
+    ----------
+    axial_stiffness : float
+        EA [N].
+    bending_stiffness : float
+        EI [N m^2].
+    mass_per_length : float
+        ρA [kg/m].
+    torsional_stiffness : float, optional
+        GJ [N m^2] (needed by the rod element).
+    radius : float, optional
+        Radius of a circular section [m] (contact, output).
+    twist_inertia : float, optional
+        ρJ_p [kg m] (the rod's; default from EI/EA as above).
+    """
 
     axial_stiffness: float
     bending_stiffness: float

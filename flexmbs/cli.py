@@ -1,6 +1,6 @@
-"""Command line: ``flexmbs run | info | render | plot | sweep | compile | paraview`` (DESIGN.md,
-"CLI"), one module per command in :mod:`flexmbs.commands` (its parser and its ``run``); here
-the parser they make up, the dispatch and the exit status.
+"""Command line: ``flexmbs run | info | render | plot | sweep | compile | paraview`` (the docs
+site's "Command line" page, docs/cli.md), one module per command in :mod:`flexmbs.commands`
+(its parser and its ``run``); here the parser they make up, the dispatch and the exit status.
 
 ``main(argv)`` returns the exit status, so tests call it directly::
 
@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from .commands._common import (
+    DOCS_URL,
     EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -51,7 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = OneLineParser(
         prog="flexmbs", description="Flexible multibody dynamics: ANCF beams, rigid bodies, "
-        "sliding joints with clearance. See docs/cli.md.")
+        "sliding joints with clearance. Every command has -q/--quiet. Documentation: "
+        f"{DOCS_URL} (the command line: {DOCS_URL}cli/).")
     parser.add_argument("--version", action="version", version=f"flexmbs {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
                                 parser_class=OneLineParser)

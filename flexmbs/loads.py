@@ -40,6 +40,14 @@ class TimeFunction:
 
 @dataclass(frozen=True)
 class Constant(TimeFunction):
+    """A time function that is ``value`` at every time.
+
+    Parameters
+    ----------
+    value : float, default 1
+        The value at every time.
+    """
+
     value: float = 1.0
 
     def __call__(self, t: float) -> float:
@@ -54,7 +62,19 @@ class Constant(TimeFunction):
 
 @dataclass(frozen=True, kw_only=True)
 class Ramp(TimeFunction):
-    """0 before ``start``, linear to ``value`` at ``end``, constant after (smooth=True: cosine ramp)."""
+    """0 before ``start``, linear to ``value`` at ``end``, constant after (smooth=True: cosine ramp).
+
+    Parameters
+    ----------
+    start : float, default 0
+        Time at which the ramp leaves 0 [s].
+    end : float, default 1
+        Time at which it reaches ``value`` [s].
+    value : float, default 1
+        Final value.
+    smooth : bool, default False
+        A cosine ramp instead of a linear one.
+    """
 
     start: float = 0.0
     end: float = 1.0
@@ -92,7 +112,17 @@ class Ramp(TimeFunction):
 
 @dataclass(frozen=True, kw_only=True)
 class HalfSine(TimeFunction):
-    """``amplitude * sin(pi (t - start)/duration)`` for start <= t <= start + duration, else 0."""
+    """``amplitude * sin(pi (t - start)/duration)`` for start <= t <= start + duration, else 0.
+
+    Parameters
+    ----------
+    duration : float
+        Length of the half wave [s].
+    start : float, default 0
+        Its start [s].
+    amplitude : float, default 1
+        Its peak value.
+    """
 
     duration: float
     start: float = 0.0
@@ -111,7 +141,17 @@ class HalfSine(TimeFunction):
 
 @dataclass(frozen=True, kw_only=True)
 class Sine(TimeFunction):
-    """``amplitude * sin(2 pi frequency t + phase)``."""
+    """``amplitude * sin(2 pi frequency t + phase)``.
+
+    Parameters
+    ----------
+    amplitude : float, default 1
+        Amplitude.
+    frequency : float, default 1
+        Frequency [Hz].
+    phase : float, default 0
+        Phase [rad].
+    """
 
     amplitude: float = 1.0
     frequency: float = 1.0
@@ -131,7 +171,15 @@ class Sine(TimeFunction):
 
 @dataclass(frozen=True)
 class Table(TimeFunction):
-    """Piecewise-linear interpolation of (times, values), constant outside."""
+    """Piecewise-linear interpolation of (times, values), constant outside.
+
+    Parameters
+    ----------
+    times : sequence of float
+        Increasing times [s].
+    values : sequence of float
+        Values at those times.
+    """
 
     times: Sequence[float]
     values: Sequence[float]
@@ -154,7 +202,13 @@ class Table(TimeFunction):
 
 @dataclass(frozen=True)
 class Function(TimeFunction):
-    """Wrap any Python callable ``f(t)``."""
+    """Wrap any Python callable ``f(t)``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(t) -> float``; its derivatives are taken by finite differences.
+    """
 
     f: Callable[[float], float]
 

@@ -46,7 +46,15 @@ def _unit(x: ArrayLike3, what: str) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Pose:
-    """Position and orientation (rotation matrix, columns = body axes in global components)."""
+    """Position and orientation (rotation matrix, columns = body axes in global components).
+
+    Parameters
+    ----------
+    position : ndarray, shape (3,)
+        Position [m].
+    rotation : ndarray, shape (3, 3), default identity
+        Rotation matrix (columns: the body axes in global components).
+    """
 
     position: np.ndarray
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
@@ -95,6 +103,16 @@ GROUND = Ground()
 
 @dataclass(frozen=True, eq=False)
 class Node:
+    """A node of a beam (``beam.first_node``, ``beam.last_node``, ``beam.node(i)``).
+
+    Parameters
+    ----------
+    beam : Beam
+        The beam.
+    index : int
+        The node's index along the beam (0 is the first node).
+    """
+
     beam: Beam
     index: int
 
@@ -114,7 +132,27 @@ class Node:
 class Beam:
     """A beam of elements of type ``element`` (a registered
     :class:`~flexmbs.elements.layout.ElementLayout`, default the 12-DOF ANCF cable) on a
-    stress-free reference ``centerline``."""
+    stress-free reference ``centerline``.
+
+    Made by :meth:`Model.add_beam`, not by hand.
+
+    Parameters
+    ----------
+    name : str
+        Unique name in the model.
+    centerline : Centerline
+        The stress-free reference centreline (nodes, tangents, element lengths).
+    stiffness : BeamStiffness
+        Section resultants (EA, EI, ρA, ...).
+    options : CableOptions or None
+        The cable's formulation options.
+    damping : float
+        Stiffness-proportional damping [s].
+    reference_axial_strain : float
+        ε0 of the normal force ``N = EA (ε − ε0)`` (ε0 < 0: pretension).
+    element : str, default "ancf_cable"
+        Element type: ``"ancf_cable"`` or ``"ancf_rod14"``.
+    """
 
     def __init__(self, name: str, centerline: Centerline, stiffness: BeamStiffness, *,
                  options: CableOptions | None, damping: float, reference_axial_strain: float,
@@ -239,7 +277,28 @@ class Beam:
 
 
 class RigidBody:
-    """A rigid body in Cartesian coordinates with Euler parameters (Haug 1989)."""
+    """A rigid body in Cartesian coordinates with Euler parameters (Haug 1989).
+
+    Made by :meth:`Model.add_rigid_body`, not by hand.
+
+    Parameters
+    ----------
+    name : str
+        Unique name in the model.
+    mass : float
+        Mass [kg].
+    inertia : ndarray, shape (3, 3)
+        Inertia tensor about the centre of mass, body frame [kg m^2].
+    pose : Pose
+        Initial position of the centre of mass and orientation.
+    velocity : ndarray, shape (3,)
+        Initial velocity of the centre of mass [m/s].
+    angular_velocity : ndarray, shape (3,)
+        Initial angular velocity, global components [rad/s].
+    shape : dict, optional
+        Output geometry (``{"type": "cylinder", ...}``, ``"box"``, ``"mesh"``); default a small
+        box sized from the inertia.
+    """
 
     def __init__(self, name: str, mass: float, inertia: np.ndarray, pose: Pose,
                  velocity: np.ndarray, angular_velocity: np.ndarray,
@@ -293,7 +352,19 @@ class LoadSpec:
 
 
 class Model:
-    """Container of the mechanical system. See DESIGN.md "Python API"."""
+    """Container of the mechanical system.
+
+    Beams, rigid bodies, constraints, joints, loads and force elements are added by its
+    ``add_*`` methods and constraint methods (``clamp``, ``pin``, ``spherical``, ...); solvers
+    take the model (:func:`simulate`, :func:`solve_static`, :func:`modes`).
+
+    Parameters
+    ----------
+    gravity : array_like of 3 floats, default (0, 0, 0)
+        Gravitational acceleration [m/s^2].
+    name : str, default "model"
+        The model's name (the output files' name by default).
+    """
 
     def __init__(self, *, gravity: ArrayLike3 = (0.0, 0.0, 0.0), name: str = "model") -> None:
         self.name = name

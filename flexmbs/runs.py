@@ -71,13 +71,15 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
             st = solve_static(asm, sc.static_options(), t=sim.t_end,
                               redundant_constraints=sim.redundant_constraints, out=folder,
                               probes=sc.probes, name=sc.name, metadata=metadata,
-                              output_frames=sim.output_frames)
+                              output_frames=sim.output_frames,
+                              vtk_compression=sim.vtk_compression)
             return RunOutcome(sc.name, folder, "completed", sim.t_end, 0, st.newton_iterations, 0)
         if sim.integrator == "quasi_static":
             qs = solve_quasi_static(asm, sim.quasi_static_times(), sc.static_options(),
                                     redundant_constraints=sim.redundant_constraints, out=folder,
                                     probes=sc.probes, name=sc.name, metadata=metadata,
-                                    output_frames=sim.output_frames)
+                                    output_frames=sim.output_frames,
+                                    vtk_compression=sim.vtk_compression)
             return RunOutcome(sc.name, folder, "completed", sim.t_end, len(qs.t),
                               qs.newton_iterations, 0)
         # where a progress bar starts; simulate() reports a missing or unreadable checkpoint
@@ -88,6 +90,7 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
                        static_options=sc.static_options(),
                        redundant_constraints=sim.redundant_constraints, record_energy=False,
                        progress=callback, out=folder, probes=sc.probes, name=sc.name,
-                       resume=resume, metadata=metadata, output_frames=sim.output_frames)
+                       resume=resume, metadata=metadata, output_frames=sim.output_frames,
+                       vtk_compression=sim.vtk_compression)
         return RunOutcome(sc.name, folder, res.status, sim.t_end, res.stats.steps,
                           res.stats.newton_iterations, res.stats.rejected_steps)

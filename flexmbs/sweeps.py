@@ -423,6 +423,32 @@ def sweep(scenario: str | os.PathLike[str], grid: Mapping[str, Sequence[Any]] | 
     each case as it ends (``reused``: completed by an earlier run of the sweep, not run again).
     Cases whose parameters cannot be built are recorded as failed without running; if no case
     can be built the first reason is raised (:class:`ScenarioError`).
+
+    Parameters
+    ----------
+    scenario : str or os.PathLike
+        The scenario file.
+    grid : mapping of str to sequence, optional
+        Key paths to lists of values; the cases are their Cartesian product.
+    zip : mapping of str to sequence, optional
+        Key paths to lists of equal length, taken side by side.
+    overrides : sequence of str, optional
+        ``KEY=VALUE`` assignments applied to every case.
+    out : str or os.PathLike, optional
+        The sweep folder.
+    client : dask.distributed.Client, optional
+        The client to use.
+    scheduler : str, optional
+        A scheduler's address or scheduler file.
+    workers : int, optional
+        Processes of a new local cluster.
+    report : callable, optional
+        ``report(case, row, done, total, reused)`` as each case ends.
+
+    Returns
+    -------
+    list of dict
+        The rows of ``sweep.csv``, one per case.
     """
     from .io.scenario import load_scenario
     from .runs import scenario_digest

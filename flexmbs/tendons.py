@@ -81,7 +81,45 @@ class Tendon:
     it).
     Actuation, exactly one of ``tension`` [N] (number or time function: a force on the start
     node back along the route's first direction) and ``pulled_length`` [m] (time function: the
-    start node driven back along it)."""
+    start node driven back along it).
+
+    Parameters
+    ----------
+    name : str
+        Unique name; also the wire's beam name.
+    route : sequence of (RigidBody, array_like)
+        The holes in route order: body and hole centre in body coordinates [m].
+    anchor : (RigidBody, array_like)
+        The wire's end [m].
+    lead : float
+        Free length before the first hole [m].
+    radius : float
+        The wire's radius [m].
+    clearance : float
+        Hole radius − wire radius [m].
+    material : Material, optional
+        The wire's material (or ``section``).
+    section : BeamStiffness, optional
+        The wire's section resultants (or ``material``).
+    element_length : float, optional
+        Element length [m].
+    elements : int, optional
+        Number of elements, instead of ``element_length``.
+    damping : float, default 0
+        Stiffness-proportional damping [s].
+    hole_length : float, default 1e-3
+        Length of every hole [m].
+    hole_sections : int, optional
+        Sections of every hole.
+    contact : LinearPenalty, Hertz, HuntCrossley or LankaraniNikravesh, optional
+        Normal force law of the holes.
+    friction : Friction, RegularizedCoulomb or float, optional
+        Friction of the holes.
+    tension : float or TimeFunction, optional
+        Pulling force [N] (or ``pulled_length``).
+    pulled_length : float or TimeFunction, optional
+        Pulled length [m] (or ``tension``).
+    """
 
     name: str
     route: Sequence[tuple[RigidBody, Any]]
@@ -346,7 +384,27 @@ class TendonParts:
     """What :meth:`Model.add_tendon <flexmbs.model.Model.add_tendon>` built for ``tendon``: the
     wire ``beam``, its clearance joints ``holes`` (route order), the ``anchor`` (spherical joint),
     the ``hold`` of its start, the ``actuator`` (the tension's point load or the pull's driver),
-    the ``start`` point and the unit ``pull`` direction (back along the route's first segment)."""
+    the ``start`` point and the unit ``pull`` direction (back along the route's first segment).
+
+    Parameters
+    ----------
+    tendon : Tendon
+        The tendon.
+    beam : Beam
+        The wire.
+    holes : tuple of SlidingClearanceJoint
+        The clearance joints, in route order.
+    anchor : ConstraintSpec
+        The spherical joint at the wire's end.
+    hold : ConstraintSpec
+        The joint holding the start across the pull.
+    actuator : LoadSpec or ConstraintSpec
+        The tension's point load or the pull's driver.
+    start : ndarray, shape (3,)
+        The wire's start point [m].
+    pull : ndarray, shape (3,)
+        Unit pull direction.
+    """
 
     tendon: Tendon
     beam: Beam

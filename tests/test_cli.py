@@ -278,3 +278,53 @@ def test_usage_errors_take_one_line(argv, what, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and what in err[0] and err[0].startswith("flexmbs")
+
+
+def test_every_command_has_quiet_and_help_points_to_the_site():
+    """-q/--quiet on every command (issue 55); the help texts name the docs site's pages, not
+    files of a clone."""
+    from flexmbs.cli import COMMANDS, build_parser
+    from flexmbs.commands._common import DOCS_URL
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    for name in COMMANDS:
+        command = sub.choices[name]
+        flags = {s for a in command._actions for s in a.option_strings}
+        assert {"-q", "--quiet"} <= flags, name
+        assert "docs/" not in (command.description or ""), name
+    assert DOCS_URL in (parser.description or "")
+    assert "-v" in {s for a in sub.choices["run"]._actions for s in a.option_strings}
+
+
+def test_info_quiet_only_checks(capsys):
+    assert main(["info", CANTILEVER, "-q"]) == EXIT_OK
+    assert capsys.readouterr().out == ""
+
+
+def test_run_verbose_prints_the_solver_counters(tmp_path, capsys):
+    out = tmp_path / "cant"
+    assert main(["run", CANTILEVER, "--t-end", "0.03", "-v", "--out", str(out)]) == EXIT_OK
+    err = capsys.readouterr().err.splitlines()
+    header = next(ln for ln in err if "newton" in ln and "per step" in ln)
+    rows = [ln.split() for ln in err[err.index(header) + 1:] if ln.startswith("cantilever:")]
+    assert rows and float(rows[-1][1]) == pytest.approx(0.03)
+    assert sum(int(r[3]) for r in rows) == summary(out)["stats"]["steps"]
+    assert main(["run", CANTILEVER, "-q", "-v"]) == EXIT_BAD_INPUT     # one or the other
+
+
+def test_compressed_frames_on_request_are_read_back(tmp_path):
+    """simulation.vtk_compression = true: zlib-compressed pieces (VTK's compressor attribute)
+    that pyvista reads to the same points as the uncompressed default."""
+    pv = pytest.importorskip("pyvista")
+    points = {}
+    for flag in ("false", "true"):
+        out = tmp_path / flag
+        assert main(["run", CANTILEVER, "--t-end", "0.02", "-q", "--out", str(out),
+                     "--set", f"simulation.vtk_compression={flag}"]) == EXIT_OK
+        piece = sorted((out / "vtu").glob("*_beams_0.vtp"))[-1]
+        assert ('compressor="vtkZLibDataCompressor"' in piece.read_text()) == (flag == "true")
+        reader = pv.get_reader(str(out / "cantilever.pvd"))
+        reader.set_active_time_value(reader.time_values[-1])
+        points[flag] = reader.read()[0]["beams"]["rod"].points
+    np.testing.assert_array_equal(points["true"], points["false"])

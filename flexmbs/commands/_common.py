@@ -11,14 +11,30 @@ from typing import Any, NoReturn
 
 from ..errors import ConvergenceError, FlexmbsError, Interrupted
 
+#: the documentation site; help texts point to its pages (:func:`docs`), not to files of a clone
+DOCS_URL = "https://flexmbs.readthedocs.io/en/latest/"
+
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXIT_FAILED = 3
 EXIT_INTERRUPTED = 130
 
-__all__ = ["EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "OneLineParser",
-           "error", "failure_status", "one_line", "overrides", "raise_pending",
+__all__ = ["DOCS_URL", "EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "OneLineParser",
+           "add_quiet", "docs", "error", "failure_status", "one_line", "overrides", "raise_pending",
            "terminate_like_ctrl_c"]
+
+
+def docs(page: str, anchor: str = "") -> str:
+    """The address of a page of the documentation site (``page``: its file name without
+    ``.md``), for help texts: ``docs("cli", "flexmbs-compile")``."""
+    return f"{DOCS_URL}{page}/" + (f"#{anchor}" if anchor else "")
+
+
+def add_quiet(parser: argparse.ArgumentParser, what: str) -> None:
+    """``-q/--quiet``, which every command has: ``what`` it leaves out (errors are always
+    printed)."""
+    parser.add_argument("--quiet", "-q", action="store_true",
+                        help=f"{what} (errors are still printed)")
 
 
 def one_line(exc: BaseException) -> str:

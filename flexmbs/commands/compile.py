@@ -15,7 +15,16 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import FlexmbsError
-from ._common import EXIT_BAD_INPUT, EXIT_OK, error, failure_status, overrides, terminate_like_ctrl_c
+from ._common import (
+    EXIT_BAD_INPUT,
+    EXIT_OK,
+    add_quiet,
+    docs,
+    error,
+    failure_status,
+    overrides,
+    terminate_like_ctrl_c,
+)
 
 __all__ = ["add_parser", "announce_compiles", "compile_notice", "run"]
 
@@ -25,14 +34,15 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
         "compile", parents=parents, help="compile the numba kernels ahead of a first run",
         description="Compile (or load from the cache) the numba kernels for the named kinds of "
                     "model (cable, rod: a clamped beam of these elements) or for the models of "
-                    "scenario files, so that the first run starts at once (docs/cli.md).")
+                    "scenario files, so that the first run starts at once "
+                    f"({docs('cli', 'flexmbs-compile')}).")
     comp.add_argument("targets", nargs="*", metavar="KIND_OR_SCENARIO",
                       help="cable, rod, or a scenario file (.toml); default: cable")
     comp.add_argument("--complete", action="store_true",
                       help="compile the complete kernel of each target's element groups instead, "
                            "which serves every model with those groups, so that none compiles "
                            "(somewhat slower per step than a model's own kernel)")
-    comp.add_argument("--quiet", "-q", action="store_true", help="no output but errors")
+    add_quiet(comp, "no output")
 
 
 

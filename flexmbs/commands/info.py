@@ -7,7 +7,7 @@ import sys
 from typing import Any, TextIO
 
 from ..errors import FlexmbsError
-from ._common import EXIT_BAD_INPUT, EXIT_OK, error, one_line, overrides
+from ._common import EXIT_BAD_INPUT, EXIT_OK, add_quiet, docs, error, one_line, overrides
 
 __all__ = ["add_parser", "print_info", "run"]
 
@@ -15,8 +15,11 @@ __all__ = ["add_parser", "print_info", "run"]
 def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     info = sub.add_parser("info", parents=parents, help="print the model of a scenario",
                           description="Print the model: coordinates, beams, bodies, constraints, "
-                                      "loads, joints, probes and solver settings.")
+                                      "loads, joints, probes and solver settings "
+                                      f"({docs('cli', 'flexmbs-info')}).")
     info.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
+    add_quiet(info, "print nothing: only check that the scenario loads and its model builds "
+                    "(exit status 0 or 2)")
 
 
 
@@ -125,5 +128,6 @@ def run(args: argparse.Namespace) -> int:
     except FlexmbsError as exc:
         error(one_line(exc))
         return EXIT_BAD_INPUT
-    print_info(sc, asm, sys.stdout)
+    if not args.quiet:
+        print_info(sc, asm, sys.stdout)
     return EXIT_OK

@@ -7,7 +7,8 @@ bodies as translucent surfaces, the contact points with arrows along the contact
 by the normal force, springs and bore outlines as lines, coloured by a beam field, with the
 camera on the whole model. ``--screenshot PNG`` runs the script with ``pvbatch`` (one frame,
 off-screen) when ParaView is installed; without ``pvbatch`` on PATH it says so in one line and
-exits 2 (the script is written all the same). See docs/postprocess.md, "ParaView".
+exits 2 (the script is written all the same). See the docs site's "Post-processing" page,
+"ParaView" (docs/postprocess.md).
 
 The command reads the output folder only (``summary.json``, ``contacts.csv``, the ``.pvd`` and
 the first frame's beam piece for the field names); it needs neither VTK nor ParaView.
@@ -31,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from ..io.vtu import frame_files, read_pvd
+from ._common import add_quiet, docs
 
 __all__ = ["CAMERAS", "ViewOptions", "add_parser", "run", "screenshot", "view_script",
            "write_view_script"]
@@ -236,7 +238,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         "paraview", help="write a ParaView view script for an output folder",
         description="Write DIR/<name>_view.py, a ParaView Python script that opens the run's "
                     "multiblock series with beams as tubes of their radius, bodies, contact "
-                    "forces and the camera on the model (docs/postprocess.md, ParaView).")
+                    "forces and the camera on the model "
+                    f"({docs('postprocess', 'paraview')}).")
     p.add_argument("directory", metavar="DIR", help="output folder of a run")
     p.add_argument("--color-by", default="curvature_magnitude", metavar="FIELD",
                    help="beam point field: curvature_magnitude (default), axial_strain, "
@@ -250,6 +253,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--time", type=float, metavar="T",
                    help="screenshot: the output at time T (default: the last)")
     p.add_argument("--size", default="1280x720", metavar="WxH", help="screenshot size in pixels")
+    add_quiet(p, "do not print the files written")
     return p
 
 
@@ -274,7 +278,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"flexmbs: error: cannot write {exc.filename or args.directory}: {exc.strerror}",
               file=sys.stderr)
         return 2
-    print(f"wrote {path}; open it with: paraview --script={path}")
+    if not args.quiet:
+        print(f"wrote {path}; open it with: paraview --script={path}")
     if not args.screenshot:
         return 0
     if shutil.which("pvbatch") is None:
@@ -287,7 +292,8 @@ def run(args: argparse.Namespace) -> int:
     except (RuntimeError, subprocess.TimeoutExpired) as exc:
         print(f"flexmbs: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 3
-    print(f"wrote {png}")
+    if not args.quiet:
+        print(f"wrote {png}")
     return 0
 
 

@@ -7,7 +7,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._common import EXIT_BAD_INPUT
+from ._common import EXIT_BAD_INPUT, add_quiet, docs
 
 __all__ = ["add_parsers", "run"]
 
@@ -15,7 +15,8 @@ __all__ = ["add_parsers", "run"]
 def add_parsers(sub: Any) -> None:
     render = sub.add_parser("render", help="off-screen rendering of an output folder",
                             description="Render the .pvd series of DIR off-screen (pyvista): "
-                                        "PNG frames and/or a movie (docs/postprocess.md).")
+                                        "PNG frames and/or a movie ("
+                                        f"{docs('postprocess', 'flexmbs-render-dir')}).")
     render.add_argument("directory", metavar="DIR")
     render.add_argument("--movie", metavar="FILE", help="movie file (.mp4 or .gif)")
     render.add_argument("--png-every", type=int, metavar="N",
@@ -32,10 +33,11 @@ def add_parsers(sub: Any) -> None:
                         help="tube radius [m] (default: the beam radius in the output)")
     render.add_argument("--size", default="1280x720", metavar="WxH", help="image size in pixels")
     render.add_argument("--fps", type=float, default=24.0, help="movie frame rate (default 24)")
-    render.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet(render, "no progress bar and no list of the files written")
     plot = sub.add_parser("plot", help="time-history figures of an output folder",
                           description="Write matplotlib figures (probes, energies, contact "
-                                      "forces, active contacts, hole sections) to DIR/figures.")
+                                      "forces, active contacts, hole sections) to DIR/figures ("
+                                      f"{docs('postprocess', 'flexmbs-plot-dir')}).")
     plot.add_argument("directory", metavar="DIR")
     plot.add_argument("--compare", metavar="OTHER_DIR", help="overlay a second run")
     plot.add_argument("--against", metavar="COLUMN",
@@ -56,6 +58,7 @@ def add_parsers(sub: Any) -> None:
     plot.add_argument("--exaggeration", type=float, metavar="F",
                       help="section view: factor on offsets and clearance (default: clearance "
                            "drawn as half the bore radius)")
+    add_quiet(plot, "do not print the files written")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -117,6 +120,7 @@ def run(args: argparse.Namespace) -> int:
     except (FileNotFoundError, ValueError) as exc:
         print(f"flexmbs: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    print(f"wrote {len(files)} file(s): {files[0] if files else '-'}"
-          f"{' ...' if len(files) > 1 else ''}")
+    if not args.quiet:
+        print(f"wrote {len(files)} file(s): {files[0] if files else '-'}"
+              f"{' ...' if len(files) > 1 else ''}")
     return 0

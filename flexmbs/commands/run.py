@@ -1,5 +1,6 @@
-"""``flexmbs run SCENARIO``: run a scenario into its output folder (DESIGN.md, "CLI"), with a
-progress bar, ``--resume`` of a stopped run and one line at the end."""
+"""``flexmbs run SCENARIO``: run a scenario into its output folder (the docs site's "Command
+line" page), with a progress bar (or, with ``--verbose``, a line of solver statistics per
+stretch of steps), ``--resume`` of a stopped run and one line at the end."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ from ..errors import FlexmbsError
 from ._common import (
     EXIT_BAD_INPUT,
     EXIT_OK,
+    add_quiet,
+    docs,
     error,
     failure_status,
     overrides,
@@ -28,14 +31,20 @@ __all__ = ["Progress", "add_parser", "run"]
 
 def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     run = sub.add_parser("run", parents=parents, help="run a scenario",
-                         description="Run a scenario and write its output folder.")
+                         description="Run a scenario and write its output folder "
+                                     f"({docs('cli', 'flexmbs-run')}).")
     run.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
     run.add_argument("--out", metavar="DIR",
                      help="output folder (default: out/<scenario name> in the current directory)")
     run.add_argument("--t-end", type=float, metavar="T", help="end time (= --set simulation.t_end=T)")
     run.add_argument("--dt", type=float, metavar="H", help="time step (= --set simulation.dt=H)")
-    run.add_argument("--quiet", "-q", action="store_true",
-                     help="no progress bar and no final summary (errors are still printed)")
+    talk = run.add_mutually_exclusive_group()
+    add_quiet(talk, "no progress bar and no final summary")
+    talk.add_argument("--verbose", "-v", action="store_true",
+                      help="instead of the progress bar, one line on stderr per stretch of "
+                           "steps the integrator reports (up to each output time): time, step "
+                           "size, steps, Newton iterations (in all and per step), "
+                           "factorisations and rejected steps")
     run.add_argument("--resume", metavar="OUT_DIR",
                      help="continue the stopped run in OUT_DIR from its checkpoint.npz to t_end, "
                           "appending to its files")
@@ -48,14 +57,22 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
 
 
 class Progress:
-    """tqdm bar over simulated time with steps/s and Newton iterations in the postfix."""
+    """tqdm bar over simulated time with steps/s and Newton iterations in the postfix; with
+    ``verbose`` no bar but one line of the solver's counters per report instead."""
 
-    def __init__(self, t0: float, t_end: float, *, disable: bool, name: str) -> None:
+    def __init__(self, t0: float, t_end: float, *, disable: bool, name: str,
+                 verbose: bool = False) -> None:
         self.bar: Any = None
         self.t0 = t0
         self.wall0 = time.perf_counter()
         self.last = 0.0
-        if disable:
+        self.verbose = verbose
+        self.name = name
+        self.seen: tuple[float, int, int, int, int] = (t0, 0, 0, 0, 0)
+        if verbose:
+            print(f"{name}: {'t [s]':>12} {'h [s]':>10} {'steps':>7} {'newton':>7} "
+                  f"{'per step':>8} {'factor.':>7} {'rejected':>8}", file=sys.stderr, flush=True)
+        if disable or verbose:
             return
         from tqdm import tqdm
 
@@ -66,6 +83,8 @@ class Progress:
 
     def __call__(self, state: Any, stats: Any) -> None:
         raise_pending()
+        if self.verbose:
+            self._line(state, stats)
         if self.bar is None:
             return
         self.stats = stats
@@ -75,6 +94,22 @@ class Progress:
             self.last = now
             self._postfix(now)
             self.bar.refresh()
+
+    def _line(self, state: Any, stats: Any) -> None:
+        """One line of what the integrator did since its last report (the counters' growth;
+        ``h``: the mean step size over the stretch)."""
+        now = (float(state.t), int(stats.steps), int(stats.newton_iterations),
+               int(stats.factorizations), int(stats.rejected_steps))
+        t0, steps0, newton0, fact0, rej0 = self.seen
+        steps = now[1] - steps0
+        if steps <= 0 and now[4] == rej0:
+            return
+        self.seen = now
+        h = (now[0] - t0) / steps if steps > 0 else float("nan")
+        per = (now[2] - newton0) / steps if steps > 0 else float("nan")
+        print(f"{self.name}: {now[0]:12.6g} {h:10.3g} {steps:7d} {now[2] - newton0:7d} "
+              f"{per:8.2f} {now[3] - fact0:7d} {now[4] - rej0:8d}",
+              file=sys.stderr, flush=True)
 
     def _postfix(self, now: float) -> None:
         stats = getattr(self, "stats", None)
@@ -149,12 +184,14 @@ def run(args: argparse.Namespace) -> int:
     from ..runs import run_scenario
 
     quiet = bool(args.quiet)
+    verbose = bool(getattr(args, "verbose", False))
     out: Path | None = None
     t_wall = time.perf_counter()
     bars: list[Progress] = []
 
     def progress(start: float, t_end: float, name: str) -> Progress:
-        bars.append(Progress(start, t_end, name=name, disable=quiet or not sys.stderr.isatty()))
+        bars.append(Progress(start, t_end, name=name, disable=quiet or not sys.stderr.isatty(),
+                             verbose=verbose))
         return bars[-1]
 
     def close_bars() -> None:

@@ -10,7 +10,16 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import FlexmbsError
-from ._common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, error, failure_status, terminate_like_ctrl_c
+from ._common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_OK,
+    add_quiet,
+    docs,
+    error,
+    failure_status,
+    terminate_like_ctrl_c,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -20,7 +29,7 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
         "sweep", parents=parents, help="run variants of a scenario on Dask (parameter study)",
         description="Run the Cartesian product of --grid lists (times the --zip lists taken side "
                     "by side) of --set overrides on Dask, one output folder per case, and write "
-                    "the table sweep.csv (docs/sweeps.md). A rerun skips completed cases.")
+                    f"the table sweep.csv ({docs('sweeps')}). A rerun skips completed cases.")
     sweep.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...",
                        help="values of one --set key; several --grid give their product")
@@ -33,7 +42,7 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
                             "default: a LocalCluster on this machine")
     sweep.add_argument("--workers", type=int, metavar="N",
                        help="LocalCluster worker processes (default: one per core)")
-    sweep.add_argument("--quiet", "-q", action="store_true", help="no progress output")
+    add_quiet(sweep, "no progress output")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -326,6 +326,29 @@ class SlidingJoint(Interaction):
     (:func:`sliding_axial_force`); its default stiffness (``stiffness=None``) is the axial
     stiffness of one beam element, ``k_t = EA/L_e`` (L_e the mean element length), stiff enough
     that the elastic stick displacement μN/k_t is the beam's own strain under that force.
+
+    Parameters
+    ----------
+    beam : Beam
+        The beam along which the body slides.
+    body : RigidBody
+        The sliding body.
+    name : str, optional
+        The joint's name.
+    hole_point : array_like of 3 floats, default (0, 0, 0)
+        The hole's centre in body coordinates [m].
+    axis : array_like of 3 floats, default (1, 0, 0)
+        The hole's axis in body coordinates.
+    variant : {"cylindrical", "ring"}, default "cylindrical"
+        Axis along the tangent (5 equations) or the position only (3).
+    s0 : float, optional
+        Initial arc length on the beam [m] (default: the hole centre's projection).
+    friction : Friction, RegularizedCoulomb or float, optional
+        Friction; a number is a Coulomb coefficient (the stick law).
+    friction_velocity : float, optional
+        With a number ``friction``: the regularised law with this velocity scale [m/s].
+    axial_force : float or TimeFunction, optional
+        Force on the body along the beam's tangent [N].
     """
 
     term_kind = "sliding"

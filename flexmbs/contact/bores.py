@@ -48,7 +48,19 @@ class Hole:
     """A bore of constant section along the body x axis, checked at ``sections`` stations
     (both end faces included). ``open_ends``: the beam may enter and leave the bore (a section
     it does not cross is idle); else it must cross every section (a beam that leaves is an
-    error: the paper's sleeve on its rail)."""
+    error: the paper's sleeve on its rail).
+
+    Parameters
+    ----------
+    section : HoleSection
+        The bore's cross-section (a circle, a superellipse, or a registered shape).
+    length : float
+        Bore length along the body x axis [m].
+    sections : int, default 9
+        Number of sections checked for contact, both end faces included.
+    open_ends : bool, default False
+        Whether the beam may enter and leave the bore.
+    """
 
     section: HoleSection
     length: float
@@ -88,7 +100,17 @@ class Hole:
 
 
 class CircleHole(Hole):
-    """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``)."""
+    """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``).
+
+    Parameters
+    ----------
+    radius : float
+        Bore radius [m].
+    length : float
+        Bore length along the body x axis [m].
+    sections : int, default 9
+        Number of hole sections checked for contact, both end faces included.
+    """
 
     def __init__(self, radius: float, length: float, sections: int = 9) -> None:
         super().__init__(CircleSection(radius), length, sections)
@@ -97,7 +119,21 @@ class CircleHole(Hole):
 class SuperellipseHole(Hole):
     """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (FORMULATION Part II §6); the
     keys are those of the scenario files (``a``, ``b``, ``exponent``, ``angle``: the section
-    turned in the body by that many radians from body y towards body z)."""
+    turned in the body by that many radians from body y towards body z).
+
+    Parameters
+    ----------
+    a, b : float
+        Semi-axes along the section's y and z [m].
+    exponent : float
+        Superellipse exponent (2: an ellipse; larger: closer to a rectangle).
+    length : float
+        Bore length along the body x axis [m].
+    sections : int, default 9
+        Number of sections checked for contact, both end faces included.
+    angle : float, default 0
+        Rotation of the section in the body, from body y towards body z [rad].
+    """
 
     def __init__(self, a: float, b: float, exponent: float, length: float,
                  sections: int = 9, angle: float = 0.0) -> None:
@@ -150,7 +186,26 @@ class CurvedBore(Hole):
     and is carried along it without twist (:func:`transported_frames`). ``radius`` is short
     for ``section = CircleSection(radius)``. ``open_ends`` (default here): the beam may enter
     and leave (a tube); ``False``: it must cross every section. A straight path along body x
-    is :class:`Hole`."""
+    is :class:`Hole`.
+
+    Parameters
+    ----------
+    path : Centerline
+        The bore's axis in body coordinates.
+    radius : float, optional
+        Short for ``section=CircleSection(radius)`` [m].
+    section : HoleSection, optional
+        The bore's cross-section (one of ``radius`` and ``section``).
+    sections : int, optional
+        Number of sections, equally spaced in arc length, both ends included.
+    spacing : float, optional
+        Instead of ``sections``: the distance between sections [m] (rounded so that both ends
+        are sections).
+    up : array_like of 3 floats, optional
+        The first section's e_y axis (default body y, or body z if y is along the curve's start).
+    open_ends : bool, default True
+        Whether the beam may enter and leave the bore.
+    """
 
     path: Centerline
     up: np.ndarray

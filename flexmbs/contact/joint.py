@@ -219,6 +219,34 @@ class SlidingClearanceJoint(Interaction):
       the axis (§3–§4; Tang & Liu). Not conservative once the beam crosses the section
       obliquely (closed-loop work 11 % of the path work at 44°–54°); kept to reproduce the
       paper. Sections without a compiled boundary (user-defined Python shapes) use it.
+
+    Parameters
+    ----------
+    beam : Beam
+        The beam passing through the hole.
+    body : RigidBody
+        The body that carries the hole.
+    hole : Hole
+        The bore: :class:`CircleHole`, :class:`SuperellipseHole`, :class:`Hole` or
+        :class:`CurvedBore`.
+    contact : LinearPenalty, Hertz, HuntCrossley or LankaraniNikravesh, optional
+        Normal force law (default: a linear penalty).
+    friction : Friction, RegularizedCoulomb or float, optional
+        Friction of the contacts; a number is a Coulomb coefficient (the stick law).
+    friction_velocity : float, optional
+        With a number ``friction``: the regularised law with this velocity scale [m/s].
+    hole_point : array_like of 3 floats, default (0, 0, 0)
+        The hole's centre in body coordinates [m].
+    beam_radius : float, optional
+        The beam's contact radius [m] (default: its section radius).
+    tangent : {"exact", "gauss_newton", "frozen_point"}, default "exact"
+        The contact's part of Newton's matrix (above).
+    detection : {"consistent", "paper"}, optional
+        Where in a section the contact points are (above).
+    name : str, optional
+        The joint's name (default: made from the beam's and body's names).
+    axis : array_like of 3 floats, default (1, 0, 0)
+        The bore's axis in body coordinates.
     """
 
     term_kind = "clearance"

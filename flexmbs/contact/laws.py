@@ -241,7 +241,17 @@ class LinearPenalty(_CommonForm):
     penetration, ``kδ²/(2δ₀)``, then ``k(δ − δ₀/2)``: the law is C¹, so a contact that only
     grazes (a slack wire in its holes) does not throw Newton between "open, no stiffness" and
     "closed, stiffness k"; a loaded contact sits δ₀/2 deeper (design notes, "Statics of
-    tendon-routed structures"). A small fraction of the clearance, e.g. 1e-3 of it."""
+    tendon-routed structures"). A small fraction of the clearance, e.g. 1e-3 of it.
+
+    Parameters
+    ----------
+    stiffness : float
+        k [N/m].
+    damping : float, default 0
+        c_d [N s/m].
+    onset : float, default 0
+        δ₀ [m]: the penetration over which the force rises smoothly.
+    """
 
     stiffness: float
     damping: float = 0.0
@@ -258,7 +268,15 @@ class LinearPenalty(_CommonForm):
 
 @dataclass(frozen=True, kw_only=True)
 class Hertz(_CommonForm):
-    """Hertz-type ``f = Kδⁿ`` (n = 3/2 point contact, ≈ 1–1.1 line-like; FORMULATION II §5)."""
+    """Hertz-type ``f = Kδⁿ`` (n = 3/2 point contact, ≈ 1–1.1 line-like; FORMULATION II §5).
+
+    Parameters
+    ----------
+    stiffness : float
+        K [N/m^n].
+    exponent : float, default 1.5
+        n.
+    """
 
     stiffness: float
     exponent: float = 1.5
@@ -277,6 +295,17 @@ class HuntCrossley(_CommonForm):
 
     ``min_approach_velocity`` guards ``δ̇⁽⁻⁾ → 0`` (resting contact): the approach velocity used is
     ``max(|δ̇⁽⁻⁾|, min_approach_velocity)``, so the damping coefficient stays bounded.
+
+    Parameters
+    ----------
+    stiffness : float
+        K [N/m^n].
+    restitution : float
+        Coefficient of restitution e, in [0, 1].
+    exponent : float, default 1.5
+        n.
+    min_approach_velocity : float, default 1e-3
+        Lower bound of the approach velocity used in the damping term [m/s].
     """
 
     stiffness: float
@@ -299,7 +328,19 @@ class HuntCrossley(_CommonForm):
 @dataclass(frozen=True, kw_only=True)
 class LankaraniNikravesh(_CommonForm):
     """Lankarani–Nikravesh (1990) ``f = Kδⁿ[1 + 3(1−e²)/4 · δ̇/δ̇⁽⁻⁾]`` (FORMULATION II §5);
-    same approach-velocity guard as :class:`HuntCrossley`."""
+    same approach-velocity guard as :class:`HuntCrossley`.
+
+    Parameters
+    ----------
+    stiffness : float
+        K [N/m^n].
+    restitution : float
+        Coefficient of restitution e, in [0, 1].
+    exponent : float, default 1.5
+        n.
+    min_approach_velocity : float, default 1e-3
+        Lower bound of the approach velocity used in the damping term [m/s].
+    """
 
     stiffness: float
     restitution: float
@@ -321,7 +362,15 @@ class LankaraniNikravesh(_CommonForm):
 @dataclass(frozen=True, kw_only=True)
 class RegularizedCoulomb:
     """Regularised Coulomb friction on the hole ``F_t = −μ f_n v_t/√(|v_t|² + ε_v²)``
-    (FORMULATION II §5), ``v_t`` = tangential velocity of Q relative to P."""
+    (FORMULATION II §5), ``v_t`` = tangential velocity of Q relative to P.
+
+    Parameters
+    ----------
+    mu : float
+        Friction coefficient μ.
+    eps_v : float, default 1e-4
+        Velocity scale ε_v [m/s].
+    """
 
     mu: float
     eps_v: float = 1e-4
@@ -358,6 +407,21 @@ class Friction:
     clearance joint: the normal law's stiffness; the sliding joint: the axial stiffness EA/L of
     one beam element). ``law = "regularised"``: ``F = −μ f_N v_t/√(|v_t|² + velocity²)``, which
     cannot hold a contact still (it creeps at a speed ∝ ``velocity``).
+
+    Parameters
+    ----------
+    mu : float
+        Kinetic (sliding) friction coefficient.
+    mu_static : float, optional
+        Static coefficient of the stick law (default ``mu``; at least ``mu``).
+    law : {"stick", "regularised"}, default "stick"
+        The tangential law.
+    stiffness : float, optional
+        Tangential stiffness k_t of the stick law [N/m] (default: chosen by the joint).
+    damping : float, default 0
+        Tangential damping c_t of the stick law [N s/m].
+    velocity : float, default 1e-3
+        Velocity scale of the regularised law [m/s].
     """
 
     mu: float

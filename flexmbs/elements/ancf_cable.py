@@ -79,6 +79,17 @@ class CableOptions:
     - ``exudyn_compatible``: Exudyn ObjectANCFCable strains, ``ε_E = |r′| − 1`` with the
       reference offset ``|r′_ref| − 1``, ``K = r′×r″/|r′|²``, integrated over dx (μ = 1);
       requires ``bending="vector"``.
+
+    Parameters
+    ----------
+    bending : {"vector", "scalar"}, default "vector"
+        Bending energy form.
+    axial_rule : {"lobatto3", "gauss5"}, default "lobatto3"
+        Quadrature of the axial term.
+    bending_points : {2, 3}, default 3
+        Gauss points of the bending term.
+    exudyn_compatible : bool, default False
+        Exudyn's ObjectANCFCable strains.
     """
 
     bending: Literal["vector", "scalar"] = "vector"

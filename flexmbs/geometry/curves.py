@@ -109,6 +109,19 @@ class Centerline:
     ``n_elem == n_nodes``; otherwise ``n_elem == n_nodes - 1``. The reference arc length ``s``
     used by :meth:`locate` and :meth:`frame_at` is the element parameter ``x = xi * L`` summed
     from node 0.
+
+    Made by :func:`line`, :func:`arc`, :func:`polyline` or :func:`read_curve`.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n_nodes, 3)
+        Node positions [m].
+    tangents : ndarray, shape (n_nodes, 3)
+        Unit tangents at the nodes.
+    lengths : ndarray, shape (n_elem,)
+        Reference length of each element [m].
+    closed : bool, default False
+        Whether the last element joins the last node back to node 0.
     """
 
     points: FloatArray
@@ -281,7 +294,20 @@ def bessel_tangents(points: ArrayLike, closed: bool = False) -> FloatArray:
 
 
 def line(start: ArrayLike, end: ArrayLike, elements: int) -> Centerline:
-    """Straight centreline from ``start`` to ``end`` with ``elements`` equal elements."""
+    """Straight centreline from ``start`` to ``end`` with ``elements`` equal elements.
+
+    Parameters
+    ----------
+    start, end : array_like of 3 floats
+        End points [m].
+    elements : int
+        Number of elements.
+
+    Returns
+    -------
+    Centerline
+        The line's nodes, tangents and element lengths.
+    """
     n = _check_elements(elements)
     a = _as_vector(start, "line start")
     b = _as_vector(end, "line end")
@@ -303,6 +329,26 @@ def arc(center: ArrayLike, radius: float, start: ArrayLike, angle: float,
     ``start`` is a point on the circle (``|start - center| == radius`` and perpendicular to
     ``normal``); the arc turns by ``angle`` (rad, right-handed about ``normal``; negative turns the
     other way). ``|angle| == 2 pi`` gives a closed loop with ``elements`` nodes.
+
+    Parameters
+    ----------
+    center : array_like of 3 floats
+        Centre of the circle [m].
+    radius : float
+        Radius [m].
+    start : array_like of 3 floats
+        First node, on the circle [m].
+    angle : float
+        Angle turned [rad].
+    normal : array_like of 3 floats, default (0, 0, 1)
+        Axis of the circle.
+    elements : int
+        Number of elements.
+
+    Returns
+    -------
+    Centerline
+        The arc's nodes, tangents and element lengths.
     """
     n = _check_elements(elements)
     c = _as_vector(center, "arc center")
@@ -442,6 +488,22 @@ def polyline(points: ArrayLike, tangents: ArrayLike | None = None, *, closed: bo
       segment.
     - Element lengths by the Hermite fixed point (:func:`hermite_lengths`).
     - ``closed``: the last point connects back to the first (a repeated first point is dropped).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        Points on the curve [m].
+    tangents : array_like, shape (n, 3), optional
+        Directions at the points (default: Bessel tangents).
+    closed : bool, default False
+        Whether the curve closes back to the first point.
+    elements : int, optional
+        Resample to this many elements of equal arc length (default: one per segment).
+
+    Returns
+    -------
+    Centerline
+        Nodes, unit tangents and element lengths.
     """
     p = _as_points(points)
     t: FloatArray | None = None

@@ -21,6 +21,7 @@ import os
 import re
 import time
 import weakref
+import zlib
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -143,9 +144,48 @@ class VTUMesh:
 
 
 # =============================================================================== XML writing
-def _format_array(a: np.ndarray, binary: bool) -> str:
-    if binary:
+#: the encodings of the data arrays: inline base64 of the raw bytes, the same of zlib-compressed
+#: blocks (VTK's ``vtkZLibDataCompressor``), or decimal text
+ENCODINGS = ("binary", "zlib", "ascii")
+#: uncompressed bytes per compressed block (VTK's default) and zlib's level: 1, the fastest,
+#: compresses the frames' doubles nearly as well as the default 6 (benchmarks/README.md,
+#: "Compressed frames")
+_ZLIB_BLOCK = 32768
+_ZLIB_LEVEL = 1
+
+
+def _zlib_blocks(raw: bytes) -> str:
+    """``raw`` as VTK's inline compressed binary: the UInt64 header (number of blocks, block
+    size, size of a partial last block or 0, each block's compressed size) in base64, then the
+    compressed blocks in base64 (two base64 runs, as VTK reads them)."""
+    blocks = [zlib.compress(raw[i:i + _ZLIB_BLOCK], _ZLIB_LEVEL)
+              for i in range(0, len(raw), _ZLIB_BLOCK)]
+    header = np.array([len(blocks), _ZLIB_BLOCK, len(raw) % _ZLIB_BLOCK,
+                       *(len(b) for b in blocks)], dtype="<u8")
+    return (base64.b64encode(header.tobytes()).decode("ascii")
+            + base64.b64encode(b"".join(blocks)).decode("ascii"))
+
+
+def _zlib_unblocks(text: str) -> bytes:
+    """The raw bytes of a DataArray written by :func:`_zlib_blocks`."""
+    head = base64.b64decode(text[:32])           # 24 bytes: the first three UInt64 = 32 chars
+    n = int(np.frombuffer(head[:8], "<u8")[0])
+    size = 8 * (3 + n)
+    chars = 4 * ((size + 2) // 3)
+    header = np.frombuffer(base64.b64decode(text[:chars]), "<u8")
+    data = base64.b64decode(text[chars:])
+    out, pos = [], 0
+    for c in header[3:3 + n]:
+        out.append(zlib.decompress(data[pos:pos + int(c)]))
+        pos += int(c)
+    return b"".join(out)
+
+
+def _format_array(a: np.ndarray, mode: str) -> str:
+    if mode != "ascii":
         raw = np.ascontiguousarray(a).astype(a.dtype.newbyteorder("<"), copy=False).tobytes()
+        if mode == "zlib":
+            return _zlib_blocks(raw)
         return base64.b64encode(np.uint64(len(raw)).tobytes() + raw).decode("ascii")
     flat = a.reshape(-1).tolist()
     # repr of a Python float is the shortest string that round-trips exactly
@@ -180,20 +220,20 @@ def _recall(key: tuple, arrays: Sequence[np.ndarray]) -> Any:
     return value
 
 
-def _data_array(name: str, a: np.ndarray, binary: bool, *, tuples: bool = False) -> str:
+def _data_array(name: str, a: np.ndarray, mode: str, *, tuples: bool = False) -> str:
     """The ``DataArray`` element of ``a`` (that of a read-only array that owns its data is
     encoded once: such an array cannot change)."""
     if _frozen(a):
-        key = ("array", id(a), name, binary, tuples)
+        key = ("array", id(a), name, mode, tuples)
         text = _recall(key, [a])
         if text is None:
-            text = _encode_array(name, a, binary, tuples=tuples)
+            text = _encode_array(name, a, mode, tuples=tuples)
             _remember(key, [a], text)
         return text
-    return _encode_array(name, np.asarray(a), binary, tuples=tuples)
+    return _encode_array(name, np.asarray(a), mode, tuples=tuples)
 
 
-def _encode_array(name: str, a: np.ndarray, binary: bool, *, tuples: bool = False) -> str:
+def _encode_array(name: str, a: np.ndarray, mode: str, *, tuples: bool = False) -> str:
     if a.dtype.kind == "b":
         a = a.astype(np.uint8)
     elif a.dtype.kind in "iu" and a.dtype not in _VTK_TYPES:
@@ -201,12 +241,13 @@ def _encode_array(name: str, a: np.ndarray, binary: bool, *, tuples: bool = Fals
     elif a.dtype.kind == "f" and a.dtype not in _VTK_TYPES:
         a = a.astype(np.float64)
     ncomp = 1 if a.ndim == 1 else int(np.prod(a.shape[1:]))
-    attrs = f'type="{_VTK_TYPES[a.dtype]}" Name="{name}" format="{"binary" if binary else "ascii"}"'
+    form = "ascii" if mode == "ascii" else "binary"
+    attrs = f'type="{_VTK_TYPES[a.dtype]}" Name="{name}" format="{form}"'
     if ncomp > 1:
         attrs += f' NumberOfComponents="{ncomp}"'
     if tuples:
         attrs += f' NumberOfTuples="{a.shape[0] if a.ndim else 1}"'
-    return f"<DataArray {attrs}>\n{_format_array(a, binary)}\n</DataArray>\n"
+    return f"<DataArray {attrs}>\n{_format_array(a, mode)}\n</DataArray>\n"
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
@@ -225,32 +266,40 @@ def _checked_arrays(mesh: VTUMesh, n: int, m: int) -> None:
             raise ValueError(f"cell data '{k}' has {np.asarray(v).shape[0]} rows, mesh has {m} cells")
 
 
-def _field_xml(mesh: VTUMesh, binary: bool) -> list[str]:
+def _field_xml(mesh: VTUMesh, mode: str) -> list[str]:
     if not mesh.field_data:
         return []
     out = ["<FieldData>\n"]
-    out.extend(_data_array(k, np.atleast_1d(np.asarray(v)), binary, tuples=True)
+    out.extend(_data_array(k, np.atleast_1d(np.asarray(v)), mode, tuples=True)
                for k, v in mesh.field_data.items())
     out.append("</FieldData>\n")
     return out
 
 
 def _attributes_xml(point_data: dict[str, np.ndarray], cell_data: dict[str, np.ndarray],
-                    pts: np.ndarray, binary: bool) -> list[str]:
+                    pts: np.ndarray, mode: str) -> list[str]:
     out = ["<PointData>\n"]
-    out.extend(_data_array(k, np.asarray(v), binary) for k, v in point_data.items())
+    out.extend(_data_array(k, np.asarray(v), mode) for k, v in point_data.items())
     out.append("</PointData>\n<CellData>\n")
-    out.extend(_data_array(k, np.asarray(v), binary) for k, v in cell_data.items())
+    out.extend(_data_array(k, np.asarray(v), mode) for k, v in cell_data.items())
     out.append("</CellData>\n<Points>\n")
-    out.append(_data_array("Points", pts, binary))
+    out.append(_data_array("Points", pts, mode))
     out.append("</Points>\n")
     return out
 
 
-def _encoding(encoding: str) -> bool:
-    if encoding not in ("binary", "ascii"):
-        raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
-    return encoding == "binary"
+def _encoding(encoding: str) -> str:
+    if encoding not in ENCODINGS:
+        raise ValueError(f"encoding must be one of {', '.join(map(repr, ENCODINGS))} "
+                         f"(got {encoding!r})")
+    return encoding
+
+
+def _header(kind: str, mode: str) -> str:
+    """The ``VTKFile`` element's opening tag (``compressor`` on zlib-compressed files)."""
+    compressor = ' compressor="vtkZLibDataCompressor"' if mode == "zlib" else ""
+    return (f'<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" '
+            f'header_type="UInt64"{compressor}>\n<{kind}>\n')
 
 
 #: ``store(path, text) -> path``: where a rendered file goes (see :func:`write_vtu`)
@@ -277,24 +326,25 @@ def write_vtu(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     writes each frame to a new file that its ``.pvd`` lists only once complete, so it skips
     the rename).
 
-    ``encoding="binary"`` (inline base64, exact bits) or ``"ascii"`` (shortest round-trip
-    decimal, also exact). ``store(path, text)``, if given, takes the file's text instead of
-    writing it (a series writing in the background renders here and stores there)."""
-    binary = _encoding(encoding)
+    ``encoding="binary"`` (inline base64, exact bits), ``"zlib"`` (the same, zlib-compressed
+    in blocks as VTK's ``vtkZLibDataCompressor``: exact bits, smaller files) or ``"ascii"``
+    (shortest round-trip decimal, also exact). ``store(path, text)``, if given, takes the
+    file's text instead of writing it (a series writing in the background renders here and
+    stores there)."""
+    mode = _encoding(encoding)
     pts = np.asarray(mesh.points, np.float64).reshape(-1, 3)
     conn, offs, types = mesh.flat_cells()
     n, m = pts.shape[0], types.size
     _checked_arrays(mesh, n, m)
     out = ['<?xml version="1.0"?>\n',
-           '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
-           'header_type="UInt64">\n<UnstructuredGrid>\n']
-    out.extend(_field_xml(mesh, binary))
+           _header("UnstructuredGrid", mode)]
+    out.extend(_field_xml(mesh, mode))
     out.append(f'<Piece NumberOfPoints="{n}" NumberOfCells="{m}">\n')
-    out.extend(_attributes_xml(mesh.point_data, mesh.cell_data, pts, binary))
+    out.extend(_attributes_xml(mesh.point_data, mesh.cell_data, pts, mode))
     out.append("<Cells>\n")
-    out.append(_data_array("connectivity", conn, binary))
-    out.append(_data_array("offsets", offs, binary))
-    out.append(_data_array("types", types, binary))
+    out.append(_data_array("connectivity", conn, mode))
+    out.append(_data_array("offsets", offs, mode))
+    out.append(_data_array("types", types, mode))
     out.append("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n")
     if store is not None:
         return store(Path(path), "".join(out))
@@ -315,21 +365,20 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     """Write ``mesh`` as a VTK XML PolyData file: vertices, lines/poly lines and polygons
     (triangles, quads) only. PolyData numbers its cells verts, then lines, then polys: cell data
     is reordered so (a stable sort by section). Arguments as :func:`write_vtu`."""
-    binary = _encoding(encoding)
+    mode = _encoding(encoding)
     pts = np.asarray(mesh.points, np.float64).reshape(-1, 3)
-    m, counts, order, cells_xml = _poly_cells(mesh, binary)
+    m, counts, order, cells_xml = _poly_cells(mesh, mode)
     n = pts.shape[0]
     _checked_arrays(mesh, n, m)
     cell_data = mesh.cell_data
     if order is not None:
         cell_data = {k: np.asarray(v)[order] for k, v in mesh.cell_data.items()}
     out = ['<?xml version="1.0"?>\n',
-           '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
-           'header_type="UInt64">\n<PolyData>\n']
-    out.extend(_field_xml(mesh, binary))
+           _header("PolyData", mode)]
+    out.extend(_field_xml(mesh, mode))
     out.append(f'<Piece NumberOfPoints="{n}" NumberOfVerts="{counts[0]}" '
                f'NumberOfLines="{counts[1]}" NumberOfStrips="0" NumberOfPolys="{counts[2]}">\n')
-    out.extend(_attributes_xml(mesh.point_data, cell_data, pts, binary))
+    out.extend(_attributes_xml(mesh.point_data, cell_data, pts, mode))
     out.extend(cells_xml)
     out.append("</Piece>\n</PolyData>\n</VTKFile>\n")
     if store is not None:
@@ -337,7 +386,7 @@ def write_vtp(path: str | os.PathLike, mesh: VTUMesh, *, encoding: str = "binary
     return _store(Path(path), "".join(out), atomic)
 
 
-def _poly_cells(mesh: VTUMesh, binary: bool
+def _poly_cells(mesh: VTUMesh, mode: str
                 ) -> tuple[int, list[int], np.ndarray | None, list[str]]:
     """The cells of ``mesh`` as PolyData stores them: (number of cells, cells per section,
     the order of the cell data or None when it keeps its order, the sections' XML). Cells
@@ -347,7 +396,7 @@ def _poly_cells(mesh: VTUMesh, binary: bool
         arrays.extend([c] if isinstance(c, np.ndarray) else c)
     key: tuple | None = None
     if arrays and all(_frozen(a) for a in arrays):
-        key = ("cells", binary, tuple((t, isinstance(c, np.ndarray), len(c)) for t, c in mesh.cells),
+        key = ("cells", mode, tuple((t, isinstance(c, np.ndarray), len(c)) for t, c in mesh.cells),
                tuple(id(a) for a in arrays))
         hit = _recall(key, arrays)
         if hit is not None:
@@ -370,8 +419,8 @@ def _poly_cells(mesh: VTUMesh, binary: bool
         ends = np.cumsum(sizes)
         sel = conn[np.repeat(starts[ids] - (ends - sizes), sizes) + np.arange(int(ends[-1]))]
         out.append(f"<{tag}>\n")
-        out.append(_data_array("connectivity", sel.astype(np.int64), binary))
-        out.append(_data_array("offsets", ends.astype(np.int64), binary))
+        out.append(_data_array("connectivity", sel.astype(np.int64), mode))
+        out.append(_data_array("offsets", ends.astype(np.int64), mode))
         out.append(f"</{tag}>\n")
     result = (m, counts, order if m and (np.diff(section) < 0).any() else None, out)
     if key is not None:
@@ -484,8 +533,7 @@ class VTUSeries:
     def __init__(self, pvd_path: str | os.PathLike, *, vtu_subdir: str = "vtu",
                  encoding: str = "binary", resume_at: float | None = None,
                  pvd_interval: float = 1.0, background: bool = False) -> None:
-        if encoding not in ("binary", "ascii"):
-            raise ValueError(f"encoding must be 'binary' or 'ascii' (got {encoding!r})")
+        _encoding(encoding)
         self.pvd_path = Path(pvd_path)
         self.name = self.pvd_path.stem
         self.vtu_subdir = vtu_subdir
@@ -633,9 +681,6 @@ class VTUSeries:
         self.close()
 
 
-_PVD_DATASET = re.compile(r'<DataSet\b[^>]*\btimestep="([^"]*)"[^>]*\bfile="([^"]*)"')
-
-
 def frame_files(path: str | os.PathLike) -> list[Path] | None:
     """The pieces a ``.vtm`` frame lists (paths beside it), or None when it is missing or
     incomplete."""
@@ -668,6 +713,9 @@ def frame_time(path: str | os.PathLike) -> float | None:
             continue
         text = (arr.text or "").strip()
         try:
+            if arr.get("format") == "binary" and root.get("compressor"):
+                raw = _zlib_unblocks(text)
+                return float(np.frombuffer(raw, dtype="<f8")[0])
             if arr.get("format") == "binary":
                 raw = base64.b64decode(text)[8:]
                 return float(np.frombuffer(raw, dtype="<f8")[0])
@@ -679,8 +727,17 @@ def frame_time(path: str | os.PathLike) -> float | None:
 
 def read_pvd(pvd_path: str | os.PathLike) -> list[tuple[float, str]]:
     """``(time, relative file)`` of every ``DataSet`` of a ``.pvd`` written by
-    :class:`VTUSeries` (in file order); a missing file is an empty series."""
+    :class:`VTUSeries` (in file order; parsed as XML, so any attribute order and quoting is
+    read); a missing file is an empty series, a file that is not a ``.pvd`` index an error."""
+    import xml.etree.ElementTree as ET
+
+    from ..errors import FlexmbsError
+
     p = Path(pvd_path)
     if not p.is_file():
         return []
-    return [(float(t), f) for t, f in _PVD_DATASET.findall(p.read_text(encoding="utf-8"))]
+    try:
+        root = ET.parse(p).getroot()
+        return [(float(ds.attrib["timestep"]), ds.attrib["file"]) for ds in root.iter("DataSet")]
+    except (ET.ParseError, KeyError, ValueError) as exc:
+        raise FlexmbsError(f"{p}: not a readable .pvd index ({type(exc).__name__}: {exc})") from None

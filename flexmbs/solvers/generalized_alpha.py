@@ -61,6 +61,29 @@ class GeneralizedAlpha:
     step grows back (by 2, up to ``dt``) only after ``grow_after`` steps whose estimates were at
     most :data:`GROW_ERROR` of it, so that the doubled step stays within it; ``dt`` is then
     the largest step. 0: steps are cut only when Newton fails (fixed ``dt`` otherwise).
+
+    Parameters
+    ----------
+    rho_inf : float, default 0.8
+        Spectral radius at infinite frequency, in [0, 1] (hht: [0.5, 1]).
+    scheme : {"generalized_alpha", "hht"}, default "generalized_alpha"
+        The integrator.
+    newton : NewtonOptions, optional
+        Newton settings (default: modified Newton).
+    adaptive : bool, default True
+        Halve the step when Newton fails.
+    min_step : float, default 0
+        Smallest step of the cut-back [s] (0: ``dt``/1024).
+    grow_after : int, default 10
+        Steps after a cut before the step doubles back.
+    compiled : bool, default True
+        Run whole steps compiled when the model allows it.
+    predictor : {"constant_acceleration", "zero_acceleration"}, default "constant_acceleration"
+        Newton's start in each step.
+    constraint_level : {"position", "position_velocity"}, default "position"
+        What holds at the end of each step.
+    step_tolerance : float, default 0
+        Largest local error of a step (0: no step-error control).
     """
 
     rho_inf: float = 0.8

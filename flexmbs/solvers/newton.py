@@ -50,6 +50,33 @@ class NewtonOptions:
     the search an inexact minimisation along it; it breaks the cycles of plain Newton between
     contact sets (a slack tendon in its holes: design notes, "Statics of tendon-routed
     structures"). The static solver switches it on itself when an increment fails without it.
+
+    Parameters
+    ----------
+    max_iterations : int, default 25
+        Iterations per solve.
+    relative_tolerance : float, default 1e-8
+        Residual tolerance relative to the largest force F.
+    constraint_tolerance : float, default 1e-10
+        Constraint tolerance relative to the model's length scale L.
+    modified : bool, default True
+        Reuse the factorisation while it contracts.
+    refresh_ratio : float, default 0.7
+        Refresh within a solve when an iteration contracts by less than this.
+    refresh_iterations : float, default 10
+        ... or when more further iterations are predicted at the current rate.
+    refresh_cost : float, default 5
+        Cost of a refresh in iterations, for the renewal rule between solves.
+    line_search : bool, default False
+        Backtracking line search on the residual's norm.
+    slope_search : bool, default False
+        The slope search above (static solves; exclusive with ``line_search``).
+    retreats : int, default 0
+        Halvings of a Newton step whose iterate the model rejects before the solve fails.
+    divergence_limit : float, default 1e8
+        Growth of the residual at which a solve is declared divergent.
+    roundoff_factor : float, default 20
+        Factor of the rounding floor ``roundoff_factor * eps * k * L`` of the force test.
     """
 
     max_iterations: int = 25

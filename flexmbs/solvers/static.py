@@ -33,6 +33,19 @@ class StaticOptions:
     (``NewtonOptions.slope_search``) before increments are halved: slack tendons among their
     holes make plain Newton cycle between contact sets (design notes, "Statics of
     tendon-routed structures").
+
+    Parameters
+    ----------
+    load_steps : int, default 1
+        Initial number of load increments.
+    min_increment : float, default 1e-4
+        Smallest load increment.
+    stabilizer : float, default 0
+        c_s [1/s^2] of the mass-proportional stabiliser.
+    easy_iterations : int, default 8
+        Newton iterations up to which an increment counts as easy (the next grows by 1.5).
+    newton : NewtonOptions, optional
+        Newton settings (default: full Newton, 40 iterations, 10 retreats).
     """
 
     load_steps: int = 1

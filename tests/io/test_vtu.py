@@ -1,9 +1,9 @@
 """VTU frames and PVD series: exact cubic beam sampling, strain/curvature, rigid-body surfaces,
 contact vertices, and round trips through meshio and VTK (pyvista).
 
-Tolerances: both encodings store float64 exactly (base64 bits, or the shortest round-trip
-decimal), so file round trips are compared bit for bit; comparisons against independently
-computed geometry use ``RTOL = 1e-12`` relative to the model size.
+Tolerances: the three encodings store float64 exactly (base64 bits, zlib-compressed bits, or
+the shortest round-trip decimal), so file round trips are compared bit for bit; comparisons
+against independently computed geometry use ``RTOL = 1e-12`` relative to the model size.
 """
 
 from __future__ import annotations
@@ -241,7 +241,7 @@ def _full_model() -> tuple[fm.Model, fm.Beam]:
     return model, beam
 
 
-@pytest.mark.parametrize("encoding", ["binary", "ascii"])
+@pytest.mark.parametrize("encoding", ["binary", "zlib", "ascii"])
 def test_vtu_round_trip_meshio_is_exact(tmp_path, rng, encoding):
     model, _ = _full_model()
     asm = Assembly(model)
@@ -259,7 +259,7 @@ def test_vtu_round_trip_meshio_is_exact(tmp_path, rng, encoding):
     np.testing.assert_array_equal(back.field_data["time"], mesh.field_data["time"])
 
 
-@pytest.mark.parametrize("encoding", ["binary", "ascii"])
+@pytest.mark.parametrize("encoding", ["binary", "zlib", "ascii"])
 def test_series_is_valid_after_every_write_and_readable_by_vtk(tmp_path, rng, encoding):
     pv = pytest.importorskip("pyvista")
     model, _ = _full_model()
@@ -374,3 +374,23 @@ def test_read_only_arrays_are_encoded_once_and_writable_ones_each_time(tmp_path)
     fresh = VTUMesh(pts, [(VTK_POLY_LINE, [np.array([3, 2, 1, 0, 3])])],
                     cell_data={"id": np.array([8], np.int32)})
     assert again == write_vtp(tmp_path / "d.vtp", fresh).read_text()
+
+
+def test_read_pvd_parses_xml_in_any_attribute_order(tmp_path):
+    """read_pvd reads a .pvd as XML: attributes in another order, single quotes, an entity,
+    a DataSet over two lines; not an index -> one clear error."""
+    import pytest
+
+    from flexmbs.errors import FlexmbsError
+    from flexmbs.io.vtu import read_pvd
+
+    pvd = tmp_path / "run.pvd"
+    pvd.write_text("<?xml version='1.0'?>\n<VTKFile type='Collection' version='0.1'>\n"
+                   "<Collection>\n<DataSet file='vtu/a&amp;b_000000.vtu' part='0' timestep='0'/>\n"
+                   "<DataSet part=\"0\"\n  file=\"vtu/a_000001.vtu\" timestep=\"0.5\"/>\n"
+                   "</Collection>\n</VTKFile>\n", encoding="utf-8")
+    assert read_pvd(pvd) == [(0.0, "vtu/a&b_000000.vtu"), (0.5, "vtu/a_000001.vtu")]
+    assert read_pvd(tmp_path / "missing.pvd") == []
+    pvd.write_text("<VTKFile><Collection><DataSet file='x.vtu'/>", encoding="utf-8")
+    with pytest.raises(FlexmbsError, match="not a readable .pvd"):
+        read_pvd(pvd)

@@ -35,6 +35,7 @@ class SimulationSettings:
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     output_interval: float | None = None       #: None: every step
     output_frames: str = "multiblock"          #: "multiblock" (.vtm per frame) | "merged" (.vtu)
+    vtk_compression: bool = False              #: frames' arrays zlib-compressed (VTK reads them)
     initial_static: bool = False               #: start from the static equilibrium at t = 0
     adaptive: bool = True                      #: halve the step on Newton failure
     min_step: float | None = None              #: None: dt / 1024
@@ -66,7 +67,8 @@ class SimulationSettings:
 def read_simulation(t: Table) -> SimulationSettings:
     """Validate the ``[simulation]`` table."""
     t.allow(("t_end", "dt", "integrator", "rho_inf", "gravity", "output_interval", "output_frames",
-             "initial_static", "adaptive", "min_step", "redundant_constraints", "load_steps",
+             "vtk_compression", "initial_static", "adaptive", "min_step", "redundant_constraints",
+             "load_steps",
              "static_stabilizer", "predictor", "compiled", "constraint_level",
              "step_tolerance", "newton"))
     integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
@@ -104,6 +106,7 @@ def read_simulation(t: Table) -> SimulationSettings:
         t_end=t_end, dt=dt, integrator=integrator, rho_inf=rho_inf, gravity=(gx, gy, gz),
         output_interval=out, initial_static=t.boolean("initial_static", False),
         output_frames=t.choice("output_frames", OUTPUT_FRAMES, "multiblock", what="output form"),
+        vtk_compression=t.boolean("vtk_compression", False),
         adaptive=adaptive, min_step=min_step,
         redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
         load_steps=t.integer("load_steps", 1, ge=1),
