@@ -1,6 +1,6 @@
 """flexmbs: flexible multibody dynamics with ANCF beams and sliding joints with clearance.
 
-Short public API (see DESIGN.md, "Python API")::
+Short public API (see docs/design.md, "Python API")::
 
     import flexmbs as fm
     model = fm.Model(gravity=(0, 0, -9.81))

@@ -1,4 +1,4 @@
-"""Command line: ``flexmbs run | info | render | plot | sweep | compile | paraview`` (DESIGN.md,
+"""Command line: ``flexmbs run | info | render | plot | sweep | compile | paraview`` (docs/design.md,
 "CLI"), one module per command in :mod:`flexmbs.commands` (its parser and its ``run``); here
 the parser they make up, the dispatch and the exit status.
 

@@ -293,7 +293,7 @@ class LoadSpec:
 
 
 class Model:
-    """Container of the mechanical system. See DESIGN.md "Python API"."""
+    """Container of the mechanical system. See docs/design.md "Python API"."""
 
     def __init__(self, *, gravity: ArrayLike3 = (0.0, 0.0, 0.0), name: str = "model") -> None:
         self.name = name

@@ -115,7 +115,7 @@ def solve_static(model: Model | Assembly, options: StaticOptions | None = None, 
     """Static equilibrium of ``model`` under its loads at time ``t`` (load stepping with
     ``options``).
 
-    With ``out`` the equilibrium is written as the output folder of DESIGN.md ("Output folder")
+    With ``out`` the equilibrium is written as the output folder of docs/design.md ("Output folder")
     with one frame at ``t`` (zero velocity): ``<name>.pvd`` + ``vtu/``, ``probes.csv`` with
     ``probes``, ``contacts.csv``, ``checkpoint.npz`` and ``summary.json`` (``name`` defaults to
     the model name; ``metadata`` is stored in the summary; ``output_frames``: ``"multiblock"``
@@ -222,7 +222,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     ``initial_static=True``, solved with ``static_options``) to ``t_end`` with step ``dt``;
     results every ``output_interval``.
 
-    With ``out`` the output folder of DESIGN.md ("Output folder") is written as the run goes
+    With ``out`` the output folder of docs/design.md ("Output folder") is written as the run goes
     (``<name>.pvd`` + ``vtu/``, ``probes.csv`` with ``probes``, ``contacts.csv``,
     ``checkpoint.npz``, ``summary.json``; ``name`` defaults to the model name) and stays valid
     if the run fails (``status: "failed: ..."``) or is interrupted (``"interrupted"``);

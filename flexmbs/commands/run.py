@@ -1,4 +1,4 @@
-"""``flexmbs run SCENARIO``: run a scenario into its output folder (DESIGN.md, "CLI"), with a
+"""``flexmbs run SCENARIO``: run a scenario into its output folder (docs/design.md, "CLI"), with a
 progress bar, ``--resume`` of a stopped run and one line at the end."""
 
 from __future__ import annotations
