@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
           f"sections; after its static solve): compiled unit costs [us], best of 7; "
           f"counts per step over {args.t_end} s at h = 1e-4")
     print("(joint) = the clearance joint's detection + forces with the default consistent "
-          "detection, [paper] = with detection = \"paper\" (FORMULATION II §4b)")
+          "detection, [paper] = with detection = \"paper\" (docs/theory.md §II.4b)")
     print(f"{'model':20s} {'residual':>9s} {'(joint)':>8s} {'[paper]':>8s} {'matrix':>8s} "
           f"{'factor':>8s} "
           f"{'solve':>7s} | {'res/st':>6s} {'it/st':>6s} {'ref/st':>7s} | {'model':>7s} "

@@ -4,8 +4,8 @@ The issue's Speed section asks for the wall time of the with-clearance run (4 s 
 to Exudyn's clearance-free planar run of the same model, measured by one run of one script on the
 same machine. The goal is at most 2x Exudyn's time. This script times, in one process:
 
-1. Exudyn planar, clearance-free (the reference of the goal). The rail and sleeve of FORMULATION
-   Part III section 9 in the x-y plane with gravity -y: 16 ``ObjectANCFCable2D`` elements with a
+1. Exudyn planar, clearance-free (the reference of the goal). The rail and sleeve of docs/theory.md
+   §III.9 in the x-y plane with gravity -y: 16 ``ObjectANCFCable2D`` elements with a
    curved stress-free reference (``strainIsRelativeToReference=1``), clamped ends, an
    ``ObjectRigidBody2D`` sleeve on an ``ObjectJointSliding2D`` (``constrainRotation=False``: the ring
    joint, the planar twin of the 3D model of ``sliding.py``).

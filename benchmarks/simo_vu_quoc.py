@@ -7,7 +7,7 @@ elbow to the tip (10, 10, 0); EA = GA = 1e6, EI = GJ = 1e3, ρA = 1, polar rotar
 an out-of-plane force F_z(t) at the elbow, 50 t for t ≤ 1, 50 (2 − t) for 1 ≤ t ≤ 2, zero after.
 The change: the published bending rotary inertia ρI = 10 is replaced by a negligible one in
 Exudyn, because the rod is an Euler–Bernoulli element without rotary inertia of bending (its
-sections' only rotary inertia is the spin about the axis, FORMULATION I §2.3); with ρI = 10 the
+sections' only rotary inertia is the spin about the axis, docs/theory.md §I.2.3); with ρI = 10 the
 published response is slower. The arms meet rigidly in a small rigid body at the elbow (mass
 0.01, inertia 1e-4; a flexmbs beam cannot kink at a node); the Exudyn model has the same body.
 

@@ -1,6 +1,6 @@
 """Side-by-side benchmark: sleeve on a sliding joint without clearance, flexmbs vs Exudyn.
 
-Case: FORMULATION Part III §9, the clearance-free "rigid-ish" variant. A circular arc beam
+Case: docs/theory.md §III.9, the clearance-free "rigid-ish" variant. A circular arc beam
 (radius 1 m, 90 deg opening symmetric about its lowest point, vertical X-Z plane, centre
 (0, 0, 1)) is made of 16 ANCF cable elements. The section is circular (r = 2 mm), steel
 (E = 2.1e11, and E x 1000 for the rigid-track check), rho = 7800. Both ends are clamped.
@@ -17,7 +17,7 @@ Exudyn 1.13.6 ``ObjectJointSliding`` only accepts ``constrainRotations=[0,0,0]``
 ``NotImplementedFeatureError: ... constrainRotations[i]!=0 not implemented``. So the Exudyn side is the
 ring joint (3 position equations, sleeve free to rotate). flexmbs runs both the ring joint
 (the like-for-like comparison) and the cylindrical joint (3 + 2 equations, the
-FORMULATION case).
+case of docs/theory.md §II.7).
 
     python benchmarks/sliding.py [--dt 1e-3 1e-4] [--e-factors 1 1000] [--t-end 2.0]
 """

@@ -1,7 +1,7 @@
 """Example 1 through the Python API: the same model as examples/curved_beam_sleeve.toml.
 
 A hollow cylinder (sleeve) slides with clearance along an initially curved steel rail under
-gravity (FORMULATION Part III §9). ``--ideal`` runs the clearance-free baseline instead.
+gravity (docs/theory.md §III.9). ``--ideal`` runs the clearance-free baseline instead.
 
     python examples/curved_beam_sleeve.py [--t-end 4.0] [--dt 1e-4] [--clearance 5e-4] [--ideal]
 """

@@ -3,7 +3,7 @@
 A steel wire (d = 1 mm) coiled into 4 turns of radius 10 mm and pitch 2 mm is clamped at its
 foot; its head is held by an end plate (a rigid body rigidly attached to the last node, its
 section included) that slides along and turns about the coil axis (a cylindrical joint). The
-static axial stiffness is compared with the closed form (FORMULATION §7.6), then a step load
+static axial stiffness is compared with the closed form (docs/theory.md §I.7.7), then a step load
 on the plate starts a lightly damped axial oscillation; the plate's travel and the wire's
 torsional moment at mid-length are written to ``out/helical_spring`` (VTU frames, probes).
 A cable (12-DOF, no torsion) cannot carry this load: its wire has no torsional stiffness.
@@ -47,7 +47,7 @@ def build(per_coil: int = 16, force: float = 1.0) -> tuple[fm.Model, fm.Beam, fm
 
 
 def closed_form_stiffness(wire: fm.Beam) -> float:
-    """k = 1/(ℓ [R² (cos²α/GJ + sin²α/EI) + sin²α/EA]) (FORMULATION §7.6)."""
+    """k = 1/(ℓ [R² (cos²α/GJ + sin²α/EI) + sin²α/EA]) (docs/theory.md §I.7.7)."""
     st = wire.stiffness
     alpha = math.atan(PITCH / (2 * math.pi * R))
     assert st.torsional_stiffness is not None

@@ -7,7 +7,7 @@ edge by the mast tip (X and Z only). Torsion springs at the hinges stand for the
 stiffness. Each panel carries a thin eyelet (a 0.2 mm sheet, bore R = 2 mm) at the middle of its
 side edge, its axis normal to the panel; the pretensioned guide wire (d = 1.6 mm, 20 N) runs
 along X through the three eyelets, crossing each at 90 - BETA = 55 deg to its axis: the section
-ellipse has a = 1.39 mm, a^2/b = 2.43 mm > R, the two-point regime (FORMULATION II §3). The wire's
+ellipse has a = 1.39 mm, a^2/b = 2.43 mm > R, the two-point regime (docs/theory.md §II.3). The wire's
 anchors are moved 15 mm sideways in the initial static solve (routing misalignment), which
 presses it on the eyelet walls along the ellipse's minor axis; the middle eyelet sits 0.5 mm
 further out. A half-sine force on panel 2 then starts a free vibration. ``--ideal`` replaces the

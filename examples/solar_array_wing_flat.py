@@ -2,8 +2,8 @@
 examples/solar_array_wing_flat.toml (the default Example 2 is examples/solar_array_wing.py).
 
 A pretensioned guide wire (ANCF cable) passes with clearance through a grommet on the fold line
-of two rigid panels that fold like an accordion, held flat by a tension bar (FORMULATION Part III
-§10; values proposed there, the paper's are unknown). The wire is meshed straight through the
+of two rigid panels that fold like an accordion, held flat by a tension bar (docs/theory.md
+§III.10; values proposed there, the paper's are unknown). The wire is meshed straight through the
 grommet centre; its anchors are moved 5 mm sideways in the initial static solve, which presses
 it on the bore wall. A half-sine force on panel 1 then starts a free vibration. ``--ideal``
 replaces the clearance joint by a ring without clearance (sliding joint, variant "ring").

@@ -1,6 +1,7 @@
 """flexmbs: flexible multibody dynamics with ANCF beams and sliding joints with clearance.
 
-Short public API (the docs site's "API reference" and "Getting started" pages)::
+Short public API (the docs site's "API reference" and "Getting started" pages; docs/design.md,
+"Python API")::
 
     import flexmbs as fm
     model = fm.Model(gravity=(0, 0, -9.81))

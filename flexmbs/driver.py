@@ -1,6 +1,6 @@
 """The one assembler kernel: sums the terms of every kind through their owners' kernels.
 
-    r_q   = M q'' + Q_int(q, q') + Phi_q^T lam - Q_ext(q, t)        (FORMULATION §0)
+    r_q   = M q'' + Q_int(q, q') + Phi_q^T lam - Q_ext(q, t)        (docs/theory.md §I.0)
     r_lam = Phi(q, t)
 
 and the iteration matrix ``[[cM M + cC C + cK K, Phi_q^T], [Phi_q, 0]]`` into the CSC ``data``
@@ -225,7 +225,7 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
 
 @njit(inline="always")
 def _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc):  # noqa: ANN001, ANN202
-    """Nodes whose tangent turned far from its base get a new chart (FORMULATION §2.4): the
+    """Nodes whose tangent turned far from its base get a new chart (docs/theory.md §I.2.4): the
     element groups change their coordinates (``q, v, qdd`` and the integrator's ``acc``; an
     empty array is left out) and record the new bases, which the joints and node moments
     holding those nodes then read. Returns the number of re-based nodes."""

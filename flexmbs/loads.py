@@ -1,7 +1,7 @@
 """Time functions for loads and prescribed motion.
 
 A time function is a callable ``f(t) -> float`` with optional first and second derivatives
-``f.d1(t)``, ``f.d2(t)`` (needed by prescribed-motion constraints, FORMULATION Part I §6.1).
+``f.d1(t)``, ``f.d2(t)`` (needed by prescribed-motion constraints, docs/theory.md §I.6.1).
 """
 
 from __future__ import annotations
@@ -283,7 +283,7 @@ def moments_pattern(moments: list) -> list[tuple[np.ndarray, np.ndarray]]:
 @njit
 def node_moment(g, T, base, twist, Q, dQ):  # noqa: ANN001, ANN201
     """Generalized force of a moment T on a beam node with slope g, and its derivative ∂Q/∂g
-    (FORMULATION I §1.2, §2.3). With t = g/|g|, c = t̄·t:
+    (docs/theory.md §I.1.2, §I.2.3). With t = g/|g|, c = t̄·t:
 
         Q_g = [T × t − (T·t)(t̄ × t)/(1 + c)] / |g|,   Q_φ = T·t        (an element with a twist)
         Q_g = (T × t)/|g|                                               (the cable: no twist)
@@ -338,7 +338,7 @@ def _moment_of(ld, k, q, g, Q, dQ):  # noqa: ANN001, ANN202
 
 @njit(internal=True)
 def loads_set_bases(ld, log, stop):  # noqa: ANN001, ANN201
-    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, docs/theory.md §I.2.4):
     moments on them read the new base tangent."""
     for k in range(ld.m_twist.size):
         for j in range(stop):

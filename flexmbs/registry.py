@@ -1,4 +1,4 @@
-"""Registries of plug-in parts, keyed by the names used in scenario files (DESIGN.md, "Pluggable
+"""Registries of plug-in parts, keyed by the names used in scenario files (docs/design.md, "Pluggable
 parts").
 
 One small class serves every kind: hole sections (:data:`flexmbs.contact.sections.HOLE_SECTIONS`),

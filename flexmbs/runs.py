@@ -1,5 +1,5 @@
 """Run a loaded scenario into its output folder: what ``flexmbs run`` and each case of
-``flexmbs sweep`` do (DESIGN.md, "CLI" and "Output folder").
+``flexmbs sweep`` do (docs/design.md, "CLI" and "Output folder").
 
 :func:`run_scenario` claims the folder (lock, refusal of another run's folder, see
 :mod:`flexmbs.io.folder`), records how the run was made (scenario file, its SHA-1, the

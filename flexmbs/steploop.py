@@ -9,7 +9,7 @@ update (:func:`flexmbs.driver.post_step`). Python is
 re-entered only at output times and on failure, so a step costs what compiled code costs. The
 arithmetic and the convergence test are those of :mod:`flexmbs.solvers.newton` and
 :mod:`flexmbs.solvers.generalized_alpha`; the tests run both paths on the same problems
-(FORMULATION Part I §6.1).
+(docs/theory.md §I.6.1).
 
 Velocity corrector (``constraint_level = "position_velocity"``, docs/design-notes.md "rho_inf
 = 1 with joints"): after the position step has converged, q stays and (v, q'', λ) move along

@@ -1,11 +1,11 @@
 """The hole-section view of the paper's Fig. 2(b): in the plane of one hole section, the bore
 circle, the beam's elliptical section, the hole points Q and their projections P on the beam
 axis, with the offsets exaggerated so that a sub-millimetre clearance is visible
-(FORMULATION Part II §2-§4).
+(docs/theory.md §II.2-§II.4).
 
 What the view needs and where it comes from:
 
-- ``contacts.csv`` (DESIGN.md) gives, per active contact point: ``gap``, ``normal_force``, the hole
+- ``contacts.csv`` (docs/design.md) gives, per active contact point: ``gap``, ``normal_force``, the hole
   point Q (``qx, qy, qz``), its closest point P on the beam axis (``px, py, pz``) and the ellipse
   semi-axes ``a, b``. From these alone one can derive |Q - P| = b + gap (a consistency check,
   done here) and the beam's tilt to the hole axis, cos(theta) = b / a (§2), but **not** the

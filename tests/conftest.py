@@ -78,7 +78,7 @@ def straight_beam(model: fm.Model, n_elem: int, *, length: float = 1.0, EA: floa
 def quarter_arc_beam(model: fm.Model, n_elem: int, *, R: float = 1.0, EA: float = 1e6,
                      EI: float = 1.0, rhoA: float = 1.0,
                      options: fm.CableOptions | None = None) -> fm.Beam:
-    """Quarter circle of FORMULATION §7.4: clamped end at the origin with tangent +y, centre
+    """Quarter circle of docs/theory.md §I.7.4: clamped end at the origin with tangent +y, centre
     (R, 0, 0), tip at (R, R, 0) with tangent +x."""
     return model.add_beam(fm.arc((R, 0, 0), R, (0, 0, 0), -np.pi / 2, normal=(0, 0, 1),
                                  elements=n_elem),

@@ -1,4 +1,4 @@
-"""The ``flexmbs`` command line (DESIGN.md "CLI" and "Output folder"): run, info, exit codes,
+"""The ``flexmbs`` command line (docs/design.md "CLI" and "Output folder"): run, info, exit codes,
 one-line errors, the output folder of completed, failed and interrupted runs, and the same
 folder from the Python API (``simulate(..., out=...)``)."""
 

@@ -91,7 +91,7 @@ def two_groups() -> fm.Model:
 def steep_wire_in_a_ring() -> fm.Model:
     """A wire crossing a thin ring (one hole section) at 54° to its axis, 0.8 mm off the
     centre across the plane of the tilt: the section ellipse (a = 3.4 mm, b = 2 mm, a²/b > R =
-    3.5 mm) touches the bore at two points (FORMULATION II §3), damped contact with friction."""
+    3.5 mm) touches the bore at two points (docs/theory.md §II.3), damped contact with friction."""
     import math
 
     model = fm.Model(gravity=(0, 0, 0))

@@ -1,5 +1,5 @@
 """Generate ``flexmbs/elements/_rod_derivatives.py``: the exact first and second derivatives of
-the 14-DOF rod's kinematic maps (FORMULATION Part I §2.1–2.2), by sympy.
+the 14-DOF rod's kinematic maps (docs/theory.md §I.2.1–2.2), by sympy.
 
 The rod's strain energy is a composition of four small maps, each differentiated here:
 
@@ -53,7 +53,7 @@ def _vec(name: str) -> sp.Matrix:
 
 
 def _sr(a: sp.Matrix, b: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
-    """SR(a → b) v (FORMULATION I §2.1)."""
+    """SR(a → b) v (docs/theory.md §I.2.1)."""
     c = a.dot(b)
     k = a.cross(b)
     return c * v + k.cross(v) + (k.dot(v) / (1 + c)) * k

@@ -2,7 +2,7 @@
 
 Unknowns: coordinates ``q`` (beams: per node the coordinates of its element layout, for the
 cable [r, r']; rigid bodies: [r, p], 7 each) and Lagrange multipliers ``lam`` (one per
-constraint equation). The dynamic residual follows the convention of FORMULATION §0::
+constraint equation). The dynamic residual follows the convention of docs/theory.md §I.0::
 
     r_q   = M(q) q'' + Q_int(q, q') + Phi_q^T lam - Q_ext(q, t)
     r_lam = Phi(q, t)
@@ -282,7 +282,7 @@ class Assembly:
     def post_step(self, q: np.ndarray, v: np.ndarray, t: float, qdd: np.ndarray | None = None,
                   acc: np.ndarray | None = None, lam: np.ndarray | None = None) -> None:
         """Interaction state after a converged step (may raise :class:`SimulationStopped`),
-        then the nodal frames re-based where needed (FORMULATION §2.4), which changes the
+        then the nodal frames re-based where needed (docs/theory.md §I.2.4), which changes the
         twist entries of ``q, v`` and of ``qdd, acc`` (when given) in place. ``lam``: the
         step's multipliers (the sliding joint's friction cone needs its normal reaction;
         default zero)."""
@@ -311,7 +311,7 @@ class Assembly:
         """After a converged static increment at ``(q, lam)`` (the multipliers: the sliding
         joint's friction cone needs its normal reaction): the joints' state as after a step
         (slide elements, contact tracking, friction anchors; ``q`` the next increment's start),
-        then the nodal frames re-based where tangents turned far (FORMULATION §2.4; ``q``
+        then the nodal frames re-based where tangents turned far (docs/theory.md §I.2.4; ``q``
         changed in place). Returns the number of re-based nodes; raises
         :class:`FlexmbsError` if a node turned past the frames' limit."""
         self._sync_compiled_forms()
@@ -342,7 +342,7 @@ class Assembly:
 
     def node_bases(self) -> np.ndarray:
         """Every twisting node's current base: records ``[twist coordinate, t̄ (3), D̄ (3)]``
-        (FORMULATION §2.4; what a checkpoint carries)."""
+        (docs/theory.md §I.2.4; what a checkpoint carries)."""
         rows = [g.element_type.bases(g.part) for g in self.groups if g.element_type.bases]
         return np.vstack(rows) if rows else np.zeros((0, BASE_RECORD))
 
@@ -614,7 +614,7 @@ class Assembly:
 
     def constraint_time_terms(self, q: np.ndarray, v: np.ndarray, t: float) -> np.ndarray:
         """Right-hand side of the acceleration-level constraints,
-        ``-(Phi_q v)_q v - 2 Phi_qt v - Phi_tt`` (FORMULATION §6.1 INIT)."""
+        ``-(Phi_q v)_q v - 2 Phi_qt v - Phi_tt`` (docs/theory.md §I.6.1 INIT)."""
         eps = 1e-7 * self.length_scale / max(float(np.abs(v).max()), 1e-30)
         out = np.zeros(self.n_mult)
         if np.any(v):

@@ -64,7 +64,7 @@ def collect_loads(model: Model, numbering: Numbering) -> ExternalLoads:
                 idx, vals = d[list(lay.position)], load.force.copy()
                 if load.moment is not None:
                     # a moment on a node works through its current slope (and twist):
-                    # loads.node_moment (FORMULATION §1.2, §2.3); the base tangent t̄ of
+                    # loads.node_moment (docs/theory.md §I.1.2, §I.2.3); the base tangent t̄ of
                     # the twist is the node's reference tangent
                     slope = d[list(lay.slope)]
                     t = numbering.q_ref[slope] / np.linalg.norm(numbering.q_ref[slope])

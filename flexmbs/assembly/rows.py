@@ -228,7 +228,7 @@ class ConstraintRows:
 def _check_prescribed_twists(model: Model) -> None:
     """A rod node's twist is prescribed only with its slope held (clamped, or its three
     slope components prescribed without motion): the twist is the section's turn relative
-    to the node's chart, which is re-based when the tangent turns far (FORMULATION §2.4),
+    to the node's chart, which is re-based when the tangent turns far (docs/theory.md §I.2.4),
     and a prescribed value cannot follow that."""
     held: set[tuple[int, int, int]] = set()
     turned: list[Any] = []

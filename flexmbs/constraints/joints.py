@@ -466,7 +466,7 @@ class _TermConstraint(Constraint):
 
 # ---------------------------------------------------------------------------------------------
 class EulerParameterNormalization(Constraint):
-    """Haug 1989, FORMULATION I §5: ``Φ^p = pᵀp − 1 = 0``.
+    """Haug 1989, docs/theory.md §I.5: ``Φ^p = pᵀp − 1 = 0``.
 
     ``dofs7`` are the body's global indices ``[r, p]``; only the 4 p indices are returned by
     :meth:`coordinates` (Φ does not depend on r).
@@ -650,7 +650,7 @@ class BeamNodeSpherical(_TermConstraint):
 
 
 class BeamNodeRigid(_TermConstraint):
-    """Rigid connection of a beam node to a body (FORMULATION I §2.3).
+    """Rigid connection of a beam node to a body (docs/theory.md §I.2.3).
 
     ``r_i − (r_B + A s′) = 0`` (3 eqs, global) and ``(A n₁′)·r′_i = 0``, ``(A n₂′)·r′_i = 0``,
     where ``s′ = body.point`` and n₁′, n₂′ (columns of ``normals_body``, body coordinates, or
@@ -743,7 +743,7 @@ class BeamNodeRigid(_TermConstraint):
 # the joint terms of the assembler (flexmbs.terms)
 @njit(refcount=False)
 def euler_norm(p):  # noqa: ANN001, ANN201
-    """Haug 1989, FORMULATION I §5: ``Φ^p = pᵀp − 1`` (its gradient is ``2p``, its Hessian ``2I``)."""
+    """Haug 1989, docs/theory.md §I.5: ``Φ^p = pᵀp − 1`` (its gradient is ``2p``, its Hessian ``2I``)."""
     return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - 1.0
 
 
@@ -918,7 +918,7 @@ def joints_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
 
 @njit(internal=True)
 def joints_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
-    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION §2.4):
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, docs/theory.md §I.2.4):
     the directors (NODE_DIRECTOR) of joints holding them read the new bases."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return

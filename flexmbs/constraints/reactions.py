@@ -1,6 +1,6 @@
 """Reaction forces of constraints and joints from their multipliers (issue "multibody basics").
 
-The equations of motion read ``M q'' + Phi_q^T lam = Q`` (FORMULATION Part I §5), so the
+The equations of motion read ``M q'' + Phi_q^T lam = Q`` (docs/theory.md §I.5), so the
 generalized force a constraint exerts on the coordinates is ``Q_c = -Phi_c,q^T lam_c`` (its own
 rows only). On each part it acts on:
 

@@ -1,7 +1,7 @@
 """Sliding joint without clearance: a rigid body whose hole axis slides along an ANCF beam.
 
 Sugiyama, Escalona & Shabana, Nonlinear Dyn. 31 (2003) 167-195: the arc-length parameter ``s``
-of the contact point is an extra unknown without inertia (FORMULATION Part II §7)::
+of the contact point is an extra unknown without inertia (docs/theory.md §II.7)::
 
     Phi = [ r_H + A u_C - r(s) ;  (A y)·r'(s) ;  (A z)·r'(s) ] = 0     (cylindrical: 3 + 2)
     Phi = [ r_H + A u_C - r(s) ]                                       (ring: 3)
@@ -64,7 +64,7 @@ def _shape_x(xi, L):  # noqa: ANN001, ANN202
 
 @njit
 def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
-    """Φ and Φ_q of the sliding joint on one element (Sugiyama et al. 2003, FORMULATION II §7).
+    """Φ and Φ_q of the sliding joint on one element (Sugiyama et al. 2003, docs/theory.md §II.7).
 
     ``ql = [r_H, p, e_k (CENTERLINE_SIZE), s]`` (N_SLIDE); ``T`` (3, 3, 4, 4) = point tensors of
     the hole point u_C and the body axes y, z (``(A w)_k = pᵀT_k(w)p``); ``n_eq`` = 3 (ring) or 5
@@ -169,7 +169,7 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
 
 @njit
 def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, fr, anchor, stuck, f_axial):  # noqa: ANN001, ANN201
-    """Generalized force on s, ``Q_s = |r′|(f_ax + F)`` (FORMULATION II §7), and its exact
+    """Generalized force on s, ``Q_s = |r′|(f_ax + F)`` (docs/theory.md §II.7), and its exact
     derivatives. ``fr`` = :meth:`~flexmbs.contact.laws.Friction.parameters` ``[law, μ, μ_s, k_t,
     c_t, ε_v]``; N = |λ_⊥|, ``λ_⊥ = λ_pos − (λ_pos·t)t``.
 

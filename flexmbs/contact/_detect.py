@@ -2,7 +2,7 @@
 bores by the closed form, other compiled sections by the generic common-normal detector).
 
 Chains the numba kernels of :mod:`flexmbs.contact.geometry`, :mod:`flexmbs.contact.stationary`
-and :func:`flexmbs.contact.sections.circle_stationary_points` (FORMULATION Part II §2-§4):
+and :func:`flexmbs.contact.sections.circle_stationary_points` (docs/theory.md §II.2-§II.4):
 section crossing (warm-started), ellipse, broad phase, stationary points of the penetration,
 hole point Q and its closest-point projection (:func:`detect_section`); the tip sections of an
 open bore (:func:`place_tips`). The forces, the tracked contacts and the assembler's term of the
@@ -353,8 +353,8 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
 @njit(internal=True)
 def _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b, origin, ey, ez,  # noqa: ANN001, ANN202, PLR0913
                       shape, params, psis, phis, kinds, depths, Y, Yp, Ypp, out, count):
-    """The paper's detection of the section-k ellipse crossed by element e at ξ (FORMULATION
-    II §6: common normals of ellipse and bore, then the closest point of the wall point on the
+    """The paper's detection of the section-k ellipse crossed by element e at ξ (docs/theory.md
+    §II.6: common normals of ellipse and bore, then the closest point of the wall point on the
     axis) appended to ``out`` from row ``count``; returns the new count. ``paper`` None: no
     joint of the model uses this detection (its code is compiled out, _compiled_view)."""
     if paper is None:

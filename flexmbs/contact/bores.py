@@ -1,5 +1,5 @@
 """The bore of a clearance joint: a hole section repeated at stations along an axis, each
-station a plane that cuts the beam (FORMULATION Part II §1, §8).
+station a plane that cuts the beam (docs/theory.md §II.1, §II.8).
 
 A bore gives the kernels its sections as data (:meth:`Hole.frames`): an origin and three axes
 (plane normal, e_y, e_z) per section, in the coordinates of the hole (the joint adds its
@@ -100,7 +100,8 @@ class Hole:
 
 
 class CircleHole(Hole):
-    """Circular bore of ``radius`` (DESIGN.md: ``fm.CircleHole(radius=..., length=..., sections=...)``).
+    """Circular bore of ``radius`` (docs/design.md, "Python API":
+    ``fm.CircleHole(radius=..., length=..., sections=...)``).
 
     Parameters
     ----------
@@ -117,7 +118,7 @@ class CircleHole(Hole):
 
 
 class SuperellipseHole(Hole):
-    """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (FORMULATION Part II §6); the
+    """Superellipse bore ``|y/a|^exponent + |z/b|^exponent = 1`` (docs/theory.md §II.6); the
     keys are those of the scenario files (``a``, ``b``, ``exponent``, ``angle``: the section
     turned in the body by that many radians from body y towards body z).
 

@@ -1,5 +1,5 @@
 """The clearance joints' term of the assembler (:mod:`flexmbs.terms`): the penalty forces and
-tangent blocks of a joint's detected points (:func:`clearance_forces`, FORMULATION II §4-§8),
+tangent blocks of a joint's detected points (:func:`clearance_forces`, docs/theory.md §II.4-§II.8),
 the contacts tracked from step to step (:func:`clearance_update`: approach velocities, friction
 anchors, stick states), and the packed part of all clearance joints with the kernels the driver
 calls (:class:`ClearancePart`, :func:`clearance_terms`, :func:`clearance_post_step_all`,
@@ -47,7 +47,7 @@ FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3
                + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK)
 
 #: two contact points of one section are the same contact from one step to the next if the
-#: section angles of their hole points differ by less than this [rad] (FORMULATION II §3)
+#: section angles of their hole points differ by less than this [rad] (docs/theory.md §II.3)
 MATCH_ANGLE = 0.5
 
 
@@ -226,7 +226,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                      consistent, paper, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
                      exact, r_q, K_out, C_out, elem_k, elem_i, fwork):
-    """Residual of one clearance joint with a circular bore (FORMULATION II §8): detection of all
+    """Residual of one clearance joint with a circular bore (docs/theory.md §II.8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
     each candidate row gets its ``gap``, ``gap_rate``, friction history after the step
@@ -564,8 +564,8 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
 
 @njit(internal=True)
 def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
-    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, FORMULATION I
-    §2.4): the contact elements holding them read the new base tangent; ``q`` (its twists
+    """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, docs/theory.md
+    §I.2.4): the contact elements holding them read the new base tangent; ``q`` (its twists
     changed), unless empty (a resumed run: :func:`~flexmbs.contact.joint._begin_clearance`),
     is the start of the next step, the friction's reference."""
     if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)

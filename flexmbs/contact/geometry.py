@@ -1,4 +1,4 @@
-"""Section kernels of the clearance sliding joint (FORMULATION II §2): the beam's section ellipse
+"""Section kernels of the clearance sliding joint (docs/theory.md §II.2): the beam's section ellipse
 in a hole section, the section state (crossing + ellipse) and section coordinates. The
 centreline geometry they build on (point, plane crossing, closest point) is
 :mod:`flexmbs.elements.centerline`, re-exported here.
@@ -55,7 +55,7 @@ def _ellipse_axes(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN202
 
 @njit
 def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
-    """Tangent-cylinder section ellipse (FORMULATION II §2): ``(a, b, e_a, e_b, cos θ)``.
+    """Tangent-cylinder section ellipse (docs/theory.md §II.2): ``(a, b, e_a, e_b, cos θ)``.
 
     ``b = r_b``, ``a = r_b / cos θ`` with ``cos θ = |t·n|``; ``e_b = t×n/|t×n|`` (minor axis),
     ``e_a = n×e_b`` (in-plane tangent direction, major axis). When ``|t×n| < 1e-10`` the section is
@@ -72,7 +72,7 @@ def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
 
 @njit
 def to_section(x, origin, e_y, e_z):  # noqa: ANN001, ANN201
-    """2D section coordinates ``((x − O)·e_y, (x − O)·e_z)`` of a 3D point (FORMULATION II §2)."""
+    """2D section coordinates ``((x − O)·e_y, (x − O)·e_z)`` of a 3D point (docs/theory.md §II.2)."""
     d = x - origin
     out = np.empty(2)
     out[0] = dot3(d, e_y)
@@ -88,7 +88,7 @@ def from_section(y, origin, e_y, e_z):  # noqa: ANN001, ANN201
 
 @njit
 def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_distance):  # noqa: ANN001, ANN201
-    """The beam in one hole section (FORMULATION II §2): the crossing of its axis with the section
+    """The beam in one hole section (docs/theory.md §II.2): the crossing of its axis with the section
     plane ``(origin, normal)`` (warm-started at ``(elem0, xi0)``, within ``max_distance`` of
     the origin) and the ellipse of its cross-section there, in section coordinates (e_y, e_z).
 

@@ -1,6 +1,6 @@
 """Sliding joint WITH clearance: a flexible beam inside a rigid hole (Tang & Liu).
 
-Per hole cross-section k (FORMULATION Part II §8): the section plane at station zeta_k cuts the
+Per hole cross-section k (docs/theory.md §II.8): the section plane at station zeta_k cuts the
 beam centreline at r_I (safeguarded Newton across elements, warm-started); the beam's section
 there is an ellipse (a = r_b / cos(theta), b = r_b); the common-normal condition gives every
 stationary point of the penetration (circle: quartic, superellipse: bracketed Newton); for each
@@ -141,7 +141,7 @@ class ClearanceState(NamedTuple):
     ws_list: np.ndarray       # (slots + 1,) the sections with a warm start ([count, k...],
                               #   _detect.reset_crossings; −1: not known, listed again)
     approach: np.ndarray      # (slots, MAX_POINTS) tracked contacts: approach velocity at
-    psi: np.ndarray           #   onset, section angle of the hole point (FORMULATION II §3),
+    psi: np.ndarray           #   onset, section angle of the hole point (docs/theory.md §II.3),
     active: np.ndarray        #   in use
     anchor: np.ndarray        # (slots, MAX_POINTS, 3) friction: elastic displacement (hole
     stuck: np.ndarray         #   frame), stuck
@@ -203,7 +203,7 @@ class SlidingClearanceJoint(Interaction):
       sliding along the bore as the detection moves it (:mod:`flexmbs.contact.tangent`):
       quadratic Newton, the right linearised modes. Compiled sections (circle, superellipse);
       a Python-defined section falls back to ``"gauss_newton"``;
-    - ``"gauss_newton"``: ``k BᵀB`` (FORMULATION §5), no stiffness along the bore wall;
+    - ``"gauss_newton"``: ``k BᵀB`` (docs/theory.md §II.5), no stiffness along the bore wall;
     - ``"frozen_point"``: adds the geometric terms that are exact for a hole point frozen as a
       material point of the hole (Python path). The true geometric stiffness of a beam pressed
       into a concave bore is about +f_N/clearance, the frozen-point term about −f_N/r_b: for a
@@ -212,7 +212,7 @@ class SlidingClearanceJoint(Interaction):
     ``detection`` (where in a section the contact points are):
 
     - ``"consistent"`` (default for sections with a compiled boundary): stationary pairs of the
-      section wall and the beam axis (FORMULATION II §4b, :mod:`flexmbs.contact.stationary`):
+      section wall and the beam axis (docs/theory.md §II.4b, :mod:`flexmbs.contact.stationary`):
       the contact forces are the exact gradient of a potential at every crossing angle, so
       undamped motion keeps its energy and closed paths do no work;
     - ``"paper"``: the paper's 2-D common normal in the section plane, then the closest point of
@@ -887,7 +887,7 @@ class SlidingClearanceJoint(Interaction):
     def contact_energy(self, q: np.ndarray, v: np.ndarray | None = None) -> float:
         """Potential of the contact forces at ``q``: ``Σ_k [Σ_max Φ(δ) − Σ_min Φ(δ)]`` over the
         sections' penetrating points (``Φ`` = :func:`~flexmbs.contact.laws.law_energy`,
-        FORMULATION II §4b). With ``detection="consistent"`` the elastic contact forces are
+        docs/theory.md §II.4b). With ``detection="consistent"`` the elastic contact forces are
         exactly its negative gradient; with ``"paper"`` only at small crossing angles. ``v``
         does not change it; passing the state's velocities reuses the detection of the output
         rows at the same state."""

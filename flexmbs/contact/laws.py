@@ -1,4 +1,4 @@
-"""Normal contact force laws and regularised Coulomb friction (FORMULATION II §5).
+"""Normal contact force laws and regularised Coulomb friction (docs/theory.md §II.5).
 
 Every law is a frozen keyword-only dataclass implementing :class:`ForceLaw`:
 ``force(delta, delta_dot, approach_velocity) -> (f, df_ddelta, df_ddelta_dot)`` with penetration
@@ -61,7 +61,7 @@ __all__ = [
 
 @njit
 def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
-    """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d δ̇`` (FORMULATION II §5), ``law`` =
+    """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d δ̇`` (docs/theory.md §II.5), ``law`` =
     ``[K, n, χ, c_d, v_min, onset]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0 for ``δ ≤ 0`` and clamped
     at 0. With n = 1 and ``onset`` δ₀ > 0 the elastic part is ``Kδ²/(2δ₀)`` below δ₀ and
     ``K(δ − δ₀/2)`` above: C¹, its stiffness grows from 0 instead of jumping to K at first touch
@@ -98,7 +98,7 @@ def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
 def law_energy(law, delta):  # noqa: ANN001, ANN201
     """Potential ``Φ(δ) = Kδⁿ⁺¹/(n + 1)`` of the elastic part of :func:`law_force` (``Φ′ = Kδⁿ``;
     0 for ``δ ≤ 0``; with an onset δ₀: ``Kδ³/(6δ₀)``, then ``K(δ²/2 − δ₀δ/2 + δ₀²/6)``): the
-    section potential of FORMULATION II §4b. The damping terms have none."""
+    section potential of docs/theory.md §II.4b. The damping terms have none."""
     if delta <= 0.0:
         return 0.0
     n, onset = law[1], law[5]
@@ -112,7 +112,7 @@ def law_energy(law, delta):  # noqa: ANN001, ANN201
 @njit
 def coulomb_force(mu, eps_v, v_t, f_n, F, dF_dv, g):  # noqa: ANN001, ANN201
     """Regularised Coulomb ``F = −μ f_n v_t/√(|v_t|² + ε²)`` into ``F`` (3,), ``dF_dv`` (3,3) and
-    ``g = ∂F/∂f_n`` (3,) (FORMULATION II §5)."""
+    ``g = ∂F/∂f_n`` (3,) (docs/theory.md §II.5)."""
     s = math.sqrt(v_t[0] * v_t[0] + v_t[1] * v_t[1] + v_t[2] * v_t[2] + eps_v * eps_v)
     c = -mu * f_n
     for i in range(3):
@@ -188,7 +188,7 @@ N_LAW = 6
 
 @runtime_checkable
 class ForceLaw(Protocol):
-    """Normal force law ``f_N(δ, δ̇; δ̇⁽⁻⁾)`` (FORMULATION II §5)."""
+    """Normal force law ``f_N(δ, δ̇; δ̇⁽⁻⁾)`` (docs/theory.md §II.5)."""
 
     def force(self, delta: float, delta_dot: float, approach_velocity: float = 0.0
               ) -> tuple[float, float, float]:
@@ -235,7 +235,7 @@ class _CommonForm:
 
 @dataclass(frozen=True, kw_only=True)
 class LinearPenalty(_CommonForm):
-    """Linear penalty + viscous damping ``f = kδ + c_d δ̇`` (FORMULATION II §5, Exudyn's choice).
+    """Linear penalty + viscous damping ``f = kδ + c_d δ̇`` (docs/theory.md §II.5, Exudyn's choice).
 
     ``onset`` δ₀ [m] (default 0): the force grows quadratically over the first δ₀ of
     penetration, ``kδ²/(2δ₀)``, then ``k(δ − δ₀/2)``: the law is C¹, so a contact that only
@@ -268,7 +268,7 @@ class LinearPenalty(_CommonForm):
 
 @dataclass(frozen=True, kw_only=True)
 class Hertz(_CommonForm):
-    """Hertz-type ``f = Kδⁿ`` (n = 3/2 point contact, ≈ 1–1.1 line-like; FORMULATION II §5).
+    """Hertz-type ``f = Kδⁿ`` (n = 3/2 point contact, ≈ 1–1.1 line-like; docs/theory.md §II.5).
 
     Parameters
     ----------
@@ -291,7 +291,7 @@ class Hertz(_CommonForm):
 
 @dataclass(frozen=True, kw_only=True)
 class HuntCrossley(_CommonForm):
-    """Hunt–Crossley ``f = Kδⁿ[1 + 3(1−e)/2 · δ̇/δ̇⁽⁻⁾]`` (FORMULATION II §5).
+    """Hunt–Crossley ``f = Kδⁿ[1 + 3(1−e)/2 · δ̇/δ̇⁽⁻⁾]`` (docs/theory.md §II.5).
 
     ``min_approach_velocity`` guards ``δ̇⁽⁻⁾ → 0`` (resting contact): the approach velocity used is
     ``max(|δ̇⁽⁻⁾|, min_approach_velocity)``, so the damping coefficient stays bounded.
@@ -327,7 +327,7 @@ class HuntCrossley(_CommonForm):
 
 @dataclass(frozen=True, kw_only=True)
 class LankaraniNikravesh(_CommonForm):
-    """Lankarani–Nikravesh (1990) ``f = Kδⁿ[1 + 3(1−e²)/4 · δ̇/δ̇⁽⁻⁾]`` (FORMULATION II §5);
+    """Lankarani–Nikravesh (1990) ``f = Kδⁿ[1 + 3(1−e²)/4 · δ̇/δ̇⁽⁻⁾]`` (docs/theory.md §II.5);
     same approach-velocity guard as :class:`HuntCrossley`.
 
     Parameters
@@ -362,7 +362,7 @@ class LankaraniNikravesh(_CommonForm):
 @dataclass(frozen=True, kw_only=True)
 class RegularizedCoulomb:
     """Regularised Coulomb friction on the hole ``F_t = −μ f_n v_t/√(|v_t|² + ε_v²)``
-    (FORMULATION II §5), ``v_t`` = tangential velocity of Q relative to P.
+    (docs/theory.md §II.5), ``v_t`` = tangential velocity of Q relative to P.
 
     Parameters
     ----------

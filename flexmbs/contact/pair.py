@@ -1,4 +1,4 @@
-"""One contact point of the clearance sliding joint: gap, forces, tangent (FORMULATION II §4–§5).
+"""One contact point of the clearance sliding joint: gap, forces, tangent (docs/theory.md §II.4–§II.5).
 
 Local coordinates of a contact ``q_c = [r_H (3), p (4), e_k (12)]`` (19): the hole body and the
 beam element holding the projection point P. The hole point Q is a frozen material point of the
@@ -82,7 +82,7 @@ class ContactResult(NamedTuple):
 @njit
 def contact_map(Bp, S):  # noqa: ANN001, ANN201
     """``W = ∂(x_Q − x_P)/∂q_c = [I, 2T(u_Q)p, −S(ξ_P)]`` (3, N_LOCAL) at fixed u_Q and ξ_P
-    (FORMULATION II §4): ``Bp`` = 2T(u_Q)p (3, 4), ``S`` the shape functions at ξ_P (4,)
+    (docs/theory.md §II.4): ``Bp`` = 2T(u_Q)p (3, 4), ``S`` the shape functions at ξ_P (4,)
     (:func:`contact_map_into` a new array)."""
     W = np.empty((3, N_LOCAL))
     contact_map_into(Bp, S, W)
@@ -205,7 +205,7 @@ def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
 
 @njit
 def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):  # noqa: ANN001, ANN201
-    """Gap kinematics of one contact (FORMULATION II §4–§5), numba kernel.
+    """Gap kinematics of one contact (docs/theory.md §II.4–§II.5), numba kernel.
 
     Returns ``(xi, g, gdot, n, P, Q, B (N_LOCAL,), W (3, N_LOCAL), H (N_LOCAL, N_LOCAL))`` with
     ``W = ∂(x_Q − x_P)/∂q_c`` at fixed ξ, ``B = nᵀW = ∂g_N/∂q_c``, and (if ``want_hessian``) the consistent
@@ -247,7 +247,7 @@ def no_spin() -> np.ndarray:
 
 @njit
 def node_spins(spin, q_elem, v_elem, b, db, w, dw):  # noqa: ANN001, ANN201
-    """The contact element's nodes' chart spins (FORMULATION I §2.4, the rod's generated
+    """The contact element's nodes' chart spins (docs/theory.md §I.2.4, the rod's generated
     ``spin`` map, the one its twist inertia uses): node a's section turns about its tangent at
     ``φ̇_a + w_a`` with ``w_a = b_a·ġ_a``; writes ``b`` (2, 3), ``∂b_a/∂g_a`` ``db`` (2, 3, 3),
     ``w`` (2,) and ``∂w_a/∂g_a`` ``dw`` (2, 3)."""
@@ -340,7 +340,7 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):  # noqa: ANN001, ANN2
 @njit
 def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0912, PLR0913, PLR0915, C901
                   approach_velocity, want_tangent, Qc, K, C, geo, work):
-    """Penalty force of one contact point and its Gauss–Newton tangent (FORMULATION II §4–§5).
+    """Penalty force of one contact point and its Gauss–Newton tangent (docs/theory.md §II.4–§II.5).
 
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
     and ``hist`` (:data:`N_HISTORY`) the contact's history, for
@@ -494,7 +494,7 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                   history: np.ndarray | None = None,
                   friction_stiffness: float | None = None,
                   spin: np.ndarray | None = None) -> ContactResult:
-    """Gap, penalty force and tangent of one beam/hole contact point (FORMULATION II §4–§5).
+    """Gap, penalty force and tangent of one beam/hole contact point (docs/theory.md §II.4–§II.5).
 
     ``g_N = |Q − P| − r_b``, ``n = (Q − P)/|Q − P|``, ``f_N = law(−g_N, −ġ_N, approach_velocity)``,
     ``F_H = f_N n + F_t`` on the hole at Q and ``−F_H`` on the beam at P;

@@ -1,4 +1,4 @@
-"""Closed-form roots used by the section detectors (FORMULATION II §3): real roots of a quartic
+"""Closed-form roots used by the section detectors (docs/theory.md §II.3): real roots of a quartic
 (Ferrari, through the resolvent cubic) and of the quadratic trigonometric polynomial
 ``al sin φ cos φ + be sin φ + ga cos φ`` whose zeros are the stationary points of a circle's
 penetration by an ellipse (:func:`flexmbs.contact.shapes.circle.circle_stationary_points`) and
@@ -18,7 +18,7 @@ __all__ = ["quartic_real_roots", "trig_quadratic_roots"]
 @njit
 def _trig_f(phi, al, be, ga):  # noqa: ANN001, ANN202
     """``f = al sin φ cos φ + be sin φ + ga cos φ`` and ``f′`` (the stationarity condition of a
-    quadratic trigonometric polynomial, FORMULATION II §3)."""
+    quadratic trigonometric polynomial, docs/theory.md §II.3)."""
     s = math.sin(phi)
     c = math.cos(phi)
     f = al * s * c + be * s + ga * c
@@ -138,7 +138,7 @@ def trig_quadratic_roots(al, be, ga, scale, phis, signs, seeds):  # noqa: ANN001
     with the sign of ``f′`` into ``signs``; returns their number (at most 4). ``seeds`` (≥ 5)
     is work.
 
-    Closed form (FORMULATION II §3): with ``t = tan((φ − φ0)/2)``, ``f (1 + t²)²`` is a quartic
+    Closed form (docs/theory.md §II.3): with ``t = tan((φ − φ0)/2)``, ``f (1 + t²)²`` is a quartic
     in t; φ0 ∈ {kπ/4} maximises the leading coefficient ``f(φ0 + π)`` (no root near t = ∞),
     real roots by :func:`quartic_real_roots` (nearly-real ones accepted), 4 Newton polishing
     steps on f, residual check against ``1e-10 scale``, duplicates removed."""

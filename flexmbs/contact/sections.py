@@ -1,12 +1,12 @@
-"""2D hole sections and the common-normal contact detector (FORMULATION II §3, §6).
+"""2D hole sections and the common-normal contact detector (docs/theory.md §II.3, §II.6).
 
 Section coordinates are ``(y, z)`` with the hole centre at the origin. The beam cuts the section
-plane in an ellipse (:class:`Ellipse2D`, FORMULATION II §2). A hole section reports every
+plane in an ellipse (:class:`Ellipse2D`, docs/theory.md §II.2). A hole section reports every
 stationary point of the penetration of that ellipse through its boundary (:meth:`candidates`):
 local maxima (``kind=+1``) are contact points, local minima (``kind=-1``) enter the force with the
-opposite sign (continuity rule, FORMULATION II §3).
+opposite sign (continuity rule, docs/theory.md §II.3).
 
-Pluggable (DESIGN.md "Pluggable parts"): the shapes are one module each in
+Pluggable (docs/design.md "Pluggable parts"): the shapes are one module each in
 :mod:`flexmbs.contact.shapes` (a compiled boundary kernel and a :class:`HoleSection` class,
 registered in :data:`HOLE_SECTIONS` by scenario name); this module holds the compiled generic
 detector of §6 (:func:`common_normal_points`), :func:`get_section` and the ellipse-in-circle
@@ -69,7 +69,7 @@ __all__ = [
 @njit
 def _support(cy, cz, eax, eay, a, b, N0, N1):  # noqa: ANN001, ANN202
     """Ellipse point with outward normal N: ``X = c + ΣN/√(NᵀΣN)``, and ``TᵀJ_E T`` for the
-    tangent T = (−N1, N0) (FORMULATION II §6)."""
+    tangent T = (−N1, N0) (docs/theory.md §II.6)."""
     na = N0 * eax + N1 * eay            # components of N along e_a, e_b
     nb = -N0 * eay + N1 * eax
     qq = a * a * na * na + b * b * nb * nb
@@ -106,7 +106,7 @@ def _common_normal_f(kind, params, cy, cz, eax, eay, a, b, psi, Y, Yp, Ypp):  # 
 def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, phi_out,  # noqa: ANN001, ANN201
                          kind_out, depth_out):
     """Every stationary point of the penetration of the ellipse through a compiled section
-    (generic detector of FORMULATION II §6, compiled): ``F(ψ)`` sampled at ``samples`` points,
+    (generic detector of docs/theory.md §II.6, compiled): ``F(ψ)`` sampled at ``samples`` points,
     sign changes bracketed, safeguarded Newton; writes ψ (wall parameter), φ (ellipse angle),
     kind (+1 maximum of the penetration, −1 minimum) and depth ``N·(X − Y)``; returns their
     number (at most ``psi_out.size``)."""
@@ -159,13 +159,13 @@ def get_section(name: str, **params: float) -> HoleSection:
 
 
 def two_point_possible(ellipse: Ellipse2D, R: float) -> bool:
-    """Two-point contact at the minor vertex is possible iff ``ρ_max = a²/b > R`` (FORMULATION II §3)."""
+    """Two-point contact at the minor vertex is possible iff ``ρ_max = a²/b > R`` (docs/theory.md §II.3)."""
     return ellipse.a**2 / ellipse.b > R
 
 
 def inside_evolute(ellipse: Ellipse2D, point: np.ndarray | None = None) -> bool:
     """Is ``point`` (default: hole centre) inside the ellipse's evolute (astroid)?  Then D(φ) has 4
-    stationary points, else 2 (FORMULATION II §3)."""
+    stationary points, else 2 (docs/theory.md §II.3)."""
     o = np.zeros(2) if point is None else np.asarray(point, dtype=float)
     d = o - ellipse.center
     da, db = float(d @ ellipse.e_a), float(d @ ellipse.e_b)
@@ -176,7 +176,7 @@ def inside_evolute(ellipse: Ellipse2D, point: np.ndarray | None = None) -> bool:
 def jamming(ellipse: Ellipse2D, hole: HoleSection) -> bool:
     """True when the ellipse is wider than the hole's inscribed circle (``a > R_in``).
 
-    Exact for the circle (the ellipse cannot fit anywhere: jamming, FORMULATION II §2); for other
+    Exact for the circle (the ellipse cannot fit anywhere: jamming, docs/theory.md §II.2); for other
     shapes a conservative flag (the ellipse may still fit along a wider direction).
     """
     return ellipse.a > hole.inscribed_radius()

@@ -1,4 +1,4 @@
-"""The consistent contact pair of a hole section (FORMULATION II §4b; issue "the clearance contact
+"""The consistent contact pair of a hole section (docs/theory.md §II.4b; issue "the clearance contact
 as the exact gradient of a potential").
 
 In hole section k the wall is the closed curve ``Y(ψ) = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` (moving with
@@ -229,7 +229,7 @@ def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, 
 
 @njit
 def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, elem0, xi0, Y, Yp, Ypp):  # noqa: ANN001, ANN201, E501
-    """Converge one contact pair of a section from a seed (FORMULATION II §4b).
+    """Converge one contact pair of a section from a seed (docs/theory.md §II.4b).
 
     First Newton on (ξ, ψ) together (:func:`_joint_newton`, 2–3 iterations, accepted when it
     converges to a point of the seed's kind); else a safeguarded Newton on the reduced

@@ -1,5 +1,5 @@
-"""Exact linearisation of one detected clearance contact (issue "exact linearisation"; FORMULATION
-II §2–§5 differentiated, implicit-function theorem on the detection's own equations).
+"""Exact linearisation of one detected clearance contact (issue "exact linearisation"; docs/theory.md
+§II.2–§II.5 differentiated, implicit-function theorem on the detection's own equations).
 
 The residual of a contact is that of :func:`flexmbs.contact.clearance_term.clearance_forces`: in hole
 section k the beam axis crosses the section plane at ξ_I (element e_I), its section is the
@@ -85,7 +85,7 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
                       Ypp):
     """Wall point ``Q = o + Y(ψ)`` of the paper's detection and its derivative (3, N_EXT): the
     crossing ξ_I, the section ellipse and the 2-D common normal differentiated implicitly
-    (FORMULATION II §2–§3). ``paper`` None: not used by the model (compiled out; not called)."""
+    (docs/theory.md §II.2–§II.3). ``paper`` None: not used by the model (compiled out; not called)."""
     NX = N_EXT
     if paper is None:
         return np.zeros(3), np.zeros((3, NX))
@@ -149,7 +149,7 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
         for j in range(NX):
             Dlrx = (rxI[0] * DrxI[0, j] + rxI[1] * DrxI[1, j] + rxI[2] * DrxI[2, j]) / lrx
             Da[j] = a * (Dlrx / lrx - sg * Dtn[j] / abs(tn))
-    # ---- common normal (FORMULATION II §3, §6): the ellipse point X(φ) and the wall point
+    # ---- common normal (docs/theory.md §II.3, §II.6): the ellipse point X(φ) and the wall point
     # Y(ψ) (section coordinates) lie on one normal of the wall, and the ellipse's tangent is
     # normal to it: E1 = (X − Y) × N = 0, E2 = X_φ·N = 0, N = (Y_ψ,z, −Y_ψ,y). For a circle
     # this is X ∥ Y with X·X_φ = 0, i.e. ψ = atan2(X) at a stationary point of ½|X|².
@@ -172,7 +172,7 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
     J22 = Xp0 * Nq0 + Xp1 * Nq1
     det = J11 * J22 - J12 * J21
     # at the bifurcation where one contact splits into two (a maximum turning into two maxima
-    # and a minimum, FORMULATION II §3) the stationary point moves infinitely fast: its
+    # and a minimum, docs/theory.md §II.3) the stationary point moves infinitely fast: its
     # ψ-derivative is dropped there (the section force, summed with signs ±1, stays continuous)
     singular = abs(det) <= 1e-12 * (J11 * J11 + J12 * J12 + J21 * J21 + J22 * J22)
     Qd = np.empty(3)
@@ -195,7 +195,7 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
 
 @njit(internal=True)
 def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  # noqa: ANN001, ANN202
-    """Wall point ``Q = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` of the consistent pair (FORMULATION II §4b)
+    """Wall point ``Q = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` of the consistent pair (docs/theory.md §II.4b)
     and its derivative (3, N_EXT): ψ moves with the coordinates by the implicit-function theorem
     on ``r₁ = (x − Q)·x_ξ = 0``, ``r₂ = (x − Q)·Q_ψ = 0`` (x on e_P at ξ_P), ``[Δξ, Δψ] =
     −H⁻¹[∂r₁, ∂r₂]`` with the Hessian H of ``½|x − Q|²`` in (ξ, ψ). No column of a crossing
@@ -278,7 +278,7 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     :func:`flexmbs.contact.pair.contact_force` (the stick law's trial displacement
     :func:`~flexmbs.contact.pair.stick_trial` differentiated here too); ``consistent``: the
     contact is a stationary pair
-    of FORMULATION II §4b (:mod:`flexmbs.contact.stationary`; ``qI``, ``xiI``, ``phi`` unused,
+    of docs/theory.md §II.4b (:mod:`flexmbs.contact.stationary`; ``qI``, ``xiI``, ``phi`` unused,
     the e_I columns zero), else the paper's 2-D common normal; ``paper`` None: no contact of
     the model uses the paper's (its code compiled out, ``consistent`` then always set). Writes
     ``Qc`` (N_LOCAL) on ``[r_H, p, e_P, φ_P]``, ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I,

@@ -5,7 +5,7 @@ and parameters ``p`` and writes the values ``val``, the Jacobian ``jac`` (output
 with ``hes``, the Hessians (outputs x inputs x inputs). Only the nonzero entries are written:
 the caller zeroes ``jac`` and ``hes`` once.
 """
-# generator sha256: 55fff12cb293777e92394b67f2745778e23d52d06ae1097f977494efaa4f5b13
+# generator sha256: 355f629940e6b5b8f214cccf25cfa483a7ba43abb924743d154f70580c1aa1cb
 # ruff: noqa: E501, F841
 # fmt: off
 

@@ -1,4 +1,4 @@
-"""Element A: 12-DOF gradient-deficient ANCF cable (FORMULATION I §1).
+"""Element A: 12-DOF gradient-deficient ANCF cable (docs/theory.md §I.1).
 
 Element coordinates ``q_e = [r0 (3), r0' (3), r1 (3), r1' (3)]`` with cubic Hermite shape
 functions (§1.1). Strains are measured relative to a curved stress-free reference ``q_ref``
@@ -69,7 +69,7 @@ _AXIAL_RULES = ("lobatto3", "gauss5")
 
 @dataclass(frozen=True, kw_only=True)
 class CableOptions:
-    """Formulation choices of the ANCF cable (FORMULATION I §1.3, §1.5, §1.6).
+    """Formulation choices of the ANCF cable (docs/theory.md §I.1.3, §I.1.5, §I.1.6).
 
     - ``bending="vector"``: A-vec, ``½EI|K − K_ref|²`` (Exudyn); ``"scalar"``: A-scal,
       ``½EI(|K|_δ − |K_ref|_δ)²`` (objective for curved references).
@@ -109,7 +109,7 @@ class CableOptions:
                              f"(got {self.bending_points!r})")
         if self.exudyn_compatible and self.bending != "vector":
             raise ValueError("CableOptions: exudyn_compatible=True reproduces Exudyn's A-vec "
-                             "bending; use bending='vector' with it (FORMULATION I §1.6)")
+                             "bending; use bending='vector' with it (docs/theory.md §I.1.6)")
 
 
 class CableProperties(NamedTuple):
@@ -125,7 +125,7 @@ class CableProperties(NamedTuple):
 
 
 class CableRest(NamedTuple):
-    """Reference-configuration data precomputed by :func:`rest_state` (FORMULATION I §1.3, §1.5).
+    """Reference-configuration data precomputed by :func:`rest_state` (docs/theory.md §I.1.3, §I.1.5).
 
     ``n_ax`` / ``n_b`` are the numbers of axial / bending quadrature points. "Metric" is
     ``μ = |r′_ref|`` (set to 1 everywhere in the Exudyn-compatible variant).
@@ -151,7 +151,7 @@ class CableRest(NamedTuple):
 # shape functions and quadrature
 @njit(inline="always")
 def hermite_basis(xi, L):  # noqa: ANN001, ANN201
-    """Cubic Hermite shape functions S1..S4 (FORMULATION I §1.1) and their first, second and third
+    """Cubic Hermite shape functions S1..S4 (docs/theory.md §I.1.1) and their first, second and third
     ξ-derivatives, as four 4-tuples (no allocation): the one statement of the element's basis."""
     x2 = xi * xi
     x3 = x2 * xi
@@ -175,7 +175,7 @@ def _basis_table(xi, L, S, dS, ddS):  # noqa: ANN001, ANN202
 
 def shape_functions(xi: np.ndarray, length: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Hermite shape functions S1..S4 and their x-derivatives (FORMULATION I §1.1).
+    """Hermite shape functions S1..S4 and their x-derivatives (docs/theory.md §I.1.1).
 
     ``xi`` and ``length`` broadcast against each other (e.g. ``(n,)`` with ``(n,)`` for one
     point per element, or ``xi[None, :]`` with ``L[:, None]`` for a table); each returned array
@@ -193,7 +193,7 @@ def shape_functions(xi: np.ndarray, length: np.ndarray
 
 @njit
 def shape_xi(xi, length):  # noqa: ANN001, ANN201
-    """S1..S4 and their ξ-derivatives (FORMULATION II §0) as arrays (4,) (:func:`hermite_basis`)."""
+    """S1..S4 and their ξ-derivatives (docs/theory.md §II.0) as arrays (4,) (:func:`hermite_basis`)."""
     s, d, dd, _ = hermite_basis(xi, length)
     S = np.empty(4)
     dS = np.empty(4)
@@ -239,7 +239,7 @@ def element_point(q, L, xi):  # noqa: ANN001, ANN201
 def centerline_interpolation(element_dofs: np.ndarray, lengths: np.ndarray, elem: np.ndarray,
                              xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Weights ``S (n, 4)`` and coordinates ``dofs (n, 12)`` of the centreline points at
-    (element, ξ) pairs: :func:`interpolate` gives r = S(ξ) q_e (FORMULATION I §1.1) from any
+    (element, ξ) pairs: :func:`interpolate` gives r = S(ξ) q_e (docs/theory.md §I.1.1) from any
     global vector (positions from q, velocities from q̇)."""
     elem = np.asarray(elem, dtype=np.int64).reshape(-1)
     S, _, _ = shape_functions(np.asarray(xi, dtype=float).reshape(-1), np.asarray(lengths)[elem])
@@ -267,7 +267,7 @@ def _gauss01(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _axial_rule(rule: str) -> tuple[np.ndarray, np.ndarray]:
-    """FORMULATION I §1.5: 3-point Lobatto (0, ½, 1; 1/6, 4/6, 1/6) or 5-point Gauss on [0, 1]."""
+    """docs/theory.md §I.1.5: 3-point Lobatto (0, ½, 1; 1/6, 4/6, 1/6) or 5-point Gauss on [0, 1]."""
     if rule == "lobatto3":
         return np.array([0.0, 0.5, 1.0]), np.array([1.0, 4.0, 1.0]) / 6.0
     return _gauss01(5)
@@ -333,7 +333,7 @@ _M4_POW = np.array([[0, 1, 0, 1], [1, 2, 1, 2], [0, 1, 0, 1], [1, 2, 1, 2]])
 
 
 def mass_matrix(props: CableProperties) -> np.ndarray:
-    """Consistent mass ``∫ρA SᵀS dx = ρA L M4(L) ⊗ I3`` (FORMULATION I §1.2); (n_elem, 12, 12)."""
+    """Consistent mass ``∫ρA SᵀS dx = ρA L M4(L) ⊗ I3`` (docs/theory.md §I.1.2); (n_elem, 12, 12)."""
     L = np.asarray(props.length, dtype=float)
     rhoA = np.asarray(props.mass_per_length, dtype=float)
     M4 = (rhoA * L)[:, None, None] * _M4[None] * L[:, None, None] ** _M4_POW[None]
@@ -352,13 +352,13 @@ def distributed_force(props: CableProperties, f: np.ndarray) -> np.ndarray:
 
 
 def gravity_force(props: CableProperties, g: np.ndarray) -> np.ndarray:
-    """Gravity ``Q_g = ρA [L/2, L²/12, L/2, −L²/12] ⊗ g`` (FORMULATION I §1.2); (n_elem, 12)."""
+    """Gravity ``Q_g = ρA [L/2, L²/12, L/2, −L²/12] ⊗ g`` (docs/theory.md §I.1.2); (n_elem, 12)."""
     rhoA = np.asarray(props.mass_per_length, dtype=float)
     return distributed_force(props, rhoA[:, None] * np.asarray(g, dtype=float)[None, :])
 
 
 def point_force_vector(xi: np.ndarray, length: np.ndarray, force: np.ndarray) -> np.ndarray:
-    """Point force at ξ: ``Q = S(ξ)ᵀ F`` (FORMULATION I §1.2).
+    """Point force at ξ: ``Q = S(ξ)ᵀ F`` (docs/theory.md §I.1.2).
 
     ``xi``, ``length``: (n,); ``force``: (n, 3); returns (n, 12).
     """
@@ -368,7 +368,7 @@ def point_force_vector(xi: np.ndarray, length: np.ndarray, force: np.ndarray) ->
 
 
 # ---------------------------------------------------------------------------------------------
-# internal forces: numba kernel (FORMULATION I §1.4)
+# internal forces: numba kernel (docs/theory.md §I.1.4)
 class KernelWork(NamedTuple):
     """Scratch of :func:`_internal_kernel`: its 3-vectors, its nodal shape-function rows, its
     3 × 3 operators and (``mat[9:]``) the node blocks of :func:`_add_point_blocks`
@@ -398,7 +398,7 @@ def _at(d, x, e, c):  # noqa: ANN001, ANN202
 
 @njit(inline="always")
 def _axial_point(q, v, e, k, rest, EA, dA):  # noqa: ANN001, ANN202
-    """The axial resultant at axial point k of element e (FORMULATION I §1.4): a = S′q, the
+    """The axial resultant at axial point k of element e (docs/theory.md §I.1.4): a = S′q, the
     unit tangent t = a/|a|, |a|, t·ȧ, N = EA(|a|/μ − 1 − ε_off) + d_ε t·ȧ/μ and ȧ = S′q̇;
     every quantity a scalar (both kernels: :func:`_internal_forces`, :func:`_internal_kernel`)."""
     d = (rest.axial_dS[e, k, 0], rest.axial_dS[e, k, 1], rest.axial_dS[e, k, 2],
@@ -415,7 +415,7 @@ def _axial_point(q, v, e, k, rest, EA, dA):  # noqa: ANN001, ANN202
 
 @njit(inline="always")
 def _bending_point(q, v, e, k, rest, EI, dB, scalar):  # noqa: ANN001, ANN202
-    """The bending terms at bending point k of element e (FORMULATION I §1.4): a = S′q,
+    """The bending terms at bending point k of element e (docs/theory.md §I.1.4): a = S′q,
     b = S″q and their rates ȧ, ḃ, g = μ|a|², the curvature K = a×b/g, its rate
     K̇ = B1 ȧ + B2 ḃ = (a×ḃ − b×ȧ)/g − 2μ(a·ȧ) K/g, the moment m_eff (vector law
     EI(K − K_ref) + d_K K̇; scalar law m_s K/κ, κ = sqrt(K·K + δ²), m_s = EI(κ − |K_ref|_δ) + d_K κ̇)
@@ -466,7 +466,7 @@ def _bending_point(q, v, e, k, rest, EI, dB, scalar):  # noqa: ANN001, ANN202
 
 @njit(inline="always")
 def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
-    """Q_int per element without its derivatives (FORMULATION I §1.4): the residual's kernel.
+    """Q_int per element without its derivatives (docs/theory.md §I.1.4): the residual's kernel.
     The quadrature points' terms are scalars (:func:`_axial_point`, :func:`_bending_point`),
     held in registers: 4.6 → 2.4 µs for Example 1's 16 elements against the tangent kernel's
     work arrays (:func:`_internal_kernel`, which states its forces with the same functions).
@@ -535,7 +535,7 @@ def _add_point_blocks(mat, e, W, ds, dds, P11, P12, P21, P22, TU):  # noqa: ANN0
 
 @njit
 def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, damp, work):  # noqa: ANN001, ANN202, C901, PLR0912, PLR0915
-    """Q_int, ∂Q_int/∂q, ∂Q_int/∂q̇ per element (FORMULATION I §1.4, derivation in the notes).
+    """Q_int, ∂Q_int/∂q, ∂Q_int/∂q̇ per element (docs/theory.md §I.1.4, derivation in the notes).
 
     Each S′_i has a single non-zero component, so every 12×12 contribution of a quadrature point
     is Σ over 4×4 node pairs (n, m) of scalar products of S′/S″ values times four 3×3 operators.
@@ -792,7 +792,7 @@ def internal_forces(q_e: np.ndarray, v_e: np.ndarray, props: CableProperties, re
                     options: CableOptions, force_out: np.ndarray,
                     stiffness_out: np.ndarray | None = None,
                     damping_out: np.ndarray | None = None) -> None:
-    """Internal force ``Q_int = ∂U/∂q`` + damping and its derivatives (FORMULATION I §1.4).
+    """Internal force ``Q_int = ∂U/∂q`` + damping and its derivatives (docs/theory.md §I.1.4).
 
     ``q_e``, ``v_e``: (n_elem, 12) float64 C-contiguous. Overwrites ``force_out`` (n_elem, 12),
     and when given ``stiffness_out = ∂Q_int/∂q`` (consistent, including the q-dependence of the
@@ -815,7 +815,7 @@ def internal_forces(q_e: np.ndarray, v_e: np.ndarray, props: CableProperties, re
 # energy and output (vectorised numpy, independent of the kernel)
 def strain_energy(q_e: np.ndarray, props: CableProperties, rest: CableRest,
                   options: CableOptions) -> np.ndarray:
-    """Elastic energy per element, ∫½EA(ε − ε_off)² + bending per ds0 (FORMULATION I §1.3).
+    """Elastic energy per element, ∫½EA(ε − ε_off)² + bending per ds0 (docs/theory.md §I.1.3).
 
     Returns (n_elem,); damping does not enter.
     """
@@ -848,7 +848,7 @@ def output_fields(q_e: np.ndarray, rest: CableRest, options: CableOptions,
 
 def axial_strain_and_curvature(q_e: np.ndarray, rest: CableRest, options: CableOptions,
                                xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Axial strain and curvature vector at ξ (FORMULATION I §1.3), for output.
+    """Axial strain and curvature vector at ξ (docs/theory.md §I.1.3), for output.
 
     Returns ``eps`` (n_elem, m) and ``K`` (n_elem, m, 3). ``eps = |r′|/μ − 1`` (exact) or
     ``|r′| − |r′_ref|`` (Exudyn-compatible), i.e. the strain relative to the stress-free
@@ -924,7 +924,7 @@ def _empty_rest() -> CableRest:
 
 @njit
 def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
-    """``r_q += Q_int(q, q̇) (+ M q̈ with inertia)`` of the elements (FORMULATION I §1.2, §1.4);
+    """``r_q += Q_int(q, q̇) (+ M q̈ with inertia)`` of the elements (docs/theory.md §I.1.2, §I.1.4);
     returns the largest single force (an element force entry or a row of M q̈)."""
     gather_states(bm, q, v, mode)
     _internal_forces(bm.qe, bm.ve, bm.props, bm.rest, bm.scalar, bm.force)

@@ -1,4 +1,4 @@
-"""Element B: the 14-DOF ANCF Kirchhoff rod with a nodal twist angle (FORMULATION Part I §2).
+"""Element B: the 14-DOF ANCF Kirchhoff rod with a nodal twist angle (docs/theory.md §I.2).
 
 Per node ``[r (3), g = r′ (3), φ (1)]``; the centreline is the cable's cubic Hermite
 (:func:`flexmbs.elements.ancf_cable.hermite_basis`, the one statement of the basis). Each node has
@@ -114,7 +114,7 @@ class RodProperties(NamedTuple):
 class RodRest(NamedTuple):
     """The nodal bases of every element's two nodes and the reference measures at the
     quadrature points: the curvatures at 3 Gauss points, the axial strain at 3 Lobatto points
-    (0, ½, 1: free of membrane locking, as the cable's default, FORMULATION I §1.5, §2.5).
+    (0, ½, 1: free of membrane locking, as the cable's default, docs/theory.md §I.1.5, §I.2.5).
     ``t_bar, d_bar`` are the current bases (changed by re-basing, §2.4; a checkpoint carries
     them), ``t_ref, d_ref`` the reference's (with ``q_ref`` they give the reference measures)."""
 
@@ -204,7 +204,7 @@ def new_work() -> RodWork:
 
 
 # ---------------------------------------------------------------------------------------------
-# the nodal maps and the strain measures (values; FORMULATION I §2.1–2.2)
+# the nodal maps and the strain measures (values; docs/theory.md §I.2.1–2.2)
 @njit(refcount=False)
 def _node_inputs(q_e, t_bar, d_bar, w, a):  # noqa: ANN001, ANN202
     """Node slot ``a``'s (g, φ) into ``x_node`` and its base (t̄, D̄) into ``p_node``."""
@@ -452,7 +452,7 @@ def strain_measures(q_e: np.ndarray, t_bar: np.ndarray, d_bar: np.ndarray, lengt
 
 
 # ---------------------------------------------------------------------------------------------
-# internal force and its exact derivatives (FORMULATION I §2.3)
+# internal force and its exact derivatives (docs/theory.md §I.2.3)
 @njit(refcount=False)
 def _point_force(val, jac, n_z, coef, ref, W, beta, ve, w, nodal, force):  # noqa: ANN001, ANN202
     """Add one quadrature point's force of the strains ``val`` (with their derivatives ``jac``
@@ -689,7 +689,7 @@ def _element_forces(q, v, props, rest, w, e, force):  # noqa: ANN001, ANN202
 
 @njit(refcount=False)
 def _rod_forces(q, v, props, rest, w, force):  # noqa: ANN001, ANN202
-    """Q_int = ∂U/∂q + damping of every element (:func:`_point_force`; FORMULATION I §2.2,
+    """Q_int = ∂U/∂q + damping of every element (:func:`_point_force`; docs/theory.md §I.2.2,
     the axial strain at the Lobatto points, the curvatures at the Gauss points, W = w μ L)."""
     for e in range(q.shape[0]):
         _element_forces(q, v, props, rest, w, e, force[e])
@@ -964,7 +964,7 @@ def _on_centerline(Q: np.ndarray) -> np.ndarray:
 
 def mass_matrix(props: RodProperties) -> np.ndarray:
     """Constant mass (n_elem, 14, 14): the cable's on (r, g) and ``ρJ_p L/6 [[2, 1], [1, 2]]``
-    on the twists (FORMULATION I §2.3)."""
+    on the twists (docs/theory.md §I.2.3)."""
     L = np.asarray(props.length, dtype=float)
     M = np.zeros((L.shape[0], ELEMENT_SIZE, ELEMENT_SIZE))
     M[:, CENTERLINE[:, None], CENTERLINE[None, :]] = cable.mass_matrix(_cable_view(props))
@@ -1312,7 +1312,7 @@ def node_turned_message(beam: object, node: int, q: np.ndarray) -> str:
     """The one-line message of :data:`ERR_NODE_TURNED`."""
     limit = math.degrees(math.acos(TURN_LIMIT))
     return (f"beam '{getattr(beam, 'name', beam)}' node {node}: its tangent turned more than "
-            f"{limit:.0f}° from its base within one step (re-basing, FORMULATION §2.4, follows "
+            f"{limit:.0f}° from its base within one step (re-basing, docs/theory.md §I.2.4, follows "
             "turns between steps): take a smaller time step or more load steps")
 
 

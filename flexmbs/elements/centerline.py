@@ -1,4 +1,4 @@
-"""Geometry of the centreline of a chain of cable elements (FORMULATION II §2, §4): point,
+"""Geometry of the centreline of a chain of cable elements (docs/theory.md §II.2, §II.4): point,
 plane crossing and closest-point projection. Owned by the element family; the sliding joint
 and the clearance joint (contact/geometry.py) call these kernels.
 
@@ -32,7 +32,7 @@ def _clip(x, lo, hi):  # noqa: ANN001, ANN202
 
 @njit
 def beam_point(q_e, lengths, elem, xi):  # noqa: ANN001, ANN201
-    """``(r, r_ξ, r_ξξ)`` of element ``elem`` at ξ (FORMULATION II §0, r = S(ξ)e_k)."""
+    """``(r, r_ξ, r_ξξ)`` of element ``elem`` at ξ (docs/theory.md §II.0, r = S(ξ)e_k)."""
     return _elem_point(q_e[elem], lengths[elem], xi)
 
 
@@ -220,7 +220,7 @@ def section_crossing(q_e: np.ndarray, lengths: np.ndarray, origin: np.ndarray, n
 
 @njit
 def section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, tol, max_iter, max_distance):  # noqa: ANN001, ANN201
-    """Crossing of the beam centreline with the plane n·(x − O) = 0 (FORMULATION II §2).
+    """Crossing of the beam centreline with the plane n·(x − O) = 0 (docs/theory.md §II.2).
 
     Safeguarded Newton on φ(s) = n·(r(s) − O) from ``s = elem0 + xi0`` (steps ≤ 1 element, across
     nodes with ξ ∓ 1, bisection once a sign change is bracketed); converged when
@@ -271,7 +271,7 @@ def section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, tol, max_i
                 break
         s_prev, f_prev = s, f
         s = s_new
-    # global fallback over node sign changes (FORMULATION II §2)
+    # global fallback over node sign changes (docs/theory.md §II.2)
     best_d = np.inf
     best_s = -1.0
     fa = dot3(normal, q_e[0, 0:3] - origin)
@@ -309,7 +309,7 @@ def closest_point(q_e: np.ndarray, lengths: np.ndarray, Q: np.ndarray, elem0: in
 
 @njit
 def closest_point_kernel(q_e, lengths, Q, elem0, xi0, tol, max_iter):  # noqa: ANN001, ANN201
-    """Closest-point projection of Q on the centreline (FORMULATION II §4).
+    """Closest-point projection of Q on the centreline (docs/theory.md §II.4).
 
     Newton on ``h(s) = (r − Q)·r_ξ`` with ``h_ξ = r_ξ·r_ξ + (r − Q)·r_ξξ`` from ``s = elem0 + xi0``;
     steps ≤ ½ element, continued across nodes; bracket [h < 0, h > 0] with bisection; a descent step

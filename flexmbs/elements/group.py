@@ -107,7 +107,7 @@ def element_post_step(part: Any, q: Any, error: Any) -> int:
 
 
 def element_rebase(part: Any, q: Any, v: Any, qdd: Any, acc: Any, log: Any, count: int) -> int:
-    """Re-base the part's nodal frames that need it (elements with charts, FORMULATION §2.4);
+    """Re-base the part's nodal frames that need it (elements with charts, docs/theory.md §I.2.4);
     the new count of records in ``log``."""
     rebase = _element_type_of(type(part)).rebase
     return count if rebase is None else int(rebase(part, q, v, qdd, acc, log, count))
@@ -343,7 +343,7 @@ def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
 
 @njit(internal=True)
 def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
-    """Re-base the nodal frames of every element group that has charts (FORMULATION §2.4) after
+    """Re-base the nodal frames of every element group that has charts (docs/theory.md §I.2.4) after
     a converged step; returns the number of records written to ``log``."""
     count = _rebase(_n0(parts), q, v, qdd, acc, log, 0)
     count = _rebase(_n1(parts), q, v, qdd, acc, log, count)

@@ -98,7 +98,7 @@ class ElementType:
     #: its code: ``(beam, node index, q) -> str``
     post_step: Callable[..., int] | None = None
     post_step_message: Callable[[Any, int, np.ndarray], str] | None = None
-    #: elements whose nodal frames change charts (the rod, FORMULATION §2.4): compiled
+    #: elements whose nodal frames change charts (the rod, docs/theory.md §I.2.4): compiled
     #: ``rebase(part, q, v, qdd, acc, log, count) -> count`` after a converged step (appends a
     #: record ``[twist coordinate, t̄ (3), D̄ (3)]`` per re-based node to ``log``),
     #: ``set_bases(part, log, start, stop)`` takes such records (a resumed run), ``bases(part)``

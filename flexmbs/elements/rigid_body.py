@@ -1,10 +1,10 @@
-"""Rigid body in Cartesian coordinates with Euler parameters (Haug 1989 form; FORMULATION I §5).
+"""Rigid body in Cartesian coordinates with Euler parameters (Haug 1989 form; docs/theory.md §I.5).
 
 Coordinates per body ``q_B = [r (3), p (4)]``: ``r`` is the centre of mass (global), and
 ``p = [e0, e1, e2, e3]`` the Euler parameters with ``pᵀp = 1`` (enforced by a constraint,
 :class:`flexmbs.constraints.joints.EulerParameterNormalization`).
 
-Conventions (FORMULATION I §5 / Haug; Part II §0 calls the same matrices G and Ḡ):
+Conventions (docs/theory.md §I.5 / Haug; §II.0 calls the same matrices G and Ḡ):
 
 - ``E(p) = [−e, ẽ + e0 I]`` (global angular velocity ``ω = 2Eṗ``),
   ``G(p) = [−e, −ẽ + e0 I]`` (body angular velocity ``ω′ = 2Gṗ``).
@@ -115,7 +115,7 @@ def normalize(p: np.ndarray) -> np.ndarray:
 
 
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """FORMULATION I §5, homogeneous form ``A = E Gᵀ = (e0² − eᵀe)I + 2(eeᵀ + e0ẽ)`` (...,3,3);
+    """docs/theory.md §I.5, homogeneous form ``A = E Gᵀ = (e0² − eᵀe)I + 2(eeᵀ + e0ẽ)`` (...,3,3);
     batched over the kernel :func:`rotation`."""
     p = np.asarray(p, dtype=float)
     if p.shape == (4,):
@@ -128,7 +128,7 @@ def rotation_matrix(p: np.ndarray) -> np.ndarray:
 
 
 def e_matrix(p: np.ndarray) -> np.ndarray:
-    """Haug 1989, FORMULATION I §5: ``E(p) = [−e, ẽ + e0 I]`` (...,3,4); global ``ω = 2Eṗ``."""
+    """Haug 1989, docs/theory.md §I.5: ``E(p) = [−e, ẽ + e0 I]`` (...,3,4); global ``ω = 2Eṗ``."""
     p = np.asarray(p, dtype=float)
     out = np.empty(p.shape[:-1] + (3, 4))
     out[..., :, 0] = -p[..., 1:]
@@ -139,7 +139,7 @@ def e_matrix(p: np.ndarray) -> np.ndarray:
 
 
 def g_matrix(p: np.ndarray) -> np.ndarray:
-    """Haug 1989, FORMULATION I §5: ``G(p) = [−e, −ẽ + e0 I]`` (...,3,4); body ``ω′ = 2Gṗ``."""
+    """Haug 1989, docs/theory.md §I.5: ``G(p) = [−e, −ẽ + e0 I]`` (...,3,4); body ``ω′ = 2Gṗ``."""
     p = np.asarray(p, dtype=float)
     out = np.empty(p.shape[:-1] + (3, 4))
     out[..., :, 0] = -p[..., 1:]
@@ -150,7 +150,7 @@ def g_matrix(p: np.ndarray) -> np.ndarray:
 
 
 def g_hat(y: np.ndarray) -> np.ndarray:
-    """FORMULATION I §5 ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (...,4,4), so that ``G(p)ᵀ y = Ĝ(y) p``."""
+    """docs/theory.md §I.5 ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (...,4,4), so that ``G(p)ᵀ y = Ĝ(y) p``."""
     y = np.asarray(y, dtype=float)
     out = np.zeros(y.shape[:-1] + (4, 4))
     out[..., 0, 1:] = -y
@@ -294,12 +294,12 @@ def quaternion_from_axis_angle(axis: np.ndarray, angle: np.ndarray | float) -> n
 # ---------------------------------------------------------------------------------------------
 # kinematics
 def angular_velocity_global(p: np.ndarray, pd: np.ndarray) -> np.ndarray:
-    """Haug 1989, FORMULATION I §5: ``ω = 2 E(p) ṗ`` (global components)."""
+    """Haug 1989, docs/theory.md §I.5: ``ω = 2 E(p) ṗ`` (global components)."""
     return 2.0 * np.einsum("...ij,...j->...i", e_matrix(p), pd)
 
 
 def angular_velocity_body(p: np.ndarray, pd: np.ndarray) -> np.ndarray:
-    """Haug 1989, FORMULATION I §5: ``ω′ = 2 G(p) ṗ`` (body components)."""
+    """Haug 1989, docs/theory.md §I.5: ``ω′ = 2 G(p) ṗ`` (body components)."""
     return 2.0 * np.einsum("...ij,...j->...i", g_matrix(p), pd)
 
 
@@ -321,7 +321,7 @@ def _gjg(inertia: np.ndarray, Ga: np.ndarray, Gb: np.ndarray) -> np.ndarray:
 
 
 def mass_matrix(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """FORMULATION I §5: ``M = diag(m I3, 4 GᵀJ′G)`` (nb,7,7); singular along p (see Φ^p)."""
+    """docs/theory.md §I.5: ``M = diag(m I3, 4 GᵀJ′G)`` (nb,7,7); singular along p (see Φ^p)."""
     mass = np.ascontiguousarray(mass, dtype=float)
     inertia = np.ascontiguousarray(inertia, dtype=float)
     p = np.ascontiguousarray(p, dtype=float)
@@ -338,7 +338,7 @@ def mass_matrix(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray) -> np.ndar
 def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: np.ndarray,
                       qdd: np.ndarray, out_r: np.ndarray, out_dq: np.ndarray,
                       out_dv: np.ndarray) -> None:
-    """FORMULATION I §5: ``r = [m r̈ ; 4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p]`` (= M q̈ − Q_v), Ġ = G(ṗ).
+    """docs/theory.md §I.5: ``r = [m r̈ ; 4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p]`` (= M q̈ − Q_v), Ġ = G(ṗ).
 
     Writes (overwrites) ``out_r`` (nb,7), ``out_dq = ∂r/∂q`` (nb,7,7, only the p-p block is
     nonzero) and ``out_dv = ∂r/∂q̇`` (nb,7,7, p-p block). ``∂r/∂q̈`` is :func:`mass_matrix`.
@@ -366,7 +366,7 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
 
 @njit
 def rotation(p):  # noqa: ANN001, ANN201
-    """``A(p)`` (3, 3), the homogeneous rotation matrix of FORMULATION I §5 (:func:`rotation_into`)."""
+    """``A(p)`` (3, 3), the homogeneous rotation matrix of docs/theory.md §I.5 (:func:`rotation_into`)."""
     A = np.empty((3, 3))
     rotation_into(p, A)
     return A
@@ -374,7 +374,7 @@ def rotation(p):  # noqa: ANN001, ANN201
 
 @njit
 def rotation_into(p, A):  # noqa: ANN001, ANN201
-    """``A(p)`` into ``A`` (3, 3), the homogeneous rotation matrix of FORMULATION I §5 (the one
+    """``A(p)`` into ``A`` (3, 3), the homogeneous rotation matrix of docs/theory.md §I.5 (the one
     statement)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
     d = e0 * e0 - e1 * e1 - e2 * e2 - e3 * e3
@@ -400,7 +400,7 @@ def _g_times(p, x):  # noqa: ANN001, ANN202
 
 @njit(refcount=False)
 def _gt_times(p, y):  # noqa: ANN001, ANN202
-    """``G(p)ᵀ y = Ĝ(y) p`` (a 4-tuple), ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (FORMULATION I §5)."""
+    """``G(p)ᵀ y = Ĝ(y) p`` (a 4-tuple), ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (docs/theory.md §I.5)."""
     return (-p[1] * y[0] - p[2] * y[1] - p[3] * y[2],
             p[0] * y[0] - p[3] * y[1] + p[2] * y[2],
             p[3] * y[0] + p[0] * y[1] - p[1] * y[2],
@@ -424,7 +424,7 @@ def _unit(j):  # noqa: ANN001, ANN202
 
 @njit(refcount=False)
 def inertial_force_p(J, p, pd, pdd, out):  # noqa: ANN001, ANN201
-    """FORMULATION I §5: the p rows of ``M q̈ − Q_v``, ``4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p`` (Ġ = G(ṗ)),
+    """docs/theory.md §I.5: the p rows of ``M q̈ − Q_v``, ``4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p`` (Ġ = G(ṗ)),
     into ``out`` (4,); no scratch arrays."""
     a = _gt_times(p, _j_times(J, _g_times(p, pdd)))
     b = _gt_times(pd, _j_times(J, _g_times(pd, p)))
@@ -437,7 +437,7 @@ def inertial_force_p(J, p, pd, pdd, out):  # noqa: ANN001, ANN201
 @njit(refcount=False)
 def inertial_derivatives(J, p, pd, pdd, dq, dv):  # noqa: ANN001, ANN201
     """∂/∂p and ∂/∂ṗ (4, 4) of :func:`inertial_force_p` into ``dq``, ``dv``, by the Ĝ identities
-    of FORMULATION I §5: ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``,
+    of docs/theory.md §I.5: ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``,
     ``∂(8ĠᵀJ′Ġp)/∂p = 8ĠᵀJ′Ġ``, ``∂(8ĠᵀJ′Ġp)/∂ṗ = 8[Ĝ(J′Ġp) − ĠᵀJ′G]``; column by column."""
     y = _j_times(J, _g_times(p, pdd))
     u = _j_times(J, _g_times(pd, p))
@@ -455,7 +455,7 @@ def inertial_derivatives(J, p, pd, pdd, dq, dv):  # noqa: ANN001, ANN201
 
 def kinetic_energy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray,
                    v: np.ndarray) -> np.ndarray:
-    """Haug 1989, FORMULATION I §5: ``T = ½ m ṙᵀṙ + 2 ṗᵀGᵀJ′Gṗ`` (nb,)."""
+    """Haug 1989, docs/theory.md §I.5: ``T = ½ m ṙᵀṙ + 2 ṗᵀGᵀJ′Gṗ`` (nb,)."""
     v = np.asarray(v, dtype=float)
     wb = np.einsum("bij,bj->bi", g_matrix(p), v[:, 3:])       # = ω′/2
     return (0.5 * np.asarray(mass, dtype=float) * np.einsum("bi,bi->b", v[:, :3], v[:, :3])
@@ -465,7 +465,7 @@ def kinetic_energy(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray,
 # ---------------------------------------------------------------------------------------------
 # applied loads (Q_ext; forces and torques fixed in the global frame)
 def applied_force(p: np.ndarray, s: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """FORMULATION I §5, force F (global) at body point s′: ``Q_r = F``, ``Q_p = BᵀF = 2C(s′,F)p``.
+    """docs/theory.md §I.5, force F (global) at body point s′: ``Q_r = F``, ``Q_p = BᵀF = 2C(s′,F)p``.
 
     ``B = ∂(As′)/∂p`` of the homogeneous A, so ``Q·δq = F·δx_P`` holds exactly to first order
     for every δq (not only tangent ones); it differs from ``2Gᵀ(s′ × AᵀF)`` by a multiple of p.
@@ -490,7 +490,7 @@ def applied_force(p: np.ndarray, s: np.ndarray, F: np.ndarray) -> tuple[np.ndarr
 
 
 def applied_torque_global(p: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Global torque n: ``Q_p = 2Eᵀn = 2Ê(n)p`` (FORMULATION I §5); returns (Q, dQ_dq).
+    """Global torque n: ``Q_p = 2Eᵀn = 2Ê(n)p`` (docs/theory.md §I.5); returns (Q, dQ_dq).
     Batched wrapper of the kernels :func:`torque_p` / :func:`torque_dp`."""
     n = np.ascontiguousarray(n, dtype=float)
     p = np.ascontiguousarray(p, dtype=float)
@@ -508,7 +508,7 @@ def applied_torque_global(p: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def applied_torque_body(p: np.ndarray, n_body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Body-fixed torque n′: ``Q_p = 2Gᵀn′ = 2Ĝ(n′)p`` (FORMULATION I §5); returns (Q, dQ_dq)."""
+    """Body-fixed torque n′: ``Q_p = 2Gᵀn′ = 2Ĝ(n′)p`` (docs/theory.md §I.5); returns (Q, dQ_dq)."""
     n_body = np.asarray(n_body, dtype=float)
     Gh = g_hat(n_body)
     nb = n_body.shape[0]
@@ -523,7 +523,7 @@ def applied_torque_body(p: np.ndarray, n_body: np.ndarray) -> tuple[np.ndarray, 
 # kernels shared by every path (one statement of each equation)
 @njit(refcount=False)
 def rotational_mass(J, p, out):  # noqa: ANN001, ANN201
-    """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (FORMULATION I §5),
+    """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (docs/theory.md §I.5),
     column by column."""
     for j in range(4):
         c = _gt_times(p, _j_times(J, _g_times(p, _unit(j))))
@@ -533,7 +533,7 @@ def rotational_mass(J, p, out):  # noqa: ANN001, ANN201
 
 @njit(refcount=False)
 def point_force_p(T, F, f, p, out):  # noqa: ANN001, ANN201
-    """``Q_p = 2 f C(s′, F) p`` with ``C = Σ_k F_k T_k(s′)`` (FORMULATION I §5, applied force)."""
+    """``Q_p = 2 f C(s′, F) p`` with ``C = Σ_k F_k T_k(s′)`` (docs/theory.md §I.5, applied force)."""
     for a in range(4):
         acc = 0.0
         for b in range(4):
@@ -557,7 +557,8 @@ def point_force_dp(T, F, f, out):  # noqa: ANN001, ANN201
 
 @njit(refcount=False)
 def torque_p(n, f, p, out):  # noqa: ANN001, ANN201
-    """Global torque f·n: ``Q_p = 2 f Eᵀn = 2 f Ê(n)p``, ``Ê(n) = [[0, −nᵀ], [n, ñ]]`` (FORMULATION I §5)."""
+    """Global torque f·n: ``Q_p = 2 f Eᵀn = 2 f Ê(n)p``, ``Ê(n) = [[0, −nᵀ], [n, ñ]]``
+    (docs/theory.md §I.5)."""
     out[0] = -2.0 * f * (n[0] * p[1] + n[1] * p[2] + n[2] * p[3])
     out[1] = 2.0 * f * (n[0] * p[0] - n[2] * p[2] + n[1] * p[3])
     out[2] = 2.0 * f * (n[1] * p[0] + n[2] * p[1] - n[0] * p[3])
@@ -641,7 +642,7 @@ def _gather(b, i, q, v, qdd, rates):  # noqa: ANN001, ANN202
 @njit(refcount=False, internal=True)
 def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
     """``r_q += M q̈ − Q_v`` (with inertia, :func:`inertial_force_p`) ``− Q_ext`` of the body
-    loads (FORMULATION I §5); returns the largest single force."""
+    loads (docs/theory.md §I.5); returns the largest single force."""
     if b is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0.0
     scale = 0.0

@@ -3,7 +3,7 @@
 Pure geometry (numpy/scipy only). The reference configuration of an ANCF cable is
 ``r_i = points[i]``, ``r'_i = tangents[i]`` (unit) and element length ``lengths[e]``; the element
 interpolates ``r(xi) = P0 H1 + L T0 H2 + P1 H3 + L T1 H4`` with the unit-interval Hermite functions
-(FORMULATION.md Part I §1.1 and §4).
+(docs/theory.md §I.1.1 and §I.4).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-# 5-point Gauss-Legendre rule on [0, 1] (FORMULATION §4 steps 1 and 3).
+# 5-point Gauss-Legendre rule on [0, 1] (docs/theory.md §I.4 steps 1 and 3).
 _GX, _GW = np.polynomial.legendre.leggauss(5)
 GAUSS_XI: FloatArray = 0.5 * (_GX + 1.0)
 GAUSS_W: FloatArray = 0.5 * _GW
@@ -217,7 +217,7 @@ def hermite_lengths(points: ArrayLike, tangents: ArrayLike, closed: bool = False
                     iterations: int = 5) -> FloatArray:
     """Element lengths L with L = arc length of the Hermite cubic built with slopes L*T.
 
-    FORMULATION §4 step 3: start from the chord and iterate
+    docs/theory.md §I.4 step 3: start from the chord and iterate
     ``L <- int_0^1 |P0 H1' + L T0 H2' + P1 H3' + L T1 H4'| dxi`` (5-point Gauss) ``iterations``
     times (fewer if converged to round-off). Tangents are normalised first. On a circular arc the
     result is ``R theta_e (1 - theta_e^4 / 720 + ...)`` (measured, see tests).
@@ -248,7 +248,7 @@ def hermite_lengths(points: ArrayLike, tangents: ArrayLike, closed: bool = False
 
 
 def bessel_tangents(points: ArrayLike, closed: bool = False) -> FloatArray:
-    """Unit Bessel tangents with chord-length weights (FORMULATION §4 step 2).
+    """Unit Bessel tangents with chord-length weights (docs/theory.md §I.4 step 2).
 
     ``T_i ~ d_{i-1}^2 (P_{i+1} - P_i) + d_i^2 (P_i - P_{i-1})``: the tangent of the circle through
     three consecutive points, exact on circles for any spacing. Open ends reflect the neighbouring
@@ -422,7 +422,7 @@ def _gauss_arc(deriv: Any, ua: FloatArray, ub: FloatArray) -> FloatArray:
 
 def _resample(p: FloatArray, t: FloatArray | None, closed: bool,
               n_elem: int) -> tuple[FloatArray, FloatArray]:
-    """Nodes and unit tangents at equal spline arc length (FORMULATION §4 step 1)."""
+    """Nodes and unit tangents at equal spline arc length (docs/theory.md §I.4 step 1)."""
     # imported here: scipy.interpolate costs ~0.5 s of start-up for every command
     from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
@@ -478,7 +478,7 @@ def _resample(p: FloatArray, t: FloatArray | None, closed: bool,
 
 def polyline(points: ArrayLike, tangents: ArrayLike | None = None, *, closed: bool = False,
              elements: int | None = None) -> Centerline:
-    """Centreline through ``points`` (FORMULATION §4).
+    """Centreline through ``points`` (docs/theory.md §I.4).
 
     - ``tangents=None``: Bessel tangents (exact on circles); otherwise the given directions are
       normalised and used.

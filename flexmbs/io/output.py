@@ -1,4 +1,4 @@
-"""The output folder of a run (DESIGN.md, "Output folder"), written as the run goes::
+"""The output folder of a run (docs/design.md, "Output folder"), written as the run goes::
 
     with OutputWriter(out_dir, "run", asm, probes=[...]) as out:
         final, stats = integrate(asm, opts, ..., observer=out.write)
@@ -58,7 +58,7 @@ from .vtu import VTUSeries
 
 CONTACT_COLUMNS = ("t", "joint", "section", "point", "gap", "normal_force", "qx", "qy", "qz",
                    "px", "py", "pz", "a", "b")
-#: ``sections.csv`` (clearance joints only; an addition to DESIGN.md's folder): the state of every
+#: ``sections.csv`` (clearance joints only; an addition to docs/design.md's folder): the state of every
 #: hole section for the section view: origin and axes of the section plane (global), the beam's
 #: ellipse in section coordinates (centre cy, cz; major axis ey_a, ez_a; semi-axes a, b), the
 #: bore's bounding radius R and the number of contact points

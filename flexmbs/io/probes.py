@@ -1,7 +1,7 @@
 """Probes: named scalar/vector quantities written to ``probes.csv`` at every output time.
 
 A probe declares its CSV columns and evaluates them from the assembly and a solver state.
-Vector probes write ``<name>_x, <name>_y, <name>_z`` (DESIGN.md, "Output folder"). The names
+Vector probes write ``<name>_x, <name>_y, <name>_z`` (docs/design.md, "Output folder"). The names
 used in scenario files (``[[probes]] type = ...``) are the registry
 :data:`flexmbs.io.builders.probes.PROBES` of scenario builders; a new probe type is a class here
 and a builder registered there.

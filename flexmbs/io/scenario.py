@@ -1,6 +1,6 @@
 """Scenario files: TOML -> :class:`~flexmbs.model.Model`, simulation settings and probes.
 
-The file format is the contract of DESIGN.md ("Scenario file"); every key is documented in
+The file format is the contract of docs/design.md ("Scenario file"); every key is documented in
 ``docs/scenario.md``. Everything is validated while the model is built, before anything runs:
 an invalid value raises :class:`~flexmbs.errors.ScenarioError` with a one-line message that starts
 with the key path (``beams[rail].radius: expected a number > 0, got -0.002``).

@@ -1,4 +1,4 @@
-"""The VTK XML files of the output (DESIGN.md, "Output folder"): frames and their time series.
+"""The VTK XML files of the output (docs/design.md, "Output folder"): frames and their time series.
 
 :class:`VTUMesh` holds one grid (points, cell blocks, point/cell/field data); :func:`write_vtu`
 writes it as a VTK XML UnstructuredGrid, :func:`write_vtp` as PolyData, both without vtk or

@@ -2,7 +2,7 @@
 
 Arnold & Brüls, Multibody Syst. Dyn. 18 (2007) 185-202, with the scaled iteration matrix of
 Bottasso, Bauchau & Cardona (2007): dynamic rows times s = beta h^2, multiplier update divided by
-s (FORMULATION Part I §6.1). HHT is the special case alpha_m = 0 (Chung & Hulbert 1993).
+s (docs/theory.md §I.6.1). HHT is the special case alpha_m = 0 (Chung & Hulbert 1993).
 
 ``constraint_level="position_velocity"`` adds a velocity corrector after each converged step:
 q stays, (v, q'', lam) move along the Newmark direction (v += gamma' u, q'' += beta' u) until

@@ -1,4 +1,4 @@
-"""Static equilibrium by full Newton with adaptive load stepping (FORMULATION Part I §6.5)."""
+"""Static equilibrium by full Newton with adaptive load stepping (docs/theory.md §I.6.5)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ class StaticOptions:
     8, with 40 iterations at most: one tendon on the 20-disk robot (plain linear penalty)
     takes 11 increments (236 iterations, 1.2 s) where 4 and 30 took 376 (2 875, 11.5 s);
     design notes, "Statics of tendon-routed structures".
-    ``stabilizer`` (FORMULATION §6.5, Exudyn's stabilizerODE2term) adds the mass-proportional
+    ``stabilizer`` (docs/theory.md §I.6.5, Exudyn's stabilizerODE2term) adds the mass-proportional
     term ``c_s (1 - load^2) M`` to the Newton matrix only: it regularises slack cables and
     contacts that are not yet closed in the first increments, and vanishes at full load, so
     the equilibrium found is unchanged. Newton halves a step whose iterate the model rejects

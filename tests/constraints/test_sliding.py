@@ -211,7 +211,7 @@ def test_a_following_plan_drops_exactly_the_entries_outside_the_windows(element,
 
 
 def test_sleeve_on_stiff_arc_swings_with_rigid_track_period():
-    """FORMULATION Part III §9, rigid-track limit: sleeve (m = 0.21441 kg, J = 4.098e-5)
+    """docs/theory.md §III.9, rigid-track limit: sleeve (m = 0.21441 kg, J = 4.098e-5)
     released at phi0 = -30 deg on a 90-deg arc of radius 1 m (E x 1000, 16 elements):
     (m rho^2 + J) phi'' + m g rho sin(phi) = 0, T(30 deg) = T0 (2/pi) K(sin 15 deg) = 2.04118 s.
     We measure the time between the first two passages through the lowest point (T/2); the

@@ -1,4 +1,4 @@
-"""Sliding joint with clearance in the assembled model: statics (FORMULATION Part III §9, V3),
+"""Sliding joint with clearance in the assembled model: statics (docs/theory.md §III.9, V3),
 tangent vs finite differences, sliding on an incline, input validation."""
 
 from __future__ import annotations

@@ -84,7 +84,7 @@ def test_energy_is_conserved_with_undamped_frictionless_contact(e_factor, rho_in
 def _slide_history(t_end: float, clearance: float | None) -> np.ndarray:
     """s(t) of a 10 mm sleeve (Example 1's mass and inertia) on the steel Example 1 rail: the
     cylindrical SlidingJoint (``clearance=None``) or the clearance joint with
-    k = 1e6 N/m * (0.5 mm / c) (FORMULATION II §5: k chosen so that the expected load gives
+    k = 1e6 N/m * (0.5 mm / c) (docs/theory.md §II.5: k chosen so that the expected load gives
     delta / c ~ constant; here delta/c ~ 2e-3) and damping 20 N s/m * sqrt(k / 1e6) (same
     damping ratio ~ 0.03)."""
     hole = 0.01
@@ -100,7 +100,7 @@ def _slide_history(t_end: float, clearance: float | None) -> np.ndarray:
 
 @pytest.mark.slow
 def test_motion_converges_to_the_clearance_free_joint():
-    """FORMULATION II §7 limit: as c -> 0 with k ~ 1/c the end-section contacts enforce the
+    """docs/theory.md §II.7 limit: as c -> 0 with k ~ 1/c the end-section contacts enforce the
     position and alignment of the cylindrical sliding joint, so s(t) approaches the
     SlidingJoint's on the same rail. The 40 mm sleeve of Example 1 cannot be used for small c:
     the rail curves by the sagitta L^2/(8 rho) = 0.2 mm inside it, so for c < 0.1 mm (passing
@@ -125,7 +125,7 @@ def test_motion_converges_to_the_clearance_free_joint():
 R_BORE, R_BEAM, OFFSET = 2.2e-3, 2e-3, 2.5e-4
 #: bifurcation tilt of the paper's detection: the minor vertex (2.25 mm from the hole centre)
 #: becomes a local minimum of the distance when a^2/b = r_b / cos^2(theta) exceeds 2.25 mm
-#: (FORMULATION II §3); of the consistent detection: the wall's point nearest the axis leaves
+#: (docs/theory.md §II.3); of the consistent detection: the wall's point nearest the axis leaves
 #: the vertex when R sin^2(theta) exceeds the offset, the distance from the wall point
 #: R(cos psi, sin psi) to the tilted axis being sqrt(cos^2(theta) y^2 + (z - offset)^2) (§4b)
 THETA_SPLIT = {"paper": math.degrees(math.acos(math.sqrt(R_BEAM / (R_BEAM + OFFSET)))),
@@ -172,7 +172,7 @@ def _brute_force_maxima(theta_deg: float, detection: str, n: int = 200_001) -> n
 
 @pytest.mark.parametrize("detection", ["consistent", "paper"])
 def test_two_contact_points_in_one_section(detection):  # noqa: ANN001
-    """FORMULATION II §3: with r_b/R < cos(theta) < sqrt(r_b/R) (0.909 < cos 21 deg = 0.934 <
+    """docs/theory.md §II.3: with r_b/R < cos(theta) < sqrt(r_b/R) (0.909 < cos 21 deg = 0.934 <
     0.953) and the minor vertex pushed into the wall, a^2/b = 2.29 mm > |X - O| = 2.25 mm: the
     vertex is a local minimum of the distance and two symmetric maxima appear.
 
@@ -216,7 +216,7 @@ def test_section_force_is_continuous_across_the_split(detection):  # noqa: ANN00
     """At the pitchfork theta* = 19.47 deg (paper: a^2/b = 2.25 mm; consistent: 19.70 deg) one
     maximum splits into two
     maxima and a penetrating minimum, all with the same depth; the rule "+maxima, -minima"
-    (FORMULATION II §3) keeps the section force continuous.
+    (docs/theory.md §II.3) keeps the section force continuous.
 
     Reference: the single-point force just before the split. Compared: |F(theta* + eps) -
     F(theta* - eps)| of the joint's total contact force for eps = 1e-1 ... 1e-4 deg. Measured

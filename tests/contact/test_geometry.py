@@ -1,4 +1,4 @@
-"""3D beam/section kernels on a circular ANCF arc (FORMULATION II §2, §4)."""
+"""3D beam/section kernels on a circular ANCF arc (docs/theory.md §II.2, §II.4)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ def _hermite(q: np.ndarray, L: np.ndarray, e: int, xi: float) -> np.ndarray:
 
 #: Hermite interpolation error of a unit-radius arc with 22.5° elements and unit nodal slopes
 #: (as ``flexmbs.geometry.curves.arc`` builds it): max radial error 6.2e-5 (measured here; the
-#: 1.4e-6 of FORMULATION II §4 [V] is not reproduced with unit slopes, see
+#: 1.4e-6 of docs/theory.md §II.4 [V] is not reproduced with unit slopes, see
 #: test_closest_point_on_arc); comparisons with the exact circle use this level
 HERMITE_TOL = 7e-5
 #: comparisons with the exact root of the *Hermite* curve (independent brentq): round-off level
@@ -114,7 +114,7 @@ def test_section_ellipse() -> None:
 @pytest.mark.parametrize("beta", [0.05, np.pi / 8, 1.0, 2.2, 3.1])
 @pytest.mark.parametrize("z", [0.0, 0.004])
 def test_closest_point_on_arc(beta: float, z: float) -> None:
-    """ℓ = 10 mm outside a unit arc with 22.5° elements: distance error ~1.4e-6 (FORMULATION II §4)."""
+    """ℓ = 10 mm outside a unit arc with 22.5° elements: distance error ~1.4e-6 (docs/theory.md §II.4)."""
     q, L = arc_beam()
     rho = 1.0 + math.sqrt(0.01**2 - z**2)
     Q = np.array([rho * math.cos(beta), rho * math.sin(beta), z])
@@ -135,7 +135,8 @@ def test_closest_point_on_arc(beta: float, z: float) -> None:
         r, rx2, _ = beam_point(q, L, e, xi)
         np.testing.assert_array_equal(r, P)
         np.testing.assert_array_equal(rx, rx2)
-    # error level of the distance over the arc: 6.2e-5 with unit slopes (FORMULATION quotes 1.4e-6)
+    # error level of the distance over the arc: 6.2e-5 with unit slopes
+    # (docs/theory.md §II.4 quotes 1.4e-6)
     errs = []
     for bt in np.linspace(0.01, np.pi - 0.01, 200):
         Q = np.array([1.01 * math.cos(bt), 1.01 * math.sin(bt), 0.0])

@@ -1,4 +1,4 @@
-"""Normal force laws and regularised Coulomb friction (FORMULATION II §5)."""
+"""Normal force laws and regularised Coulomb friction (docs/theory.md §II.5)."""
 
 from __future__ import annotations
 

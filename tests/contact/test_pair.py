@@ -1,4 +1,5 @@
-"""One contact point: gap, generalized forces and tangents vs finite differences (FORMULATION II §4–§5)."""
+"""One contact point: gap, generalized forces and tangents vs finite differences
+(docs/theory.md §II.4–§II.5)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The clearance contact as the exact gradient of a potential (FORMULATION II §4b; issue "the
+"""The clearance contact as the exact gradient of a potential (docs/theory.md §II.4b; issue "the
 clearance contact as the exact gradient of a potential, at every crossing angle").
 
 A straight or slightly bent wire (r_b = 0.8 mm unless said) held through a thin eyelet (0.2 mm

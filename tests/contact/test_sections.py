@@ -1,4 +1,4 @@
-"""2D hole sections: common-normal detector vs brute force (FORMULATION II §3, §6)."""
+"""2D hole sections: common-normal detector vs brute force (docs/theory.md §II.3, §II.6)."""
 
 from __future__ import annotations
 
@@ -179,7 +179,7 @@ def test_superellipse_boundary_is_consistent() -> None:
 
 
 def test_astroid_count(rng: np.random.Generator) -> None:
-    """4 stationary points iff the hole centre is inside the evolute, else 2 (FORMULATION II §3)."""
+    """4 stationary points iff the hole centre is inside the evolute, else 2 (docs/theory.md §II.3)."""
     checked = 0
     for _ in range(600):
         b = rng.uniform(0.3, 1.0)
@@ -198,7 +198,7 @@ def test_astroid_count(rng: np.random.Generator) -> None:
 
 @pytest.mark.parametrize("cos_t, n_max", [(0.99, 1), (0.96, 1), (0.93, 2)])
 def test_two_point_criterion(cos_t: float, n_max: int) -> None:
-    """FORMULATION II §3 check: r_b = 1, R = 1.1, centre offset along e_b so that the minor vertex
+    """docs/theory.md §II.3 check: r_b = 1, R = 1.1, centre offset along e_b so that the minor vertex
     penetrates by 1e-3: one max at the vertex for cos θ = 0.99, 0.96; two symmetric maxima with
     equal δ = 0.0098 for cos θ = 0.93 (a²/b = 1.156 > R), the vertex becoming a minimum."""
     Rh = 1.1

@@ -1,4 +1,4 @@
-"""The consistent detection (FORMULATION II §4b) against brute force: a slightly curved beam
+"""The consistent detection (docs/theory.md §II.4b) against brute force: a slightly curved beam
 element crosses a hole section at a random tilt and offset (circle and superellipse bores,
 two-point configurations included). Its contact points are the local minima, below the beam
 radius, of the distance from the section's wall to the beam axis; the brute force samples the

@@ -2,7 +2,7 @@
 ellipses in random (turned) superellipses, n from 2 to 20, jammed ones included. The
 penetration along a wall normal N is d(N) = h_E(N) − h_W(N), the difference of the support
 functions of the ellipse (closed form) and of the wall (here by dense sampling); its positive
-local maxima over the normal's direction are the contact points (FORMULATION II §6). The
+local maxima over the normal's direction are the contact points (docs/theory.md §II.6). The
 detector must find each of them, with the same depth and wall normal."""
 
 from __future__ import annotations

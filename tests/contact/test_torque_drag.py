@@ -99,7 +99,7 @@ def test_turning_a_rod_splits_its_friction_into_drag_and_torque(law: str) -> Non
 # ---------------------------------------------------------------------------------------------
 # A rod whose nodes are re-based while they slide in frictional contact: pulled 0.25 m around
 # a 180° tube (centre-line radius 0.1 m), each node inside the bend turns past 120° from its
-# chart's base and takes a new chart (FORMULATION I §2.4) with its contacts' friction history
+# chart's base and takes a new chart (docs/theory.md §I.2.4) with its contacts' friction history
 # on it; the cable (no charts) is the reference.
 BEND_R, BEND_BORE, BEND_WIRE = 0.1, 0.8e-3, 0.5e-3
 

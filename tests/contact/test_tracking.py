@@ -1,4 +1,4 @@
-"""Contact identity of the clearance joint (FORMULATION II §3): a contact point of a hole section
+"""Contact identity of the clearance joint (docs/theory.md §II.3): a contact point of a hole section
 is the same contact from one step to the next when the section angle of its hole point moves
 less than MATCH_ANGLE; it then keeps the approach velocity stored at its onset (used by the
 dissipative laws), whatever its index among the stationary points of the section."""

@@ -10,7 +10,7 @@ The chord between the outer walls at the mouths passes inside the inner wall at 
 the two mouths and the inner wall at the middle section, and nowhere else (checked below on
 the elastica: its axis keeps inside the bore between these sections).
 
-The elastica, derived for the joint's contact law (FORMULATION II §4: at a section the hole
+The elastica, derived for the joint's contact law (docs/theory.md §II.4: at a section the hole
 point Q is where the section's ellipse touches the wall — in the plane of the arc, by symmetry,
 the wall point in that plane — and the force acts between Q and its closest centre-line point
 P, along Q − P, with the penalty f = k (r_b − |Q − P|)). Take the arc's centre at the origin

@@ -1,4 +1,4 @@
-"""Element A, the 12-DOF ANCF cable (FORMULATION I §1): closed forms, FD derivatives, invariance."""
+"""Element A, the 12-DOF ANCF cable (docs/theory.md §I.1): closed forms, FD derivatives, invariance."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ RTOL_FD = 1e-6
 FD_STEP = 1e-6
 #: "zero" force: roundoff of Σ w EA ε ... with EA = 100 and |r′| ≈ 1 is ~1e-14; 1e-9·EA is the brief
 ZERO_FORCE = 1e-9
-#: FORMULATION I §1.3 Evidence gives 2.75 (3 digits) for Exudyn A-vec after R_x(90°)
+#: docs/theory.md §I.1.3 Evidence gives 2.75 (3 digits) for Exudyn A-vec after R_x(90°)
 RTOL_EXUDYN = 1e-2
 
 ALL_OPTIONS = [
@@ -299,7 +299,7 @@ def test_scalar_bending_is_objective_out_of_plane() -> None:
 
 
 def test_vector_bending_is_not_objective_exudyn_value() -> None:
-    """FORMULATION I §1.3 Evidence: Exudyn A-vec, quarter circle R = 1, 8 elements, EI = 1,
+    """docs/theory.md §I.1.3 Evidence: Exudyn A-vec, quarter circle R = 1, 8 elements, EI = 1,
     EA = 100, default Exudyn quadrature (axial 5, bending 3): |Q_int| = 2.75 after R_x(90°),
     2.83 after R_x(180°)."""
     q_ref, L = arc_elements(8)
@@ -355,7 +355,7 @@ def test_uniform_stretch_of_straight_bar(options: cable.CableOptions) -> None:
 
 
 def test_straight_reference_exudyn_equals_exact() -> None:
-    """With |r′_ref| = 1 the Exudyn and exact strains coincide (FORMULATION I §1.3)."""
+    """With |r′_ref| = 1 the Exudyn and exact strains coincide (docs/theory.md §I.1.3)."""
     rng = np.random.default_rng(7)
     q_ref, L = straight_elements(3)
     q = q_ref + 0.05 * rng.standard_normal(q_ref.shape)

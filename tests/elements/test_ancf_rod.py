@@ -1,5 +1,5 @@
 """Element B, part 1 (issue "torsion rod"): the 14-DOF rod's strain energy against independent
-references (FORMULATION Part I §2.2 "verified properties"): zero in a curved, twisted reference,
+references (docs/theory.md §I.2.2 "verified properties"): zero in a curved, twisted reference,
 the closed-form energy of turned cross-sections of a helix, objectivity under a rigid rotation of
 a large deformation, a uniform twist of a straight rod (closed form ½ GJ a² L), and
 a straight rod bent into a circular arc (½ EI L/ρ²)."""

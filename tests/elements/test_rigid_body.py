@@ -1,4 +1,4 @@
-"""Rigid body with Euler parameters (FORMULATION I §5): identities, inertia, loads."""
+"""Rigid body with Euler parameters (docs/theory.md §I.5): identities, inertia, loads."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Example 1 (FORMULATION Part III §9): the scenario files run from the CLI, short-form golden
+"""Example 1 (docs/theory.md §III.9): the scenario files run from the CLI, short-form golden
 values, agreement with the clearance-free baseline, and the stiff-rail pendulum period."""
 
 from __future__ import annotations

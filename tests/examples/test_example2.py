@@ -2,7 +2,7 @@
 two-point threshold of the eyelet, the Python and scenario versions, two contact points in the
 middle section of an eyelet during the run, the clearance-free baseline, energy balance.
 
-The reference for the threshold is geometric (FORMULATION II §3): a wire of radius r_b crossing a
+The reference for the threshold is geometric (docs/theory.md §II.3): a wire of radius r_b crossing a
 section plane at angle theta to the hole axis cuts an ellipse a = r_b / cos(theta), b = r_b; pushed
 along its minor axis so that the minor vertex lies at distance d = R + p from the hole centre,
 that vertex is the single deepest point while a^2/b < d and splits into two symmetric deepest
@@ -31,7 +31,7 @@ import solar_array_wing as ex2  # noqa: E402  (examples/solar_array_wing.py)
 R_BORE = ex2.WIRE_R + 1.2e-3
 DEPTH = 2e-5                     # penetration of the minor vertex in the threshold test
 #: the split: paper's detection a^2/b = r_b / cos^2(theta) = R + DEPTH; consistent detection
-#: (FORMULATION II §4b) R sin^2(theta) = R + DEPTH - r_b, the offset of the wire axis from the
+#: (docs/theory.md §II.4b) R sin^2(theta) = R + DEPTH - r_b, the offset of the wire axis from the
 #: hole centre (the wall's point nearest the tilted axis leaves the minor vertex); the two
 #: agree as DEPTH -> 0 (50.77 deg; 51.00 and 51.35 deg here)
 THETA_SPLIT = {"paper": math.degrees(math.acos(math.sqrt(ex2.WIRE_R / (R_BORE + DEPTH)))),

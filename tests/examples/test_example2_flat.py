@@ -1,4 +1,4 @@
-"""Example 2 (FORMULATION Part III §10): the solar array wing scenarios run; the closed panel
+"""Example 2 (docs/theory.md §III.10): the solar array wing scenarios run; the closed panel
 loop has no redundant equations; the static pretension and preload match string estimates;
 short-form golden values; the fold-mode frequency from the free vibration (slow)."""
 

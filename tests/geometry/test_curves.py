@@ -39,7 +39,7 @@ def circle_points(phi: np.ndarray, radius: float = 2.3, center=(1.0, -2.0, 0.5),
 
 
 def example1_arc(elements: int) -> Centerline:
-    """FORMULATION Part III §9: R = 1 m, centre (0, 0, 1), -45..+45 deg about the lowest point."""
+    """docs/theory.md §III.9: R = 1 m, centre (0, 0, 1), -45..+45 deg about the lowest point."""
     a = np.pi / 4
     return arc((0, 0, 1), 1.0, (-np.sin(a), 0, 1 - np.cos(a)), np.pi / 2, normal=(0, -1, 0),
                elements=elements)

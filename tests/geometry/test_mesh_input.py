@@ -252,7 +252,7 @@ def test_meshes_arc_r1m_90deg() -> None:
 def test_meshes_guide_wire() -> None:
     c = read_curve(MESHES / "guide_wire.msh", group="guide_wire")
     assert c.n_elem == 12
-    # meshed through the grommet centre (h, -e, 0), FORMULATION §10: y = -e = -0.02
+    # meshed through the grommet centre (h, -e, 0), docs/theory.md §III.10: y = -e = -0.02
     np.testing.assert_allclose(c.points[0], [-0.1, -0.02, 0.0], atol=EXACT)
     np.testing.assert_allclose(c.points[-1], [1.1, -0.02, 0.0], atol=EXACT)
     np.testing.assert_allclose(c.tangents, np.tile([1.0, 0.0, 0.0], (13, 1)), atol=EXACT)

@@ -20,7 +20,7 @@ def _unit_cantilever(n_elem: int, gravity=(0, 0, 0)) -> tuple[fm.Model, fm.Beam]
 
 
 def test_cantilever_eigenfrequencies():
-    """L = rhoA = EI = 1, EA = 1e4 (FORMULATION §7.3): bending (beta_n L)^2, each twice (y, z),
+    """L = rhoA = EI = 1, EA = 1e4 (docs/theory.md §I.7.3): bending (beta_n L)^2, each twice (y, z),
     and the first axial mode pi/2 sqrt(EA/rhoA) = 157.0796. With 16 cubic elements the 4th
     bending mode is within ~2e-4 (it converges as h^4; Exudyn's 8-element value is 2.2e-3 off);
     tolerances grow with the mode number accordingly."""
@@ -37,7 +37,7 @@ def test_cantilever_eigenfrequencies():
 def test_eigenfrequency_convergence_rate():
     """Fourth bending mode error decreases at the rate of cubic Hermite elements (~h^4) once
     the mode is resolved (8+ elements; measured 3.9-4.0). The 8-element value also equals
-    Exudyn's 121.173 (FORMULATION §7.3 table) to the printed digits."""
+    Exudyn's 121.173 (docs/theory.md §I.7.3 table) to the printed digits."""
     model, _ = _unit_cantilever(8)
     assert fm.modes(model, n_modes=8).omega[6] == pytest.approx(121.173, abs=1e-3)
     ns = [8, 16, 32]

@@ -1,4 +1,4 @@
-"""Static beam validation against closed forms (FORMULATION Part I §7)."""
+"""Static beam validation against closed forms (docs/theory.md §I.7)."""
 
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def test_cantilever_deflection_field_converges_at_fourth_order():
     assert rate == pytest.approx(4.0, abs=0.25)
 
 
-# inextensible elastica, FORMULATION §7.2(a) [V]: alpha -> (u_h/L, v/L, theta_tip)
+# inextensible elastica, docs/theory.md §I.7.2(a) [V]: alpha -> (u_h/L, v/L, theta_tip)
 ELASTICA = {1.0: (0.05643, 0.30172, 0.46135), 3.0: (0.25442, 0.60325, 0.98602),
             10.0: (0.55500, 0.81061, 1.43029)}
 
@@ -59,7 +59,7 @@ ELASTICA = {1.0: (0.05643, 0.30172, 0.46135), 3.0: (0.25442, 0.60325, 0.98602),
 def test_large_deflection_cantilever_elastica(alpha):
     """Dead vertical tip load P = alpha EI/L^2 on a nearly inextensible cantilever
     (EA L^2/EI = 1e8). 16 elements with Lobatto axial integration reach 5 digits in
-    FORMULATION §1.5; the table has 5 decimals, so 2e-4 absolute (on quantities ~0.05-1.4)."""
+    docs/theory.md §I.1.5; the table has 5 decimals, so 2e-4 absolute (on quantities ~0.05-1.4)."""
     L, EI = 1.0, 1.0
     model = fm.Model()
     beam = straight_beam(model, 16, EA=1e8, EI=EI)
@@ -79,7 +79,7 @@ def test_large_deflection_cantilever_elastica(alpha):
 
 def test_elastica_mesh_convergence():
     """alpha = 3: error of v/L against 0.60325 decreases with a fitted order >= 2 from 2 to 8
-    elements (FORMULATION §1.5 table: 0.60286, 0.60323, 0.60325 for 4, 8, 16)."""
+    elements (docs/theory.md §I.1.5 table: 0.60286, 0.60323, 0.60325 for 4, 8, 16)."""
     errs = []
     ns = [2, 4, 8]
     for n in ns:
@@ -98,7 +98,7 @@ def test_elastica_mesh_convergence():
 @pytest.mark.parametrize("direction", ["radial", "tangential"])
 def test_quarter_arc_castigliano(direction):
     """Quarter circle, R = EI = 1, small tip load, nearly inextensible (EA = 1e7): Castigliano
-    (FORMULATION §7.4a). Radial load (-y): along-load pi/4, transverse (+x) 1/2; tangential load
+    (docs/theory.md §I.7.4a). Radial load (-y): along-load pi/4, transverse (+x) 1/2; tangential load
     (+x): along-load 3pi/4 - 2, transverse (-y)... 1/2 (units P R^3/EI). P = 1e-4 keeps the
     response linear to ~1e-4; 16 elements: discretisation error ~1e-4 -> 1e-3 relative."""
     P = 1e-4

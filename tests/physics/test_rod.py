@@ -1,5 +1,5 @@
 """The torsion-capable rod (element ``ancf_rod14``) in models, against independent references:
-the closed form of the out-of-plane tip load on an arc (FORMULATION §7.4(c)), the Bathe–Bolourchi
+the closed form of the out-of-plane tip load on an arc (docs/theory.md §I.7.4(c)), the Bathe–Bolourchi
 45° bend (§7.5, published scatter), a straight rod's uniform twist and torsional frequencies
 (closed forms), the cable's in-plane answer (the elastica table of §7.2), energy balance, and
 Exudyn's geometrically exact beam on the Simo–Vu-Quoc right-angle cantilever."""

@@ -1,4 +1,4 @@
-"""Re-basing of the rod's nodal frames (FORMULATION Part I §2.4): a node whose tangent turned
+"""Re-basing of the rod's nodal frames (docs/theory.md §I.2.4): a node whose tangent turned
 more than 120° from its base gets a new chart ``t̄ ← t, D̄ ← d2, φ ← 0`` after a converged step.
 
 Checked against independent statements: the triad, the strain energy and the physical spin of

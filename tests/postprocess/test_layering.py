@@ -1,4 +1,4 @@
-"""postprocess/ only reads output folders (DESIGN.md, "Layers"): no module of it may import the
+"""postprocess/ only reads output folders (docs/design.md, "Layers"): no module of it may import the
 solvers, the high-level simulation API, the model, the assembly or the CLI. Checked on the source
 (ast), so that it holds without pyvista or matplotlib installed and cannot regress silently."""
 

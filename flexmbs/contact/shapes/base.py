@@ -1,4 +1,4 @@
-"""What every hole section shares (FORMULATION II §2–§3, §6): the beam's section ellipse
+"""What every hole section shares (docs/theory.md §II.2–§II.3, §II.6): the beam's section ellipse
 :class:`Ellipse2D`, a detected :class:`Candidate`, the :class:`HoleSection` base with the generic
 common-normal detector of §6 in numpy, and the registry :data:`HOLE_SECTIONS` of scenario shape
 names. The shapes themselves are one module each in this package."""
@@ -27,7 +27,7 @@ SHAPE_SAMPLES = 128
 
 @dataclass(frozen=True)
 class Ellipse2D:
-    """Beam section ellipse ``X(φ) = c + a cos φ e_a + b sin φ e_b`` (FORMULATION II §2–§3)."""
+    """Beam section ellipse ``X(φ) = c + a cos φ e_a + b sin φ e_b`` (docs/theory.md §II.2–§II.3)."""
 
     center: np.ndarray   #: (2,) centre c (beam centreline crossing) in section coordinates
     e_a: np.ndarray      #: (2,) unit major axis
@@ -64,7 +64,7 @@ class Ellipse2D:
         return math.atan2(float(d @ self.e_b) / self.b, float(d @ self.e_a) / self.a)
 
     def support(self, N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Support point and map (FORMULATION II §6): ``X(N) = c + ΣN/√(NᵀΣN)`` and
+        """Support point and map (docs/theory.md §II.6): ``X(N) = c + ΣN/√(NᵀΣN)`` and
         ``J_E = (Σ − ΣNNᵀΣ/NᵀΣN)/√(NᵀΣN)`` for unit normals ``N (..., 2)``."""
         N = np.asarray(N, dtype=float)
         ea, eb = self.e_a, self.e_b
@@ -79,11 +79,11 @@ class Ellipse2D:
 
 @dataclass(frozen=True)
 class Candidate:
-    """One stationary point of the section penetration (FORMULATION II §3/§6)."""
+    """One stationary point of the section penetration (docs/theory.md §II.3/§II.6)."""
 
     phi: float           #: ellipse angle of X
     X: np.ndarray        #: (2,) beam-ellipse point
-    Q: np.ndarray        #: (2,) hole boundary point (hole point of FORMULATION II §4)
+    Q: np.ndarray        #: (2,) hole boundary point (hole point of docs/theory.md §II.4)
     normal: np.ndarray   #: (2,) outward hole normal at Q (from the bore into the hole material)
     depth: float         #: penetration along the normal, > 0 = penetrating
     kind: int            #: +1 local max of penetration (contact point), −1 local min
@@ -92,9 +92,9 @@ class Candidate:
 
 # ---------------------------------------------------------------------------------------------
 class HoleSection(ABC):
-    """Convex C¹ hole cross-section (DESIGN.md "Pluggable parts", FORMULATION II §6)."""
+    """Convex C¹ hole cross-section (docs/design.md "Pluggable parts", docs/theory.md §II.6)."""
 
-    #: number of samples of F(ψ) in the generic detector (≥ 64, FORMULATION II §6)
+    #: number of samples of F(ψ) in the generic detector (≥ 64, docs/theory.md §II.6)
     samples: int = 128
 
     #: the methods whose value a section computes once (sections are immutable: a frozen
@@ -154,7 +154,7 @@ class HoleSection(ABC):
         return None
 
     def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
-        """All stationary points of the penetration with ``depth > −margin`` (FORMULATION II §6).
+        """All stationary points of the penetration with ``depth > −margin`` (docs/theory.md §II.6).
 
         Generic detector: common-normal residual ``F(ψ) = T·(X(N(ψ)) − Y(ψ))`` sampled at
         ``self.samples`` points, sign changes bracketed, safeguarded Newton with
@@ -182,7 +182,7 @@ class HoleSection(ABC):
     # --- generic helpers -------------------------------------------------------------------
     def _residual(self, ellipse: Ellipse2D, psi: np.ndarray | float
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``F(ψ)``, ``F'(ψ)`` and ``d(ψ)`` (FORMULATION II §6)."""
+        """``F(ψ)``, ``F'(ψ)`` and ``d(ψ)`` (docs/theory.md §II.6)."""
         Y, N, T, speed, kappa = self.boundary(psi)
         X, J = ellipse.support(N)
         F = np.einsum("...i,...i->...", T, X - Y)

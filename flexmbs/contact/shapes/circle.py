@@ -1,4 +1,4 @@
-"""The circular bore (FORMULATION II §3): its compiled boundary and inside test, the closed-form
+"""The circular bore (docs/theory.md §II.3): its compiled boundary and inside test, the closed-form
 stationary points of an ellipse's penetration, and :class:`CircleSection` (scenario shape
 ``"circle"``)."""
 
@@ -44,7 +44,7 @@ def circle_contains(params, y, z):  # noqa: ANN001, ANN201
 
 @njit
 def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
-    """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (FORMULATION II §3).
+    """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (docs/theory.md §II.3).
 
     ``f = D′ = (b² − a²) sin φ cos φ + a d_a sin φ − b d_b cos φ`` solved in closed form by
     :func:`trig_quadratic_roots`. Returns ``(phi (k,), kind (k,))`` with ``kind = +1`` for
@@ -69,7 +69,7 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
 @HOLE_SECTIONS.register("circle")
 @dataclass(frozen=True)
 class CircleSection(HoleSection):
-    """Circular bore of radius R (FORMULATION II §3): closed-form quartic detector."""
+    """Circular bore of radius R (docs/theory.md §II.3): closed-form quartic detector."""
 
     radius: float
 
@@ -87,7 +87,7 @@ class CircleSection(HoleSection):
         return float(self.radius)
 
     def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
-        """Stationary points of ``|X(φ)| − R`` with depth > −margin (FORMULATION II §3, §4):
+        """Stationary points of ``|X(φ)| − R`` with depth > −margin (docs/theory.md §II.3, §II.4):
         ``Q = R u``, ``u = X/|X|``."""
         R = float(self.radius)
         c = ellipse.center

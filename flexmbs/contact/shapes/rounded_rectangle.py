@@ -3,7 +3,7 @@ corners are quarter circles of radius ``r`` (a rectangular tube, a slot with rad
 ``r = min(w, h)`` is a stadium, ``w = h = r`` the circle). Its compiled boundary in the
 arc-length parametrisation scaled to ψ ∈ [0, 2π) (CCW from the middle of the +e_y side), inside
 test and :class:`RoundedRectangleSection` (scenario shape ``"rounded_rectangle"``; the generic
-detector, FORMULATION II §6). The wall is C¹ (its curvature jumps where a flat meets a corner)."""
+detector, docs/theory.md §II.6). The wall is C¹ (its curvature jumps where a flat meets a corner)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The superellipse bore ``|y/a|ⁿ + |z/b|ⁿ = 1`` (FORMULATION II §6): its compiled boundary (radial
+"""The superellipse bore ``|y/a|ⁿ + |z/b|ⁿ = 1`` (docs/theory.md §II.6): its compiled boundary (radial
 parametrisation, turned by the section's angle) and inside test, and
 :class:`SuperellipseSection` (scenario shape ``"superellipse"``; the generic detector)."""
 
@@ -25,7 +25,7 @@ def superellipse_boundary(A, B, n, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
     """Wall point of the superellipse ``|y/A|ⁿ + |z/B|ⁿ = 1`` in the radial parametrisation
     ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``, ``ρ = g^(−1/n)``, ``g = |cos ψ/A|ⁿ + |sin ψ/B|ⁿ``, and its
     first and second ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,) (compiled boundary of
-    :class:`SuperellipseSection`, FORMULATION II §6; n ≥ 2 keeps g twice differentiable)."""
+    :class:`SuperellipseSection`, docs/theory.md §II.6; n ≥ 2 keeps g twice differentiable)."""
     c = math.cos(psi)
     s = math.sin(psi)
     u = c / A
@@ -81,7 +81,7 @@ def superellipse_contains(params, y, z):  # noqa: ANN001, ANN201
 @dataclass(frozen=True)
 class SuperellipseSection(HoleSection):
     """Superellipse bore ``|y/a|ⁿ + |z/b|ⁿ = 1``, semi-axes ``a`` (body y) and ``b`` (body z),
-    ``n = exponent ≥ 2`` (FORMULATION II §6), radially parametrised ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``;
+    ``n = exponent ≥ 2`` (docs/theory.md §II.6), radially parametrised ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``;
     generic common-normal detector. ``angle`` turns the section in the hole body (its a axis
     from body y towards body z, radians). Parameter names as in the scenario: ``a``, ``b``,
     ``exponent``, ``angle``."""

@@ -79,7 +79,7 @@ def read_friction(t: Table, key: str = "friction") -> Friction | None:
 
 @JOINTS.register("sliding")
 def _sliding(t: Table, ctx: BuildContext) -> Any:
-    """``type = "sliding"``: SlidingJoint (no clearance), FORMULATION Part II §7."""
+    """``type = "sliding"``: SlidingJoint (no clearance), docs/theory.md §II.7."""
     from ...constraints.sliding import SlidingJoint
 
     t.allow(("name", "type", "beam", "body", "variant", "s0", "hole_point", "axis", "friction",
@@ -99,7 +99,7 @@ def _sliding(t: Table, ctx: BuildContext) -> Any:
 
 @JOINTS.register("sliding_clearance")
 def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
-    """``type = "sliding_clearance"``: SlidingClearanceJoint, FORMULATION Part II §1-§8."""
+    """``type = "sliding_clearance"``: SlidingClearanceJoint, docs/theory.md §II.1-§II.8."""
     from ...contact.joint import DETECTIONS, TANGENTS, Hole, SlidingClearanceJoint
 
     t.allow(("name", "type", "beam", "body", "hole", "contact", "beam_radius", "tangent",
