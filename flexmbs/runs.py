@@ -23,6 +23,7 @@ from .io.folder import claim
 from .io.output import check_output
 from .io.scenario import Scenario
 from .simulation import checkpoint_time, simulate, solve_quasi_static, solve_static
+from .solvers.generalized_alpha import check_masses
 
 __all__ = ["RunOutcome", "run_scenario", "scenario_digest"]
 
@@ -66,6 +67,8 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
                   out=folder, prefix="simulation.")
     asm = Assembly(sc.model, redundant_constraints=sim.redundant_constraints)
     check_output(folder, sc.name, asm, probes=sc.probes, output_frames=sim.output_frames)
+    if sim.integrator not in ("static", "quasi_static") and not resume:
+        check_masses(asm)
     with claim(folder, scenario=sc.name, overwrite=overwrite, resume=resume):
         if sim.integrator == "static":
             st = solve_static(asm, sc.static_options(), t=sim.t_end,

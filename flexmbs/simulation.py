@@ -28,6 +28,7 @@ from .solvers.generalized_alpha import (
     GeneralizedAlpha,
     IntegrationStats,
     State,
+    check_masses,
     consistent_initial_state,
     integrate,
 )
@@ -470,6 +471,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         if not t_end > resume_t:
             raise ModelError(f"cannot resume: the checkpoint in {out} is at t = {resume_t:.6g} "
                              f"and t_end = {t_end:.6g}; give a later t_end")
+    if not resume:
+        check_masses(asm)        # bad input, before the folder is written
     writer: OutputWriter | None = None
     if out is not None:
         meta = {"dt": dt, "t_end": t_end, "output_interval": output_interval,

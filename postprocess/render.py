@@ -22,6 +22,7 @@ docs/postprocess.md.
 from __future__ import annotations
 
 import ctypes.util
+import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -197,6 +198,21 @@ def _field_range(beam_meshes: Sequence[Any], name: str) -> tuple[float, float]:
     return (lo, hi) if hi > lo else (lo - 0.5 * (abs(lo) or 1.0), hi + 0.5 * (abs(hi) or 1.0))
 
 
+def _resume_command(frame: Path) -> str:
+    """``flexmbs run SCENARIO --resume DIR`` for the run folder that holds ``frame`` (the
+    nearest folder above it with a ``summary.json``; the scenario from its metadata)."""
+    for folder in frame.parents:
+        summary = folder / "summary.json"
+        if summary.is_file():
+            try:
+                meta = json.loads(summary.read_text(encoding="utf-8")).get("metadata") or {}
+            except (OSError, ValueError, AttributeError):
+                meta = {}
+            scenario = meta.get("scenario_file") if isinstance(meta, dict) else None
+            return f"flexmbs run {scenario or 'SCENARIO'} --resume {folder}"
+    return "flexmbs run SCENARIO --resume RUN_FOLDER"
+
+
 def _read_frame(pv: Any, path: Path) -> Any:
     """One frame; a missing, empty or unreadable file is an error naming it (VTK would return
     an empty grid and print to the terminal)."""
@@ -204,7 +220,7 @@ def _read_frame(pv: Any, path: Path) -> Any:
         raise FileNotFoundError(f"frame listed in the .pvd is missing: {path}")
     if path.stat().st_size == 0:
         raise ValueError(f"frame {path} is empty (0 bytes); the run that wrote it was cut off: "
-                         "flexmbs run --resume rewrites the series from its checkpoint")
+                         f"{_resume_command(path)} rewrites the series from its checkpoint")
     import vtk
 
     vtk.vtkObject.GlobalWarningDisplayOff()

@@ -264,7 +264,8 @@ def test_render_refuses_bad_fps_a_damaged_index_and_an_empty_frame(tmp_path, cap
     shutil.copytree(out, empty)
     frames = sorted((empty / "vtu").glob("*.vtm"))
     frames[1].write_bytes(b"")
-    _refused(["render", str(empty), "--quiet"], capsys, frames[1].name, "is empty")
+    _refused(["render", str(empty), "--quiet"], capsys, frames[1].name, "is empty",
+             f"--resume {empty}", "cantilever.toml")
     assert not (empty / "frames").exists()
 
 

@@ -3,6 +3,7 @@ the inertia box drawn for a body without ``shape``."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -70,13 +71,29 @@ def inertia_box(mass: float, inertia: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return pts @ V.T, tri
 
 
+#: a body's shape mesh larger than this [m] (after ``scale``) is a unit or file error
+MAX_SHAPE_SIZE = 1e3
+
+
 def _mesh_surface(shape: dict, body_name: str) -> tuple[np.ndarray, np.ndarray]:
     import meshio
 
     try:
-        m = meshio.read(shape["file"])
+        # meshio's readers warn on overflowing coordinates (an STL's float32): the check
+        # below says it in one line
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            m = meshio.read(shape["file"])
     except Exception as exc:  # noqa: BLE001 - re-raised with the body named
         raise ModelError(f"body '{body_name}': cannot read shape mesh {shape['file']!r} ({exc})") from exc
+    with np.errstate(all="ignore"):
+        size = float(np.abs(np.asarray(m.points, float) * float(shape.get("scale", 1.0))).max(
+            initial=0.0))
+    if not size <= MAX_SHAPE_SIZE:
+        raise ModelError(f"body '{body_name}': shape mesh {shape['file']!r} has coordinates of "
+                         f"{size:.3g} m (times its scale): not finite or beyond "
+                         f"{MAX_SHAPE_SIZE:g} m; give the file in metres or set the shape's "
+                         "scale (e.g. 1e-3 for millimetres)")
     tris = []
     for block in m.cells:
         if block.type == "triangle":

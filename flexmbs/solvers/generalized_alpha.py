@@ -278,6 +278,21 @@ def _massless(asm: Assembly) -> str:
             "(or integrator = \"static\")")
 
 
+def check_masses(asm: Assembly) -> None:
+    """Before a dynamic run writes anything: a beam without mass (density 0) that can move
+    makes the initial accelerations singular; refuse it as bad input (:class:`ModelError`
+    naming ``beams[<name>].density``) when the initial accelerations cannot be computed.
+    Nothing to do, and nothing solved, when every beam has mass."""
+    cause = _massless(asm)
+    if not cause:
+        return
+    q0, v0 = asm.initial_state()
+    try:
+        consistent_initial_state(asm, q0, v0, 0.0)
+    except ConvergenceError:
+        raise ModelError(cause) from None
+
+
 def consistent_initial_state(asm: Assembly, q0: np.ndarray, v0: np.ndarray, t0: float) -> State:
     """Solve [M Phi_q^T; Phi_q 0][q''; lam] = [Q_ext - Q_int; gamma] at (q0, v0, t0); forces
     that depend on lam (friction on a sliding joint's reaction) by Newton iterations from it.

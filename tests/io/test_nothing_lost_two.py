@@ -5,8 +5,10 @@ messages name the cause (key or file)."""
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flexmbs.cli import main
@@ -138,8 +140,10 @@ def test_plot_of_a_garbage_probes_csv_names_the_file(tmp_path, capsys):
 
 
 def test_density_zero_on_a_free_beam_names_the_beam_and_key(tmp_path, capsys):
+    """Bad input: refused before the output folder exists (exit 2), naming the key."""
     _refused(["run", _scenario(tmp_path, density="0.0"), "--out", str(tmp_path / "o"), "-q"],
-             capsys, "beam 'rod' has no mass", "beams[rod].density", code=3)
+             capsys, "beam 'rod' has no mass", "beams[rod].density")
+    assert not (tmp_path / "o").exists()
 
 
 def test_superellipse_exponent_beyond_the_detector_is_refused_with_the_limit(capsys):
@@ -160,3 +164,24 @@ def test_api_hole_checks_the_exponent():
         fm.Hole(SuperellipseSection(a=4e-3, b=2.6e-3, exponent=1e6), length=0.04)
     with pytest.raises(fm.ModelError, match="exponent = 1e.06.*<= "):
         fm.SuperellipseHole(a=4e-3, b=2.6e-3, exponent=1e6, length=0.04)
+
+
+@pytest.mark.parametrize("coordinate", [1e300, 1e10])
+def test_a_body_shape_with_absurd_coordinates_is_one_line(tmp_path, capsys, coordinate):
+    """An STL with coordinates beyond float32 (read as inf, with numpy's overflow warnings)
+    or of 1e10 m: one line naming the body and the file and the fix, nothing printed before
+    it, nothing written."""
+    import meshio
+
+    stl = tmp_path / "huge.stl"
+    points = np.array([[0.0, 0.0, 0.0], [coordinate, 0.0, 0.0], [0.0, coordinate, 0.0]])
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        meshio.write(str(stl), meshio.Mesh(points, [("triangle", np.array([[0, 1, 2]]))]),
+                     binary=True)
+    body = BODY.format(pose="{ position = [0.5, 0.0, 0.0] }") + (
+        f'shape = {{ type = "mesh", file = "{stl}" }}\n')
+    out = tmp_path / "o"
+    _refused(["run", _scenario(tmp_path, CLAMP, body), "--out", str(out), "-q"], capsys,
+             "body 'blk'", str(stl), "scale")
+    assert not out.exists()
