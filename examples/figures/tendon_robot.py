@@ -8,8 +8,8 @@ the output folders):
 - ``robot_shapes.png``: the backbone through the disk centres, every case, three views;
 - ``robot_tensions.png``: the tension in every span of each loaded tendon, per case;
 - ``robot_loop.png``: the last disk's displacement against tendon 4's pull, up to 2 N and
-  back, without friction and with μ = 0.1, as equilibria (``examples/tendon_robot.py --loop
-  --static``).
+  back, without friction and with μ = 0.1, as equilibria on 10 disks
+  (``examples/tendon_robot.py --loop --static --disks 10``).
 
     python examples/figures/tendon_robot.py [--disks 20] [--mu 0] [--rerun]
 """
@@ -48,7 +48,9 @@ def main(argv: list[str] | None = None) -> int:
         runs[case] = read_run(out)
     loop = args.runs / "loop"
     if args.rerun or not (loop / "mu_0.1" / "probes.csv").is_file():
-        tendon_robot.main(["--loop", "--static", "--disks", str(args.disks), "--mu", "0.1",
+        # 10 disks: on 20 the quasi-static loop with friction stops just after the peak
+        # (design notes, "Quasi-static paths")
+        tendon_robot.main(["--loop", "--static", "--disks", "10", "--mu", "0.1",
                            "--out", str(loop)])
     loops = {f"mu = {mu}": read_run(loop / f"mu_{mu}") for mu in ("0", "0.1")}
     paths = save_figures({"robot_shapes": robot_shapes(runs),
