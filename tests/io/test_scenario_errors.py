@@ -66,7 +66,7 @@ CASES = [
     ("dt_larger_than_t_end", sub(SIM, "dt = 1e-3", "dt = 2.0"), "simulation.dt: expected a time "
                                                                 "step <= t_end"),
     ("unknown_integrator", SIM + "integrator = 'rk4'\n",
-     "simulation.integrator: unknown integrator 'rk4' (known: generalized_alpha, hht, static)"),
+     "simulation.integrator: unknown integrator 'rk4' (known: generalized_alpha, hht, static, quasi_static)"),
     ("rho_inf_range", SIM + "rho_inf = 1.5\n", "simulation.rho_inf: expected a number in [0, 1], "
                                                "got 1.5"),
     ("hht_rho_inf", SIM + "integrator = 'hht'\nrho_inf = 0.3\n",
