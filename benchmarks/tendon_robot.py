@@ -287,6 +287,31 @@ def unit_costs(n_disks: int, t_end: float = 0.03, **kw) -> dict:
     return out
 
 
+def contact_units(n_disks: int, refined: bool = False, **kw) -> dict:
+    """The clearance joints' share of a residual [us] at the straight robot's start (best of 3
+    compiled loops of 50 calls of ``clearance_terms``) beside the whole residual's; ``refined``:
+    tendons of 3 elements per disk spacing (their elements grow with the disks)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from unit_loops import best_of, loop_clearance, loop_residual
+
+    from flexmbs.terms import dynamic_mode
+
+    if refined:
+        kw["tendon_elements"] = 3 * n_disks
+    model, _ = build(n_disks, **kw)
+    asm = Assembly(model)
+    q, v = asm.initial_state()
+    m = asm.kernel_system
+    fv = asm.functions.table(0.0, 1e-3, 1)[0]
+    r = np.zeros(asm.n_total)
+    error = np.zeros(4, np.int64)
+    zeros = np.zeros_like(q)
+    lam = np.zeros(asm.n_total - q.size)
+    return {"joints": int(m.clearance.r_b.size), "tendon_elements": int(m.clearance.n_elem.max()),
+            "residual_us": best_of(loop_residual, (m, q, v, zeros, lam, fv, dynamic_mode(), r), 50, 3),
+            "clearance_us": best_of(loop_clearance, (m.clearance, q, v, r, error), 50, 3)}
+
+
 def run_static(n_disks: int, load_steps: int, **kw) -> dict:
     """Static equilibrium under the full tensions (time ``t_ramp``) by load stepping; where
     it fails if it does."""
@@ -344,6 +369,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mu", type=float, default=0.0, help="friction coefficient of the bores")
     ap.add_argument("--units", type=int, nargs="*", default=None, metavar="DISKS",
                     help="unit costs of a compiled step at these disk counts instead of a run")
+    ap.add_argument("--contact-units", type=int, nargs="*", default=None, metavar="DISKS",
+                    help="the clearance joints' cost per residual at these disk counts (tendons "
+                         "as built and refined with the disks)")
     ap.add_argument("--retreats", type=int, default=None,
                     help="Newton's halvings of an iterate the model rejects (default: the "
                          "integrator's)")
@@ -375,6 +403,16 @@ def main(argv: list[str] | None = None) -> int:
         static_cases(a.disks, a.sections, a.load_steps, a.onset)
         return 0
 
+    if a.contact_units:
+        print(f"{'disks':>5s} {'tendons':>8s} {'joints':>6s} {'elements':>8s} {'residual':>8s} "
+              f"{'contacts':>8s}  [us]")
+        for d in a.contact_units:
+            for refined in (False, True):
+                u = contact_units(d, refined, **kw)
+                print(f"{d:5d} {'refined' if refined else 'as built':>8s} {u['joints']:6d} "
+                      f"{u['tendon_elements']:8d} {u['residual_us']:8.0f} "
+                      f"{u['clearance_us']:8.0f}", flush=True)
+        return 0
     if a.units:
         print(f"{'disks':>5s} {'unknowns':>8s} {'planned':>8s} {'plan':>6s} {'matrix':>8s} "
               f"{'residual':>8s} {'factor':>8s} {'solve':>7s}  [us]")

@@ -12,6 +12,7 @@ import numpy as np
 
 from flexmbs import driver
 from flexmbs._jit import njit
+from flexmbs.contact.clearance_term import clearance_terms
 from flexmbs.linalg.bordered import bordered_factorize, bordered_solve
 
 
@@ -38,6 +39,13 @@ def loop_matrix(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN201
 def loop_residual(m, q, v, qdd, lam, fv, mode, r, n):  # noqa: ANN001, ANN201
     for _ in range(n):
         driver.residual(m, q, v, qdd, lam, fv, mode, r)
+
+
+@njit(refcount=False)
+def loop_clearance(cl, q, v, r, error, n):  # noqa: ANN001, ANN201
+    """The clearance joints' residual alone (``clearance_terms``), ``n`` times."""
+    for _ in range(n):
+        clearance_terms(cl, q, v, False, 0.0, 0.0, r, r, error)
 
 
 def best_of(fn, args, n: int, repeats: int = 7) -> float:  # noqa: ANN001

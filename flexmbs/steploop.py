@@ -31,6 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ._jit import njit
+from .codes import ERROR_CODES
 from .driver import constraint_velocity, jacobian, post_step, residual, stops_run
 from .linalg.bordered import BorderedFactor, bordered_factorize, bordered_solve, empty_tree
 from .linalg.sparse_lu import empty_sparse
@@ -40,9 +41,9 @@ STATUS_FAILED = 2      # the current step failed and was restored to its start
 STATUS_STOPPED = 3     # a step converged, then an interaction stopped the run (end of a beam)
 
 #: error code of a singular iteration matrix (the others are flexmbs.driver.ERR_*)
-ERR_SINGULAR = 100
+ERR_SINGULAR = ERROR_CODES["singular"]
 #: error code of a converged step whose local error estimate exceeds the tolerance
-ERR_STEP_ERROR = 101
+ERR_STEP_ERROR = ERROR_CODES["step_error"]
 
 #: ``info`` entries
 (INFO_IT, INFO_PREV, INFO_ERR, INFO_WORST, INFO_DONE, INFO_TOTAL, INFO_CODE, INFO_HAVE,

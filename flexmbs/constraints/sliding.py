@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 import numpy as np
 
 from .._jit import njit
+from ..codes import ERROR_CODES
 from ..contact.laws import (
     FRICTION_NONE,
     FRICTION_STICK,
@@ -552,10 +553,10 @@ class SlidingJoint(Interaction):
 # ---------------------------------------------------------------------------------------------
 # the sliding-joint term of the assembler (flexmbs.terms)
 #: error code of :func:`sliding_post_step`: the slide coordinate left the beam
-ERR_END_OF_BEAM = 2
+ERR_END_OF_BEAM = ERROR_CODES["end_of_beam"]
 #: error code of :func:`sliding_jacobian`: a joint's element lies outside the elements the
 #: factorisation's plan follows it on (``window``); the step is retried after a new plan
-ERR_OFF_PLAN = 4
+ERR_OFF_PLAN = ERROR_CODES["off_plan"]
 
 
 class SlidingPart(NamedTuple):

@@ -18,7 +18,6 @@ import numpy as np
 from .._jit import njit
 from ..elements.centerline import (
     beam_point,
-    element_bounding_sphere,
     element_crossings,
     element_plane_range,
 )
@@ -59,9 +58,10 @@ MAX_CANDIDATES = 8
 MAX_CROSSINGS = 4
 #: :func:`detect_section`'s float work (its vectors and candidate arrays, carved in order)
 DETECT_WORK = 4 * 3 + 3 * 2 + 3 * MAX_CANDIDATES + 3 * 3 + 10
-#: :func:`detect_section`'s int work past the sections: the search stack and the candidates'
-#: kinds, the line model's signs (its ``work`` holds ``n_sections + DETECT_INT_WORK``)
-DETECT_INT_WORK = 64 + MAX_CANDIDATES + 5
+#: :func:`detect_section`'s int work past the sections: the search stacks (sections,
+#: elements), the candidates' kinds, the line model's signs (its ``work`` holds
+#: ``n_sections + DETECT_INT_WORK``)
+DETECT_INT_WORK = 64 + MAX_CANDIDATES + 5 + 64
 #: section slots of a joint past its bore's sections: one per end of the beam (first node,
 #: last node), the tip sections of an open bore (:func:`place_tips`)
 N_TIPS = 2
@@ -165,7 +165,7 @@ def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list
 
 
 @njit
-def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi, etree,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
                    open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
                    elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, paper,
                    out, fwork):
@@ -183,9 +183,12 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     ``paper`` None: no joint of the model uses the paper's detection (:func:`_paper_candidates`
     compiled out; ``consistent`` is then always set).
 
-    The crossings (issue 30, "many sections, cheap"): every element's bounding sphere is put
-    to the bore's section tree (:func:`~flexmbs.contact.bores.sections_near`, body
-    coordinates), so a section no element comes near costs nothing; a section near an element
+    The crossings (issue 30, "many sections, cheap"; issue 52, "many holes on one beam"): the
+    beam's element tree ``etree`` (:func:`~flexmbs.elements.centerline.element_tree` at ``qe``)
+    is descended to the elements whose spheres may meet the bore's (its section tree's root),
+    and each such element's bounding sphere is put to the bore's section tree
+    (:func:`~flexmbs.contact.bores.sections_near`, body coordinates), so an element or a
+    section far from the other costs nothing; a section near an element
     whose control points straddle its plane gets the element's crossings
     (:func:`~flexmbs.elements.centerline.element_crossings`), up to :data:`MAX_CROSSINGS` (a
     beam looping back crosses a plane twice). A crossing farther than ``2 R_out + r_b`` from
@@ -220,26 +223,53 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
     phis = fwork[o + MAX_CANDIDATES:o + 2 * MAX_CANDIDATES]
     depths = fwork[o + 2 * MAX_CANDIDATES:o + 3 * MAX_CANDIDATES]
     o += 3 * MAX_CANDIDATES
-    centre = fwork[o:o + 3]
     xb = fwork[o + 3:o + 6]
     roots = fwork[o + 6:o + 9]
     lm_work = fwork[o + 9:o + 19]
     stack = work[:64]
     kinds = work[64:64 + MAX_CANDIDATES]
-    lm_signs = work[64 + MAX_CANDIDATES:DETECT_INT_WORK]
+    lm_signs = work[64 + MAX_CANDIDATES:64 + MAX_CANDIDATES + 5]
+    estack = work[64 + MAX_CANDIDATES + 5:DETECT_INT_WORK]
     near = work[DETECT_INT_WORK:]
-    # ---- broad phase: the sections each element comes near, and its crossings with them
+    # ---- broad phase: the elements near the bore, the sections each of them comes near,
+    # and its crossings with them (elements in ascending order, as a scan of all would)
     n_touched = 0
-    for e in range(ne):
-        rho = element_bounding_sphere(qe[e], lengths[e], centre)
-        _to_body(centre, r_H, A, xb)
-        m = sections_near(tree_c, tree_r, tree_lo, tree_hi, xb, 1.01 * rho + 1e-12, stack,
-                          near)
-        for i in range(m):
-            k = near[i]
-            _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
-            n_touched = _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots,
-                                       cross_n, cross_e, cross_xi, touched, n_touched)
+    P = etree.shape[0] // 2
+    if tree_r.shape[0] > 0 and tree_r[0] >= 0.0:
+        # an inner node's sphere in body coordinates: |_to_body(x) − _to_body(y)| ≤ f |x − y|
+        scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]
+        f = 0.0
+        for a in range(3):
+            for c in range(3):
+                f += A[a, c] * A[a, c]
+        f = math.sqrt(f) / scale
+        top = 0
+        estack[0] = 1
+        while top >= 0:
+            i = estack[top]
+            top -= 1
+            if etree[i, 3] < 0.0:
+                continue
+            if i < P:
+                _to_body(etree[i, :3], r_H, A, xb)
+                d2 = ((xb[0] - tree_c[0, 0]) ** 2 + (xb[1] - tree_c[0, 1]) ** 2
+                      + (xb[2] - tree_c[0, 2]) ** 2)
+                reach_i = tree_r[0] + 1.01 * f * etree[i, 3] + 1e-12
+                if d2 <= reach_i * reach_i:
+                    top += 1
+                    estack[top] = 2 * i + 1     # the right half after the left one
+                    top += 1
+                    estack[top] = 2 * i
+                continue
+            e = i - P                           # its element_bounding_sphere
+            _to_body(etree[i, :3], r_H, A, xb)
+            m = sections_near(tree_c, tree_r, tree_lo, tree_hi, xb, 1.01 * etree[i, 3] + 1e-12,
+                              stack, near)
+            for ii in range(m):
+                k = near[ii]
+                _section_plane(r_H, A, origins[k], frames[k], origin, n, ey, ez)
+                n_touched = _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots,
+                                           cross_n, cross_e, cross_xi, touched, n_touched)
     # the tip sections: crossed by the elements at their end of the beam
     for t in range(tip_on.shape[0]):
         if not tip_on[t]:

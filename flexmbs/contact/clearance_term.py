@@ -13,7 +13,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
+from ..codes import ERROR_CODES
 from ..elements.ancf_cable import CENTERLINE_SIZE
+from ..elements.centerline import element_tree
 from ..elements.rigid_body import rotation_into
 from ._detect import (
     ANCHOR_COL,
@@ -221,7 +223,7 @@ def _frame_into(q, body_dofs, qb, A):  # noqa: ANN001, ANN202
 @njit(internal=True)
 def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      tree_c, tree_r, tree_lo,
-                     tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                     tree_hi, etree, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                      consistent, paper, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
@@ -240,8 +242,9 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     linearisation (``exact``) or Gauss–Newton ``k BᵀB`` (frozen hole point, no e_I columns).
     ``spin`` (pair.N_SPIN) work for the contact element's spin, ``paper`` as in
     :func:`detect_section` (None: compiled out); ``fwork`` (:data:`FORCES_WORK`) holds every
-    work array (nothing is allocated). Returns ``(rows, contacts, scale)``;
-    ``rows = −1 − k`` if the beam axis left the bore at section k."""
+    work array (nothing is allocated); ``qe`` and ``etree`` are the beam's element coordinates
+    at ``q`` and their tree (:func:`beam_geometry`, shared by the joints on one beam). Returns
+    ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left the bore at section k."""
     o = DETECT_WORK
     qb = fwork[o:o + 7]
     A = fwork[o + 7:o + 16].reshape((3, 3))
@@ -251,11 +254,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     for i in range(7):
         vb[i] = v[body_dofs[i]]
     ne = elem_dofs.shape[0]
-    for e in range(ne):
-        for k in range(CENTERLINE_SIZE):
-            qe[e, k] = q[elem_dofs[e, k]]
     m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
-                       tree_hi, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
+                       tree_hi, etree, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                        xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                        consistent, paper, rows, fwork[:DETECT_WORK])
     if m < 0:
@@ -358,14 +358,14 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
 # ---------------------------------------------------------------------------------------------
 # the clearance-joint term of the assembler (flexmbs.terms): all clearance joints
 #: error code: the beam axis left the bore (joint in ``error[1]``, section in ``error[2]``)
-ERR_LEFT_BORE = 1
+ERR_LEFT_BORE = ERROR_CODES["left_bore"]
 #: error code: more contacts at once than the tangent's work arrays hold (joint in
 #: ``error[1]``, contacts in ``error[2]``; :data:`CONTACTS_PER_SECTION`)
-ERR_TOO_MANY_CONTACTS = 3
+ERR_TOO_MANY_CONTACTS = ERROR_CODES["too_many_contacts"]
 #: error code of the tangent: a contact's element lies outside the elements the factorisation's
 #: plan follows the joint on (``window``; joint in ``error[1]``, element in ``error[2]``); the
 #: step is retried after a new plan (:meth:`flexmbs.assembly.Assembly.follow_contacts`)
-ERR_CONTACT_OFF_PLAN = 5
+ERR_CONTACT_OFF_PLAN = ERROR_CODES["contact_off_plan"]
 #: contacts per section the tangent's work arrays hold on average (plus
 #: :data:`EXTRA_CONTACTS`): a section has one, two past a²/b > R, a third with a local minimum;
 #: sized by the candidates instead (MAX_CANDIDATES per section) they took 60 kB per section
@@ -444,8 +444,24 @@ class ClearancePart(NamedTuple):
     window: np.ndarray               # (nj, 2) state: the elements [lo, hi) the factorisation's
                                      # plan holds the joint's (body, beam) entries on (the whole
                                      # beam unless Assembly.follow_contacts set it)
+    beam_of: np.ndarray              # (nj,) the joint's beam: its row of the next three
+    beam_joint: np.ndarray           # (nb,) a joint on the beam (its elem_dofs, lengths)
+    beam_qe: np.ndarray              # work (nb, max_ne, CENTERLINE_SIZE): the beam's elements
+    beam_tree: np.ndarray            # work (nb, element_tree_size(max_ne), 4)  at q (beam_geometry)
     # (tips_due, spin and paper are None in the kernel's copy when no joint of the model uses
     # them: contact.joint._compiled_view, their code is then not compiled)
+
+
+@njit
+def beam_geometry(q, elem_dofs, lengths, qe, etree):  # noqa: ANN001, ANN201
+    """A beam's element coordinates ``qe`` (n_elem, CENTERLINE_SIZE) at ``q`` and their bounding
+    spheres' tree ``etree`` (:func:`~flexmbs.elements.centerline.element_tree`): once per
+    evaluation for every joint on the beam."""
+    ne = elem_dofs.shape[0]
+    for e in range(ne):
+        for k in range(CENTERLINE_SIZE):
+            qe[e, k] = q[elem_dofs[e, k]]
+    element_tree(qe[:ne], lengths, etree)
 
 
 def contact_capacity(max_sections: int) -> int:
@@ -459,6 +475,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
     ne_j = cl.n_elem[j]
     ns = cl.n_sec[j]
+    b = cl.beam_of[j]
     place_due_tips(cl.tips_due, j, cl.q_start, cl.qe, cl.n_elem[j], cl.n_sec[j], cl.elem_dofs[j],
                    cl.body[j], cl.lengths[j], cl.origins[j], cl.frames[j], cl.stations[j],
                    cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], cl.tip_reach[j],
@@ -467,11 +484,12 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j], cl.spin,
         cl.lengths[j, :ne_j], cl.origins[j, :ns],
         cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
-        cl.open_ends[j], cl.tip_on[j], cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched, cl.work,
+        cl.beam_tree[b], cl.open_ends[j], cl.tip_on[j], cl.cross_n, cl.cross_e, cl.cross_xi,
+        cl.touched, cl.work,
         cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
         cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
-        cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.qe, cl.rows[j],
+        cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.beam_qe[b], cl.rows[j],
         want_tangent, cl.exact[j], r, K, C, elem, elem_i, cl.fwork)
     if m == _OVERFLOW:
         cl.n_candidates[j] = 0
@@ -508,6 +526,10 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
     C = cl.C if want_tangent else cl.no_C
     kelem = cl.kelem if want_tangent else cl.no_elem
     kelem_i = cl.kelem_i if want_tangent else cl.no_elem
+    for b in range(cl.beam_joint.size):
+        j = cl.beam_joint[b]
+        ne_b = cl.n_elem[j]
+        beam_geometry(q, cl.elem_dofs[j, :ne_b], cl.lengths[j, :ne_b], cl.beam_qe[b], cl.beam_tree[b])
     for j in range(cl.r_b.size):
         if not cl.enabled[j]:
             continue

@@ -21,8 +21,10 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
+from ..codes import SHAPE_CODES
 from ..constraints.interaction import Following, Interaction, InteractionKind, MatrixSink, ModelParts
 from ..elements.ancf_cable import CENTERLINE_SIZE
+from ..elements.centerline import element_tree, element_tree_size
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
@@ -270,7 +272,13 @@ class SlidingClearanceJoint(Interaction):
             raise ModelError(f"joint '{self.name}': tangent must be one of {', '.join(TANGENTS)} "
                              f"(got {tangent!r})")
         self.tangent = tangent
-        compiled = hole.section.compiled_shape() is not None
+        shape = hole.section.compiled_shape()
+        compiled = shape is not None
+        if shape is not None and int(shape[0]) not in SHAPE_CODES.values():
+            raise ModelError(f"joint '{self.name}': {type(hole.section).__name__} has the "
+                             f"compiled shape code {int(shape[0])}, which flexmbs.codes.SHAPE_CODES "
+                             "does not list: add the shape there and to the dispatchers of "
+                             "flexmbs.contact.shapes")
         if detection is None:
             detection = "consistent" if compiled else "paper"
         if detection not in DETECTIONS:
@@ -599,8 +607,11 @@ class SlidingClearanceJoint(Interaction):
         assert compiled is not None
         shape, params = compiled
         g = self.geometry
+        etree = np.zeros((element_tree_size(qe.shape[0]), 4))
+        element_tree(qe, g.lengths, etree)
         m = detect_section(qe, g.lengths, np.ascontiguousarray(qb[:3]), A, self.state.origins,
-                           self.state.axes, *g.tree, bool(self.hole.open_ends), self.state.tip_on,
+                           self.state.axes, *g.tree, etree, bool(self.hole.open_ends),
+                           self.state.tip_on,
                            *self._cross[:5],
                            self.state.elem, self.state.xi, unknown, e_out, x_out, out_list,
                            self.beam_radius, shape, params,
@@ -1043,10 +1054,30 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.array([j.geometry.tip_reach for j in joints], float), np.zeros(nj, np.bool_),
         np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
         np.zeros(FORCES_WORK),
-        c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)))
+        c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)),
+        *_beams(joints, max_ne))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
     return part
+
+
+def _beams(joints: list[SlidingClearanceJoint], max_ne: int) -> tuple[np.ndarray, ...]:
+    """The joints' beams (:class:`ClearancePart`'s ``beam_of``, ``beam_joint``, ``beam_qe``,
+    ``beam_tree``): joints on the same elements share one copy of the beam's coordinates and
+    one element tree per evaluation (clearance_term.beam_geometry)."""
+    keys: dict[bytes, int] = {}
+    beam_of = np.zeros(len(joints), np.int64)
+    first: list[int] = []
+    for i, j in enumerate(joints):
+        key = (np.ascontiguousarray(j.geometry.elem_dofs, np.int64).tobytes()
+               + np.ascontiguousarray(j.geometry.lengths, float).tobytes())
+        if key not in keys:
+            keys[key] = len(first)
+            first.append(i)
+        beam_of[i] = keys[key]
+    nb = len(first)
+    return (beam_of, np.array(first, np.int64), np.zeros((nb, max_ne, CENTERLINE_SIZE)),
+            np.zeros((nb, element_tree_size(max_ne), 4)))
 
 
 def _compiled_view(part: ClearancePart) -> ClearancePart:

@@ -45,6 +45,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import FLAG, njit
+from ..codes import ERROR_CODES
 from ..errors import ModelError
 from ..terms import WITH_INERTIA
 from . import ancf_cable as cable
@@ -85,7 +86,7 @@ REBASE_LIMIT = -0.5
 #: smallest rotation from t̄ is singular at 180°): the integrator retries with a smaller step
 TURN_LIMIT = -0.9
 #: the error code of that failure (distinct from the joints' codes, flexmbs.driver)
-ERR_NODE_TURNED = 11
+ERR_NODE_TURNED = ERROR_CODES["node_turned"]
 N_GAUSS = 3                #: Gauss points of the curvatures (§2.5's recommendation)
 N_STRAIN = 4               #: ε, K1, K2, K3
 N_Z = 13                   #: inputs of the Gauss-point map: r′, r″, t_0, d2_0, Δθ

@@ -132,6 +132,52 @@ def element_bounding_sphere(q, L, centre):  # noqa: ANN001, ANN201
     return rho
 
 
+def element_tree_size(n_elem: int) -> int:
+    """Rows of :func:`element_tree`'s array for a chain of ``n_elem`` elements: a complete
+    binary tree (heap order, root 1) over the next power of two of leaves."""
+    leaves = 1
+    while leaves < max(1, n_elem):
+        leaves *= 2
+    return 2 * leaves
+
+
+@njit
+def element_tree(q_e, lengths, tree):  # noqa: ANN001, ANN201
+    """Bounding spheres of a chain's elements and of their consecutive runs, for a broad phase
+    that visits O(log n) of them (issue 52: a hole's detection no longer touches every element
+    of its beam). ``tree`` (:func:`element_tree_size`, 4): rows ``[centre, radius]`` in heap
+    order, leaf ``P + e`` element e's :func:`element_bounding_sphere` (``P = rows / 2``), an
+    inner node the smallest sphere holding its children's; radius −1: no element below."""
+    ne = q_e.shape[0]
+    P = tree.shape[0] // 2
+    for i in range(P, 2 * P):
+        e = i - P
+        if e < ne:
+            tree[i, 3] = element_bounding_sphere(q_e[e], lengths[e], tree[i, :3])
+        else:
+            tree[i, 3] = -1.0
+    for i in range(P - 1, 0, -1):
+        a, b = 2 * i, 2 * i + 1
+        ra, rb = tree[a, 3], tree[b, 3]
+        if rb < 0.0 or ra < 0.0:
+            src = a if rb < 0.0 else b
+            for c in range(4):
+                tree[i, c] = tree[src, c]
+            continue
+        d = math.sqrt((tree[b, 0] - tree[a, 0]) ** 2 + (tree[b, 1] - tree[a, 1]) ** 2
+                      + (tree[b, 2] - tree[a, 2]) ** 2)
+        if d + rb <= ra or d + ra <= rb:
+            src = a if d + rb <= ra else b
+            for c in range(4):
+                tree[i, c] = tree[src, c]
+            continue
+        R = 0.5 * (d + ra + rb)
+        w = (R - ra) / d
+        for c in range(3):
+            tree[i, c] = tree[a, c] + w * (tree[b, c] - tree[a, c])
+        tree[i, 3] = R * (1.0 + 1e-12)     # rounding: the children stay inside
+
+
 @njit(inline="always")
 def element_plane_range(q, L, origin, normal):  # noqa: ANN001, ANN201
     """Least and largest signed distance ``n·(P − O)`` of the element's Bézier control points

@@ -24,6 +24,7 @@ from flexmbs.contact._detect import (
 from flexmbs.contact.bores import section_tree
 from flexmbs.contact.sections import SHAPE_CIRCLE, SHAPE_SUPERELLIPSE, section_boundary
 from flexmbs.elements.ancf_cable import shape_xi
+from flexmbs.elements.centerline import element_tree, element_tree_size
 from tests.conftest import FULL
 
 L_ELEM = 0.02        # the beam element, centred on the section
@@ -74,8 +75,11 @@ def _detected(qe: np.ndarray, shape: int, params: np.ndarray, R_out: float, R_in
     work = (np.zeros(1, np.int64), np.zeros((1, MAX_CROSSINGS), np.int64),
             np.zeros((1, MAX_CROSSINGS)), np.zeros(1, np.int64),
             np.zeros(1 + DETECT_INT_WORK, np.int64))
+    etree = np.zeros((element_tree_size(1), 4))
+    element_tree(qe.reshape(1, 12), np.array([L_ELEM]), etree)
     m = detect_section(qe.reshape(1, 12), np.array([L_ELEM]), np.zeros(3), np.eye(3),
-                       np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, False, np.zeros(0, np.bool_),
+                       np.zeros((1, 3)), np.eye(3)[None].copy(), *tree, etree, False,
+                       np.zeros(0, np.bool_),
                        *work, ws_e,
                        ws_x, np.full(1, -1, np.int64), ws_e.copy(), ws_x.copy(),
                        np.full(2, -1, np.int64), r_b, shape, params, R_out, R_in, True, None, rows,

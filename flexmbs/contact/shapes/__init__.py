@@ -8,6 +8,8 @@ numba needs the calls spelt out.
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..._jit import njit
 from .base import HOLE_SECTIONS, SHAPE_SAMPLES, Candidate, Ellipse2D, HoleSection
 from .circle import (
@@ -43,20 +45,29 @@ __all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_RECTANGLE", "SHAPE_SA
 def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
     """``Y(ψ), Y′, Y″`` of a compiled hole section (``kind``, ``params`` of
     :meth:`HoleSection.compiled_shape`): the detectors and the contact tangent read the wall
-    through it."""
+    through it. An unknown ``kind`` (a shape module whose code is not dispatched here) gives a
+    wall of NaN, never another shape's (tests/test_codes.py dispatches every code)."""
     if kind == SHAPE_CIRCLE:
         circle_boundary(params[0], psi, Y, Yp, Ypp)
     elif kind == SHAPE_ROUNDED_RECTANGLE:
         rounded_rectangle_boundary(params, psi, Y, Yp, Ypp)
-    else:
+    elif kind == SHAPE_SUPERELLIPSE:
         superellipse_section_boundary(params, psi, Y, Yp, Ypp)
+    else:
+        for c in range(2):
+            Y[c] = np.nan
+            Yp[c] = np.nan
+            Ypp[c] = np.nan
 
 
 @njit
 def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
-    """Whether the point (y, z) lies inside the compiled hole section (on the wall counts)."""
+    """Whether the point (y, z) lies inside the compiled hole section (on the wall counts);
+    an unknown ``kind``: nowhere (the beam axis is then outside the bore at once)."""
     if kind == SHAPE_CIRCLE:
         return circle_contains(params, y, z)
     if kind == SHAPE_ROUNDED_RECTANGLE:
         return rounded_rectangle_contains(params, y, z)
-    return superellipse_contains(params, y, z)
+    if kind == SHAPE_SUPERELLIPSE:
+        return superellipse_contains(params, y, z)
+    return False

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._jit import njit
+from ...codes import SHAPE_CODES
 from ...errors import ModelError
 from ..roots import trig_quadratic_roots
 from .base import HOLE_SECTIONS, Candidate, Ellipse2D, HoleSection
@@ -18,7 +19,7 @@ __all__ = ["SHAPE_CIRCLE", "CircleSection", "circle_boundary", "circle_contains"
            "circle_stationary_points"]
 
 #: the compiled kind code of the circle (:meth:`HoleSection.compiled_shape`), params ``[R, 0, 0, 0]``
-SHAPE_CIRCLE = 0
+SHAPE_CIRCLE = SHAPE_CODES["circle"]
 
 
 @njit

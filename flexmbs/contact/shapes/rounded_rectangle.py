@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._jit import njit
+from ...codes import SHAPE_CODES
 from ...errors import ModelError
 from .base import HOLE_SECTIONS, SHAPE_SAMPLES, HoleSection
 
@@ -20,7 +21,7 @@ __all__ = ["SHAPE_ROUNDED_RECTANGLE", "RoundedRectangleSection", "rounded_rectan
            "rounded_rectangle_contains"]
 
 #: the compiled kind code of the rounded rectangle, params ``[w, h, r, angle]``
-SHAPE_ROUNDED_RECTANGLE = 2
+SHAPE_ROUNDED_RECTANGLE = SHAPE_CODES["rounded_rectangle"]
 
 
 @njit

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._jit import njit
+from ...codes import SHAPE_CODES
 from ...errors import ModelError
 from .base import HOLE_SECTIONS, HoleSection
 
@@ -17,7 +18,7 @@ __all__ = ["SHAPE_SUPERELLIPSE", "SuperellipseSection", "superellipse_boundary",
            "superellipse_contains", "superellipse_section_boundary"]
 
 #: the compiled kind code of the superellipse, params ``[a, b, exponent, angle]``
-SHAPE_SUPERELLIPSE = 1
+SHAPE_SUPERELLIPSE = SHAPE_CODES["superellipse"]
 
 
 @njit
