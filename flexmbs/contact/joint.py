@@ -263,7 +263,7 @@ class SlidingClearanceJoint(Interaction):
         self.beam = beam
         self.body = body
         self.hole = hole
-        self.contact = contact or LinearPenalty(stiffness=1e6)
+        law = contact or LinearPenalty(stiffness=1e6)
         self.friction = as_friction(friction, friction_velocity)
         self.hole_point = np.asarray(hole_point, float).reshape(3)
         self.name = name or f"clearance_{body.name}"
@@ -299,6 +299,7 @@ class SlidingClearanceJoint(Interaction):
                 f"joint '{self.name}': the hole (inscribed radius "
                 f"{hole.section.inscribed_radius():.6g}) is not larger than the beam (radius "
                 f"{self.beam_radius:.6g}); the beam cannot pass")
+        self.contact = law
         self.stations = hole.stations()
         ns = len(self.stations)
         # the sections in body coordinates: origins (ns, 3), axes (ns, 3, 3) (normal, e_y, e_z);
@@ -397,6 +398,20 @@ class SlidingClearanceJoint(Interaction):
         A = rotation_matrix(qb[3:7])
         ns = len(self.stations)
         return A, qb[:3] + self.state.origins[:ns] @ A.T, A @ self.state.axes[:ns]
+
+    @property
+    def contact(self) -> ForceLaw:
+        """The normal force law; a damped :class:`LinearPenalty` without an onset is kept with
+        its viscous force ramped in over :data:`~flexmbs.contact.laws.DAMPING_ONSET` of the
+        radial clearance (:meth:`LinearPenalty.for_clearance`, docs/design-notes.md "The damped
+        penalty in a curved bore (issue 53 item 2)")."""
+        return self._contact
+
+    @contact.setter
+    def contact(self, law: ForceLaw) -> None:
+        if isinstance(law, LinearPenalty):
+            law = law.for_clearance(self.hole.section.inscribed_radius() - self.beam_radius)
+        self._contact = law
 
     @property
     def n_slots(self) -> int:

@@ -49,6 +49,7 @@ __all__ = [
     "get_law",
     "law_force",
     "N_LAW",
+    "DAMPING_ONSET",
     "law_energy",
     "coulomb_force",
     "coulomb_return_map",
@@ -61,11 +62,15 @@ __all__ = [
 
 @njit
 def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
-    """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d δ̇`` (docs/theory.md §II.5), ``law`` =
-    ``[K, n, χ, c_d, v_min, onset]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0 for ``δ ≤ 0`` and clamped
-    at 0. With n = 1 and ``onset`` δ₀ > 0 the elastic part is ``Kδ²/(2δ₀)`` below δ₀ and
-    ``K(δ − δ₀/2)`` above: C¹, its stiffness grows from 0 instead of jumping to K at first touch
-    (:class:`LinearPenalty`)."""
+    """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d s(δ) δ̇`` (docs/theory.md §II.5),
+    ``law`` = ``[K, n, χ, c_d, v_min, onset, damping_onset]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0
+    for ``δ ≤ 0`` and clamped at 0. With n = 1 and ``onset`` δ₀ > 0 the elastic part is
+    ``Kδ²/(2δ₀)`` below δ₀ and ``K(δ − δ₀/2)`` above: C¹, its stiffness grows from 0 instead of
+    jumping to K at first touch (:class:`LinearPenalty`). The viscous part's factor ``s`` grows
+    from 0 to 1 over the first ``damping_onset`` δ_c of penetration, ``s = x²(3 − 2x)``,
+    ``x = δ/δ_c`` (1 beyond, and for δ_c = 0): without it the force jumps from 0 to ``c_d δ̇``
+    at first touch, and an implicit step whose contact closes within it can have no solution
+    (docs/design-notes.md "The damped penalty in a curved bore (issue 53 item 2)")."""
     if delta <= 0.0:
         return 0.0, 0.0, 0.0
     K, n, chi, c_d, onset = law[0], law[1], law[2], law[3], law[5]
@@ -79,16 +84,21 @@ def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
     else:
         fe = K * delta**n
         ke = n * fe / delta
+    cs, dcs = c_d, 0.0           # the viscous coefficient c_d s(δ) and its δ-derivative
+    if c_d != 0.0 and delta < law[6]:
+        x = delta / law[6]
+        cs = c_d * x * x * (3.0 - 2.0 * x)
+        dcs = c_d * 6.0 * x * (1.0 - x) / law[6]
     if chi != 0.0:
         v0 = max(abs(approach_velocity), law[4])
         fac = 1.0 + chi * delta_dot / v0
-        f = fe * fac + c_d * delta_dot
-        kt = ke * fac
-        ct = fe * chi / v0 + c_d
+        f = fe * fac + cs * delta_dot
+        kt = ke * fac + dcs * delta_dot
+        ct = fe * chi / v0 + cs
     else:
-        f = fe + c_d * delta_dot
-        kt = ke
-        ct = c_d
+        f = fe + cs * delta_dot
+        kt = ke + dcs * delta_dot
+        ct = cs
     if f <= 0.0:
         return 0.0, 0.0, 0.0
     return f, kt, ct
@@ -183,7 +193,10 @@ def tangential_force(fric, stuck, f_n, d, v_t, F, dF_dd, dF_dv, dF_dfn, d_new): 
 
 
 #: entries of a force law's parameters (:meth:`ForceLaw.parameters`)
-N_LAW = 6
+N_LAW = 7
+#: a damped :class:`LinearPenalty` without an onset ramps its viscous force in over this
+#: fraction of a clearance joint's radial clearance (:meth:`LinearPenalty.for_clearance`)
+DAMPING_ONSET = 1e-3
 
 
 @runtime_checkable
@@ -196,7 +209,7 @@ class ForceLaw(Protocol):
         ...
 
     def parameters(self) -> np.ndarray:
-        """``[K, n, χ, c_d, v_min, onset]`` (:data:`N_LAW`) of the common form evaluated by
+        """``[K, n, χ, c_d, v_min, onset, damping_onset]`` (:data:`N_LAW`) of the common form evaluated by
         :func:`law_force`."""
         ...
 
@@ -243,6 +256,14 @@ class LinearPenalty(_CommonForm):
     "closed, stiffness k"; a loaded contact sits δ₀/2 deeper (design notes, "Statics of
     tendon-routed structures"). A small fraction of the clearance, e.g. 1e-3 of it.
 
+    ``damping_onset`` δ_c [m]: the viscous part grows as ``c_d s(δ) δ̇``, ``s = x²(3 − 2x)``,
+    ``x = δ/δ_c``, over the first δ_c of penetration (``s = 1`` beyond). Without it the force
+    jumps from 0 to ``c_d δ̇`` at first touch, and an implicit step whose contact closes
+    within that jump has no solution: Newton cycles between the contact open and closed at
+    any step size (docs/design-notes.md "The damped penalty in a curved bore (issue 53 item
+    2)"). ``None`` (default): ``onset`` when that is > 0, else a clearance joint takes
+    :data:`DAMPING_ONSET` of its radial clearance; 0: no ramp (the law as written above).
+
     Parameters
     ----------
     stiffness : float
@@ -250,20 +271,35 @@ class LinearPenalty(_CommonForm):
     damping : float, default 0
         c_d [N s/m].
     onset : float, default 0
-        δ₀ [m]: the penetration over which the force rises smoothly.
+        δ₀ [m]: the penetration over which the elastic force rises smoothly.
+    damping_onset : float, optional
+        δ_c [m]: the penetration over which the viscous force rises smoothly (default: above).
     """
 
     stiffness: float
     damping: float = 0.0
     onset: float = 0.0
+    damping_onset: float | None = None
 
     def __post_init__(self) -> None:
         _positive("LinearPenalty", "stiffness", self.stiffness)
         _positive("LinearPenalty", "damping", self.damping, allow_zero=True)
         _positive("LinearPenalty", "onset", self.onset, allow_zero=True)
+        if self.damping_onset is not None:
+            _positive("LinearPenalty", "damping_onset", self.damping_onset, allow_zero=True)
 
     def parameters(self) -> np.ndarray:
-        return np.array([self.stiffness, 1.0, 0.0, self.damping, 0.0, self.onset], dtype=float)
+        ramp = self.onset if self.damping_onset is None else self.damping_onset
+        return np.array([self.stiffness, 1.0, 0.0, self.damping, 0.0, self.onset, ramp],
+                        dtype=float)
+
+    def for_clearance(self, clearance: float) -> LinearPenalty:
+        """The law a clearance joint of radial ``clearance`` [m] uses: with damping and
+        neither ``onset`` nor ``damping_onset`` given, the viscous force ramps in over
+        :data:`DAMPING_ONSET` of the clearance; otherwise the law itself."""
+        if self.damping > 0.0 and self.damping_onset is None and self.onset == 0.0:
+            return dataclasses.replace(self, damping_onset=DAMPING_ONSET * float(clearance))
+        return self
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -286,7 +322,7 @@ class Hertz(_CommonForm):
         _exponent("Hertz", self.exponent)
 
     def parameters(self) -> np.ndarray:
-        return np.array([self.stiffness, self.exponent, 0.0, 0.0, 0.0, 0.0], dtype=float)
+        return np.array([self.stiffness, self.exponent, 0.0, 0.0, 0.0, 0.0, 0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -322,7 +358,7 @@ class HuntCrossley(_CommonForm):
     def parameters(self) -> np.ndarray:
         chi = 1.5 * (1.0 - self.restitution)
         return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity,
-                         0.0], dtype=float)
+                         0.0, 0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -356,7 +392,7 @@ class LankaraniNikravesh(_CommonForm):
     def parameters(self) -> np.ndarray:
         chi = 0.75 * (1.0 - self.restitution**2)
         return np.array([self.stiffness, self.exponent, chi, 0.0, self.min_approach_velocity,
-                         0.0], dtype=float)
+                         0.0, 0.0], dtype=float)
 
 
 @dataclass(frozen=True, kw_only=True)

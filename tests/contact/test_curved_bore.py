@@ -21,6 +21,8 @@ from flexmbs.contact.bores import transported_frames
 from flexmbs.errors import ModelError, ScenarioError
 from tests.contact.test_potential import (
     GRADIENT_TOL,
+    STIFFNESS,
+    WIRE_R,
     _bent,
     _checked_tangent,
     eyelet_on_wire,
@@ -110,16 +112,25 @@ def test_curved_bore_force_is_the_gradient_of_its_potential(deg, push, axis):  #
         assert 0 in kinds and 8 in kinds and 4 not in kinds
 
 
-@pytest.mark.parametrize("friction", [None, 0.3])
-def test_curved_bore_tangent_equals_central_differences(friction):  # noqa: ANN001
+@pytest.mark.parametrize(("friction", "ramp"), [(None, None), (0.3, None), (None, 0.5)])
+def test_curved_bore_tangent_equals_central_differences(friction, ramp):  # noqa: ANN001
     """The assembled iteration matrix (exact contact tangent with turned sections; the stick
-    law when friction is on) against central differences of the assembled residual."""
+    law when friction is on; with ``ramp``, every contact inside the damped law's viscous
+    ramp, its δ-derivative c s′(δ) δ̇ in the stiffness, issue 53 item 2) against central
+    differences of the assembled residual."""
+    law = None
+    if ramp is not None:        # the ramp's length: `ramp` times the clearance (1.5 mm here)
+        law = fm.LinearPenalty(stiffness=STIFFNESS, damping=5.0,
+                               damping_onset=ramp * (BORE_R - WIRE_R))
     model, joint, body, _ = eyelet_on_wire(math.radians(8.0), 0.9e-3, hole=bent_bore(),
-                                           free=True, damping=5.0, friction=friction)
+                                           free=True, damping=5.0, friction=friction, law=law)
     asm = Assembly(model)
     asm.begin(asm.q_ref)
     q = _bent(asm, joint)
     v = 1e-2 * np.random.default_rng(5).standard_normal(asm.n_coords)
+    if ramp is not None:
+        depths = [-res.gap for _k, _j, _kind, _eP, res, *_ in joint._observed(q, v)]
+        assert depths and max(depths) < joint.contact.damping_onset, depths
     _checked_tangent(asm, joint, body, q, v)
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from flexmbs.contact.laws import (
+    DAMPING_ONSET,
     LAWS,
     ForceLaw,
     Hertz,
@@ -23,6 +24,7 @@ FD_RTOL = 1e-6
 LAW_CASES = [
     LinearPenalty(stiffness=1e6, damping=30.0),
     LinearPenalty(stiffness=1e6, damping=30.0, onset=2e-4),     # δ = 1e-4, 3e-5 in the onset
+    LinearPenalty(stiffness=1e6, damping=30.0, damping_onset=3e-4),   # in the viscous ramp
     Hertz(stiffness=1e9, exponent=1.5),
     Hertz(stiffness=1e7, exponent=1.1),
     HuntCrossley(stiffness=1e9, exponent=1.5, restitution=0.7),
@@ -81,6 +83,81 @@ def test_the_linear_penalty_s_smooth_onset() -> None:
     assert LinearPenalty(stiffness=k).force(1e-6, 0.0, 0.0) == (1.0, k, 0.0)
     with pytest.raises(ModelError, match="onset must be a finite number >= 0"):
         LinearPenalty(stiffness=k, onset=-1e-9)
+
+
+def test_the_damped_linear_penalty_s_viscous_force_starts_from_zero() -> None:
+    """Issue 53 item 2. Reference: f = kδ + c s(δ) δ̇, s = x²(3 − 2x), x = δ/δ_c below the
+    damping onset δ_c, 1 above: at first touch the force is 0 whatever δ̇ (the plain law jumps
+    to c δ̇ there), f and ∂f/∂δ are continuous at δ_c; a given ``onset`` is the damping's too;
+    a clearance joint gives a damped law without either DAMPING_ONSET of its clearance."""
+    k, c, dc, ddot = 2e5, 2.0, 1e-7, 0.065
+    law = LinearPenalty(stiffness=k, damping=c, damping_onset=dc)
+    assert law.force(1e-15, ddot, 0.0)[0] == pytest.approx(k * 1e-15 + 3 * c * ddot * 1e-16, rel=1e-6)
+    assert law.force(0.5 * dc, ddot, 0.0) == pytest.approx(
+        (k * 0.5 * dc + 0.5 * c * ddot, k + 1.5 * c * ddot / dc, 0.5 * c))
+    below, above = law.force(dc * (1 - 1e-12), ddot, 0.0), law.force(dc * (1 + 1e-12), ddot, 0.0)
+    assert below[0] == pytest.approx(above[0], rel=1e-9)
+    assert below[1] == pytest.approx(above[1], rel=1e-6) and below[2] == pytest.approx(above[2])
+    assert law.force(2 * dc, ddot, 0.0) == pytest.approx((2 * k * dc + c * ddot, k, c))
+    plain = LinearPenalty(stiffness=k, damping=c, damping_onset=0.0)
+    assert plain.force(1e-15, ddot, 0.0)[0] == pytest.approx(c * ddot)      # the jump
+    assert LinearPenalty(stiffness=k, damping=c, onset=dc).parameters()[6] == dc
+    assert LinearPenalty(stiffness=k, damping=c).for_clearance(1e-4).damping_onset == \
+        pytest.approx(DAMPING_ONSET * 1e-4)
+    for kept in (LinearPenalty(stiffness=k), LinearPenalty(stiffness=k, damping=c, onset=dc),
+                 plain):
+        assert kept.for_clearance(1e-4) is kept
+    assert get_law("linear", stiffness=k, damping=c, damping_onset=dc) == law
+    with pytest.raises(ModelError, match="damping_onset must be a finite number >= 0"):
+        LinearPenalty(stiffness=k, damping=c, damping_onset=-1e-9)
+
+
+def _step_residual(law: ForceLaw, delta: float, pred: float, v_pred: float, m: float,
+                   h: float) -> tuple[float, float]:
+    """One generalized-α step (ρ∞ = 0.8, the integrator's form) of a point of mass m moving
+    onto a wall, unknown its penetration δ at the step's end: R = m b (δ − δ*) + f(δ, δ̇),
+    δ̇ = v* + g (δ − δ*) (b, g: the step's ∂q̈/∂q, ∂q̇/∂q); returns (R, ∂R/∂δ)."""
+    from flexmbs.solvers.generalized_alpha import GeneralizedAlpha
+
+    am, af, gamma, beta = GeneralizedAlpha(rho_inf=0.8).parameters()
+    b, g = (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta)
+    f, kd, kv = law.force(delta, v_pred + g * (delta - pred), 0.0)
+    return m * b * (delta - pred) + f, m * b + kd + g * kv
+
+
+def test_an_implicit_step_onto_the_damped_wall_has_a_solution() -> None:
+    """Issue 53 item 2, the mechanism: a wire's section (3.06e-6 kg) reaches the wall at
+    0.065 m/s, c = 2 N s/m, k = 2e5 N/m, h = 2e-6 s. When the free motion would end the step
+    less than c v*/(m b + c g) inside the wall (here 22 % of the step's travel h v*), the plain
+    law's step equation has no root: R < 0 for every δ ≤ 0 (the free motion goes further in)
+    and R > 0 for every δ > 0 (the viscous force c δ̇ there already throws it back out);
+    Newton cycles between open and closed (as in the bore at t = 3.85 ms). With the viscous
+    force ramped in, the residual is continuous and increasing: Newton finds the root."""
+    m, c, k, h, v = 3.06e-6, 2.0, 2e5, 2e-6, 0.065
+    plain = LinearPenalty(stiffness=k, damping=c, damping_onset=0.0)
+    ramped = LinearPenalty(stiffness=k, damping=c).for_clearance(1e-4)
+    pred = 0.5 * _band(m, c, h, v)
+    assert pred > 0.1 * h * v
+    grid = np.concatenate([-np.geomspace(1e-6, 1e-14, 60), np.geomspace(1e-14, 1e-6, 60)])
+    R = np.array([_step_residual(plain, d, pred, v, m, h)[0] for d in grid])
+    assert np.all(R[grid <= 0] < 0) and np.all(R[grid > 0] > 0)          # no root
+    for law in (plain, ramped):
+        d, cycle = pred, []
+        for _ in range(30):
+            r, dr = _step_residual(law, d, pred, v, m, h)
+            d -= r / dr
+            cycle.append(d)
+        converged = abs(_step_residual(law, d, pred, v, m, h)[0]) < 1e-12 * m * v / h
+        assert converged == (law is ramped), (law, cycle[-4:])
+
+
+def _band(m: float, c: float, h: float, v: float) -> float:
+    """The predictor penetrations (0, c v/(m b + c g)) without a solution (plain law)."""
+    from flexmbs.solvers.generalized_alpha import GeneralizedAlpha
+
+    am, af, gamma, beta = GeneralizedAlpha(rho_inf=0.8).parameters()
+    b, g = (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta)
+    return c * v / (m * b + c * g)
 
 
 @pytest.mark.parametrize("law", LAW_CASES, ids=lambda x: type(x).__name__)
