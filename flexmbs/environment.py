@@ -33,12 +33,12 @@ class Variable:
         """Why ``value`` is not a value of this variable (None if it is)."""
         if self.file:
             if value and not os.path.isfile(value):
-                return f"expected the path of an existing file ({self.meaning}), got {value!r}"
+                return f"expected the path of an existing file ({self.meaning})"
             return None
         v = value.strip() if self.case_sensitive else value.strip().lower()
         if v not in self.choices:
-            shown = ", ".join(repr(c) for c in self.choices if c) or "none"
-            return f"expected one of {shown} ({self.meaning}), got {value!r}"
+            shown = ", ".join(c for c in self.choices if c) or "none"
+            return f"expected one of {shown} ({self.meaning})"
         return None
 
 
@@ -64,5 +64,5 @@ def check_environment(environ: Mapping[str, str] | None = None) -> None:
             continue
         problem = var.problem(value)
         if problem is not None:
-            raise FlexmbsError(f"environment variable {var.name}: {problem}; correct it or "
-                               f"unset it (unset {var.name})")
+            raise FlexmbsError(f"environment variable {var.name}={value!r}: {problem}; correct "
+                               f"it or unset it (unset {var.name})")

@@ -41,12 +41,13 @@ MISSING: Any = object()
 #: the unit of every number a scenario key holds -> the largest magnitude it may have (SI).
 #: A key declares its unit where it is read (``t.number("radius", gt=0, unit="m")``); a value
 #: beyond this size is not a model of anything (a radius of 1e30 m) and is refused naming the
-#: key. ``"1"``: dimensionless, bounded only by the key's own range.
+#: key. Stiffnesses are left room for parts made stiff on purpose (a rail of 1000 times steel's
+#: modulus stands for a rigid track). ``"1"``: dimensionless, bounded only by the key's range.
 UNITS: dict[str, float] = {
     "1": math.inf, "m": 1e6, "s": 1e12, "rad": 1e6, "Hz": 1e9, "m/s": 1e6, "rad/s": 1e6,
     "m/s^2": 1e7, "1/s": 1e9, "1/s^2": 1e12, "kg": 1e12, "kg/m": 1e6, "kg/m^3": 1e6,
-    "kg m": 1e9, "kg m^2": 1e15, "N": 1e12, "N m": 1e12, "N m^2": 1e12, "Pa": 1e13,
-    "N/m": 1e15, "N/m^n": 1e15, "N s/m": 1e12, "N m/rad": 1e12, "N m s/rad": 1e12,
+    "kg m": 1e9, "kg m^2": 1e15, "N": 1e15, "N m": 1e15, "N m^2": 1e18, "Pa": 1e18,
+    "N/m": 1e18, "N/m^n": 1e18, "N s/m": 1e15, "N m/rad": 1e18, "N m s/rad": 1e15,
 }
 
 
