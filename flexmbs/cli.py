@@ -181,6 +181,14 @@ def _main(argv: Sequence[str] | None) -> int:
         args = parser.parse_args(None if argv is None else list(argv))
     except SystemExit as exc:   # --help, --version, usage errors (argparse printed them)
         return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
+    from .environment import check_environment
+    from .errors import FlexmbsError
+
+    try:                        # the FLEXMBS_* variables, before anything is read or written
+        check_environment()
+    except FlexmbsError as exc:
+        error(str(exc))
+        return EXIT_BAD_INPUT
     try:
         import importlib
 

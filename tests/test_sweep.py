@@ -149,7 +149,8 @@ def test_cli_sweep_local_cluster_plot_and_errors(tmp_path, capsys):
     # one-line errors, exit 2
     for bad, text in [(["--grid", "beams.rod.elements"], "expected KEY=V1,V2"),
                       (["--grid", "beams.rod.elements=4,,6"], "an empty value"),
-                      (["--grid", "beams.rod.elements=4", "--workers", "0"], "--workers 0"),
+                      (["--grid", "beams.rod.elements=4", "--workers", "0"],
+                       "--workers: expected an integer >= 1"),
                       (["--grid", "simulation.t_endd=1,2"], "unknown key 't_endd' in simulation")]:
         assert main(["sweep", CANTILEVER, "--out", str(tmp_path / "x"), *bad]) == 2
         lines = capsys.readouterr().err.strip().splitlines()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import sys
 from collections.abc import Callable
 from typing import Any, NoReturn
@@ -19,9 +20,9 @@ EXIT_BAD_INPUT = 2
 EXIT_FAILED = 3
 EXIT_INTERRUPTED = 130
 
-__all__ = ["DOCS_URL", "EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "OneLineParser",
-           "add_quiet", "docs", "error", "failure_status", "one_line", "overrides", "raise_pending",
-           "terminate_like_ctrl_c"]
+__all__ = ["DOCS_URL", "EXIT_BAD_INPUT", "EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "Number",
+           "OneLineParser", "add_quiet", "docs", "error", "failure_status", "one_line", "overrides",
+           "raise_pending", "terminate_like_ctrl_c"]
 
 
 def docs(page: str, anchor: str = "") -> str:
@@ -51,6 +52,33 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}; see {self.prog} -h\n")
+
+
+class Number:
+    """The ``type`` of a numeric flag, and its declaration: an integer or a finite number in a
+    range (``add_argument("--fps", type=Number(gt=0))``); a bad value is argparse's one-line
+    usage error naming the flag (``argument --fps: expected a number > 0, got '0'``). The test
+    of every flag (tests/io/test_every_key.py) generates its bad values from these."""
+
+    def __init__(self, *, integer: bool = False, gt: float | None = None,
+                 ge: float | None = None) -> None:
+        self.integer, self.gt, self.ge = integer, gt, ge
+        self.__name__ = "integer" if integer else "number"
+
+    def expected(self) -> str:
+        bound = (f" > {self.gt:g}" if self.gt is not None
+                 else f" >= {self.ge:g}" if self.ge is not None else "")
+        return ("an integer" if self.integer else "a finite number") + bound
+
+    def __call__(self, text: str) -> float:
+        try:
+            v = int(text) if self.integer else float(text)
+        except ValueError:
+            v = math.nan
+        if (not math.isfinite(v) or (self.gt is not None and not v > self.gt)
+                or (self.ge is not None and not v >= self.ge)):
+            raise argparse.ArgumentTypeError(f"expected {self.expected()}, got {text!r}")
+        return v
 
 
 def overrides(args: argparse.Namespace) -> list[str]:

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from ..io.vtu import frame_files, read_pvd
-from ._common import add_quiet, docs
+from ._common import Number, add_quiet, docs
 
 __all__ = ["CAMERAS", "ViewOptions", "add_parser", "run", "screenshot", "view_script",
            "write_view_script"]
@@ -246,11 +246,11 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                         "displacement, velocity, curvature, arc_length, ...")
     p.add_argument("--camera", default="iso", choices=tuple(CAMERAS),
                    help="view direction (default iso)")
-    p.add_argument("--tube-scale", type=float, default=1.0, metavar="F",
+    p.add_argument("--tube-scale", type=Number(gt=0), default=1.0, metavar="F",
                    help="draw beams F times thicker than their radius (default 1)")
     p.add_argument("--screenshot", metavar="PNG",
                    help="also render one frame to PNG with pvbatch (needs ParaView)")
-    p.add_argument("--time", type=float, metavar="T",
+    p.add_argument("--time", type=Number(), metavar="T",
                    help="screenshot: the output at time T (default: the last)")
     p.add_argument("--size", default="1280x720", metavar="WxH", help="screenshot size in pixels")
     add_quiet(p, "do not print the files written")

@@ -7,7 +7,7 @@ import argparse
 import sys
 from typing import Any
 
-from ._common import EXIT_BAD_INPUT, add_quiet, docs
+from ._common import EXIT_BAD_INPUT, Number, add_quiet, docs
 
 __all__ = ["add_parsers", "run"]
 
@@ -19,7 +19,7 @@ def add_parsers(sub: Any) -> None:
                                         f"{docs('postprocess', 'flexmbs-render-dir')}).")
     render.add_argument("directory", metavar="DIR")
     render.add_argument("--movie", metavar="FILE", help="movie file (.mp4 or .gif)")
-    render.add_argument("--png-every", type=int, metavar="N",
+    render.add_argument("--png-every", type=Number(integer=True, ge=1), metavar="N",
                         help="write every N-th frame as PNG to DIR/frames (default: every frame "
                              "when no --movie is given)")
     render.add_argument("--camera", default="iso",
@@ -27,12 +27,12 @@ def add_parsers(sub: Any) -> None:
     render.add_argument("--color-by", default="curvature_magnitude", metavar="FIELD",
                         help="beam point field: curvature_magnitude (default), axial_strain, "
                              "displacement, velocity, curvature, arc_length")
-    render.add_argument("--tube-scale", type=float, default=1.0, metavar="F",
+    render.add_argument("--tube-scale", type=Number(gt=0), default=1.0, metavar="F",
                         help="draw beams F times thicker than their radius")
-    render.add_argument("--radius", type=float, metavar="R",
+    render.add_argument("--radius", type=Number(gt=0), metavar="R",
                         help="tube radius [m] (default: the beam radius in the output)")
     render.add_argument("--size", default="1280x720", metavar="WxH", help="image size in pixels")
-    render.add_argument("--fps", type=float, default=24.0, help="movie frame rate (default 24)")
+    render.add_argument("--fps", type=Number(gt=0), default=24.0, help="movie frame rate (default 24)")
     add_quiet(render, "no progress bar and no list of the files written")
     plot = sub.add_parser("plot", help="time-history figures of an output folder",
                           description="Write matplotlib figures (probes, energies, contact "
@@ -50,12 +50,13 @@ def add_parsers(sub: Any) -> None:
                            "Fig. 2(b); default: the middle section at the last output) and "
                            "where its contact points sit over time")
     plot.add_argument("--joint", metavar="NAME", help="section view: only this joint")
-    plot.add_argument("--section-index", type=int, metavar="K", help="section view: section K")
-    plot.add_argument("--time", type=float, metavar="T",
+    plot.add_argument("--section-index", type=Number(integer=True), metavar="K",
+                      help="section view: section K")
+    plot.add_argument("--time", type=Number(), metavar="T",
                       help="section view: the output nearest to T")
-    plot.add_argument("--radius", type=float, metavar="R",
+    plot.add_argument("--radius", type=Number(gt=0), metavar="R",
                       help="section view: bore radius [m] (default: sections.csv)")
-    plot.add_argument("--exaggeration", type=float, metavar="F",
+    plot.add_argument("--exaggeration", type=Number(gt=0), metavar="F",
                       help="section view: factor on offsets and clearance (default: clearance "
                            "drawn as half the bore radius)")
     add_quiet(plot, "do not print the files written")

@@ -16,6 +16,7 @@ from ..errors import FlexmbsError
 from ._common import (
     EXIT_BAD_INPUT,
     EXIT_OK,
+    Number,
     add_quiet,
     docs,
     error,
@@ -36,8 +37,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     run.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
     run.add_argument("--out", metavar="DIR",
                      help="output folder (default: out/<scenario name> in the current directory)")
-    run.add_argument("--t-end", type=float, metavar="T", help="end time (= --set simulation.t_end=T)")
-    run.add_argument("--dt", type=float, metavar="H", help="time step (= --set simulation.dt=H)")
+    run.add_argument("--t-end", type=Number(gt=0), metavar="T", help="end time (= --set simulation.t_end=T)")
+    run.add_argument("--dt", type=Number(gt=0), metavar="H", help="time step (= --set simulation.dt=H)")
     talk = run.add_mutually_exclusive_group()
     add_quiet(talk, "no progress bar and no final summary")
     talk.add_argument("--verbose", "-v", action="store_true",

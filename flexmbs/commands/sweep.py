@@ -14,6 +14,7 @@ from ._common import (
     EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_OK,
+    Number,
     add_quiet,
     docs,
     error,
@@ -40,7 +41,7 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="an existing Dask scheduler (tcp://host:8786 or a scheduler file); "
                             "default: a LocalCluster on this machine")
-    sweep.add_argument("--workers", type=int, metavar="N",
+    sweep.add_argument("--workers", type=Number(integer=True, ge=1), metavar="N",
                        help="LocalCluster worker processes (default: one per core)")
     add_quiet(sweep, "no progress output")
 

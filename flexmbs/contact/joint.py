@@ -1163,7 +1163,7 @@ def _current_windows(part: ClearancePart, reach: int) -> np.ndarray:
     out = np.zeros((part.r_b.size, 2), np.int64)
     for j in range(part.r_b.size):
         ns, ne = int(part.n_sec[j]) - N_TIPS, int(part.n_elem[j])
-        crossed = np.concatenate([part.elem_ws[j, :ns], part.elem_ws[j, ns:][part.tip_on[j]]])
+        crossed = np.concatenate([part.elem_ws[j, :ns], part.elem_ws[j, ns:ns + N_TIPS][part.tip_on[j]]])
         crossed = crossed[crossed >= 0]
         if crossed.size:
             out[j] = max(int(crossed.min()) - reach, 0), min(int(crossed.max()) + reach + 1, ne)

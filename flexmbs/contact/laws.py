@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -276,10 +276,10 @@ class LinearPenalty(_CommonForm):
         δ_c [m]: the penetration over which the viscous force rises smoothly (default: above).
     """
 
-    stiffness: float
-    damping: float = 0.0
-    onset: float = 0.0
-    damping_onset: float | None = None
+    stiffness: float = field(metadata={"unit": "N/m", "gt": 0.0})
+    damping: float = field(default=0.0, metadata={"unit": "N s/m", "ge": 0.0})
+    onset: float = field(default=0.0, metadata={"unit": "m", "ge": 0.0})
+    damping_onset: float | None = field(default=None, metadata={"unit": "m", "ge": 0.0})
 
     def __post_init__(self) -> None:
         _positive("LinearPenalty", "stiffness", self.stiffness)
@@ -314,8 +314,8 @@ class Hertz(_CommonForm):
         n.
     """
 
-    stiffness: float
-    exponent: float = 1.5
+    stiffness: float = field(metadata={"unit": "N/m^n", "gt": 0.0})
+    exponent: float = field(default=1.5, metadata={"unit": "1", "ge": 1.0})
 
     def __post_init__(self) -> None:
         _positive("Hertz", "stiffness", self.stiffness)
@@ -344,10 +344,10 @@ class HuntCrossley(_CommonForm):
         Lower bound of the approach velocity used in the damping term [m/s].
     """
 
-    stiffness: float
-    restitution: float
-    exponent: float = 1.5
-    min_approach_velocity: float = 1e-3
+    stiffness: float = field(metadata={"unit": "N/m^n", "gt": 0.0})
+    restitution: float = field(metadata={"unit": "1", "gt": 0.0, "le": 1.0})
+    exponent: float = field(default=1.5, metadata={"unit": "1", "ge": 1.0})
+    min_approach_velocity: float = field(default=1e-3, metadata={"unit": "m/s", "gt": 0.0})
 
     def __post_init__(self) -> None:
         _positive("HuntCrossley", "stiffness", self.stiffness)
@@ -378,10 +378,10 @@ class LankaraniNikravesh(_CommonForm):
         Lower bound of the approach velocity used in the damping term [m/s].
     """
 
-    stiffness: float
-    restitution: float
-    exponent: float = 1.5
-    min_approach_velocity: float = 1e-3
+    stiffness: float = field(metadata={"unit": "N/m^n", "gt": 0.0})
+    restitution: float = field(metadata={"unit": "1", "gt": 0.0, "le": 1.0})
+    exponent: float = field(default=1.5, metadata={"unit": "1", "ge": 1.0})
+    min_approach_velocity: float = field(default=1e-3, metadata={"unit": "m/s", "gt": 0.0})
 
     def __post_init__(self) -> None:
         _positive("LankaraniNikravesh", "stiffness", self.stiffness)

@@ -6,7 +6,9 @@
 
 Files (every one valid after every output written, so a run that stops early leaves readable
 results; the writer's thread writes them, following the run by at most :data:`QUEUE_SIZE`
-outputs, and whatever ends the run, everything queued is written before the summary):
+outputs and :data:`MAX_LAG` seconds of wall time, so that a run killed outright (SIGKILL, a
+power cut) loses at most the outputs of its last second; whatever else ends the run, everything
+queued is written before the summary):
 
 - ``<name>.pvd`` + ``vtu/<name>_NNNNNN.vtm`` with its pieces ``vtu/<name>_NNNNNN_<block>.vtp``
   (``output_frames="multiblock"``, the default), or ``vtu/<name>_NNNNNN.vtu`` (``"merged"``)
@@ -31,6 +33,7 @@ the frames continue in the form the series has (``.vtm`` or ``.vtu``), whatever
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import csv
 import dataclasses
@@ -136,6 +139,9 @@ def _rows(t: str, records: Sequence[dict], columns: Sequence[str]) -> list[list[
 
 #: outputs queued for the writer's thread at most (the solver waits when the disk is slower)
 QUEUE_SIZE = 16
+#: seconds of wall time an output may wait for the disk: an output is not handed over while
+#: one handed over longer ago than this is not written (docs/design.md, "Output folder")
+MAX_LAG = 1.0
 
 #: trailing blanks of summary.json: room for the final status on a full disk
 SUMMARY_RESERVE = 4096
@@ -225,7 +231,7 @@ class OutputWriter:
                  metadata: dict | None = None, samples_per_element: int = 8,
                  vtu_encoding: str = "binary", resume_at: float | None = None,
                  checkpoint_interval: float = 10.0, output_frames: str = "multiblock",
-                 background: bool = True) -> None:
+                 background: bool = True, max_lag: float = MAX_LAG) -> None:
         # before the folder is touched: what can refuse the output
         frames = check_output(directory, name, asm, probes=probes, write_vtu=write_vtu,
                               output_frames=output_frames,
@@ -257,6 +263,10 @@ class OutputWriter:
         self._files: list[Any] = []
         self.background = bool(background)
         self._queue: queue.Queue[_Output | _Flush | None] | None = None
+        self.max_lag = float(max_lag)
+        #: wall times at which the outputs not written yet were handed over, oldest first
+        self._pending: collections.deque[float] = collections.deque()
+        self._stored = threading.Condition()
         self._thread: threading.Thread | None = None
         self._failure: BaseException | None = None   # the writer thread's error
         self._failure_raised = False
@@ -375,6 +385,9 @@ class OutputWriter:
             self._store(job)
             self._written = job.written
             return
+        self._wait_for_lag()
+        with self._stored:
+            self._pending.append(time.perf_counter())
         while True:     # the queue is bounded; a thread that stopped on an error takes no more
             self._raise_failure()
             try:
@@ -384,6 +397,16 @@ class OutputWriter:
                 if self._thread is None or not self._thread.is_alive():
                     self._raise_failure()
                     raise RuntimeError("flexmbs output thread ended") from None
+
+    def _wait_for_lag(self) -> None:
+        """Wait while an output handed over more than :attr:`max_lag` seconds ago is not on
+        disk (the bound on what a SIGKILL loses)."""
+        with self._stored:
+            while self._pending and time.perf_counter() - self._pending[0] > self.max_lag:
+                self._raise_failure()
+                if self._thread is None or not self._thread.is_alive():
+                    return
+                self._stored.wait(0.05)
 
     def _store(self, job: _Output) -> None:
         """Write the files of one output (the writer's thread, or :meth:`write` without it)."""
@@ -433,6 +456,10 @@ class OutputWriter:
                     self._written = job.written
                 except BaseException as exc:  # noqa: BLE001 - raised in the caller's thread
                     self._failure = exc
+            with self._stored:
+                if self._pending:
+                    self._pending.popleft()
+                self._stored.notify_all()
 
     def _raise_failure(self, again: bool = True) -> None:
         """Raise the writer thread's error in the caller's thread (the output is broken: at

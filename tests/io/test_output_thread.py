@@ -242,3 +242,38 @@ def test_after_an_error_every_write_raises_it(tmp_path, monkeypatch):
                 w.write(st)
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == \
         "failed: RuntimeError: broken"
+
+
+@pytest.mark.parametrize("max_lag, bounded", [(0.3, True), (float("inf"), False)])
+def test_the_outputs_not_on_disk_are_bounded_by_time(tmp_path, monkeypatch, max_lag, bounded):
+    """Issue "nothing lost, part three", item 2: while each output takes 0.15 s to store, an
+    output is handed over only when none handed over more than ``max_lag`` ago is still
+    waiting: a SIGKILL loses at most the outputs of the last ``max_lag`` seconds (and at most
+    QUEUE_SIZE). Without the bound (``max_lag = inf``) the outputs wait up to QUEUE_SIZE deep."""
+    asm, _, st = _pendulum()
+    real = OutputWriter._store
+    stored: set[float] = set()
+
+    def slow(self, job):  # noqa: ANN001, ANN202
+        time.sleep(0.15)
+        real(self, job)
+        stored.add(float(job.state.t))
+
+    monkeypatch.setattr(OutputWriter, "_store", slow)
+    handed: list[tuple[float, float]] = []
+    worst = 0.0
+    with OutputWriter(tmp_path, "demo", asm, write_vtu=False, max_lag=max_lag) as w:
+        for k in range(20):
+            time.sleep(0.05)                # the run computes the next output
+            st_k = st.copy()
+            st_k.t = 0.01 * k
+            w.write(st_k)
+            now = time.perf_counter()
+            handed.append((st_k.t, now))
+            waiting = [now - h for t, h in handed[:-1] if t not in stored]
+            worst = max(worst, *waiting, 0.0)
+    assert len(stored) == 20
+    if bounded:
+        assert worst <= max_lag + 0.05, worst
+    else:
+        assert worst > 0.5, worst

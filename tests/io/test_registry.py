@@ -89,8 +89,8 @@ def test_superellipse_keys_are_the_python_parameters() -> None:
                                       'length = 0.04 }')])
     with pytest.raises(ScenarioError, match=r"joints\[sleeve\]\.hole\.b: missing required key"):
         load_scenario(SLEEVE, [_shape('{ shape = "superellipse", a = 2.6e-3, length = 0.04 }')])
-    with pytest.raises(ScenarioError, match=r"^joints\[sleeve\]\.hole: SuperellipseSection: "
-                                            "exponent must be >= 2"):
+    with pytest.raises(ScenarioError, match=r"^joints\[sleeve\]\.hole\.exponent: expected a "
+                                            "number >= 2, got 1.5"):
         load_scenario(SLEEVE, [_shape('{ shape = "superellipse", a = 2.6e-3, b = 2.6e-3, '
                                       'exponent = 1.5, length = 0.04 }')])
 

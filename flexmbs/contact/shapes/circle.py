@@ -5,7 +5,7 @@ stationary points of an ellipse's penetration, and :class:`CircleSection` (scena
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,7 +72,7 @@ def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
 class CircleSection(HoleSection):
     """Circular bore of radius R (docs/theory.md §II.3): closed-form quartic detector."""
 
-    radius: float
+    radius: float = field(metadata={"unit": "m", "gt": 0.0})
 
     def __post_init__(self) -> None:
         if not (isinstance(self.radius, (int, float)) and self.radius > 0.0):

@@ -8,7 +8,7 @@ detector, docs/theory.md §II.6). The wall is C¹ (its curvature jumps where a f
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -105,11 +105,11 @@ class RoundedRectangleSection(HoleSection):
     span two of them (else a contact at a small corner could fall between samples), hence a
     smallest ``r`` (the error names it); ``samples``: the Python path's sampling."""
 
-    w: float
-    h: float
-    r: float
-    samples: int = 128
-    angle: float = 0.0
+    w: float = field(metadata={"unit": "m", "gt": 0.0})
+    h: float = field(metadata={"unit": "m", "gt": 0.0})
+    r: float = field(metadata={"unit": "m", "gt": 0.0})
+    samples: int = field(default=128, metadata={"ge": 64})
+    angle: float = field(default=0.0, metadata={"unit": "rad"})
 
     def __post_init__(self) -> None:
         for name in ("w", "h", "r"):

@@ -5,7 +5,7 @@ parametrisation, turned by the section's angle) and inside test, and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -87,11 +87,11 @@ class SuperellipseSection(HoleSection):
     from body y towards body z, radians). Parameter names as in the scenario: ``a``, ``b``,
     ``exponent``, ``angle``."""
 
-    a: float
-    b: float
-    exponent: float = 2.0
-    samples: int = 128
-    angle: float = 0.0
+    a: float = field(metadata={"unit": "m", "gt": 0.0})
+    b: float = field(metadata={"unit": "m", "gt": 0.0})
+    exponent: float = field(default=2.0, metadata={"unit": "1", "ge": 2.0})
+    samples: int = field(default=128, metadata={"ge": 64})
+    angle: float = field(default=0.0, metadata={"unit": "rad"})
 
     def __post_init__(self) -> None:
         for name in ("a", "b"):

@@ -67,7 +67,7 @@ def _ancf_rod14(t: Table, ctx: BuildContext) -> Beam:
         if not t.has("axial_stiffness"):
             raise ScenarioError(f"{t.key('twist_inertia')}: only with an explicit section; with "
                                 "radius + density it is density * pi r^4/2")
-        stiffness = replace(stiffness, twist_inertia=t.number("twist_inertia", gt=0))
+        stiffness = replace(stiffness, twist_inertia=t.number("twist_inertia", gt=0, unit="kg m"))
     return _add(t, ctx, centerline, stiffness, element="ancf_rod14", options=None)
 
 
@@ -79,9 +79,9 @@ def _geometry_and_section(t: Table, ctx: BuildContext) -> tuple[Centerline, Beam
 def _add(t: Table, ctx: BuildContext, centerline: Centerline, stiffness: BeamStiffness, *,
          element: str, options: CableOptions | None) -> Beam:
     return ctx.model.add_beam(centerline, section=stiffness, name=t.raw["name"], options=options,
-                              damping=t.number("damping", 0.0, ge=0),
+                              damping=t.number("damping", 0.0, ge=0, unit="s"),
                               reference_axial_strain=t.number("reference_axial_strain", 0.0,
-                                                              gt=-1, lt=1), element=element)
+                                                              gt=-1, lt=1, unit="1"), element=element)
 
 
 def read_geometry(ctx: BuildContext, g: Table, elements: int | None, beam: Table) -> Centerline:
@@ -118,12 +118,13 @@ def read_geometry(ctx: BuildContext, g: Table, elements: int | None, beam: Table
         if kind == "line":
             assert elements is not None  # checked above
             sub.allow(("start", "end"))
-            return line(sub.vector("start"), sub.vector("end"), elements=elements)
+            return line(sub.vector("start", unit="m"), sub.vector("end", unit="m"), elements=elements)
         if kind == "arc":
             assert elements is not None
             sub.allow(("center", "radius", "start", "angle", "normal"))
-            return arc(sub.vector("center"), sub.number("radius", gt=0), sub.vector("start"),
-                       sub.number("angle"), sub.vector("normal", np.array([0.0, 0.0, 1.0])),
+            return arc(sub.vector("center", unit="m"), sub.number("radius", gt=0, unit="m"),
+                       sub.vector("start", unit="m"), sub.number("angle", unit="rad"),
+                       sub.vector("normal", np.array([0.0, 0.0, 1.0]), unit="1"),
                        elements=elements)
         sub.allow(("points", "tangents", "closed"))
         pts = _points(sub, "points")
@@ -151,11 +152,11 @@ def read_stiffness(t: Table) -> BeamStiffness:
             raise ScenarioError(f"{t.path}: give the section either as radius + youngs_modulus + "
                                 "density or as axial_stiffness + bending_stiffness + "
                                 f"mass_per_length, not both (got {', '.join(explicit + mixed)})")
-        return BeamStiffness(axial_stiffness=t.number("axial_stiffness", gt=0),
-                             bending_stiffness=t.number("bending_stiffness", gt=0),
-                             mass_per_length=t.number("mass_per_length", ge=0),
-                             torsional_stiffness=t.number("torsional_stiffness", None, gt=0),
-                             radius=t.number("radius", None, gt=0))
+        return BeamStiffness(axial_stiffness=t.number("axial_stiffness", gt=0, unit="N"),
+                             bending_stiffness=t.number("bending_stiffness", gt=0, unit="N m^2"),
+                             mass_per_length=t.number("mass_per_length", ge=0, unit="kg/m"),
+                             torsional_stiffness=t.number("torsional_stiffness", None, gt=0, unit="N m^2"),
+                             radius=t.number("radius", None, gt=0, unit="m"))
     if t.has("torsional_stiffness"):
         raise ScenarioError(f"{t.key('torsional_stiffness')}: only with an explicit section "
                             "(axial_stiffness, bending_stiffness, mass_per_length); with "
@@ -163,16 +164,16 @@ def read_stiffness(t: Table) -> BeamStiffness:
     if not t.has("radius") and not t.has("youngs_modulus"):
         raise ScenarioError(f"{t.path}: missing section: give radius + youngs_modulus + density "
                             "or axial_stiffness + bending_stiffness + mass_per_length")
-    radius = t.number("radius", gt=0)
-    E = t.number("youngs_modulus", gt=0)
-    rho = t.number("density", ge=0)
+    radius = t.number("radius", gt=0, unit="m")
+    E = t.number("youngs_modulus", gt=0, unit="Pa")
+    rho = t.number("density", ge=0, unit="kg/m^3")
     t.exclusive("poisson_ratio", "shear_modulus")
     if t.has("shear_modulus"):
-        G = t.number("shear_modulus", gt=0)
+        G = t.number("shear_modulus", gt=0, unit="Pa")
         nu = E / (2 * G) - 1
         if not -1 < nu < 0.5:
             raise t.fail("shear_modulus", f"a number > {E / 3:g} (youngs_modulus/3, so that the "
                          "Poisson ratio E/2G - 1 is in (-1, 0.5))", G)
     else:
-        nu = t.number("poisson_ratio", 0.3, gt=-1, lt=0.5)
+        nu = t.number("poisson_ratio", 0.3, gt=-1, lt=0.5, unit="1")
     return BeamStiffness.from_section(CircularSection(radius), Material(E=E, rho=rho, nu=nu))

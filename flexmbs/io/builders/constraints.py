@@ -72,7 +72,7 @@ def _global_point(obj: RigidBody | Ground | Node, local: np.ndarray) -> np.ndarr
 
 
 def _axis(t: Table, default: Any = MISSING) -> Any:
-    ax = t.vector("axis", default)
+    ax = t.vector("axis", default, unit="1")
     if ax is not None and not np.linalg.norm(ax) > 0:
         raise t.fail("axis", "a non-zero direction [x, y, z]", ax.tolist())
     return ax
@@ -85,18 +85,19 @@ def _spherical(t: Table, ctx: BuildContext) -> Any:
     a = _first(ctx, t)
     if isinstance(a, Node) and t.has("point"):
         raise ScenarioError(f"{t.key('point')}: a beam node has no body frame; omit 'point'")
-    x = _global_point(a, t.vector("point", np.zeros(3)))
+    x = _global_point(a, t.vector("point", np.zeros(3), unit="m"))
     b: RigidBody | Ground
     if t.has("body2"):
         if t.has("ground_point"):
             raise ScenarioError(f"{t.path}: give either body2 (+ point2) or ground_point, not both")
         b = ctx.body(t, "body2")
-        other, key = _global_point(b, t.vector("point2", np.zeros(3))), "point2"
+        other, key = _global_point(b, t.vector("point2", np.zeros(3), unit="m")), "point2"
     else:
         if t.has("point2"):
             raise ScenarioError(f"{t.key('point2')}: only with body2 = \"<body name>\"")
         b = GROUND
-        other, key = (t.vector("ground_point"), "ground_point") if t.has("ground_point") else (x, "")
+        other, key = ((t.vector("ground_point", unit="m"), "ground_point")
+                      if t.has("ground_point") else (x, ""))
     gap = float(np.linalg.norm(other - x))
     if key and gap > 1e-9 * max(1.0, float(np.linalg.norm(x))):
         raise ScenarioError(f"{t.key(key)}: expected the same global point as the first object's "
@@ -115,7 +116,7 @@ def _body(ctx: BuildContext, t: Table) -> RigidBody:
 def _revolute(t: Table, ctx: BuildContext) -> Any:
     """Rotation about ``axis`` through ``point`` only."""
     t.allow(_keys("body", "body2", "point", "axis"))
-    return ctx.model.revolute(_body(ctx, t), _second(ctx, t), point=t.vector("point"),
+    return ctx.model.revolute(_body(ctx, t), _second(ctx, t), point=t.vector("point", unit="m"),
                               axis=_axis(t), name=t.raw.get("name"))
 
 
@@ -123,7 +124,7 @@ def _revolute(t: Table, ctx: BuildContext) -> Any:
 def _prismatic(t: Table, ctx: BuildContext) -> Any:
     """Translation along ``axis`` only."""
     t.allow(_keys("body", "body2", "point", "axis"))
-    return ctx.model.prismatic(_body(ctx, t), _second(ctx, t), point=t.vector("point"),
+    return ctx.model.prismatic(_body(ctx, t), _second(ctx, t), point=t.vector("point", unit="m"),
                                axis=_axis(t), name=t.raw.get("name"))
 
 
@@ -146,7 +147,7 @@ def _prescribed(t: Table, ctx: BuildContext) -> Any:
             or not all(isinstance(c, int) and not isinstance(c, bool) and 0 <= c < n for c in comps)):
         what = "node: 0-2 position, 3-5 slope" if n == 6 else "body: 0-2 position, 3-6 Euler parameters"
         raise t.fail("components", f"a list of distinct indices in 0..{n - 1} ({what})", comps)
-    fn = read_function(t, "function", Constant(0.0))
+    fn = read_function(t, "function", Constant(0.0), unit="m")
     return ctx.model.prescribe(target, comps, fn, name=t.raw.get("name"))
 
 
@@ -173,7 +174,7 @@ def _joint(t: Table, ctx: BuildContext) -> Any:
         masks[k] = tuple(int(x) for x in m)
     if sum(masks["translation"]) + sum(masks["rotation"]) == 0:
         raise ScenarioError(f"{t.path}: translation and rotation lock nothing; set at least one 1")
-    return ctx.model.joint(a, b, point=t.vector("point"), axis=_axis(t, None), frame=frame,
+    return ctx.model.joint(a, b, point=t.vector("point", unit="m"), axis=_axis(t, None), frame=frame,
                            translation=masks["translation"], rotation=masks["rotation"],
                            name=t.raw.get("name"))
 
@@ -186,5 +187,5 @@ def _driver(t: Table, ctx: BuildContext) -> Any:
     motion = t.get("motion", None)
     if motion is not None and motion not in ("rotation", "slide"):
         raise t.fail("motion", '"rotation" or "slide"', motion)
-    fn = read_function(t, "function", Constant(0.0))
+    fn = read_function(t, "function", Constant(0.0), unit="m" if motion == "slide" else "rad")
     return ctx.model.add_driver(joint, fn, motion=motion, name=t.raw.get("name"))

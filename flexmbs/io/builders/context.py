@@ -85,7 +85,7 @@ class BuildContext:
 
     def arc_length(self, t: Table, beam: Beam, key: str = "s") -> float:
         """A reference arc length of ``beam`` (within its length)."""
-        s = t.number(key)
+        s = t.number(key, unit="m")
         tol = beam.length_tolerance
         if not -tol <= s <= beam.length + tol:
             raise ScenarioError(f"{t.key(key)}: expected an arc length in [0, {beam.length!r}] "

@@ -42,12 +42,13 @@ def read_friction(t: Table, key: str = "friction") -> Friction | None:
     ``friction_velocity`` beside it, the regularised law of earlier versions) or a table
     ``{ mu, mu_static, law = "stick" | "regularised", stiffness, damping, velocity }``. None if
     absent or zero."""
+    t.note(key, "value")        # a number or a table
     if not t.has(key):
         return None
     if not isinstance(t.raw[key], dict):
-        mu = t.number(key, ge=0.0)
+        mu = t.number(key, ge=0.0, unit="1")
         if t.has("friction_velocity"):
-            velocity = t.number("friction_velocity", gt=0.0)
+            velocity = t.number("friction_velocity", gt=0.0, unit="m/s")
             return Friction(mu=mu, law="regularised", velocity=velocity) if mu > 0 else None
         return Friction(mu=mu) if mu > 0 else None
     if t.has("friction_velocity"):
@@ -57,8 +58,8 @@ def read_friction(t: Table, key: str = "friction") -> Friction | None:
     f = t.table(key)
     f.allow(FRICTION_KEYS)
     law = f.choice("law", FRICTION_LAWS, "stick", what="friction law")
-    mu = f.number("mu", ge=0.0)
-    mu_s = f.number("mu_static", None, ge=0.0)
+    mu = f.number("mu", ge=0.0, unit="1")
+    mu_s = f.number("mu_static", None, ge=0.0, unit="1")
     if mu_s is not None and mu_s < mu:
         raise ScenarioError(f"{f.key('mu_static')}: expected a static coefficient >= mu ({mu:g}), "
                             f"got {mu_s:g}")
@@ -71,9 +72,9 @@ def read_friction(t: Table, key: str = "friction") -> Friction | None:
                             "takes mu, mu_static, stiffness and damping)")
     with at(f.path):
         friction = Friction(mu=mu, mu_static=mu_s, law=law,
-                            stiffness=f.number("stiffness", None, gt=0.0),
-                            damping=f.number("damping", 0.0, ge=0.0),
-                            velocity=f.number("velocity", 1e-3, gt=0.0))
+                            stiffness=f.number("stiffness", None, gt=0.0, unit="N/m"),
+                            damping=f.number("damping", 0.0, ge=0.0, unit="N s/m"),
+                            velocity=f.number("velocity", 1e-3, gt=0.0, unit="m/s"))
     return friction if mu > 0 or (mu_s or 0.0) > 0 else None
 
 
@@ -90,10 +91,10 @@ def _sliding(t: Table, ctx: BuildContext) -> Any:
     joint = SlidingJoint(
         beam, body, name=t.raw["name"],
         variant=t.choice("variant", ("cylindrical", "ring"), "cylindrical", what="variant"),
-        s0=s0, hole_point=t.vector("hole_point", (0.0, 0.0, 0.0)),
-        axis=t.vector("axis", (1.0, 0.0, 0.0)),
+        s0=s0, hole_point=t.vector("hole_point", (0.0, 0.0, 0.0), unit="m"),
+        axis=t.vector("axis", (1.0, 0.0, 0.0), unit="1"),
         friction=read_friction(t),
-        axial_force=read_function(t, "axial_force", None))
+        axial_force=read_function(t, "axial_force", None, unit="N"))
     return ctx.model.add_joint(joint)
 
 
@@ -114,7 +115,7 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
                                 "{ line | arc | polyline | mesh }); a straight bore takes "
                                 "length and sections")
     hole = read_bore(h, section, ctx) if h.has("path") else Hole(
-        section, h.number("length", gt=0.0), h.integer("sections", 9, ge=1),
+        section, h.number("length", gt=0.0, unit="m"), h.integer("sections", 9, ge=1),
         h.boolean("open_ends", False))
     c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
     contact_law = read_contact_law(c)
@@ -125,14 +126,14 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     if t.has("axis") and h.has("path"):
         raise ScenarioError(f"{t.key('axis')}: turns a straight bore; a bore along a path runs "
                             f"along its path ({h.key('path')}, body coordinates): drop axis")
-    axis = t.vector("axis", (1.0, 0.0, 0.0))
+    axis = t.vector("axis", (1.0, 0.0, 0.0), unit="1")
     if not np.linalg.norm(axis) > 0:
         raise t.fail("axis", "the hole's direction in body coordinates, not zero", t.raw["axis"])
     with at(h.path):        # the hole against the beam: "joints[j].hole: the hole ... "
         joint = SlidingClearanceJoint(
             beam, body, hole=hole, contact=contact_law, friction=friction,
-            hole_point=h.vector("point", (0.0, 0.0, 0.0)),
-            beam_radius=t.number("beam_radius", gt=0.0) if t.has("beam_radius") else None,
+            hole_point=h.vector("point", (0.0, 0.0, 0.0), unit="m"),
+            beam_radius=t.number("beam_radius", gt=0.0, unit="m") if t.has("beam_radius") else None,
             tangent=tangent, detection=detection, name=t.raw["name"], axis=axis)
     if body.name in ctx.resting:      # pose = { on_beam, s, rest = "bore" }
         direction, where = ctx.resting.pop(body.name)
@@ -196,8 +197,8 @@ def read_bore(h: Table, section: HoleSection, ctx: BuildContext) -> Any:
     with at(h.path):
         return CurvedBore(path, section=section,
                           sections=h.integer("sections", ge=2) if which == "sections" else None,
-                          spacing=h.number("spacing", gt=0.0) if which == "spacing" else None,
-                          up=h.vector("up") if h.has("up") else None,
+                          spacing=h.number("spacing", gt=0.0, unit="m") if which == "spacing" else None,
+                          up=h.vector("up", unit="1") if h.has("up") else None,
                           open_ends=h.boolean("open_ends", True))
 
 

@@ -26,13 +26,15 @@ FUNCTIONS = ("constant", "ramp", "half_sine", "sine", "table")
 D = TypeVar("D", bound="TimeFunction | None")
 
 
-def read_function(t: Table, key: str, default: D) -> TimeFunction | D:
-    """A time function: a number (constant) or ``{ type = "ramp" | "half_sine" | ... }``."""
+def read_function(t: Table, key: str, default: D, *, unit: str) -> TimeFunction | D:
+    """A time function: a number (constant) or ``{ type = "ramp" | "half_sine" | ... }``;
+    ``unit``: that of its values (:data:`~flexmbs.io.tables.UNITS`)."""
+    t.note(key, "function", unit=unit)
     if not t.has(key):
         return default
     v = t.raw[key]
     if is_number(v):
-        return Constant(float(t.number(key)))
+        return Constant(float(t.number(key, unit=unit)))
     if not isinstance(v, Mapping):
         raise t.fail(key, "a number or a time function table { type = "
                      f"{' | '.join(repr(k) for k in FUNCTIONS)}, ... }}", v)
@@ -40,22 +42,24 @@ def read_function(t: Table, key: str, default: D) -> TimeFunction | D:
     kind = f.choice("type", FUNCTIONS, what="time function")
     if kind == "constant":
         f.allow(("type", "value"))
-        return Constant(f.number("value"))
+        return Constant(f.number("value", unit=unit))
     if kind == "ramp":
         f.allow(("type", "start", "end", "value", "smooth"))
-        start, end = f.number("start", 0.0), f.number("end")
+        start, end = f.number("start", 0.0, unit="s"), f.number("end", unit="s")
         if not end > start:
             raise f.fail("end", f"a time > start = {start:g}", end)
-        return Ramp(start=start, end=end, value=f.number("value", 1.0),
+        return Ramp(start=start, end=end, value=f.number("value", 1.0, unit=unit),
                     smooth=f.boolean("smooth", False))
     if kind == "half_sine":
         f.allow(("type", "duration", "start", "amplitude"))
-        return HalfSine(duration=f.number("duration", gt=0), start=f.number("start", 0.0),
-                        amplitude=f.number("amplitude", 1.0))
+        return HalfSine(duration=f.number("duration", gt=0, unit="s"),
+                        start=f.number("start", 0.0, unit="s"),
+                        amplitude=f.number("amplitude", 1.0, unit=unit))
     if kind == "sine":
         f.allow(("type", "amplitude", "frequency", "phase"))
-        return Sine(amplitude=f.number("amplitude", 1.0), frequency=f.number("frequency", gt=0),
-                    phase=f.number("phase", 0.0))
+        return Sine(amplitude=f.number("amplitude", 1.0, unit=unit),
+                    frequency=f.number("frequency", gt=0, unit="Hz"),
+                    phase=f.number("phase", 0.0, unit="rad"))
     f.allow(("type", "times", "values"))
     times = f.get("times", expected="a list of times")
     values = f.get("values", expected="a list of numbers")
@@ -63,6 +67,7 @@ def read_function(t: Table, key: str, default: D) -> TimeFunction | D:
         if not (isinstance(arr, list) and arr and all(is_number(x) and math.isfinite(x)
                                                        for x in arr)):
             raise f.fail(k, "a non-empty list of numbers", arr)
+        f.check_size(k, arr, "s" if k == "times" else unit, "a list of numbers")
     if len(times) != len(values):
         raise f.fail("values", f"{len(times)} numbers (one per entry of times)", values)
     if any(b <= a for a, b in zip(times[:-1], times[1:], strict=True)):
@@ -80,9 +85,9 @@ def _point_load(t: Table, ctx: BuildContext) -> Any:
     if not t.has("force") and not t.has("moment"):
         raise ScenarioError(f"{t.key('force')}: missing required key (expected 3 numbers [N]; "
                             "give force and/or moment)")
-    force = t.vector("force", np.zeros(3))
-    moment = t.vector("moment", None)
-    fn = read_function(t, "function", Constant(1.0))
+    force = t.vector("force", np.zeros(3), unit="N")
+    moment = t.vector("moment", None, unit="N m")
+    fn = read_function(t, "function", Constant(1.0), unit="1")
     target: Any
     if which == "body":
         for k in ("node", "s"):
@@ -106,7 +111,7 @@ def _point_load(t: Table, ctx: BuildContext) -> Any:
                                     "give node instead of s")
             target = (beam, ctx.arc_length(t, beam))
     return ctx.model.add_point_load(target, force, moment=moment,
-                                    point=t.vector("point", np.zeros(3)), function=fn,
+                                    point=t.vector("point", np.zeros(3), unit="m"), function=fn,
                                     name=t.raw.get("name"))
 
 
@@ -115,6 +120,6 @@ def _distributed_load(t: Table, ctx: BuildContext) -> Any:
     """Force per length on a whole beam."""
     t.allow(("type", "name", "beam", "force", "function"))
     beam = ctx.beam(t)
-    return ctx.model.add_distributed_load(beam, t.vector("force"),
-                                          function=read_function(t, "function", Constant(1.0)),
+    return ctx.model.add_distributed_load(beam, t.vector("force", unit="N/m"),
+                                          function=read_function(t, "function", Constant(1.0), unit="1"),
                                           name=t.raw.get("name"))

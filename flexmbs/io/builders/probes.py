@@ -53,7 +53,7 @@ def _body_orientation(t: Table, ctx: BuildContext) -> probes.Probe:
 def _body_point(t: Table, ctx: BuildContext) -> probes.Probe:
     t.allow(("name", "type", "body", "point", "quantity"))
     quantity = t.choice("quantity", ("position", "displacement"), "position", what="quantity")
-    return probes.BodyPointProbe(t.raw["name"], ctx.body(t), t.vector("point"), quantity)
+    return probes.BodyPointProbe(t.raw["name"], ctx.body(t), t.vector("point", unit="m"), quantity)
 
 
 @PROBES.register("energy")

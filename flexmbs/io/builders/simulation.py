@@ -73,21 +73,21 @@ def read_simulation(t: Table) -> SimulationSettings:
              "step_tolerance", "newton"))
     integrator = t.choice("integrator", INTEGRATORS, "generalized_alpha", what="integrator")
     static = integrator == "static"
-    t_end = t.number("t_end", 1.0 if static else MISSING, gt=0)
-    dt = t.number("dt", t_end if static else MISSING, gt=0)
+    t_end = t.number("t_end", 1.0 if static else MISSING, gt=0, unit="s")
+    dt = t.number("dt", t_end if static else MISSING, gt=0, unit="s")
     if dt > t_end:
         raise t.fail("dt", f"a time step <= t_end = {t_end:g}", dt)
     lo = 0.5 if integrator == "hht" else 0.0
-    rho_inf = t.number("rho_inf", 0.8, ge=lo, le=1.0)
-    gravity = t.vector("gravity", np.zeros(3))
-    out = t.number("output_interval", None, gt=0)
+    rho_inf = t.number("rho_inf", 0.8, ge=lo, le=1.0, unit="1")
+    gravity = t.vector("gravity", np.zeros(3), unit="m/s^2")
+    out = t.number("output_interval", None, gt=0, unit="s")
     if out is not None and out < dt * (1 - 1e-12):
         raise t.fail("output_interval", f"a number >= dt = {dt:g} (one output per step at most)", out)
-    min_step = t.number("min_step", None, gt=0)
+    min_step = t.number("min_step", None, gt=0, unit="s")
     if min_step is not None and min_step > dt:
         raise t.fail("min_step", f"a number <= dt = {dt:g}", min_step)
     adaptive = t.boolean("adaptive", True)
-    step_tolerance = t.number("step_tolerance", 0.0, ge=0.0)
+    step_tolerance = t.number("step_tolerance", 0.0, ge=0.0, unit="1")
     if step_tolerance > 0.0 and not adaptive:
         raise t.fail("step_tolerance", "0 when adaptive = false (a step refused for its error is "
                      "retried with half the step), or adaptive = true", step_tolerance)
@@ -100,7 +100,8 @@ def read_simulation(t: Table) -> SimulationSettings:
                 continue
             newton[k] = (nt.integer(k, ge=1) if kind == "int" else nt.integer(k, ge=0)
                          if kind == "count" else nt.boolean(k) if kind == "bool"
-                         else nt.number(k, gt=0, lt=1) if kind == "ratio" else nt.number(k, gt=0))
+                         else nt.number(k, gt=0, lt=1, unit="1") if kind == "ratio"
+                         else nt.number(k, gt=0, unit="1"))
     gx, gy, gz = (float(x) for x in gravity)
     return SimulationSettings(
         t_end=t_end, dt=dt, integrator=integrator, rho_inf=rho_inf, gravity=(gx, gy, gz),
@@ -110,7 +111,7 @@ def read_simulation(t: Table) -> SimulationSettings:
         adaptive=adaptive, min_step=min_step,
         redundant_constraints=t.choice("redundant_constraints", ("error", "drop"), "error"),
         load_steps=t.integer("load_steps", 1, ge=1),
-        static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0),
+        static_stabilizer=t.number("static_stabilizer", 0.0, ge=0.0, unit="1/s^2"),
         predictor=t.choice("predictor", PREDICTORS, "constant_acceleration", what="predictor"),
         compiled=t.boolean("compiled", True),
         constraint_level=t.choice("constraint_level", CONSTRAINT_LEVELS, "position",

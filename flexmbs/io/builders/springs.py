@@ -60,14 +60,16 @@ def _translational(t: Table, ctx: BuildContext) -> Any:
         raise ScenarioError(f"{t.key('stiffness')}: missing required key (N/m; or a "
                             "force-elongation table)")
     table = _table(t)
-    rest = t.number("rest_length", None, ge=0.0) if t.has("rest_length") else None
+    rest = t.number("rest_length", None, ge=0.0, unit="m") if t.has("rest_length") else None
     for k in ("point", "point2"):
         if t.has(k) and not isinstance(t.raw[k], list):
             raise t.fail(k, "[x, y, z]", show_value(t.raw[k]))
     return ctx.model.add_spring_damper(
-        a, b, point_a=t.vector("point", (0.0, 0.0, 0.0)), point_b=t.vector("point2", (0.0, 0.0, 0.0)),
-        stiffness=t.number("stiffness", 0.0, ge=0.0), damping=t.number("damping", 0.0, ge=0.0),
-        rest_length=rest, preload=t.number("preload", 0.0), table=table, name=t.raw.get("name"))
+        a, b, point_a=t.vector("point", (0.0, 0.0, 0.0), unit="m"),
+        point_b=t.vector("point2", (0.0, 0.0, 0.0), unit="m"),
+        stiffness=t.number("stiffness", 0.0, ge=0.0, unit="N/m"),
+        damping=t.number("damping", 0.0, ge=0.0, unit="N s/m"),
+        rest_length=rest, preload=t.number("preload", 0.0, unit="N"), table=table, name=t.raw.get("name"))
 
 
 @SPRINGS.register("rotational")
@@ -82,6 +84,7 @@ def _rotational(t: Table, ctx: BuildContext) -> Any:
                             "torque-angle table)")
     table = _table(t, "[[angle, torque], ...] with at least 2 rows")
     return ctx.model.add_rotational_spring(
-        joint, stiffness=t.number("stiffness", 0.0, ge=0.0),
-        damping=t.number("damping", 0.0, ge=0.0), rest_angle=t.number("rest_angle", 0.0),
-        preload=t.number("preload", 0.0), table=table, name=t.raw.get("name"))
+        joint, stiffness=t.number("stiffness", 0.0, ge=0.0, unit="N m/rad"),
+        damping=t.number("damping", 0.0, ge=0.0, unit="N m s/rad"),
+        rest_angle=t.number("rest_angle", 0.0, unit="rad"),
+        preload=t.number("preload", 0.0, unit="N m"), table=table, name=t.raw.get("name"))

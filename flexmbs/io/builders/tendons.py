@@ -37,7 +37,7 @@ TENDON_KEYS = ("name", "route", "anchor", "lead", *_SECTION_KEYS, "element_lengt
 def _body_point(e: Table, ctx: BuildContext) -> tuple[Any, Any]:
     """``{ body = "<name>", point = [x, y, z] }`` (body coordinates, m)."""
     e.allow(("body", "point"))
-    return ctx.body(e), e.vector("point")
+    return ctx.body(e), e.vector("point", unit="m")
 
 
 def _route(t: Table, ctx: BuildContext) -> list[tuple[Any, Any]]:
@@ -70,14 +70,14 @@ def build_tendon(t: Table, ctx: BuildContext) -> TendonParts:
         contact, friction = read_contact_law(c), read_friction(c)
     with at(t.path):
         spec = Tendon(
-            name=t.raw["name"], route=route, anchor=anchor, lead=t.number("lead", gt=0.0),
-            radius=section.radius, section=section, clearance=t.number("clearance", gt=0.0),
-            element_length=t.number("element_length", None, gt=0.0),
-            elements=t.integer("elements", None, ge=1), damping=t.number("damping", 0.0, ge=0.0),
-            hole_length=t.number("hole_length", 1e-3, gt=0.0),
+            name=t.raw["name"], route=route, anchor=anchor, lead=t.number("lead", gt=0.0, unit="m"),
+            radius=section.radius, section=section, clearance=t.number("clearance", gt=0.0, unit="m"),
+            element_length=t.number("element_length", None, gt=0.0, unit="m"),
+            elements=t.integer("elements", None, ge=1), damping=t.number("damping", 0.0, ge=0.0, unit="s"),
+            hole_length=t.number("hole_length", 1e-3, gt=0.0, unit="m"),
             hole_sections=t.integer("hole_sections", None, ge=1), contact=contact,
-            friction=friction, tension=read_function(t, "tension", None),
-            pulled_length=read_function(t, "pulled_length", None))
+            friction=friction, tension=read_function(t, "tension", None, unit="N"),
+            pulled_length=read_function(t, "pulled_length", None, unit="m"))
     try:
         spec.layout(ctx.model, where=t.path)     # a bad route, named by its key path
     except ModelError as exc:
