@@ -19,7 +19,7 @@ from .assembly import Assembly
 from .budget import check_run
 from .elements import ancf_cable as cable
 from .errors import ConvergenceError, ModelError, ScenarioError
-from .io.checkpoint import load_checkpoint
+from .io.checkpoint import CheckpointVersionError, load_checkpoint
 from .io.output import OutputWriter, failure_reason
 from .io.probes import Probe, probe_columns
 from .model import Beam, Model, Node, RigidBody
@@ -670,6 +670,8 @@ def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[Stat
         raise ScenarioError(f"cannot resume: no checkpoint {ckpt} (run without --resume first)")
     try:
         state, extra = load_checkpoint(ckpt)
+    except CheckpointVersionError as exc:
+        raise ScenarioError(f"cannot resume: {exc}") from None
     except (OSError, ValueError, KeyError) as exc:
         raise ScenarioError(f"cannot resume: {exc}; the output written before it stays readable; "
                             "run again without --resume to start over") from None
