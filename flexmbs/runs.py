@@ -66,7 +66,10 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
         check_run(sc.model, t_end=sim.t_end, dt=sim.dt, output_interval=sim.output_interval,
                   out=folder, prefix="simulation.")
     asm = Assembly(sc.model, redundant_constraints=sim.redundant_constraints)
-    check_output(folder, sc.name, asm, probes=sc.probes, output_frames=sim.output_frames)
+    outputs = (None if sim.integrator == "static" else
+               sim.t_end / (sim.output_interval or sim.dt) + 1)
+    check_output(folder, sc.name, asm, probes=sc.probes, output_frames=sim.output_frames,
+                 frames=outputs, prefix="simulation.")
     if sim.integrator not in ("static", "quasi_static") and not resume:
         check_masses(asm)
     with claim(folder, scenario=sc.name, overwrite=overwrite, resume=resume):

@@ -482,7 +482,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         writer = OutputWriter(out, run_name, asm, probes=probes, metadata=meta,
                               write_vtu=write_vtu, resume_at=resume_t,
                               output_frames=output_frames,
-                              vtu_encoding="zlib" if vtk_compression else "binary")
+                              vtu_encoding="zlib" if vtk_compression else "binary",
+                              expected_outputs=t_end / (output_interval or dt) + 1)
     run = _RunRecord(asm, probes, writer, record_energy=record_energy, resume_t=resume_t,
                      observer=observer, progress=progress, previous=previous)
     # the writer ends the folder whatever ends the run (summary.json: "completed", "failed:

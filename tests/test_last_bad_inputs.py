@@ -399,3 +399,23 @@ def test_a_signal_inside_numba_waits_for_the_next_step():
     finally:
         restore()
         cli.PENDING.clear()
+
+
+def test_an_output_folder_of_more_than_1e5_files_is_refused(tmp_path, capsys):
+    """60 001 frames of a beam-only model: 2 files each as a multiblock (over 1e5: refused
+    before the folder exists, naming output_interval and merged frames), one each merged
+    (allowed: the check passes and the run is stopped by its own size check later, not here)."""
+    out = tmp_path / "out"
+    argv = ["run", CANTILEVER, "--out", str(out), "-q", "--set", "simulation.t_end=60",
+            "--set", "simulation.output_interval=1e-3"]
+    _refused(argv, capsys, "simulation.output_interval", "60001 output frames of 2 files",
+             'simulation.output_frames = "merged"')
+    assert not out.exists()
+    from flexmbs.assembly import Assembly
+    from flexmbs.io.output import MAX_FILES, check_output
+    from flexmbs.io.scenario import load_scenario
+
+    asm = Assembly(load_scenario(CANTILEVER).model)
+    assert check_output(tmp_path, "c", asm, output_frames="merged", frames=60001) is not None
+    with pytest.raises(fm.ModelError, match="give a larger output_interval$"):
+        check_output(tmp_path, "c", asm, output_frames="merged", frames=MAX_FILES + 1)

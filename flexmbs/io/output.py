@@ -177,15 +177,22 @@ def name_max(directory: str | os.PathLike) -> int:
         return 255
 
 
+#: files an output folder may hold: a run that would write more is refused before its folder is
+#: touched (file systems and ParaView's series readers slow down by the 10⁵; issue 57)
+MAX_FILES = 100_000
+
+
 def check_output(directory: str | os.PathLike, name: str, asm: Any, *,
                  probes: Sequence[Probe] = (), write_vtu: bool = True,
-                 output_frames: str = "multiblock", samples_per_element: int = 8
-                 ) -> FrameBuilder | None:
+                 output_frames: str = "multiblock", samples_per_element: int = 8,
+                 frames: float | None = None, prefix: str = "") -> FrameBuilder | None:
     """Everything the output of a run can be refused for, checked before its folder is touched
     (issue "nothing lost, part two"): the form of the frames, the run name against the file
     system's limit on file names (with :data:`NAME_ENDING_MAX`), the probes against the model,
-    and the frames' body shapes (mesh files are read here). Returns the frame builder (None
-    without VTU frames). Raises :class:`ModelError` (one line)."""
+    the frames' body shapes (mesh files are read here) and, given the run's number of
+    ``frames``, the files they make against :data:`MAX_FILES` (``prefix`` before the keys the
+    message names, ``"simulation."`` for scenarios). Returns the frame builder (None without
+    VTU frames). Raises :class:`ModelError` (one line)."""
     if output_frames not in OUTPUT_FRAMES:
         raise ModelError(f"output_frames must be one of {', '.join(OUTPUT_FRAMES)} "
                          f"(got {output_frames!r})")
@@ -200,7 +207,19 @@ def check_output(directory: str | os.PathLike, name: str, asm: Any, *,
             "bytes")
     for p in probes:
         p.check(asm)
-    return FrameBuilder(asm, samples_per_element=samples_per_element) if write_vtu else None
+    if not write_vtu:
+        return None
+    builder = FrameBuilder(asm, samples_per_element=samples_per_element)
+    if frames is not None:
+        per = 1 if output_frames == "merged" else 1 + len(builder.block_tree())
+        if frames * per > MAX_FILES:
+            fix = (f"a larger {prefix}output_interval" if output_frames == "merged" else
+                   f"a larger {prefix}output_interval or {prefix}output_frames = \"merged\" "
+                   "(one file per frame)")
+            raise ModelError(f"{prefix}output_interval: {frames:.6g} output frames of {per} "
+                             f"file{'s' if per > 1 else ''} each would put {frames * per:.3g} "
+                             f"files in {directory}, more than {MAX_FILES:.0e}; give {fix}")
+    return builder
 
 
 class OutputWriter:
@@ -231,10 +250,11 @@ class OutputWriter:
                  metadata: dict | None = None, samples_per_element: int = 8,
                  vtu_encoding: str = "binary", resume_at: float | None = None,
                  checkpoint_interval: float = 10.0, output_frames: str = "multiblock",
-                 background: bool = True, max_lag: float = MAX_LAG) -> None:
+                 background: bool = True, max_lag: float = MAX_LAG,
+                 expected_outputs: float | None = None) -> None:
         # before the folder is touched: what can refuse the output
         frames = check_output(directory, name, asm, probes=probes, write_vtu=write_vtu,
-                              output_frames=output_frames,
+                              output_frames=output_frames, frames=expected_outputs,
                               samples_per_element=samples_per_element)
         self.output_frames = output_frames
         self.directory = Path(directory)
