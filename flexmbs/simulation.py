@@ -8,6 +8,7 @@ import json
 import math
 import os
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,8 +18,9 @@ import numpy as np
 
 from .assembly import Assembly
 from .budget import check_run
+from .checks import RunChecks
 from .elements import ancf_cable as cable
-from .errors import ConvergenceError, ModelError, ScenarioError
+from .errors import ConvergenceError, FlexmbsWarning, ModelError, ScenarioError
 from .io.checkpoint import CheckpointVersionError, load_checkpoint
 from .io.output import OutputWriter, failure_reason
 from .io.probes import Probe, probe_columns
@@ -353,10 +355,6 @@ def _warn_undamped_constraints(model: Model, opts: GeneralizedAlpha) -> None:
         nonlinear += [j.name for j in model.interactions]
     if not nonlinear:
         return
-    import warnings
-
-    from .errors import FlexmbsWarning
-
     names = f"{', '.join(nonlinear[:3])}{' ...' if len(nonlinear) > 3 else ''}"
     if corrected:
         warnings.warn(
@@ -399,7 +397,9 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     frames' data arrays zlib-compressed (default ``False``: uncompressed base64).
     ``resume=True`` continues the stopped run in ``out`` from its ``checkpoint.npz`` to
     ``t_end``, appending to its files (see :func:`resume_point`); the returned history then
-    starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``.
+    starts at the checkpoint. Probe values are also returned in ``Result.extra["probes"]``, and
+    the run's checks of its energy balance and constraint drift in ``Result.extra["checks"]``
+    (:mod:`flexmbs.checks`; one beyond its bound is also a :class:`FlexmbsWarning`).
     A :class:`ConvergenceError` carries the history so far as ``partial_result``.
 
     Parameters
@@ -484,14 +484,16 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                               output_frames=output_frames,
                               vtu_encoding="zlib" if vtk_compression else "binary",
                               expected_outputs=t_end / (output_interval or dt) + 1)
+    checks = RunChecks(asm, rho_inf=opts.rho_inf, dt=dt, previous=previous.get("checks"))
     run = _RunRecord(asm, probes, writer, record_energy=record_energy, resume_t=resume_t,
-                     observer=observer, progress=progress, previous=previous)
+                     observer=observer, progress=progress, previous=previous, checks=checks)
     # the writer ends the folder whatever ends the run (summary.json: "completed", "failed:
     # <reason>", "interrupted"), from the folder's creation on: an initial static solve that
     # does not converge still leaves a summary saying why
     with writer if writer is not None else contextlib.nullcontext():
         if writer is not None:
             writer.totals = run.totals
+            writer.checks = checks.report
         if not resume:
             q0, v0 = asm.initial_state()
             if initial_static:
@@ -509,7 +511,10 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                 run.last_state(), run.stats(), f"failed: {failure_reason(exc)}")
             raise
         run.stats_seen = stats
-    return run.result(final, stats, "completed")
+        result = run.result(final, stats, "completed")
+        for message in result.extra["checks"]["warnings"]:
+            warnings.warn(message, FlexmbsWarning, stacklevel=2)
+    return result
 
 
 class _RunRecord:
@@ -522,10 +527,11 @@ class _RunRecord:
                  record_energy: bool, resume_t: float | None,
                  observer: Callable[[State], None] | None,
                  progress: Callable[[State, IntegrationStats], None] | None,
-                 previous: dict) -> None:
+                 previous: dict, checks: RunChecks) -> None:
         self.asm, self.probes, self.writer = asm, probes, writer
         self.record_energy, self.resume_t = record_energy, resume_t
         self.observer, self.progress, self.previous = observer, progress, previous
+        self.checks = checks
         self.columns = probe_columns(probes)
         self.ts: list[float] = []
         self.qs: list[np.ndarray] = []
@@ -564,6 +570,7 @@ class _RunRecord:
                                            "spring_angles": asm.system.springs.theta_ref.copy(),
                                            **{f"solver_{k}": v
                                               for k, v in self.solver_now.items()}})
+        self.checks.observe(s.q, s.v, s.t, energy)
         if self.observer is not None:
             self.observer(s)
 
@@ -593,6 +600,7 @@ class _RunRecord:
             extra["probes"] = {c: arr[:, i] for i, c in enumerate(self.columns)}
         if self.writer is not None:
             extra["out"] = self.writer.directory
+        extra["checks"] = self.checks.report()
         return Result(self.asm, np.array(self.ts), np.array(self.qs), np.array(self.vs),
                       np.array(self.ls), {k: np.array(v) for k, v in self.energies.items()},
                       stats, time.perf_counter() - self.t0, final, status, extra)

@@ -212,6 +212,23 @@ class ConstraintRows:
                 out[nl.rows] += nl.constraint.velocity_rhs(q[nl.coords], t)
         return out
 
+    def drift(self, q: np.ndarray, v: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(Phi, dPhi/dt = Phi_q v + Phi_t)`` of every kept equation at ``(q, v, t)``, from the
+        constraints' own functions (no kernel is run: the steps' state stays as it is)."""
+        phi = np.zeros(self.n_mult)
+        rate = -self.velocity_terms(q, t)                      # Phi_t
+        if self.m_lin:
+            phi[:self.m_lin] = self.lin_matrix @ q - self.lin_rhs0
+            rate[:self.m_lin] += self.lin_matrix @ v
+            for row, fn in self.lin_functions:
+                phi[row] -= fn(t)
+        for nl in self.nonlinear:
+            coords = nl.constraint.coordinates()       # a sliding joint's: its element's now
+            values, jac = nl.constraint.evaluate(q[coords], t)
+            phi[nl.rows] = values[nl.keep]
+            rate[nl.rows] += (jac @ v[coords])[nl.keep]
+        return phi, rate
+
     def velocity_rows(self) -> np.ndarray:
         """(n_mult,) 1.0 for the equations whose velocity form is ``Phi_q v = 0`` (no time in
         Phi), 0.0 for prescribed coordinates with a time function and drivers (``Phi_t != 0``,

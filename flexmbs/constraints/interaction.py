@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol
 
 import numpy as np
 
@@ -24,6 +24,9 @@ from .base import Constraint
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..terms import DofMap, PackContext
+
+#: what an interaction does to the model's energy (:meth:`Interaction.energy_flow`)
+EnergyFlow = Literal["conserves", "dissipates", "works"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -137,6 +140,13 @@ class Interaction:
 
     def constraints(self) -> list[Constraint]:
         return []
+
+    def energy_flow(self) -> EnergyFlow | None:
+        """How the interaction changes the model's energy, for the run's energy check
+        (:mod:`flexmbs.checks`): ``"conserves"`` (it stores energy or does no work),
+        ``"dissipates"`` (friction, damping: it only takes energy out), ``"works"`` (it may
+        put energy in, e.g. an actuator), ``None`` (not declared: the energy is not checked)."""
+        return None
 
     def compiled_form(self) -> bool:
         """Whether the kernels of its term kind evaluate it now (else :meth:`evaluate`)."""

@@ -44,7 +44,7 @@ from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
 from ..terms import pad_stack
 from .base import Constraint
-from .interaction import Following, Interaction, InteractionKind, ModelParts
+from .interaction import EnergyFlow, Following, Interaction, InteractionKind, ModelParts
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam, RigidBody
@@ -469,6 +469,12 @@ class SlidingJoint(Interaction):
 
     def constraints(self) -> list[Constraint]:
         return [self._constraint]
+
+    def energy_flow(self) -> EnergyFlow:
+        """An ideal joint does no work; its friction dissipates; its ``axial_force`` works."""
+        if self.axial_force is not None:
+            return "works"
+        return "conserves" if self.friction is None else "dissipates"
 
     def error(self, code: int, detail: int, q: np.ndarray, t: float) -> FlexmbsError:
         """The exception for an error code of :func:`sliding_post_step` (or, should it ever

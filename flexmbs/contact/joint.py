@@ -22,7 +22,14 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from ..codes import SHAPE_CODES
-from ..constraints.interaction import Following, Interaction, InteractionKind, MatrixSink, ModelParts
+from ..constraints.interaction import (
+    EnergyFlow,
+    Following,
+    Interaction,
+    InteractionKind,
+    MatrixSink,
+    ModelParts,
+)
 from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.centerline import element_tree, element_tree_size
 from ..elements.rigid_body import rotation_matrix
@@ -67,6 +74,7 @@ from .laws import (
     RegularizedCoulomb,
     as_friction,
     check_resumed_friction,
+    law_dissipates,
     law_energy,
 )
 from .pair import N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, contact_point, friction_vector
@@ -412,6 +420,11 @@ class SlidingClearanceJoint(Interaction):
         if isinstance(law, LinearPenalty):
             law = law.for_clearance(self.hole.section.inscribed_radius() - self.beam_radius)
         self._contact = law
+
+    def energy_flow(self) -> EnergyFlow:
+        """The wall's potential stores energy; damping and friction dissipate."""
+        return "dissipates" if self.friction is not None or law_dissipates(self.contact) \
+            else "conserves"
 
     @property
     def n_slots(self) -> int:

@@ -51,6 +51,7 @@ __all__ = [
     "N_LAW",
     "DAMPING_ONSET",
     "law_energy",
+    "law_dissipates",
     "coulomb_force",
     "coulomb_return_map",
     "tangential_force",
@@ -212,6 +213,13 @@ class ForceLaw(Protocol):
         """``[K, n, χ, c_d, v_min, onset, damping_onset]`` (:data:`N_LAW`) of the common form evaluated by
         :func:`law_force`."""
         ...
+
+
+def law_dissipates(law: ForceLaw) -> bool:
+    """Whether a normal law takes energy out of the motion: a damping term (``χ`` or ``c_d`` of
+    :meth:`ForceLaw.parameters`) that is not zero."""
+    p = law.parameters()
+    return bool(p[2] != 0.0 or p[3] != 0.0)
 
 
 def _positive(cls: str, name: str, value: object, *, allow_zero: bool = False) -> None:

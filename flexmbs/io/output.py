@@ -280,6 +280,8 @@ class OutputWriter:
         #: what the summary reports when the run ends through ``with`` (``__exit__``): a
         #: callable returning ``(stats, wall_time)`` (the run's counters so far), set by the run
         self.totals: Callable[[], tuple[Any, float | None]] | None = None
+        #: the run's checks for the summary (:meth:`flexmbs.checks.RunChecks.report`)
+        self.checks: Callable[[], dict] | None = None
         self._files: list[Any] = []
         self.background = bool(background)
         self._queue: queue.Queue[_Output | _Flush | None] | None = None
@@ -552,6 +554,7 @@ class OutputWriter:
             "wall_time": time.perf_counter() - self._t_start if wall_time is None else wall_time,
             "dofs": {"coordinates": int(self.asm.n_coords), "multipliers": int(self.asm.n_mult)},
             "energy_balance": energy,
+            "checks": self.checks() if self.checks is not None else None,
             "stats": st,
             "files": {"pvd": self.pvd_path.name if self.series else None,
                       "frames": self.output_frames if self.series else None,

@@ -72,6 +72,7 @@ class _Tee(OutputWriter):
         self.twin.write(state, **kw)
 
     def finish(self, *args, **kw):
+        self.twin.checks = self.checks       # the run's checks, given to the writer it made
         self.twin.finish(*args, **kw)
         super().finish(*args, **kw)
 
