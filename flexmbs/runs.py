@@ -91,12 +91,13 @@ def run_scenario(sc: Scenario, out: str | os.PathLike[str], *, overrides: Sequen
         # where a progress bar starts; simulate() reports a missing or unreadable checkpoint
         start = (checkpoint_time(folder) if resume else None) or 0.0
         callback = progress(start, sim.t_end, sc.name) if progress is not None else None
+        # the outputs are in the folder: only the last is kept in memory (flat over long runs)
         res = simulate(asm, t_end=sim.t_end, dt=sim.dt, integrator=sc.integrator_options(),
                        output_interval=sim.output_interval, initial_static=sim.initial_static,
                        static_options=sc.static_options(),
                        redundant_constraints=sim.redundant_constraints, record_energy=False,
                        progress=callback, out=folder, probes=sc.probes, name=sc.name,
                        resume=resume, metadata=metadata, output_frames=sim.output_frames,
-                       vtk_compression=sim.vtk_compression)
+                       vtk_compression=sim.vtk_compression, keep_history=False)
         return RunOutcome(sc.name, folder, res.status, sim.t_end, res.stats.steps,
                           res.stats.newton_iterations, res.stats.rejected_steps)

@@ -50,7 +50,7 @@ class Result:
     assembly : Assembly
         The assembled model (numbering of the coordinates).
     t : ndarray, shape (n_out,)
-        Output times [s].
+        Output times [s] (the last only after ``simulate(..., keep_history=False)``).
     q, v : ndarray, shape (n_out, n_coords)
         Coordinates and velocities at the output times.
     lam : ndarray, shape (n_out, n_mult)
@@ -382,7 +382,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
              probes: Sequence[Probe] = (), name: str | None = None,
              static_options: StaticOptions | None = None, resume: bool = False,
              metadata: dict | None = None, write_vtu: bool = True,
-             output_frames: str = "multiblock", vtk_compression: bool = False) -> Result:
+             output_frames: str = "multiblock", vtk_compression: bool = False,
+             keep_history: bool = True) -> Result:
     """Implicit dynamic simulation from the model's initial state (or its static equilibrium,
     ``initial_static=True``, solved with ``static_options``) to ``t_end`` with step ``dt``;
     results every ``output_interval``.
@@ -401,6 +402,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     the run's checks of its energy balance and constraint drift in ``Result.extra["checks"]``
     (:mod:`flexmbs.checks`; one beyond its bound is also a :class:`FlexmbsWarning`).
     A :class:`ConvergenceError` carries the history so far as ``partial_result``.
+    ``keep_history=False`` keeps only the last output in memory (the folder holds them all).
 
     Parameters
     ----------
@@ -443,6 +445,10 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
     vtk_compression : bool, default False
         zlib-compress the frames' data arrays (28 % smaller, the encoding about 12 times the
         CPU time).
+    keep_history : bool, default True
+        Keep every output in the returned :class:`Result`; ``False`` keeps the last only, so
+        that memory stays flat however long the run (``flexmbs run`` does so: its outputs are
+        in the folder).
 
     Returns
     -------
@@ -486,7 +492,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                               expected_outputs=t_end / (output_interval or dt) + 1)
     checks = RunChecks(asm, rho_inf=opts.rho_inf, dt=dt, previous=previous.get("checks"))
     run = _RunRecord(asm, probes, writer, record_energy=record_energy, resume_t=resume_t,
-                     observer=observer, progress=progress, previous=previous, checks=checks)
+                     observer=observer, progress=progress, previous=previous, checks=checks,
+                     keep_history=keep_history)
     # the writer ends the folder whatever ends the run (summary.json: "completed", "failed:
     # <reason>", "interrupted"), from the folder's creation on: an initial static solve that
     # does not converge still leaves a summary saying why
@@ -519,16 +526,17 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
 
 class _RunRecord:
     """What :func:`simulate` keeps of a run: the histories at the output times (the
-    :class:`Result`), the probes, and each output written to ``writer`` with the checkpoint's
-    extras; ``totals`` gives the writer the run's counters when it ends (added to those of the
-    run it resumes)."""
+    :class:`Result`; the last output only without ``keep_history``), the probes, and each
+    output written to ``writer`` with the checkpoint's extras; ``totals`` gives the writer the
+    run's counters when it ends (added to those of the run it resumes)."""
 
     def __init__(self, asm: Assembly, probes: list[Probe], writer: OutputWriter | None, *,
                  record_energy: bool, resume_t: float | None,
                  observer: Callable[[State], None] | None,
                  progress: Callable[[State, IntegrationStats], None] | None,
-                 previous: dict, checks: RunChecks) -> None:
+                 previous: dict, checks: RunChecks, keep_history: bool = True) -> None:
         self.asm, self.probes, self.writer = asm, probes, writer
+        self.keep_history = keep_history
         self.record_energy, self.resume_t = record_energy, resume_t
         self.observer, self.progress, self.previous = observer, progress, previous
         self.checks = checks
@@ -548,6 +556,11 @@ class _RunRecord:
     def record(self, s: State) -> None:
         """One output time: the histories, the probes, the folder."""
         asm, writer = self.asm, self.writer
+        if not self.keep_history:
+            for kept in (self.ts, self.qs, self.vs, self.ls, self.probe_rows):
+                kept.clear()
+            for history in self.energies.values():
+                history.clear()
         self.ts.append(s.t)
         self.qs.append(s.q.copy())
         self.vs.append(s.v.copy())

@@ -302,3 +302,26 @@ def test_beam_point_probe_keeps_its_coordinates_and_pickles():
     st3 = _initial(asm2)
     st3.q[:] = st.q
     np.testing.assert_array_equal(probe2.evaluate(asm2, st3), first)
+
+
+def test_keep_history_false_keeps_the_last_output_and_writes_them_all(tmp_path):
+    """``simulate(keep_history=False)`` (what ``flexmbs run`` does: memory flat over long runs,
+    issue 57) returns the last output only; the folder and the final state are the same."""
+    results, folders = {}, {}
+    for keep in (True, False):
+        model, beam, body = cantilever_and_pendulum(2)
+        folders[keep] = tmp_path / f"keep_{keep}"
+        results[keep] = fm.simulate(model, t_end=0.02, dt=1e-3, output_interval=5e-3,
+                                    out=folders[keep], probes=make_probes(beam, body),
+                                    write_vtu=False, keep_history=keep)
+    full, last = results[True], results[False]
+    assert len(full.t) == 5 and list(last.t) == [full.t[-1]]
+    np.testing.assert_array_equal(last.q, full.q[-1:])
+    np.testing.assert_array_equal(last.lam, full.lam[-1:])
+    assert {k: list(v) for k, v in last.energy.items()} == {k: [v[-1]] for k, v in
+                                                           full.energy.items()}
+    for column, values in full.extra["probes"].items():
+        np.testing.assert_array_equal(last.extra["probes"][column], values[-1:])
+    np.testing.assert_array_equal(last.final_state.q, full.final_state.q)
+    assert last.stats.steps == full.stats.steps
+    assert read_csv(folders[False] / "probes.csv") == read_csv(folders[True] / "probes.csv")
