@@ -15,6 +15,8 @@ import json
 import os
 import re
 import signal
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -182,3 +184,55 @@ def test_a_case_that_kills_its_worker_every_time_fails_after_bounded_attempts(tm
     assert by_case["elements=4"]["attempts"] == 1 and len(_starts(out, "elements=4")) == 1
     # the last attempt's folder is an output folder that the next run of the sweep takes
     assert output_summary(out / "elements=6")["status"] == "running"
+
+
+@pytest.mark.parametrize("how", ["ctrl-c", "sigkill"])
+def test_an_interrupted_sweep_runs_again_only_its_unfinished_cases(tmp_path, how):
+    """``flexmbs sweep`` in a real process, interrupted while one case is done and the other
+    runs: Ctrl-C at a terminal (SIGINT to the process group: the sweep and its workers) or
+    SIGKILL of the sweep's process alone (its workers then exit)."""
+    out = tmp_path / "sweep"
+    zipped = {"beams.rod.elements": [4, 6], "simulation.t_end": [0.3, 3.0]}
+    short, long_ = "elements=4,t_end=0.3", "elements=6,t_end=3.0"
+    argv = [sys.executable, "-m", "flexmbs", "sweep", CANTILEVER, "--zip",
+            "beams.rod.elements=4,6", "--zip", "simulation.t_end=0.3,3.0", "--set", LONG[1],
+            "--out", str(out), "--workers", "2"]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH",
+                                                                                    "")])}
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 240
+        while not (_status(out / short) == "completed" and _status(out / long_) == "running"
+                   and (out / long_ / "probes.csv").read_bytes().count(b"\n") > 20):
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        if how == "ctrl-c":
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.kill()
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    if how == "ctrl-c":
+        assert proc.returncode == 130
+        assert err.strip().splitlines()[-1] == ("flexmbs: error: sweep interrupted (finished cases "
+                                                "are in the table; rerun to continue)")
+    else:
+        assert proc.returncode == -signal.SIGKILL
+    # Ctrl-C stops the running case at once (Dask's 4 s of grace would let this one complete)
+    assert _status(out / short) == "completed" and _status(out / long_) == "running"
+    stamp = (out / short / "summary.json").stat().st_mtime_ns
+    reused, ran = [], []
+    rows = fm.sweep(CANTILEVER, zip=zipped, overrides=LONG[1:], out=out, workers=1,
+                    report=lambda case, row, d, t, was_reused:
+                    (reused if was_reused else ran).append(case.name))
+    assert (reused, ran) == ([short], [long_])
+    assert (out / short / "summary.json").stat().st_mtime_ns == stamp       # not run again
+    assert [(r["case"], r["status"], r["attempts"]) for r in rows] == [
+        (short, "completed", 0), (long_, "completed", 1)]
+    _same_run(out / long_, _reference(tmp_path, (*LONG[1:], "beams.rod.elements=6",
+                                                 "simulation.t_end=3.0")))
