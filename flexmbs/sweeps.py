@@ -421,10 +421,13 @@ def _local_client(n_workers: int) -> tuple[Any, Callable[[bool], None]]:
     from dask.distributed import Client, LocalCluster
 
     # one case per worker at a time: none waits queued behind a running case (a worker that
-    # dies then takes only the case it runs, and idle workers take the queued cases); the
-    # scheduler's log of a case given up is silenced: the case's row and line say it
+    # dies then takes only the case it runs, and idle workers take the queued cases); workers
+    # ignore Ctrl-C (flexmbs._sweep_worker); the scheduler's log of a case given up is
+    # silenced: the case's row and line say it
+    preload = [*dask.config.get("distributed.worker.preload", []), "flexmbs._sweep_worker"]
     with dask.config.set({"distributed.worker.daemon": False,
-                          "distributed.scheduler.worker-saturation": 1.0}):
+                          "distributed.scheduler.worker-saturation": 1.0,
+                          "distributed.worker.preload": preload}):
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                dashboard_address=":0", silence_logs=logging.CRITICAL,
                                env=dict(WORKER_ENV))
