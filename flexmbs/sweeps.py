@@ -5,9 +5,15 @@ the ``grid`` lists times the ``zip`` lists taken side by side. Each case is an o
 (:func:`flexmbs.runs.run_scenario`) into its own folder below the sweep folder, named by its
 parameters (``radius=0.0021,stiffness=1000000000.0``); ``sweep.csv`` tabulates every case
 (parameters, status, wall time, steps, Newton iterations, rejected steps, largest contact force,
-energy change, final/min/max of every probe column) and is rewritten as cases finish, so an
-interrupted sweep leaves a valid table. A rerun skips cases whose folder holds a completed run
-of the same scenario file and overrides (resumable); failed cases are run again.
+energy change, attempts, final/min/max of every probe column) and is rewritten as cases finish,
+so an interrupted sweep leaves a valid table. A rerun skips cases whose folder holds a completed
+run of the same scenario file and overrides (resumable); failed cases are run again.
+
+A case whose worker process dies (killed, out of memory, a segfault) is run again from the
+start by Dask on another or the restarted worker, up to the scheduler's
+``distributed.scheduler.allowed-failures`` more times (Dask's default 3), then recorded as
+``failed: worker died N times ...``; each start of a case appends a line to
+``.attempts/<case>`` in the sweep folder, which the ``attempts`` column counts.
 
 The cases run on a Dask ``LocalCluster`` of single-threaded worker processes (BLAS, OpenMP and
 numba threads pinned to 1) or on an existing scheduler (``scheduler=`` address or scheduler
@@ -25,6 +31,7 @@ import json
 import math
 import os
 import re
+import socket
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -34,10 +41,13 @@ from typing import Any
 
 from .errors import FlexmbsError, ScenarioError
 
-__all__ = ["SWEEP_FILE", "TABLE_FILE", "Case", "make_cases", "parse_values", "read_case", "sweep"]
+__all__ = ["ATTEMPTS_DIR", "SWEEP_FILE", "TABLE_FILE", "Case", "make_cases", "parse_values",
+           "read_case", "sweep"]
 
 TABLE_FILE = "sweep.csv"
 SWEEP_FILE = "sweep.json"
+#: the sweep folder's record of case starts: ``.attempts/<case>``, one line per start
+ATTEMPTS_DIR = ".attempts"
 
 #: environment of every worker process: one thread each (cases run side by side)
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -45,7 +55,7 @@ WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THRE
 
 #: the table's fixed columns after ``case`` and the parameters
 RESULT_COLUMNS = ("status", "final_time", "wall_time", "steps", "newton_iterations",
-                  "rejected_steps", "max_contact_force", "energy_change")
+                  "rejected_steps", "max_contact_force", "energy_change", "attempts")
 
 
 # ================================================================================ cases
@@ -243,12 +253,17 @@ def _probe_extremes(path: Path) -> dict[str, float]:
     return out
 
 
-def run_case(scenario: str, overrides: Sequence[str], folder: str) -> dict[str, Any]:
-    """Run one case into ``folder`` (on a Dask worker); never raises for a failing case: the
-    row's ``status`` is ``failed: <one-line reason>``."""
+def run_case(scenario: str, overrides: Sequence[str], folder: str,
+             attempts_log: str | None = None) -> dict[str, Any]:
+    """Run one case into ``folder`` (on a Dask worker), from the start: the folder of an
+    attempt whose worker died is cleared (:func:`flexmbs.io.folder.claim`). Never raises for a
+    failing case: the row's ``status`` is ``failed: <one-line reason>``. The start is first
+    appended to ``attempts_log`` (:func:`record_start`)."""
     from .io.scenario import load_scenario
     from .runs import run_scenario
 
+    if attempts_log is not None:
+        record_start(attempts_log)
     t0 = time.perf_counter()
     status = "completed"
     try:
@@ -263,6 +278,26 @@ def run_case(scenario: str, overrides: Sequence[str], folder: str) -> dict[str, 
         row["status"] = status
     row.setdefault("wall_time", time.perf_counter() - t0)
     return row
+
+
+def record_start(log: str | os.PathLike[str]) -> None:
+    """Append ``<UTC time> host=<host> pid=<process id>`` to ``log``: this process starts the
+    case (a sweep counts the lines; the pid is the worker's, for its logs). A log that cannot be
+    written does not stop the case."""
+    line = (f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())} host={socket.gethostname()} "
+            f"pid={os.getpid()}\n")
+    with contextlib.suppress(OSError):
+        Path(log).parent.mkdir(parents=True, exist_ok=True)
+        with open(log, "a", encoding="utf-8") as f:
+            f.write(line)
+
+
+def count_starts(log: str | os.PathLike[str]) -> int:
+    """How many times the case of ``log`` was started (:func:`record_start`)."""
+    try:
+        return Path(log).read_text(encoding="utf-8").count("\n")
+    except OSError:
+        return 0
 
 
 def _prepare_kernel(scenario: str, overrides: Sequence[str]) -> None:
@@ -374,19 +409,37 @@ def _sweep_folder(path: Path, scenario_name: str) -> Iterator[Path]:
         yield path
 
 
-def _local_client(n_workers: int) -> tuple[Any, Callable[[], None]]:
+def _local_client(n_workers: int) -> tuple[Any, Callable[[bool], None]]:
+    """A ``LocalCluster`` of ``n_workers`` single-threaded processes, its client, and its
+    ``close(abandon)``: ``abandon`` (Ctrl-C) stops the running cases within 0.5 s instead of
+    Dask's 4 s of grace to a running task (their folders say ``running``; a rerun of the sweep
+    runs them again from the start)."""
+    import asyncio
     import logging
 
     import dask
     from dask.distributed import Client, LocalCluster
 
-    with dask.config.set({"distributed.worker.daemon": False}):
+    # one case per worker at a time: none waits queued behind a running case (a worker that
+    # dies then takes only the case it runs, and idle workers take the queued cases); workers
+    # ignore Ctrl-C (flexmbs._sweep_worker); the scheduler's log of a case given up is
+    # silenced: the case's row and line say it
+    preload = [*dask.config.get("distributed.worker.preload", []), "flexmbs._sweep_worker"]
+    with dask.config.set({"distributed.worker.daemon": False,
+                          "distributed.scheduler.worker-saturation": 1.0,
+                          "distributed.worker.preload": preload}):
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.ERROR,
+                               dashboard_address=":0", silence_logs=logging.CRITICAL,
                                env=dict(WORKER_ENV))
     client = Client(cluster)
 
-    def close() -> None:
+    async def stop_workers() -> None:
+        await asyncio.gather(*(nanny.close(timeout=0.5) for nanny in list(cluster.workers.values())))
+
+    def close(abandon: bool) -> None:
+        if abandon:
+            with contextlib.suppress(Exception):
+                cluster.sync(stop_workers)
         client.close()
         cluster.close()
     return client, close
@@ -420,9 +473,11 @@ def sweep(scenario: str | os.PathLike[str], grid: Mapping[str, Sequence[Any]] | 
     ``tcp://host:8786`` or a scheduler file) or a new ``LocalCluster`` of ``workers`` processes
     (default: one per core, at most one per case). ``out``: the sweep folder (default
     ``out/<scenario name>_sweep``). ``report(case, row, done, total, reused)`` is called for
-    each case as it ends (``reused``: completed by an earlier run of the sweep, not run again).
-    Cases whose parameters cannot be built are recorded as failed without running; if no case
-    can be built the first reason is raised (:class:`ScenarioError`).
+    each case as it ends (``reused``: completed by an earlier run of the sweep, not run again;
+    those and the cases that cannot be built are reported first). Cases whose parameters cannot
+    be built are recorded as failed without running; if no case can be built the first reason
+    is raised (:class:`ScenarioError`). A case whose worker dies is run again from the start
+    (module docstring); the row's ``attempts`` says how many times this call started it.
 
     Parameters
     ----------
@@ -464,7 +519,7 @@ def sweep(scenario: str | os.PathLike[str], grid: Mapping[str, Sequence[Any]] | 
         try:
             sc = load_scenario(path, case.overrides)
         except FlexmbsError as exc:
-            rows[case.index] = {"status": f"failed: {_one_line(exc)}"}
+            rows[case.index] = {"status": f"failed: {_one_line(exc)}", "attempts": 0}
             continue
         name = sc.name
         loaded.append(case)
@@ -482,19 +537,19 @@ def sweep(scenario: str | os.PathLike[str], grid: Mapping[str, Sequence[Any]] | 
             "cases": [{"case": c.name, "overrides": list(c.overrides)} for c in cases],
         }, indent=2, default=str) + "\n", encoding="utf-8")
         todo = []
+        reused: set[int] = set()
         for case in loaded:
             row = _finished(folder / case.name, case, digest)
             if row is not None:
-                rows[case.index] = row
+                rows[case.index] = {**row, "attempts": 0}
+                reused.add(case.index)
             else:
                 todo.append(case)
         table = folder / TABLE_FILE
         _write_table(table, cases, rows)
-        done = len(rows)
         if report is not None:
-            for case in cases:
-                if case.index in rows:
-                    report(case, rows[case.index], done, len(cases), True)
+            for done, case in enumerate((c for c in cases if c.index in rows), start=1):
+                report(case, rows[case.index], done, len(cases), case.index in reused)
         if todo:
             _run_cases(todo, path, folder, cases, rows, table, client=client,
                        scheduler=scheduler, workers=workers, report=report)
@@ -504,23 +559,27 @@ def sweep(scenario: str | os.PathLike[str], grid: Mapping[str, Sequence[Any]] | 
 def _run_cases(todo: Sequence[Case], path: Path, folder: Path, cases: Sequence[Case],
                rows: dict[int, dict[str, Any]], table: Path, *, client: Any, scheduler: str | None,
                workers: int | None, report: Callable[..., None] | None) -> None:
-    from dask.distributed import as_completed
-
     from .kernel import kernels_cached
 
-    close: Callable[[], None] = lambda: None  # noqa: E731
+    close: Callable[[bool], None] = lambda abandon: None  # noqa: E731
     local = client is None and not scheduler
     if client is None:
         if scheduler:
-            client, close = _remote_client(scheduler)
+            client, close_remote = _remote_client(scheduler)
+            close = lambda abandon: close_remote()  # noqa: E731 - tasks running there finish
         else:
             n = workers or os.cpu_count() or 1
             client, close = _local_client(max(1, min(n, len(todo))))
+    interrupted = False
+    attempts = (folder / ATTEMPTS_DIR).resolve()
+    attempts.mkdir(exist_ok=True)
+    for case in todo:                       # the attempts column counts this sweep's starts
+        (attempts / case.name).unlink(missing_ok=True)
     try:
         def submit(case: Case) -> Any:
             return client.submit(run_case, str(path), list(case.overrides),
-                                 str((folder / case.name).resolve()), pure=False,
-                                 key=f"flexmbs-{case.name}-{time.time_ns()}")
+                                 str((folder / case.name).resolve()), str(attempts / case.name),
+                                 pure=False, key=f"flexmbs-{case.name}-{time.time_ns()}")
 
         pending = list(todo)
         futures: dict[Any, Case] = {}
@@ -531,28 +590,42 @@ def _run_cases(todo: Sequence[Case], path: Path, folder: Path, cases: Sequence[C
                   "minute)", file=sys.stderr, flush=True)
             first = pending.pop(0)
             futures[submit(first)] = first
-            _collect(futures, rows, cases, table, report, as_completed)
-            futures.clear()
+            _collect(futures, rows, cases, table, attempts, report)
         for case in pending:
             futures[submit(case)] = case
-        _collect(futures, rows, cases, table, report, as_completed)
+        _collect(futures, rows, cases, table, attempts, report)
     except KeyboardInterrupt:
+        interrupted = True
         with contextlib.suppress(Exception):
             client.cancel(list(futures))
         raise
     finally:
         _write_table(table, cases, rows)
-        close()
+        close(interrupted)
 
 
-def _collect(futures: Mapping[Any, Case], rows: dict[int, dict[str, Any]], cases: Sequence[Case],
-             table: Path, report: Callable[..., None] | None, as_completed: Any) -> None:
+def _collect(futures: dict[Any, Case], rows: dict[int, dict[str, Any]], cases: Sequence[Case],
+             table: Path, attempts: Path, report: Callable[..., None] | None) -> None:
+    """Record each case's row as its future ends; the ``attempts`` column counts its starts.
+    Dask has already run a case again whose worker died, up to ``allowed-failures`` times.
+    Each future is released once read (and dropped from ``futures``): Dask would otherwise
+    compute a finished case again when the worker holding its row dies, rewriting its folder
+    behind its row."""
+    from dask.distributed import KilledWorker, as_completed
+
     for fut in as_completed(list(futures)):
-        case = futures[fut]
+        case = futures.pop(fut)
         try:
-            row = fut.result()
-        except Exception as exc:   # noqa: BLE001 - a worker died or could not run the task
+            row = dict(fut.result())
+        except KilledWorker as exc:
+            row = {"status": f"failed: worker died {exc.allowed_failures + 1} times running case "
+                             f"{case.name} (killed, out of memory or a crash such as a segfault; "
+                             f"its starts are in {ATTEMPTS_DIR}/{case.name})"}
+        except Exception as exc:   # noqa: BLE001 - the task could not run (e.g. not importable)
             row = {"status": f"failed: worker error {type(exc).__name__}: {_one_line(exc)}"}
+        finally:
+            fut.release()
+        row["attempts"] = count_starts(attempts / case.name)
         rows[case.index] = row
         _write_table(table, cases, rows)
         if report is not None:

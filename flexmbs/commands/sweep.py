@@ -30,7 +30,8 @@ def add_parser(sub: Any, parents: list[argparse.ArgumentParser]) -> None:
         "sweep", parents=parents, help="run variants of a scenario on Dask (parameter study)",
         description="Run the Cartesian product of --grid lists (times the --zip lists taken side "
                     "by side) of --set overrides on Dask, one output folder per case, and write "
-                    f"the table sweep.csv ({docs('sweeps')}). A rerun skips completed cases.")
+                    f"the table sweep.csv ({docs('sweeps')}). A case whose worker dies is run "
+                    "again; a rerun of the command skips completed cases.")
     sweep.add_argument("scenario", metavar="SCENARIO", help="scenario file (.toml)")
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...",
                        help="values of one --set key; several --grid give their product")
@@ -69,8 +70,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"[{done}/{total}] {case.name}: completed by an earlier run (kept)",
                   file=sys.stderr, flush=True)
         else:
+            deaths = int(row.get("attempts") or 1) - 1
+            again = (f", run again from the start after {deaths} worker death"
+                     f"{'s' if deaths > 1 else ''}" if deaths > 0 else "")
             print(f"[{done}/{total}] {case.name}: completed in {row.get('wall_time', 0):.3g} s, "
-                  f"{row.get('steps')} steps", file=sys.stderr, flush=True)
+                  f"{row.get('steps')} steps{again}", file=sys.stderr, flush=True)
 
     restore = terminate_like_ctrl_c()
     try:

@@ -9,6 +9,10 @@ another scenario's results unless the user says so.
   ``overwrite`` another scenario's output folder is cleared and taken; a folder that is not an
   output folder is never cleared (it may be the user's working directory).
 - ``resume`` keeps the folder as it is (the resume logic checks it).
+- A run killed at any moment (SIGKILL, a dead Dask worker) leaves a folder the next run of
+  the scenario takes: a run writes ``summary.json`` (the mark, status ``running``) before any
+  other file, :func:`claim` removes it after the other files, and a lock whose process is gone
+  or a zombie is taken over.
 
 A folder is flexmbs output only if its ``summary.json`` says so (issue "nothing lost, part
 two"): :func:`output_summary`. Files with a run's names (``probes.csv``, ``summary.json``,
@@ -55,13 +59,19 @@ def output_files(folder: Path) -> list[Path]:
 
 
 def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs: a zombie (exited, not yet reaped by its parent, e.g. a
+    killed Dask worker in a container whose init does not reap) does not."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:     # exists, another user's
+        pass
+    try:        # Linux: "pid (comm) STATE ..."; comm may hold spaces and parentheses
+        stat = Path(f"/proc/{pid}/stat").read_text(encoding="utf-8", errors="replace")
+    except OSError:             # no /proc (macOS), or gone meanwhile
         return True
-    return True
+    return stat.rpartition(")")[2].split()[:1] not in (["Z"], ["X"])
 
 
 def _lock(folder: Path) -> Path:
@@ -179,8 +189,9 @@ def claim(folder: str | os.PathLike[str], *, scenario: str, overwrite: bool = Fa
                 "choose another folder")
     path.mkdir(parents=True, exist_ok=True)
     with lock_folder(path):
-        if not resume:
-            for p in output_files(path):
+        if not resume:      # summary.json, the folder's mark, last: a run killed meanwhile
+            marked = path / "summary.json"     # leaves a folder the next run still takes
+            for p in sorted(output_files(path), key=lambda p: p == marked):
                 if p.is_dir():
                     shutil.rmtree(p)
                 else:

@@ -20,10 +20,11 @@ queued is written before the summary):
   output when the run ends (any status), and during the run at most every
   ``checkpoint_interval`` seconds of wall time (a checkpoint costs a few milliseconds; the
   outputs after it are dropped by ``--resume``);
-- ``summary.json``: written at start (``status: "running"``) and at the end (``completed``,
-  ``failed: <reason>`` or ``interrupted``); ``format: "flexmbs-output"`` and ``format_version``
-  mark the folder as flexmbs output (:func:`flexmbs.io.folder.output_summary`): files with
-  these names in a folder without the mark are the user's and are not written over.
+- ``summary.json``: written at start, before any other file (``status: "running"``), and at
+  the end (``completed``, ``failed: <reason>`` or ``interrupted``); ``format:
+  "flexmbs-output"`` and ``format_version`` mark the folder as flexmbs output
+  (:func:`flexmbs.io.folder.output_summary`): files with these names in a folder without the
+  mark are the user's and are not written over.
 
 ``OutputWriter(..., resume_at=t)`` continues the folder of a stopped run (``flexmbs run
 --resume``): rows and frames at times ``<= t`` are kept, later ones removed, new ones appended;
@@ -304,6 +305,8 @@ class OutputWriter:
             if isinstance(initial, dict):
                 self.initial_energy = initial
         try:
+            if self.resume_at is None:    # the mark before any other file: a run killed while
+                self._write_summary()     # it starts leaves a folder that says it is flexmbs's
             if frames is not None:
                 self.frames = frames
                 # without the writer's thread the series stores the files in one of its own

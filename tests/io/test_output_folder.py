@@ -98,6 +98,62 @@ def test_a_second_run_into_a_busy_folder_is_refused(tmp_path):
         first.communicate(timeout=120)
 
 
+class _Killed(BaseException):
+    """The process dies here: nothing after it runs (no ``except Exception`` catches it)."""
+
+
+@pytest.mark.parametrize("where", ["while the writer opens its files",
+                                   "while the rerun clears the folder"])
+def test_a_run_killed_as_it_starts_leaves_a_folder_the_next_run_takes(tmp_path, monkeypatch,
+                                                                       where):
+    """Issue 57, item 4: a Dask worker killed mid-case; its rerun must not find a folder
+    with a run's files and no summary (the mark), which would be refused as the user's."""
+    from flexmbs.io import folder as folder_module
+    from flexmbs.io.output import OutputWriter
+
+    out = tmp_path / "o"
+    if where == "while the rerun clears the folder":
+        assert _run(CANTILEVER, out) == 0
+
+        def die(path, *args, **kwargs):      # the first folder removed: vtu/
+            raise _Killed
+        monkeypatch.setattr(folder_module.shutil, "rmtree", die)
+    else:
+        real = OutputWriter._open_csv
+
+        def die(self, fname, header):      # probes.csv is written, contacts.csv not yet
+            if fname == "contacts.csv":
+                raise _Killed
+            return real(self, fname, header)
+        monkeypatch.setattr(OutputWriter, "_open_csv", die)
+    with pytest.raises(_Killed):
+        _run(CANTILEVER, out)
+    monkeypatch.undo()
+    assert (out / "vtu").is_dir()                   # a half-written (or half-cleared) folder
+    assert json.loads((out / "summary.json").read_text())["scenario"] == "cantilever"
+    assert _run(CANTILEVER, out) == 0
+    assert json.loads((out / "summary.json").read_text())["status"] == "completed"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="needs Linux /proc")
+def test_a_lock_held_by_a_zombie_process_is_taken_over(tmp_path):
+    """A killed worker not yet reaped by its parent (a container's init that does not reap)
+    answers ``kill(pid, 0)`` but runs nothing: its lock is stale."""
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    stat = Path(f"/proc/{child.pid}/stat")
+    try:
+        end = time.time() + 30
+        while stat.read_text().rpartition(")")[2].split()[0] != "Z":   # exited, not reaped
+            assert time.time() < end
+            time.sleep(0.02)
+        out = tmp_path / "o"
+        out.mkdir()
+        (out / LOCK_NAME).write_text(f"{child.pid}\n")
+        assert _run(CANTILEVER, out) == 0
+    finally:
+        child.wait()
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
 def test_terminate_and_hangup_finish_like_ctrl_c(tmp_path, sig):
     out = tmp_path / "o"
