@@ -573,6 +573,7 @@ class _RunRecord:
                                  for p in self.probes] + [np.zeros(0)])
         if self.probes:
             self.probe_rows.append(values)
+        self.checks.observe(s.q, s.v, s.t, energy)
         # a resumed run starts at the checkpoint, which the folder already holds
         if writer is not None and (self.resume_t is None or s.t > self.resume_t):
             writer.write(s, contacts=interaction_outputs(asm, s),
@@ -581,9 +582,10 @@ class _RunRecord:
                          checkpoint_extra={**self.ckpt, "interactions": interaction_states(asm),
                                            "node_bases": asm.node_bases(),
                                            "spring_angles": asm.system.springs.theta_ref.copy(),
+                                           "run_totals": self.totals_at_output(),
                                            **{f"solver_{k}": v
-                                              for k, v in self.solver_now.items()}})
-        self.checks.observe(s.q, s.v, s.t, energy)
+                                              for k, v in self.solver_now.items()
+                                              if k != "counters"}})
         if self.observer is not None:
             self.observer(s)
 
@@ -595,6 +597,18 @@ class _RunRecord:
 
     def stats(self) -> IntegrationStats:
         return self.stats_seen if self.stats_seen is not None else IntegrationStats()
+
+    def totals_at_output(self) -> dict[str, Any]:
+        """What a run resumed from this output's checkpoint continues from: the counters and
+        wall time up to this output (with those of the runs this one resumes) and the checks'
+        extremes; a summary's counters may run past the checkpoint, or be missing after a
+        SIGKILL (:func:`resume_point`)."""
+        counters = self.solver_now.get("counters") or {}
+        now = IntegrationStats(**{f.name: int(counters.get(f.name, 0))
+                                  for f in dataclasses.fields(IntegrationStats)})
+        wall = time.perf_counter() - self.t0 + float(self.previous.get("wall_time") or 0.0)
+        return {"stats": dataclasses.asdict(_add_stats(self.previous.get("stats"), now)),
+                "wall_time": wall, "checks": dict(self.checks.running)}
 
     def totals(self) -> tuple[IntegrationStats, float]:
         """Counters and wall time so far, with those of the run this one resumes."""
@@ -736,4 +750,8 @@ def resume_point(out: str | os.PathLike, asm: Assembly, name: str) -> tuple[Stat
                 fn(saved[key])
             except ModelError as exc:    # e.g. a changed friction law
                 raise ScenarioError(f"cannot resume: {exc}") from None
+    totals = extra.get("run_totals")     # the counters at the checkpoint (older: the summary's)
+    if isinstance(totals, dict):
+        summary = {**summary, "stats": totals.get("stats"), "wall_time": totals.get("wall_time"),
+                   "checks": {"running": totals.get("checks") or {}}}
     return state, summary

@@ -15,6 +15,7 @@ undamped period-2 mode of the multipliers at rho_inf = 1 (docs/design-notes.md).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -730,8 +731,10 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
 
     def observe(after_step: bool) -> None:
         if snapshot is not None:
+            _count(stats, stepper)
             snapshot({"h": h, "ok_since_cut": ok_since_cut, "err_since_cut": err_since_cut,
-                      "h_matrix": -1.0 if h_matrix is None else h_matrix, **stepper.snapshot()})
+                      "h_matrix": -1.0 if h_matrix is None else h_matrix,
+                      "counters": dataclasses.asdict(stats), **stepper.snapshot()})
         if observer is not None:
             # the interactions' records of the state: what its step's equations held
             asm.observe(state.q, state.v, state.lam, state.t, after_step=after_step)
@@ -805,12 +808,16 @@ def integrate(asm: Assembly, options: GeneralizedAlpha, *, t_end: float, dt: flo
                 k_out += 1
                 observe(True)
             if progress is not None:
-                stats.newton_iterations, stats.factorizations, stats.residual_evaluations = (
-                    stepper.totals())
+                _count(stats, stepper)
                 progress(state, stats)
     finally:
         stepper.release()
-    stats.replans = stepper.replans
-    stats.newton_iterations, stats.factorizations, stats.residual_evaluations = stepper.totals()
-    stats.velocity_iterations = stepper.velocity_iterations()
+    _count(stats, stepper)
     return state, stats
+
+
+def _count(stats: IntegrationStats, stepper: _PythonStepper | _CompiledStepper) -> None:
+    """The stepper's counters into ``stats`` (the driver counts steps and rejections)."""
+    stats.newton_iterations, stats.factorizations, stats.residual_evaluations = stepper.totals()
+    stats.replans = stepper.replans
+    stats.velocity_iterations = stepper.velocity_iterations()
