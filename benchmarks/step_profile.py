@@ -352,10 +352,12 @@ def python_profile(c: Case, t_end: float, t_from: float = 0.0) -> dict:
 
 
 # ---------------------------------------------------------------- 3. unit costs
-def unit_costs(asm: Assembly, state: ga.State, dt: float, repeats: int = 3) -> dict:
+def unit_costs(asm: Assembly, state: ga.State, dt: float, repeats: int = 5) -> dict:
     """Unit costs [µs] at ``state`` with the compiled loops of ``unit_loops.py`` on the plan
-    a compiled run takes (the one that follows the joints where it is much cheaper)."""
-    from unit_loops import best_of, loop_factorize, loop_matrix, loop_residual, loop_solve
+    a compiled run takes (the one that follows the joints where it is much cheaper), best of
+    ``repeats`` loops; ``clearance_us``: the clearance joints' terms alone (a part of the
+    residual)."""
+    from unit_loops import best_of, loop_clearance, loop_factorize, loop_matrix, loop_residual, loop_solve
 
     from flexmbs import driver
     from flexmbs.solvers.factor import FOLLOW_COST_RATIO, FOLLOW_REACH
@@ -382,7 +384,10 @@ def unit_costs(asm: Assembly, state: ga.State, dt: float, repeats: int = 3) -> d
            "matrix_us": best_of(loop_matrix, (m, q, v, qdd, lam, fv, mode, data), n, repeats),
            "residual_us": best_of(loop_residual, (m, q, v, qdd, lam, fv, mode, r), n, repeats),
            "factor_us": best_of(loop_factorize, (lu.factor, data), n, repeats),
-           "solve_us": best_of(loop_solve, (lu.factor, r, x), n, repeats)}
+           "solve_us": best_of(loop_solve, (lu.factor, r, x), n, repeats),
+           # the clearance joints' share of the residual (detection and contact forces)
+           "clearance_us": best_of(loop_clearance, (m.clearance, q, v, r, np.zeros(4, np.int64)),
+                                   n, repeats)}
     asm.follow(None)
     return out
 
