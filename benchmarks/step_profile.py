@@ -7,8 +7,9 @@ robot (``tendon_robot.py``, 20 disks). Everything goes through the public API
 module is touched):
 
 1. **Compiled run** (``--t-end``): ``_CompiledStepper.advance`` is called one step at a time
-   (the compiled loop keeps its whole state in ``info`` between calls, so the steps are those
-   of a chunked run) and the counters of ``info`` are read around each step: Newton iterations,
+   (the compiled loop keeps its whole state in ``info`` between calls and the time functions
+   are those of the chunk, so the steps are those of a chunked run, bit for bit) and the
+   counters of ``info`` are read around each step: Newton iterations,
    factorisations (split by cause: *forced*, the step started without a factorisation — the
    driver's ``invalidate`` at a step-size change, a rejected step or a failed advance;
    *renewal*, the between-step rule ``renew_jacobian``; *in-solve*, the rule ``_slow`` on the
@@ -35,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import sys
 import time
@@ -169,11 +171,16 @@ def compiled_profile(c: Case, t_end: float) -> tuple[dict, Assembly, ga.State]:
                 tolerance: float = 0.0) -> int:
         cc, info = self.cc, self.info
         err_max = 0.0
+        # the time functions at the chunk's step ends, as the chunked call computes them
+        # (t0 + (k + 1) h, not (t0 + k h) + h: the same steps to the last bit)
+        fns = self.asm.functions
+        full = fns.table(t0, h, n_steps)
         for k in range(n_steps):
             have, renew = info[cc.INFO_HAVE], info[cc.INFO_RENEW]
             before = (info[cc.INFO_TOTAL], info[cc.INFO_FACT], info[cc.INFO_RES])
             rec: dict[str, Any] = {"t": t0 + k * h, "h": h, "forced": int(have == 0.0),
                                    "renewal": int(have != 0.0 and renew != 0.0)}
+            fns.table = lambda *_a, row=full[k:k + 1]: row     # type: ignore[method-assign]
             try:
                 orig_advance(self, h, 1, t0 + k * h, tolerance)
                 rec["failed"] = ""
@@ -183,6 +190,7 @@ def compiled_profile(c: Case, t_end: float) -> tuple[dict, Assembly, ga.State]:
                 raise ga._StepFailure(k + exc.done, str(exc), error=exc.error,
                                       replan=exc.replan) from None
             finally:
+                del fns.table
                 rec["its"] = int(info[cc.INFO_TOTAL] - before[0])
                 rec["facts"] = int(info[cc.INFO_FACT] - before[1])
                 rec["res"] = int(info[cc.INFO_RES] - before[2])
@@ -204,12 +212,14 @@ def compiled_profile(c: Case, t_end: float) -> tuple[dict, Assembly, ga.State]:
 
 
 def summarise(steps: list[dict], stats: ga.IntegrationStats, invalidations: Counter) -> dict:
-    """The report of :func:`compiled_profile` from its per-step records."""
+    """The report of :func:`compiled_profile` from its per-step records; the steps are put in
+    classes by the change of the contact state from the last converged step (a rejected
+    attempt's counts go to ``attempts`` and the totals only)."""
     ok = [s for s in steps if not s["failed"]]
     prev: dict = {}
-    by_change: dict[str, list[int]] = {"no change": [], "stick/slip only": [],
-                                       "onset or release": []}
-    tip_only = 0
+    by_change: dict[str, list[dict]] = {"no change": [], "stick/slip only": [],
+                                        "onset or release, tip sections only": [],
+                                        "onset or release": []}
     switch = Counter()
     for s in steps:
         if s["failed"]:
@@ -219,11 +229,10 @@ def summarise(steps: list[dict], stats: ga.IntegrationStats, invalidations: Coun
         for k, x in d.items():
             switch[k] += x
         made = d.get("onsets", 0) + d.get("releases", 0)
-        key = ("onset or release" if made else "stick/slip only" if d.get("stick_slip", 0)
-               else "no change")
-        by_change[key].append(s["its"])
-        if made and made == d.get("tip_onsets", 0) + d.get("tip_releases", 0):
-            tip_only += 1
+        tips = made and made == d.get("tip_onsets", 0) + d.get("tip_releases", 0)
+        key = ("onset or release, tip sections only" if tips else "onset or release" if made
+               else "stick/slip only" if d.get("stick_slip", 0) else "no change")
+        by_change[key].append(s)
     n = max(len(ok), 1)
     facts = sum(s["facts"] for s in steps)
     forced = sum(s["forced"] for s in steps)
@@ -244,9 +253,11 @@ def summarise(steps: list[dict], stats: ga.IntegrationStats, invalidations: Coun
         "contacts_max": max((x[0] for x in contacts), default=0),
         "timeline": timeline(steps),
         "changes_between_steps": dict(switch),
-        "steps_by_change": {k: {"steps": len(v), "its_per_step": float(np.mean(v)) if v else 0.0}
+        "steps_by_change": {k: {"steps": len(v),
+                                "its_per_step": float(np.mean([s["its"] for s in v])) if v else 0.0,
+                                "facts_per_step": float(np.mean([s["facts"] for s in v])) if v else 0.0,
+                                "facts": sum(s["facts"] for s in v)}
                             for k, v in by_change.items()},
-        "steps_tip_changes_only": tip_only,
         "stats": {"steps": stats.steps, "rejected": stats.rejected_steps,
                   "iterations": stats.newton_iterations, "factorisations": stats.factorizations,
                   "residuals": stats.residual_evaluations, "replans": stats.replans},
@@ -339,9 +350,10 @@ def python_profile(c: Case, t_end: float, t_from: float = 0.0) -> dict:
                       ("since the factorisation", "changed_since_factor"),
                       ("contacts made/lost since the factorisation", "made_since_factor"),
                       ("stick/slip since the factorisation", "stick_slip_since_factor")):
-        hi, n_hi = share(lambda d, k=key: d[k], lambda d: d["rate"] > 0.9)
-        lo, n_lo = share(lambda d, k=key: d[k], lambda d: d["rate"] < 0.3)
-        table[name] = {"rate > 0.9": [hi, n_hi], "rate < 0.3": [lo, n_lo]}
+        table[name] = {label: list(share(lambda d, k=key: d[k], pool)) for label, pool in (
+            ("rate > 1", lambda d: d["rate"] > 1.0), ("rate > 0.9", lambda d: d["rate"] > 0.9),
+            ("rate 0.3-0.9", lambda d: 0.3 <= d["rate"] <= 0.9),
+            ("rate < 0.3", lambda d: d["rate"] < 0.3))}
     return {"t_from": t_from, "t_end": t_end, "wall_s": wall, "steps": stats.steps,
             "rejected": stats.rejected_steps, "iterations": stats.newton_iterations,
             "factorisations": stats.factorizations, "decisions": int(rates.size),
@@ -418,18 +430,36 @@ def modelled(counts: dict, units: dict) -> dict:
     return {k: v / 1e3 for k, v in parts.items()} | {"total": sum(parts.values()) / 1e3}
 
 
+def with_newton(c: Case, settings: list[str]) -> Case:
+    """``c`` with Newton options changed by ``name=value`` settings (``refresh_ratio=0.9``)."""
+    if not settings:
+        return c
+    kw = {}
+    for item in settings:
+        name, _, value = item.partition("=")
+        kw[name] = type(getattr(c.options.newton, name))(float(value))
+    newton = dataclasses.replace(c.options.newton, **kw)
+    return dataclasses.replace(c, options=dataclasses.replace(c.options, newton=newton))
+
+
 def profile(model: str, t_end: float, python_t_end: float = 0.0, units: bool = True,
-            wall: bool = True, disks: int = 20, python_from: float | None = None) -> dict:
-    """The whole report of one model (module docstring)."""
-    c = case(model, disks)
+            wall: bool = True, disks: int = 20, python_from: float | None = None,
+            newton: list[str] | None = None) -> dict:
+    """The whole report of one model (module docstring); ``newton``: Newton options changed
+    (:func:`with_newton`)."""
+    c = with_newton(case(model, disks), newton or [])
     fm.simulate(c.build(), t_end=2 * c.dt, dt=c.dt, output_interval=2 * c.dt,
                 integrator=c.options, record_energy=False)      # kernels loaded or compiled
-    report: dict[str, Any] = {"model": model, "t_end": t_end, "dt": c.dt}
+    report: dict[str, Any] = {"model": model, "t_end": t_end, "dt": c.dt,
+                              "newton": dataclasses.asdict(c.options.newton)}
     t0 = time.perf_counter()
     report["compiled"], asm, state = compiled_profile(c, t_end)
     report["compiled"]["instrumented_wall_s"] = time.perf_counter() - t0
     if wall:
-        report["wall"] = wall_per_step(c, t_end)
+        report["wall"] = w = wall_per_step(c, t_end)
+        cs = report["compiled"]["stats"]
+        w["same_counts"] = all(w[k] == cs[k] for k in ("steps", "iterations", "factorisations",
+                                                       "residuals"))
     if units:
         report["units"] = unit_costs(asm, state, c.dt)
         report["model_ms_per_step"] = modelled(report["compiled"], report["units"])
@@ -460,10 +490,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--disks", type=int, default=20, help="tendon robot's disks")
     ap.add_argument("--no-units", action="store_true", help="skip the unit costs")
     ap.add_argument("--no-wall", action="store_true", help="skip the uninstrumented run")
+    ap.add_argument("--newton", action="append", default=[], metavar="NAME=VALUE",
+                    help="a Newton option changed (NewtonOptions), e.g. retreats=4")
     ap.add_argument("--json", type=Path, help="write the report here too")
     a = ap.parse_args(argv)
     rep = profile(a.model, a.t_end, a.python_t_end, units=not a.no_units, wall=not a.no_wall,
-                  disks=a.disks, python_from=a.python_from)
+                  disks=a.disks, python_from=a.python_from, newton=a.newton)
     print(_fmt(rep))
     if a.json:
         a.json.write_text(json.dumps(rep, indent=1, default=str))
