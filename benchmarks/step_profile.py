@@ -302,9 +302,13 @@ def python_profile(c: Case, t_end: float, t_from: float = 0.0) -> dict:
     orig_slow = nw._too_slow
     orig_solve = nw.Newton.solve
 
+    solves: list[dict] = []
+    last["end"], last["seen"] = {}, []
+
     def evaluate(self: ga._AlphaStep, want_matrix: bool) -> Any:
         out = orig_eval(self, want_matrix)
         last["iterate"], last["state"] = last["state"], contact_state(self.asm)
+        last["seen"].append(last["state"])
         return out
 
     def factorize(self: nw.Newton, A: Any) -> None:
@@ -323,8 +327,21 @@ def python_profile(c: Case, t_end: float, t_from: float = 0.0) -> dict:
         return slow
 
     def solve(self: nw.Newton, problem: Any, **kw: Any) -> Any:
-        last["state"] = {}          # a step's first residual has no previous iterate
-        return orig_solve(self, problem, **kw)
+        last["state"], last["seen"] = {}, []    # a step's first residual: no previous iterate
+        f0 = self.total.factorizations
+        ok = False
+        try:
+            out = orig_solve(self, problem, **kw)
+            ok = True
+            return out
+        finally:
+            end, seen = last["state"], last["seen"]
+            solves.append({"ok": ok, "facts": self.total.factorizations - f0,
+                           "end_changed": end != last["end"],
+                           "predictor_other": bool(seen) and seen[0] != end,
+                           "passed_other": any(x != end for x in seen[1:])})
+            if ok:
+                last["end"] = end
 
     opts = ga.GeneralizedAlpha(**{**{f: getattr(c.options, f) for f in (
         "rho_inf", "scheme", "newton", "adaptive", "min_step", "grow_after", "predictor",
@@ -353,8 +370,20 @@ def python_profile(c: Case, t_end: float, t_from: float = 0.0) -> dict:
         table[name] = {label: list(share(lambda d, k=key: d[k], pool)) for label, pool in (
             ("rate > 1", lambda d: d["rate"] > 1.0), ("rate > 0.9", lambda d: d["rate"] > 0.9),
             ("rate 0.3-0.9", lambda d: 0.3 <= d["rate"] <= 0.9),
-            ("rate < 0.3", lambda d: d["rate"] < 0.3))}
+            ("rate < 0.3", lambda d: d["rate"] < 0.3),
+            ("refreshed", lambda d: d["refresh"]))}
+    classes: dict[str, dict[str, int]] = {}
+    for sv in solves:
+        key = ("failed" if not sv["ok"] else "contact state changed from the last step"
+               if sv["end_changed"] else
+               "same contact state, a later iterate passed through another"
+               if sv["passed_other"] else "same contact state, only the predictor's differs"
+               if sv["predictor_other"] else "same contact state in every iterate")
+        cl = classes.setdefault(key, {"steps": 0, "facts": 0})
+        cl["steps"] += 1
+        cl["facts"] += sv["facts"]
     return {"t_from": t_from, "t_end": t_end, "wall_s": wall, "steps": stats.steps,
+            "steps_by_contact_state": classes,
             "rejected": stats.rejected_steps, "iterations": stats.newton_iterations,
             "factorisations": stats.factorizations, "decisions": int(rates.size),
             "refreshes_decided": sum(d["refresh"] for d in decisions),
