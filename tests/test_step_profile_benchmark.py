@@ -39,6 +39,9 @@ def test_step_profile_counts_agree_with_the_integrator(tmp_path: Path,
     assert c["contacts_max"] >= c["contacts_mean"] >= c["stuck_mean"] >= 0
     p = rep["python"]
     assert p["steps"] == 10 and p["decisions"] == sum(p["rate_histogram"].values())
+    classes = p["steps_by_contact_state"].values()
+    assert sum(k["steps"] for k in classes) == p["steps"] + p["rejected"]
+    assert sum(k["facts"] for k in classes) == p["factorisations"]
     assert 0 <= p["refreshes_decided"] <= p["decisions"] <= p["iterations"]
     for row in p["contact_change_vs_rate"].values():
         for hits, pool in row.values():
