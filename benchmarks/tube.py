@@ -56,8 +56,11 @@ def far_sections(length: float, steps: int) -> tuple[tuple[float, float], int]:
     return _run(model, steps, 1e-4), n
 
 
-def long_wire(steps: int) -> tuple[tuple[float, float], int, int]:
-    rho, n_el = 0.2, 200
+def long_wire_model(n_el: int = 200, sections: int = 1000
+                    ) -> tuple[fm.Model, fm.SlidingClearanceJoint]:
+    """A wire of ``n_el`` elements lying all along a quarter-circle tube (radius 0.2 m) of
+    ``sections`` sections under gravity (also ``step_profile.py``'s ``tube_wire``)."""
+    rho = 0.2
     s = np.linspace(0.0, math.pi / 2, n_el + 1)
     pts = np.column_stack([rho * np.sin(s), rho * (1 - np.cos(s)), np.zeros_like(s)])
     tans = np.column_stack([np.cos(s), np.sin(s), np.zeros_like(s)])
@@ -69,9 +72,15 @@ def long_wire(steps: int) -> tuple[tuple[float, float], int, int]:
     model.fix_body(tube)
     arc = fm.arc((0, rho, 0), rho, (0.002, rho - math.sqrt(rho**2 - 0.002**2), 0),
                  math.pi / 2 - 0.02, normal=(0, 0, 1), elements=64)
-    bore = fm.CurvedBore(arc, radius=0.8e-3, sections=1000)
+    bore = fm.CurvedBore(arc, radius=0.8e-3, sections=sections)
     joint = model.add_joint(fm.SlidingClearanceJoint(wire, tube, hole=bore,
                                                      contact=fm.LinearPenalty(stiffness=1e5)))
+    return model, joint
+
+
+def long_wire(steps: int) -> tuple[tuple[float, float], int, int, tuple[float, int, int]]:
+    model, joint = long_wire_model()
+    n_el, bore = 200, joint.hole
     res = _run(model, steps, 1e-4)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
