@@ -199,10 +199,12 @@ def test_an_interrupted_sweep_runs_again_only_its_unfinished_cases(tmp_path, how
     runs: Ctrl-C at a terminal (SIGINT to the process group: the sweep and its workers) or
     SIGKILL of the sweep's process alone (its workers then exit)."""
     out = tmp_path / "sweep"
-    zipped = {"beams.rod.elements": [4, 6], "simulation.t_end": [0.3, 3.0]}
-    short, long_ = "elements=4,t_end=0.3", "elements=6,t_end=3.0"
+    # the long case runs for about 7 s on a quiet core: it cannot end in the moments the
+    # interrupted sweep takes to stop it, even on a loaded machine (3 s could, 2026-12-07)
+    zipped = {"beams.rod.elements": [4, 6], "simulation.t_end": [0.3, 10.0]}
+    short, long_ = "elements=4,t_end=0.3", "elements=6,t_end=10.0"
     argv = [sys.executable, "-m", "flexmbs", "sweep", CANTILEVER, "--zip",
-            "beams.rod.elements=4,6", "--zip", "simulation.t_end=0.3,3.0", "--set", LONG[1],
+            "beams.rod.elements=4,6", "--zip", "simulation.t_end=0.3,10.0", "--set", LONG[1],
             "--out", str(out), "--workers", "2"]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH",
                                                                                     "")])}
@@ -243,4 +245,4 @@ def test_an_interrupted_sweep_runs_again_only_its_unfinished_cases(tmp_path, how
     assert [(r["case"], r["status"], r["attempts"]) for r in rows] == [
         (short, "completed", 0), (long_, "completed", 1)]
     _same_run(out / long_, _reference(tmp_path, (*LONG[1:], "beams.rod.elements=6",
-                                                 "simulation.t_end=3.0")))
+                                                 "simulation.t_end=10.0")))
