@@ -490,7 +490,8 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                               output_frames=output_frames,
                               vtu_encoding="zlib" if vtk_compression else "binary",
                               expected_outputs=t_end / (output_interval or dt) + 1)
-    checks = RunChecks(asm, rho_inf=opts.rho_inf, dt=dt, previous=previous.get("checks"))
+    checks = RunChecks(asm, rho_inf=opts.rho_inf, dt=dt, output_interval=output_interval,
+                       previous=previous.get("checks"))
     run = _RunRecord(asm, probes, writer, record_energy=record_energy, resume_t=resume_t,
                      observer=observer, progress=progress, previous=previous, checks=checks,
                      keep_history=keep_history)
