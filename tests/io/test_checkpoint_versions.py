@@ -15,7 +15,7 @@ from flexmbs import __version__
 from flexmbs.cli import main
 from flexmbs.io import checkpoint
 from flexmbs.io.checkpoint import FORMAT_VERSION, CheckpointVersionError, load_checkpoint
-from tests.test_last_bad_inputs import CANTILEVER, _refused
+from tests.test_bad_inputs_answered_in_one_line import CANTILEVER, _refused
 
 
 def _retag(path: Path, version: int, written_by: str) -> None:

@@ -1,5 +1,5 @@
-"""The last bad inputs of issue "nothing lost": one line each, exit 2, before any file is
-written (sizes, time spans, names, damaged files, signals at start-up, clearance geometry)."""
+"""Bad inputs answered in one line each, exit 2, before any file is written (sizes, time spans,
+names, damaged files, signals at start-up, clearance geometry)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
-"""Issue "nothing lost, part two", items 1-3: a user's own files are never written over, what
-can be checked from the scenario is checked before the output folder is touched, and the
-messages name the cause (key or file)."""
+"""A user's own files are never written over, what can be checked from the scenario is checked
+before the output folder is touched, and the messages name the cause (key or file)."""
 
 from __future__ import annotations
 
