@@ -607,7 +607,7 @@ class _RunRecord:
         counters = self.solver_now.get("counters") or {}
         now = IntegrationStats(**{f.name: int(counters.get(f.name, 0))
                                   for f in dataclasses.fields(IntegrationStats)})
-        wall = time.perf_counter() - self.t0 + float(self.previous.get("wall_time") or 0.0)
+        _, wall = self.totals()
         return {"stats": dataclasses.asdict(_add_stats(self.previous.get("stats"), now)),
                 "wall_time": wall, "checks": dict(self.checks.running)}
 

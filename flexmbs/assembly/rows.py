@@ -25,9 +25,14 @@ class NonlinearRows:
     """The kept equations of one nonlinear constraint."""
 
     constraint: Constraint
-    coords: np.ndarray          # (nc,) global coordinate indices
     keep: np.ndarray            # equation indices kept (redundant ones dropped)
     rows: np.ndarray            # multiplier indices of kept equations (len(keep),)
+
+    @property
+    def coords(self) -> np.ndarray:
+        """(nc,) the global coordinates the constraint depends on now (a sliding joint's follow
+        its current element)."""
+        return np.asarray(self.constraint.coordinates(), np.int64)
 
 
 class _LinearRow(NamedTuple):
@@ -78,7 +83,7 @@ class ConstraintRows:
                 continue
             rows = np.arange(row, row + keep.size)
             row += keep.size
-            self.nonlinear.append(NonlinearRows(con, np.asarray(con.coordinates(), np.int64), keep, rows))
+            self.nonlinear.append(NonlinearRows(con, keep, rows))
             labels.extend(f"{type(con).__name__} '{con.name}' equation {con.equation_labels[j]}"
                           for j in keep)
             owners.extend([con.name] * keep.size)
@@ -223,7 +228,7 @@ class ConstraintRows:
             for row, fn in self.lin_functions:
                 phi[row] -= fn(t)
         for nl in self.nonlinear:
-            coords = nl.constraint.coordinates()       # a sliding joint's: its element's now
+            coords = nl.coords
             values, jac = nl.constraint.evaluate(q[coords], t)
             phi[nl.rows] = values[nl.keep]
             rate[nl.rows] += (jac @ v[coords])[nl.keep]
