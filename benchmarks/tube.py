@@ -7,6 +7,13 @@
    (almost) nothing: the section tree puts each element's bounding sphere to the sections.
 2. A 200-element wire all through a 1 000-section curved tube (a quarter circle, radius
    0.2 m): steps per second, and the detection per crossed section.
+3. A flexible tube against the rigid bore (issue 53, item 5): a wire (r = 0.5 mm, 40
+   elements, 0.4 m, clamped) lies under gravity in a straight tube of 201 sections (R = 0.8
+   mm), once a fixed rigid bore, once a beam (`fm.TubeJoint`, 20 elements, clamped at every
+   node, so the same contacts). The joint's cost per step is the step's time less that of
+   the same model without the joint (the beams alone), divided by the sections the wire
+   crosses; the same for one evaluation of the residual and Newton's matrix (the joint's own
+   work, without the factorisation), and the matrix's reserved non-zeros.
 
     python benchmarks/tube.py [--steps 200]
 """
@@ -104,6 +111,69 @@ def detection(joint: fm.SlidingClearanceJoint, q: np.ndarray, calls: int = 200,
     return (time.perf_counter() - t0) / calls / crossed, crossed, m
 
 
+def _straight_wire(model: fm.Model, length: float) -> fm.Beam:
+    wire = model.add_beam(fm.line((-0.005, 0, 0), (length + 0.005, 0, 0), elements=40),
+                          name="wire", section=fm.CircularSection(0.5e-3), material=STEEL)
+    model.clamp(wire.first_node)
+    model.clamp(wire.last_node)
+    return wire
+
+
+def flexible_against_rigid(steps: int, length: float = 0.4, sections: int = 201
+                           ) -> dict[str, float]:
+    """µs per step of the rigid bore, the flexible tube and each without its joint, and the
+    joints' µs per crossed section (the contacts: every section, the wire sagging onto the
+    wall between its clamped ends)."""
+    law = fm.LinearPenalty(stiffness=1e5)
+    out: dict[str, float] = {}
+    for kind in ("rigid", "flexible"):
+        for with_joint in (False, True):
+            model = fm.Model(name="tube", gravity=(0.0, 0.0, -9.81))
+            wire = _straight_wire(model, length)
+            if kind == "rigid":
+                body = model.add_rigid_body(mass=1.0, inertia=(1, 1, 1), name="tube")
+                model.fix_body(body)
+                if with_joint:
+                    bore = fm.CurvedBore(fm.line((0, 0, 0), (length, 0, 0), elements=1),
+                                         radius=0.8e-3, sections=sections)
+                    model.add_joint(fm.SlidingClearanceJoint(wire, body, hole=bore, contact=law))
+            else:
+                tube = model.add_beam(fm.line((0, 0, 0), (length, 0, 0), elements=20),
+                                      name="tube", section=fm.CircularSection(2e-3),
+                                      material=fm.Material(E=2e9, rho=1200.0))
+                for node in range(tube.n_nodes):
+                    model.clamp(tube.node(node))
+                if with_joint:
+                    model.add_joint(fm.TubeJoint(wire, tube, inner_radius=0.8e-3,
+                                                 sections=sections, contact=law))
+            key = f"{kind}{'' if with_joint else '_alone'}"
+            out[key] = 1e6 * _run(model, steps, 1e-4)[0]
+            out[key + "_evaluation"], out[key + "_nnz"] = _evaluation(model)
+    for kind in ("rigid", "flexible"):
+        for what in ("", "_evaluation"):
+            out[f"{kind}{what}_per_section"] = (out[kind + what]
+                                                - out[f"{kind}_alone{what}"]) / sections
+    return out
+
+
+def _evaluation(model: fm.Model, calls: int = 200) -> tuple[float, int]:
+    """µs per evaluation of the residual and Newton's matrix at the state after 5 ms, and the
+    matrix's reserved non-zeros."""
+    from flexmbs.assembly import Assembly
+
+    asm = Assembly(model)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = fm.simulate(asm, t_end=5e-3, dt=1e-4, output_interval=5e-3, record_energy=False)
+    q, v = res.q[-1], res.v[-1]
+    n, m = asm.n_coords, asm.n_mult
+    a, lam, rq, rl = np.zeros(n), np.zeros(m), np.zeros(n), np.zeros(m)
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(1.0, 1.0, 1.0))
+    return 1e6 * (time.perf_counter() - t0) / calls, int(asm.matrix.nnz)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=200)
@@ -118,6 +188,18 @@ def main() -> None:
           f"{1e6 * dt:.0f} µs per step, {1 / dt:.0f} steps per second; detection "
           f"{1e6 * per:.2f} µs per crossed section ({crossed} crossed, {rows} candidates, "
           "called from Python)")
+    c = flexible_against_rigid(a.steps)
+    print("\n| bore | µs per step (without the joint) | per crossed section | evaluation µs "
+          "(without) | per crossed section | reserved non-zeros (without) |")
+    print("|---|---|---|---|---|---|")
+    for k in ("rigid", "flexible"):
+        print(f"| {k} | {c[k]:.0f} ({c[k + '_alone']:.0f}) | {c[k + '_per_section']:.2f} | "
+              f"{c[k + '_evaluation']:.0f} ({c[k + '_alone_evaluation']:.0f}) | "
+              f"{c[k + '_evaluation_per_section']:.2f} | {c[k + '_nnz']:.0f} "
+              f"({c[k + '_alone_nnz']:.0f}) |")
+    for what in ("", "_evaluation"):
+        print(f"flexible / rigid per crossed section{what.replace('_', ', ')}: "
+              f"{c['flexible' + what + '_per_section'] / c['rigid' + what + '_per_section']:.2f}")
 
 
 if __name__ == "__main__":

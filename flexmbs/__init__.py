@@ -38,6 +38,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
         LinearPenalty,
         RegularizedCoulomb,
     )
+    from .contact.tube_joint import TubeJoint
     from .elements.ancf_cable import CableOptions
     from .geometry.curves import Centerline, arc, line, polyline
     from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
@@ -56,6 +57,7 @@ _LAZY = {
     "Hole": ".contact.joint",
     "SlidingClearanceJoint": ".contact.joint",
     "SuperellipseHole": ".contact.joint",
+    "TubeJoint": ".contact.tube_joint",
     "Friction": ".contact.laws",
     "Hertz": ".contact.laws",
     "HuntCrossley": ".contact.laws",
@@ -146,5 +148,5 @@ __all__ = [
     "RedundantConstraintError", "Result", "RigidBody", "ScenarioError", "SimulationStopped",
     "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
     "modes", "polyline", "read_curve", "simulate", "solve_quasi_static", "solve_static", "sweep",
-    "Tendon", "TendonParts",
+    "Tendon", "TendonParts", "TubeJoint",
 ]

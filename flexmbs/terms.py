@@ -84,6 +84,9 @@ class PackContext(DofMap, Protocol):
     n_total: int
     q_ref: np.ndarray
 
+    def matrix_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """The iteration matrix's CSC ``(indptr, indices)`` (int64; fixed once packed)."""
+
 
 class FunctionTable:
     """Time functions of a model numbered in first-use order; kernels read their values at the

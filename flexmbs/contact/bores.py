@@ -27,7 +27,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..geometry.curves import Centerline
 
 __all__ = ["Hole", "CircleHole", "SuperellipseHole", "CurvedBore", "transported_frames",
-           "section_tree", "sections_near", "section_between", "TREE_LEAF", "BORE_KEYS"]
+           "section_tree", "refit_section_tree", "sections_near", "section_between", "TREE_LEAF",
+           "BORE_KEYS"]
 
 #: keys of a bore's record beyond its section's parameters (:meth:`Hole.record`, read back by
 #: the section view)
@@ -315,6 +316,36 @@ def section_tree(origins: np.ndarray, reach: float) -> tuple[np.ndarray, ...]:
             mid = (a + b) // 2
             stack += [(2 * i + 1, a, mid), (2 * i + 2, mid, b)]
     return centre, radius, lo, hi
+
+
+@njit
+def refit_section_tree(origins, reach, centre, radius, lo, hi):  # noqa: ANN001, ANN201
+    """:func:`section_tree`'s spheres again for sections that moved (a flexible tube's, at
+    every evaluation): the same nodes and ranges, each node's centre the mean of its
+    sections' ``origins`` and its radius their largest distance plus ``reach``. O(n log n)."""
+    for i in range(radius.shape[0]):
+        if radius[i] < 0.0:
+            continue
+        a, b = lo[i], hi[i]
+        c0 = 0.0
+        c1 = 0.0
+        c2 = 0.0
+        for k in range(a, b):
+            c0 += origins[k, 0]
+            c1 += origins[k, 1]
+            c2 += origins[k, 2]
+        c0 /= b - a
+        c1 /= b - a
+        c2 /= b - a
+        d2 = 0.0
+        for k in range(a, b):
+            d = ((origins[k, 0] - c0) ** 2 + (origins[k, 1] - c1) ** 2
+                 + (origins[k, 2] - c2) ** 2)
+            d2 = max(d2, d)
+        centre[i, 0] = c0
+        centre[i, 1] = c1
+        centre[i, 2] = c2
+        radius[i] = math.sqrt(d2) + reach
 
 
 @njit(inline="always")

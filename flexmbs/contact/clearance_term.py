@@ -25,11 +25,13 @@ from ._detect import (
     GAP_COL,
     GEOMETRY_COL,
     MAX_CANDIDATES,
+    N_TIPS,
     angle_distance,
     detect_section,
     place_tips,
     reset_crossings,
 )
+from .bores import refit_section_tree
 from .pair import (
     HIST_TWIST,
     N_GEO,
@@ -42,11 +44,21 @@ from .pair import (
 )
 from .sections import section_boundary
 from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
+from .tube import POSE_SIZE, POSE_WORK, TubeSections, pose_curvature, section_pose
+from .tube import rebase as rebase_section
 
 #: :func:`clearance_forces`' float work (:attr:`ClearancePart.fwork`): :func:`detect_section`'s,
-#: then the hole body's pose, rotation and velocity, and a contact's arrays (carved in order)
+#: then the hole body's pose, rotation and velocity, a contact's arrays and a tube section's
+#: rotation (carved in order)
 FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3 * 2 + N_GEO
-               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK)
+               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9)
+
+#: a tube joint's float work (:attr:`ClearancePart.tube_work`): a section's pose, its rate and
+#: its pose at the step's start (7 each), J and G (7 × CENTERLINE_SIZE each), H
+#: (CENTERLINE_SIZE²), the outer element's coordinates and rates, the unit section (origin 0,
+#: axes I) and :data:`~flexmbs.contact.tube.POSE_WORK`
+TUBE_WORK = (3 * POSE_SIZE + 2 * POSE_SIZE * CENTERLINE_SIZE + CENTERLINE_SIZE * CENTERLINE_SIZE
+             + 2 * CENTERLINE_SIZE + 12 + POSE_WORK)
 
 #: two contact points of one section are the same contact from one step to the next if the
 #: section angles of their hole points differ by less than this [rad] (docs/theory.md §II.3)
@@ -220,6 +232,102 @@ def _frame_into(q, body_dofs, qb, A):  # noqa: ANN001, ANN202
     rotation_into(qb[3:7], A)
 
 
+@njit(inline="always")
+def _tube_carve(tw):  # noqa: ANN001, ANN202
+    """The arrays of a tube joint's work (:data:`TUBE_WORK`; views, nothing allocated)."""
+    P, CS = POSE_SIZE, CENTERLINE_SIZE
+    pose = tw[0:P]
+    vel = tw[P:2 * P]
+    start = tw[2 * P:3 * P]
+    o = 3 * P
+    J = tw[o:o + P * CS].reshape((P, CS))
+    o += P * CS
+    G = tw[o:o + P * CS].reshape((P, CS))
+    o += P * CS
+    H = tw[o:o + CS * CS].reshape((CS, CS))
+    o += CS * CS
+    qo = tw[o:o + CS]
+    vo = tw[o + CS:o + 2 * CS]
+    o += 2 * CS
+    unit_o = tw[o:o + 3]
+    unit_f = tw[o + 3:o + 12].reshape((3, 3))
+    o += 12
+    return pose, vel, start, J, G, H, qo, vo, unit_o, unit_f, tw[o:o + POSE_WORK]
+
+
+@njit
+def tube_joint(tube, j):  # noqa: ANN001, ANN201
+    """Whether clearance joint j's bore is a flexible tube (``tube`` None: none is)."""
+    if tube is None:
+        return False
+    return tube.on[j]
+
+
+@njit
+def tube_section(tube, j, k, q, v, tw):  # noqa: ANN001, ANN201
+    """Pose, rate and ``J`` of section k of clearance joint j into ``tube_work`` when its bore
+    is a flexible tube (:func:`~flexmbs.contact.tube.section_pose`); returns whether it is.
+    ``tube`` None: no tube in the model (compiled out)."""
+    if tube is None:
+        return False
+    if not tube.on[j]:
+        return False
+    pose, vel, _, J, _, _, qo, vo, _, _, pw = _tube_carve(tw)
+    for c in range(CENTERLINE_SIZE):
+        qo[c] = q[tube.dofs[j, k, c]]
+        vo[c] = v[tube.dofs[j, k, c]] if v.size > 0 else 0.0
+    section_pose(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], vo, pose,
+                 vel, J, pw)
+    return True
+
+
+@njit
+def tube_force(tube, j, k, J, Qc, sign, r_q):  # noqa: ANN001, ANN201
+    """A contact's force ``sign Qc[:7]`` on section k's pose, taken to the tube's element
+    (``Jᵀ``) and subtracted from ``r_q``."""
+    if tube is None:
+        return
+    for c in range(CENTERLINE_SIZE):
+        s = 0.0
+        for a in range(7):
+            s += J[a, c] * Qc[a]
+        r_q[tube.dofs[j, k, c]] -= sign * s
+
+
+@njit
+def tube_start_pose(tube, j, k, q_start, tw):  # noqa: ANN001, ANN201
+    """Section k's pose at the step's start ``q_start`` into ``tube_work``'s ``start`` (the
+    friction's reference, as a hole body's coordinates at the step's start); uses ``G`` and
+    ``H`` as scratch."""
+    if tube is None:
+        return
+    _, _, start, _, G, H, qo, vo, _, _, pw = _tube_carve(tw)
+    for c in range(CENTERLINE_SIZE):
+        qo[c] = q_start[tube.dofs[j, k, c]]
+        vo[c] = 0.0
+    section_pose(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], vo, start,
+                 H[0, :POSE_SIZE], G, pw)
+
+
+@njit
+def tube_place_sections(tube, j, q, n_bore, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201
+                        reach, tw):
+    """The world origins and axes of tube joint j's sections at ``q`` into ``origins``,
+    ``frames`` (the detection then takes the identity as the hole body's pose) and their
+    tree refitted (:func:`~flexmbs.contact.bores.refit_section_tree`)."""
+    if tube is None:
+        return
+    if not tube.on[j]:
+        return
+    pose = _tube_carve(tw)[0]
+    for k in range(n_bore):
+        tube_section(tube, j, k, q, q[:0], tw)
+        for c in range(3):
+            origins[k, c] = pose[c]
+        rotation_into(pose[3:7], frames[k])
+    refit_section_tree(origins[:n_bore], reach, tree_c, tree_r, tree_lo, tree_hi)
+
+
 @njit(internal=True)
 def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
                      tree_c, tree_r, tree_lo,
@@ -227,7 +335,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                      consistent, paper, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
-                     exact, r_q, K_out, C_out, elem_k, elem_i, fwork):
+                     exact, r_q, K_out, C_out, elem_k, elem_i, fwork, j, tube, tw, ksec, kforce):
     """Residual of one clearance joint with a circular bore (docs/theory.md §II.8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
@@ -243,16 +351,36 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     ``spin`` (pair.N_SPIN) work for the contact element's spin, ``paper`` as in
     :func:`detect_section` (None: compiled out); ``fwork`` (:data:`FORCES_WORK`) holds every
     work array (nothing is allocated); ``qe`` and ``etree`` are the beam's element coordinates
-    at ``q`` and their tree (:func:`beam_geometry`, shared by the joints on one beam). Returns
-    ``(rows, contacts, scale)``; ``rows = −1 − k`` if the beam axis left the bore at section k."""
+    at ``q`` and their tree (:func:`beam_geometry`, shared by the joints on one beam).
+
+    A flexible tube (joint ``j`` of ``tube``, :class:`~flexmbs.contact.tube.TubeSections`): its
+    sections' ``origins`` and ``frames`` are global (:func:`tube_place_sections`) and each
+    contact takes its section's pose as the hole body's (:func:`tube_section`, ``tw``
+    :data:`TUBE_WORK`); its force goes to the tube's element through ``Jᵀ``, and the tangent
+    keeps the section of each contact in ``ksec`` and its force on the pose in ``kforce``
+    for :func:`_tube_tangent`. Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the
+    beam axis left the bore at section k."""
     o = DETECT_WORK
     qb = fwork[o:o + 7]
     A = fwork[o + 7:o + 16].reshape((3, 3))
     vb = fwork[o + 16:o + 23]
     o += 23
-    _frame_into(q, body_dofs, qb, A)
-    for i in range(7):
-        vb[i] = v[body_dofs[i]]
+    pose_k, vel_k, start_k, J_k, _, _, _, _, unit_o, unit_f, _ = _tube_carve(tw)
+    tubular = tube_joint(tube, j)     # a tube: its sections are global, each its own pose
+    if tubular:
+        for i in range(7):
+            qb[i] = 0.0
+            vb[i] = 0.0
+        qb[3] = 1.0
+        for a in range(3):
+            unit_o[a] = 0.0
+            for c in range(3):
+                A[a, c] = 1.0 if a == c else 0.0
+                unit_f[a, c] = A[a, c]
+    else:
+        _frame_into(q, body_dofs, qb, A)
+        for i in range(7):
+            vb[i] = v[body_dofs[i]]
     ne = elem_dofs.shape[0]
     m = detect_section(qe[:ne], lengths, qb[:3], A, origins, frames, tree_c, tree_r, tree_lo,
                        tree_hi, etree, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
@@ -282,23 +410,34 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     o += CENTERLINE_SIZE
     u_Q = fwork[o:o + 3]
     pair_work = fwork[o + 3:o + 3 + PAIR_WORK]
+    o += 3 + PAIR_WORK
+    A_k = fwork[o:o + 9].reshape((3, 3))
     count = 0
     scale = 0.0
     for i in range(m):
         row = rows[i]
         k, eP = int(row[0]), int(row[3])
         sign = row[2]
+        qk, vk, Ak, ok, fk = qb, vb, A, origins[k], frames[k]
+        if tubular:      # the section's own pose is the hole body's
+            tube_section(tube, j, k, q, v, tw)
+            rotation_into(pose_k[3:7], A_k)
+            qk, vk, Ak, ok, fk = pose_k, vel_k, A_k, unit_o, unit_f
         for c in range(3):
-            u_Q[c] = (A[0, c] * (row[5] - qb[0]) + A[1, c] * (row[6] - qb[1])
-                      + A[2, c] * (row[7] - qb[2]))
+            u_Q[c] = (Ak[0, c] * (row[5] - qk[0]) + Ak[1, c] * (row[6] - qk[1])
+                      + Ak[2, c] * (row[7] - qk[2]))
         for c in range(CENTERLINE_SIZE):
             ve[c] = v[elem_dofs[eP, c]]
         slot = tracked_slot(active, psi_track, k, row[11])
         v_app = approach[k, slot] if slot >= 0 else 0.0
         contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP],
                         twist_dofs[eP], hist)
+        if tubular:
+            tube_start_pose(tube, j, k, q_start, tw)
+            for c in range(7):
+                hist[4 + c] = start_k[c]
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
-        g, gdot, f, xiP = contact_force(qb, vb, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
+        g, gdot, f, xiP = contact_force(qk, vk, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
                                         C, geo, pair_work)
         row[GAP_COL] = g
@@ -311,8 +450,11 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
             row[GEOMETRY_COL + c] = geo[c]
         if g >= 0.0:
             continue
-        for c in range(7):
-            r_q[body_dofs[c]] -= sign * Qc[c]
+        if tubular:      # Jᵀ λ on the tube's element
+            tube_force(tube, j, k, J_k, Qc, sign, r_q)
+        else:
+            for c in range(7):
+                r_q[body_dofs[c]] -= sign * Qc[c]
         for c in range(CENTERLINE_SIZE):
             r_q[elem_dofs[eP, c]] -= sign * Qc[7 + c]
         for c in range(N_TWIST):
@@ -323,10 +465,14 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                 scale = abs(Qc[c])
         if want_tangent and count >= K_out.shape[0]:
             return _OVERFLOW, count, scale
+        if want_tangent:
+            ksec[count] = k
+            for c in range(7):
+                kforce[count, c] = sign * Qc[c]
         if want_tangent and exact:
             eI = eP if consistent else int(row[CROSSING_COL])
             section_boundary(shape, params, row[11], Y, Yp, Ypp)
-            contact_tangent(qb, vb, origins[k], frames[k], qe[eI], lengths[eI],
+            contact_tangent(qk, vk, ok, fk, qe[eI], lengths[eI],
                             row[CROSSING_COL + 1],
                             qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
                             fric, hist, v_app, consistent, paper, Qx, KX, C)
@@ -448,6 +594,12 @@ class ClearancePart(NamedTuple):
     beam_joint: np.ndarray           # (nb,) a joint on the beam (its elem_dofs, lengths)
     beam_qe: np.ndarray              # work (nb, max_ne, CENTERLINE_SIZE): the beam's elements
     beam_tree: np.ndarray            # work (nb, element_tree_size(max_ne), 4)  at q (beam_geometry)
+    tube: TubeSections               # the sections of flexible tubes (None: no joint has one)
+    tube_work: np.ndarray            # work (TUBE_WORK,)
+    ksec: np.ndarray                 # work (n_contacts,): contact's section
+    kforce: np.ndarray               # work (n_contacts, 7): its force on the section's pose
+    indptr: np.ndarray               # the iteration matrix's CSC pattern (a tube's entries are
+    indices: np.ndarray              #   found in it: _tube_tangent)
     # (tips_due, spin and paper are None in the kernel's copy when no joint of the model uses
     # them: contact.joint._compiled_view, their code is then not compiled)
 
@@ -480,6 +632,9 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
                    cl.body[j], cl.lengths[j], cl.origins[j], cl.frames[j], cl.stations[j],
                    cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], cl.tip_reach[j],
                    cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j], cl.tip_station[j], cl.work)
+    tube_place_sections(cl.tube, j, q, ns - N_TIPS, cl.origins[j], cl.frames[j], cl.tree_c[j],
+                        cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], 2.0 * cl.R_out[j] + cl.r_b[j],
+                        cl.tube_work)
     m, cnt, sc = clearance_forces(
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j], cl.spin,
         cl.lengths[j, :ne_j], cl.origins[j, :ns],
@@ -490,7 +645,8 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
         cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.beam_qe[b], cl.rows[j],
-        want_tangent, cl.exact[j], r, K, C, elem, elem_i, cl.fwork)
+        want_tangent, cl.exact[j], r, K, C, elem, elem_i, cl.fwork, j, cl.tube, cl.tube_work,
+        cl.ksec, cl.kforce)
     if m == _OVERFLOW:
         cl.n_candidates[j] = 0
         error[0] = ERR_TOO_MANY_CONTACTS
@@ -549,6 +705,10 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
                 error[1] = j
                 error[2] = eP if eP < lo or eP >= hi else eI
                 return scale, ERR_CONTACT_OFF_PLAN
+        if tube_joint(cl.tube, j):
+            for i in range(cnt):
+                _tube_tangent(cl, cl.tube, j, i, q, v, cC, cK, data)
+            continue
         for i in range(cnt):
             eP = cl.kelem[i]
             eI = cl.kelem_i[i]
@@ -633,7 +793,8 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
             cl.xi_ws[j, k] = cl.xi_out[j, k]
             ws_list[1 + i] = k
         ws_list[0] = out_list[0]
-        _mark_tips_due(cl.tips_due, j, cl.open_ends[j])
+        _mark_tips_due(cl.tips_due, j, cl.open_ends[j] and not tube_joint(cl.tube, j))
+        tube_rebase(cl.tube, j, ns - N_TIPS, q, cl.tube_work)
 
 
 @njit(internal=True)
@@ -663,3 +824,111 @@ def _mark_tips_due(due, j, open_end):  # noqa: ANN001, ANN202
     if due is None:
         return
     due[j] = open_end
+
+
+@njit
+def tube_rebase(tube, j, n_bore, q, tw):  # noqa: ANN001, ANN201
+    """After a converged step: the sections of tube joint j whose tangent turned far take new
+    bases (:func:`~flexmbs.contact.tube.rebase`; their poses do not change)."""
+    if tube is None:
+        return
+    if not tube.on[j]:
+        return
+    _, _, _, _, _, _, qo, _, _, _, pw = _tube_carve(tw)
+    for k in range(n_bore):
+        for c in range(CENTERLINE_SIZE):
+            qo[c] = q[tube.dofs[j, k, c]]
+        rebase_section(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], pw)
+
+
+@njit(inline="always")
+def _csc_add(indptr, indices, data, row, col, value):  # noqa: ANN001, ANN202
+    """``data[(row, col)] += value`` if the pattern holds the entry (binary search in the
+    column's sorted rows); else nothing (as the rigid bore's entries outside the pattern)."""
+    lo = indptr[col]
+    hi = indptr[col + 1]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        r = indices[mid]
+        if r < row:
+            lo = mid + 1
+        elif r > row:
+            hi = mid
+        else:
+            data[mid] += value
+            return
+
+
+@njit
+def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):  # noqa: ANN001, ANN202, C901, PLR0912
+    """Contact i of tube joint j into the iteration matrix: its rigid-bore blocks
+    (``cl.K[i]``, ``cl.C[i]``, columns and rows of the hole body's pose ``b``) taken to the
+    tube's element ``e_o`` through ``b = b(e_o)`` (:mod:`flexmbs.contact.tube`):
+    ``K_xo = K_xb J + C_xb G``, ``K_ox = Jᵀ K_bx``,
+    ``K_oo = Jᵀ (K_bb J + C_bb G) − Σ_a λ_a ∂²b_a/∂e²``, ``C_xo = C_xb J``, ``C_ox = Jᵀ C_bx``
+    (x: the beam's element e_P, its twists and the crossing's element e_I). ``tube``
+    (``cl.tube``) None: no tube in the model (compiled out)."""
+    if tube is None:
+        return
+    k = cl.ksec[i]
+    eP = cl.kelem[i]
+    eI = cl.kelem_i[i]
+    tw = cl.tube_work
+    tube_section(tube, j, k, q, v, tw)
+    _, _, _, J, G, H, qo, vo, _, _, pw = _tube_carve(tw)
+    pose_curvature(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], vo,
+                   cl.kforce[i], H, G, pw)
+    K = cl.K[i]
+    C = cl.C[i]
+    CS = CENTERLINE_SIZE
+    od = tube.dofs[j, k]
+    n_tw = N_TWIST if cl.twist_dofs[j, eP, 0] >= 0 else 0
+    ip, ix = cl.indptr, cl.indices
+    # the beam's rows (e_P, its twists) and columns (e_P, twists, e_I): the rigid bore's
+    for a in range(CS + n_tw):
+        ra = cl.elem_dofs[j, eP, a] if a < CS else cl.twist_dofs[j, eP, a - CS]
+        la = 7 + a                                  # local row
+        for c in range(CS):
+            kk = K[la, P_OFF + c]
+            if eI == eP:
+                kk += K[la, I_OFF + c]
+            _csc_add(ip, ix, data, ra, cl.elem_dofs[j, eP, c], cK * kk + cC * C[la, 7 + c])
+            if eI != eP:
+                _csc_add(ip, ix, data, ra, cl.elem_dofs[j, eI, c], cK * K[la, I_OFF + c])
+        for c in range(n_tw):
+            _csc_add(ip, ix, data, ra, cl.twist_dofs[j, eP, c],
+                     cK * K[la, T_OFF + c] + cC * C[la, TWIST_OFF + c])
+        # columns of the tube's element
+        for c in range(CS):
+            s = 0.0
+            for b in range(7):
+                s += (cK * K[la, b] + cC * C[la, b]) * J[b, c] + cK * C[la, b] * G[b, c]
+            _csc_add(ip, ix, data, ra, od[c], s)
+    # the tube's rows
+    for r in range(CS):
+        ro = od[r]
+        for c in range(CS):          # against e_P (and e_I)
+            s = 0.0
+            sI = 0.0
+            for b in range(7):
+                kk = K[b, P_OFF + c]
+                if eI == eP:
+                    kk += K[b, I_OFF + c]
+                s += J[b, r] * (cK * kk + cC * C[b, 7 + c])
+                sI += J[b, r] * cK * K[b, I_OFF + c]
+            _csc_add(ip, ix, data, ro, cl.elem_dofs[j, eP, c], s)
+            if eI != eP:
+                _csc_add(ip, ix, data, ro, cl.elem_dofs[j, eI, c], sI)
+        for c in range(n_tw):
+            s = 0.0
+            for b in range(7):
+                s += J[b, r] * (cK * K[b, T_OFF + c] + cC * C[b, TWIST_OFF + c])
+            _csc_add(ip, ix, data, ro, cl.twist_dofs[j, eP, c], s)
+        for c in range(CS):          # against itself
+            s = -cK * H[r, c]
+            for b in range(7):
+                t = 0.0
+                for d in range(7):
+                    t += (cK * K[b, d] + cC * C[b, d]) * J[d, c] + cK * C[b, d] * G[d, c]
+                s += J[b, r] * t
+            _csc_add(ip, ix, data, ro, od[c], s)

@@ -56,6 +56,7 @@ from .clearance_term import (
     ERR_LEFT_BORE,
     ERR_TOO_MANY_CONTACTS,
     FORCES_WORK,
+    TUBE_WORK,
     ClearancePart,
     clearance_update,
     contact_capacity,
@@ -80,6 +81,7 @@ from .laws import (
 from .pair import N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, contact_point, friction_vector
 from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
+from .tube import TubeSections
 
 __all__ = ["SlidingClearanceJoint", "Hole", "CircleHole", "SuperellipseHole", "CurvedBore",
            "CLEARANCE", "MAX_POINTS", "TANGENTS", "DETECTIONS", "hole_frame"]
@@ -96,6 +98,10 @@ MAX_POINTS = 8
 TANGENTS = ("exact", "gauss_newton", "frozen_point")
 #: contact detections of the clearance joint (see :class:`SlidingClearanceJoint`)
 DETECTIONS = ("consistent", "paper")
+
+#: What a joint's detection takes at a state: the hole body's position and rotation, the
+#: sections' origins and axes in its coordinates and their bounding-sphere tree.
+DetectionFrame = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[np.ndarray, ...]]
 
 
 class ClearanceGeometry(NamedTuple):
@@ -394,6 +400,19 @@ class SlidingClearanceJoint(Interaction):
         # the twists' charts' base tangents (set when packed, then re-based)
         self.state = self.state._replace(t_bar=np.zeros((ne, N_TWIST, 3)))
 
+    def own_dofs(self) -> np.ndarray:
+        """The coordinates the bore moves with (the hole body's): the joint's entries against
+        its beam (:func:`clearance_pattern`) and its plan windows' own unknowns."""
+        return np.asarray(self.geometry.body_dofs, np.int64)
+
+    def tube_sections(self) -> tuple[np.ndarray, ...] | None:
+        """A flexible tube's sections (:class:`~flexmbs.contact.tube_joint.TubeJoint`); a rigid
+        bore has none."""
+        return None
+
+    def packed_tube(self, tube: TubeSections, i: int) -> None:
+        """A flexible tube keeps views of its packed sections' state (a rigid bore: nothing)."""
+
     def initial_extra(self, q0: np.ndarray) -> np.ndarray:
         g = self.geometry
         self._check_start(q0[g.body_dofs], np.ascontiguousarray(q0[g.elem_dofs]), warn=False)
@@ -406,6 +425,10 @@ class SlidingClearanceJoint(Interaction):
         A = rotation_matrix(qb[3:7])
         ns = len(self.stations)
         return A, qb[:3] + self.state.origins[:ns] @ A.T, A @ self.state.axes[:ns]
+
+    def _planes_at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_planes` at the model's coordinates ``q``."""
+        return self._planes(q[self.geometry.body_dofs])
 
     @property
     def contact(self) -> ForceLaw:
@@ -618,12 +641,26 @@ class SlidingClearanceJoint(Interaction):
                 out.append((k, j, cand.kind, eP, res, a, b, psi))
         return out
 
+    def _detection_frame(self, q: np.ndarray) -> DetectionFrame:
+        """What the detection takes at ``q``: the hole body's position and rotation, the
+        sections' origins and axes in its coordinates and their tree."""
+        qb = q[self.geometry.body_dofs]
+        return (np.ascontiguousarray(qb[:3]), rotation_matrix(qb[3:7]), self.state.origins,
+                self.state.axes, self.geometry.tree)
+
+    def _contact_pose(self, q: np.ndarray, v: np.ndarray, k: int
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pose ``[r, p]``, its rate and rotation of the body that holds section k's wall
+        (the hole body)."""
+        g = self.geometry
+        qb = q[g.body_dofs]
+        return qb, v[g.body_dofs], rotation_matrix(qb[3:7])
+
     def detect_rows(self, q: np.ndarray, update: bool = False) -> int:
         """The compiled narrow phase of every section at ``q`` (:func:`_detect.detect_section`):
         the candidate rows into ``self._rows``; returns their number (``-1 - k``: the axis left
         the bore at section k). ``update``: the crossings become the warm starts."""
-        qb = q[self.geometry.body_dofs]
-        A = rotation_matrix(qb[3:7])
+        r_H, A, origins, axes, tree = self._detection_frame(q)
         qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         e_out, x_out = (self.state.elem, self.state.xi) if update else (self._elem_out, self._xi_out)
         unknown = np.full(1, -1, np.int64)        # lists not kept here: every section scanned
@@ -637,8 +674,8 @@ class SlidingClearanceJoint(Interaction):
         g = self.geometry
         etree = np.zeros((element_tree_size(qe.shape[0]), 4))
         element_tree(qe, g.lengths, etree)
-        m = detect_section(qe, g.lengths, np.ascontiguousarray(qb[:3]), A, self.state.origins,
-                           self.state.axes, *g.tree, etree, bool(self.hole.open_ends),
+        m = detect_section(qe, g.lengths, r_H, A, origins, axes, *tree, etree,
+                           bool(self.hole.open_ends),
                            self.state.tip_on,
                            *self._cross[:5],
                            self.state.elem, self.state.xi, unknown, e_out, x_out, out_list,
@@ -653,15 +690,13 @@ class SlidingClearanceJoint(Interaction):
                            update: bool) -> list:
         """A section with a compiled shape: the narrow phase of all sections runs compiled
         (contact/_detect.py)."""
-        qb = q[self.geometry.body_dofs]
-        vb = v[self.geometry.body_dofs]
-        A = rotation_matrix(qb[3:7])
         m = self.detect_rows(q, update)
         if m < 0:
             self._raise_left_bore(m)
         out = []
         for row in self._rows[:m].copy():
             k, eP = int(row[0]), int(row[3])
+            qb, vb, A = self._contact_pose(q, v, k)
             u_Q = A.T @ (row[5:8] - qb[:3])
             ed = self.geometry.elem_dofs[eP]
             res = contact_point(qb, vb, u_Q, q[ed], v[ed], self.geometry.lengths[eP], row[4],
@@ -876,8 +911,7 @@ class SlidingClearanceJoint(Interaction):
     def section_records(self, q: np.ndarray, v: np.ndarray, t: float) -> list[dict[str, Any]]:
         """Per hole section: section frame, beam ellipse (section coordinates), bore radius and
         number of contact points (``sections.csv``, used by the section view)."""
-        qb = q[self.geometry.body_dofs]
-        _, origins, axes = self._planes(qb)
+        _, origins, axes = self._planes_at(q)
         qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         R = self.hole.section.bounding_radius()
         counts: dict[int, int] = {}
@@ -902,7 +936,7 @@ class SlidingClearanceJoint(Interaction):
         """The bore outline of every hole section at ``q`` (output: the ``hole_sections`` block):
         ``(n_sections, samples, 3)`` global points ``o_k + Y_y(psi) e_y,k + Y_z(psi) e_z,k``
         of the section boundary ``Y(psi)`` at ``psi = 2 pi j / samples`` in each section plane."""
-        _, origins, axes = self._planes(q[self.geometry.body_dofs])
+        _, origins, axes = self._planes_at(q)
         cached = getattr(self, "_outline_boundary", None)    # the section's, the same each time
         section = self.hole.section
         if cached is None or cached[0] != int(samples) or cached[1] is not section:
@@ -915,9 +949,8 @@ class SlidingClearanceJoint(Interaction):
     def slide_coordinate(self, q: np.ndarray) -> float:
         """Arc length (from the beam's first node) of the projection of the hole centre (the
         middle section's origin) onto the beam centreline."""
-        qb = q[self.geometry.body_dofs]
         k = len(self.stations) // 2
-        centre = self._planes(qb)[1][k]
+        centre = self._planes_at(q)[1][k]
         qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         e, xi, *_ = closest_point(qe, self.geometry.lengths, centre, max(0, int(self.state.elem[k])),
                                   float(self.state.xi[k]))
@@ -986,8 +1019,9 @@ def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[
     uses the entries the beam already has (their shared node): reserving the rest would widen
     the band of every beam by a node (measured: Example 1 20 % slower) for entries of order
     ξ² near the shared node."""
-    cols = np.concatenate([joint.geometry.body_dofs, joint.geometry.beam_dofs])
-    return [(joint.geometry.body_dofs, cols), (cols, joint.geometry.body_dofs)]
+    own = joint.own_dofs()
+    cols = np.concatenate([own, joint.geometry.beam_dofs])
+    return [(own, cols), (cols, own)]
 
 
 def _chart_tangents(joint: SlidingClearanceJoint, ctx: PackContext) -> np.ndarray:
@@ -1083,13 +1117,36 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
         np.zeros(FORCES_WORK),
         c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)),
-        *_beams(joints, max_ne))
+        *_beams(joints, max_ne), _tubes(joints, max_ns), np.zeros(TUBE_WORK),
+        np.zeros(n_contacts, i64), np.zeros((n_contacts, 7)), *ctx.matrix_pattern())
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
+        j.packed_tube(part.tube, i)
     return part
 
 
-def _beams(joints: list[SlidingClearanceJoint], max_ne: int) -> tuple[np.ndarray, ...]:
+def _tubes(joints: list[SlidingClearanceJoint], max_ns: int) -> TubeSections:
+    """The sections of the joints whose bore is a flexible tube (:meth:`tube_sections`; zeros
+    for the others)."""
+    nj = len(joints)
+    CS = CENTERLINE_SIZE
+    out = TubeSections(on=np.zeros(nj, np.bool_), dofs=np.zeros((nj, max_ns, CS), np.int64),
+                       length=np.ones((nj, max_ns)), xi=np.zeros((nj, max_ns)),
+                       t_bar=np.zeros((nj, max_ns, 3)), p0=np.zeros((nj, max_ns, 4)))
+    for i, j in enumerate(joints):
+        sections = j.tube_sections()
+        if sections is None:
+            continue
+        dofs, length, xi, t_bar, p0 = sections
+        n = len(xi)
+        out.on[i] = True
+        out.dofs[i, :n], out.length[i, :n], out.xi[i, :n] = dofs, length, xi
+        out.t_bar[i, :n], out.p0[i, :n] = t_bar, p0
+    return out
+
+
+def _beams(joints: list[SlidingClearanceJoint], max_ne: int
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The joints' beams (:class:`ClearancePart`'s ``beam_of``, ``beam_joint``, ``beam_qe``,
     ``beam_tree``): joints on the same elements share one copy of the beam's coordinates and
     one element tree per evaluation (clearance_term.beam_geometry)."""
@@ -1113,7 +1170,7 @@ def _compiled_view(part: ClearancePart) -> ClearancePart:
     None, so that their code is not compiled for it (docs/design-notes.md, "Compile time"):
     the tip sections of open bores, a rod's spin in the contact, the paper's detection."""
     unused = {"tips_due": not part.open_ends.any(), "spin": not (part.twist_dofs >= 0).any(),
-              "paper": not part.paper.any()}
+              "paper": not part.paper.any(), "tube": not part.tube.on.any()}
     none: dict[str, Any] = {name: None for name, off in unused.items() if off}
     return part._replace(**none)
 
@@ -1130,7 +1187,7 @@ def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
     part.tips_due[:] = False
     for j in range(part.r_b.size):
         part.tip_on[j] = False
-        if not part.open_ends[j]:
+        if not part.open_ends[j] or part.tube.on[j]:
             continue
         ne, ns = int(part.n_elem[j]), int(part.n_sec[j])
         qb = q[part.body[j]]
@@ -1192,5 +1249,5 @@ CLEARANCE = InteractionKind(
     enable=_enable_clearance, begin=_begin_clearance, compiled_view=_compiled_view,
     energy=("contact", SlidingClearanceJoint.contact_energy), observe=_observe_clearance,
     follow=Following(off_plan=ERR_CONTACT_OFF_PLAN,
-                     own=lambda joint, dofs: np.asarray(joint.geometry.body_dofs, np.int64),
+                     own=lambda joint, dofs: joint.own_dofs(),
                      elements=_joint_elements, current=_current_windows))

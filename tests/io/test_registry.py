@@ -52,7 +52,7 @@ def test_the_registries_hold_the_documented_names() -> None:
     assert set(laws.CONTACT_LAWS) == {"linear", "hertz", "hunt_crossley", "lankarani_nikravesh"}
     assert sections.SECTION_TYPES is sections.HOLE_SECTIONS and laws.LAWS is laws.CONTACT_LAWS
     assert ELEMENTS.names()[0] == "ancf_cable"
-    assert JOINTS.names() == ("sliding", "sliding_clearance")
+    assert JOINTS.names() == ("sliding", "sliding_clearance", "tube")
     assert CONSTRAINTS.names() == ("clamp", "pin", "fix_body", "spherical", "revolute", "prismatic",
                                    "rigid", "prescribed", "joint", "driver")
     assert LOADS.names() == ("point", "distributed")

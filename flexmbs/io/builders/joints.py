@@ -1,4 +1,4 @@
-"""``[[joints]]`` builders, registry :data:`JOINTS` (``sliding``, ``sliding_clearance``).
+"""``[[joints]]`` builders, registry :data:`JOINTS` (``sliding``, ``sliding_clearance``, ``tube``).
 
 The bore of a clearance joint and its contact law are plug-in parts with registries of their own,
 shared with the Python API: ``hole = { shape = ... }`` looks the section class up in
@@ -154,14 +154,49 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
                             f"{one_line(exc)}") from None
 
 
-def read_hole_section(h: Table) -> HoleSection:
+@JOINTS.register("tube")
+def _tube(t: Table, ctx: BuildContext) -> Any:
+    """``type = "tube"``: TubeJoint, a beam inside a flexible tube, docs/theory.md §II.9."""
+    from ...contact.joint import TANGENTS
+    from ...contact.tube_joint import TubeJoint
+
+    t.allow(("name", "type", "beam", "tube", "lumen", "spacing", "sections", "start", "end",
+             "open_ends", "contact", "beam_radius", "tangent"))
+    inner = ctx.beam(t)
+    outer = ctx.beam(t, "tube")
+    lumen = read_hole_section(t.table("lumen"), keys=("shape",))
+    which = t.exclusive("sections", "spacing")
+    if which is None:
+        raise ScenarioError(f"{t.path}: a tube needs sections = <count> or spacing = <distance "
+                            "along the tube> [m]")
+    c = t.table("contact") if t.has("contact") else Table({}, t.key("contact"))
+    contact_law = read_contact_law(c)
+    friction = read_friction(c)
+    with at(t.path):
+        joint = TubeJoint(
+            inner, outer, lumen=lumen,
+            spacing=t.number("spacing", gt=0.0, unit="m") if which == "spacing" else None,
+            sections=t.integer("sections", ge=2) if which == "sections" else None,
+            start=ctx.arc_length(t, outer, "start") if t.has("start") else 0.0,
+            end=ctx.arc_length(t, outer, "end") if t.has("end") else None,
+            open_ends=t.boolean("open_ends", True), contact=contact_law, friction=friction,
+            beam_radius=t.number("beam_radius", gt=0.0, unit="m") if t.has("beam_radius") else None,
+            tangent=t.choice("tangent", TANGENTS[:2], "exact", what="tangent"), name=t.raw["name"])
+    try:
+        return ctx.model.add_joint(joint)
+    except ModelError as exc:   # the start: the inner beam against the tube
+        raise ScenarioError(f"{t.path}: {one_line(exc)}") from None
+
+
+def read_hole_section(h: Table, keys: tuple[str, ...] = HOLE_KEYS) -> HoleSection:
     """The section of ``hole = { shape = "<name>", <its parameters>, length, sections, point }``
-    (shape default ``"circle"``), built by :func:`~flexmbs.contact.sections.get_section`."""
+    (shape default ``"circle"``; ``keys``: the table's keys beyond the section's), built by
+    :func:`~flexmbs.contact.sections.get_section`."""
     if h.has("semi_axes"):
         raise ScenarioError(f"{h.key('semi_axes')}: renamed; give the semi-axes as a = ... "
                             "(body y) and b = ... (body z)")
     shape, cls = h.lookup("shape", HOLE_SECTIONS, "circle")
-    h.allow((*HOLE_KEYS, *Table.parameter_names(cls)))
+    h.allow((*keys, *Table.parameter_names(cls)))
     params = h.parameters(cls)
     with at(h.path):
         section = get_section(shape, **params)
