@@ -1,15 +1,16 @@
 """Off-screen rendering of an output folder with pyvista: PNG frames and movies.
 
 Frames are read in either form flexmbs writes: a multiblock ``.vtm`` (groups ``beams``,
-``bodies``, ``contacts``, ``springs``) or a merged ``.vtu`` (told apart by ``block_id``).
+``bodies``, ``contacts``, ``springs``, ``hole_sections``) or a merged ``.vtu`` (told apart by
+``block_id``), and drawn the same.
 Beams (cells with ``block_id == 0``, VTK_LINE segments, or poly lines) are joined into polylines and drawn as
 tubes of their section radius, coloured by a beam point field with a scalar bar; rigid bodies
 (``block_id == 1``) are translucent surfaces in their pose; contact points (``block_id == 2``)
 are spheres with arrows of the force on the beam, ``-normal_force * normal``, scaled so that the
 largest normal force of the run is 8 % of the scene diagonal; translational spring-dampers
 (``block_id == 3``, lines) are drawn as thin dark-green lines; the bore outlines of clearance
-joints (the multiblock group ``hole_sections``, e.g. a curved tube's rings) as thin grey
-lines. A time label sits in the upper left;
+joints (``block_id == 4``, the multiblock group ``hole_sections``, e.g. a curved tube's rings)
+as thin grey lines. A time label sits in the upper left;
 the camera frames the bounding box of the whole motion (union over all frames), so it does not
 move during a movie.
 
@@ -52,7 +53,7 @@ def configure_offscreen() -> None:
 
 #: the group of a multiblock frame that holds each block_id of the merged frame
 _GROUPS = {0: "beams", 1: "bodies", 2: "contacts", 3: "springs", 4: "hole_sections"}
-#: the bore outlines of clearance joints: a group of the multiblock frames only
+#: the bore outlines of clearance joints (merged frames written before they held them: none)
 BORE_OUTLINES = 4
 
 

@@ -1,7 +1,7 @@
 """``flexmbs paraview DIR [--screenshot PNG]``: a ready-made ParaView view of a run (issue 35).
 
 Writes ``DIR/<name>_view.py``, a ParaView Python script (``paraview --script=...``, ``pvpython``
-or ``pvbatch``) that opens the run's multiblock series (``<name>.pvd``) and draws the beams as
+or ``pvbatch``) that opens the run's series (``<name>.pvd``) and draws the beams as
 tubes of their true section radius (the point data ``radius``, times ``--tube-scale``), the
 bodies as translucent surfaces, the contact points with arrows along the contact normal scaled
 by the normal force, springs and bore outlines as lines, coloured by a beam field, with the
@@ -10,8 +10,14 @@ off-screen) when ParaView is installed; without ``pvbatch`` on PATH it says so i
 exits 2 (the script is written all the same). See the docs site's "Post-processing" page,
 "ParaView" (docs/postprocess.md).
 
+Both forms of frames are read: multiblock ones (the parts are blocks, taken by name with
+*Extract Block*) and merged ones (one grid, the parts taken by the cell data ``block_id`` with
+*Threshold*; the beams' line segments through *Extract Surface* to the *Tube*), with the same
+view.
+
 The command reads the output folder only (``summary.json``, ``contacts.csv``, the ``.pvd`` and
-the first frame's beam piece for the field names); it needs neither VTK nor ParaView.
+the first frame's beam piece, or merged grid, for the field names); it needs neither VTK nor
+ParaView.
 """
 
 from __future__ import annotations
@@ -42,6 +48,8 @@ CAMERAS = {"iso": ((1.0, -1.0, 1.0), (0.0, 0.0, 1.0)), "xy": ((0.0, 0.0, 1.0), (
            "xz": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)), "yz": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0))}
 #: beam point data that is not a field to colour by
 _NOT_FIELDS = ("radius",)
+#: point data of a merged frame that belongs to its contact points, not to the beams
+_CONTACT_FIELDS = ("gap", "normal_force", "normal", "tangential_force", "stick")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -62,6 +70,7 @@ class _Series:
     blocks: list[dict]
     fields: dict[str, int]          #: beam point field -> number of components
     force_max: float                #: largest |normal force| of contacts.csv (0: none)
+    merged: bool = False            #: merged frames (one .vtu each), not multiblocks
 
 
 def _read_series(run_dir: Path) -> _Series:
@@ -79,32 +88,67 @@ def _read_series(run_dir: Path) -> _Series:
     frames = read_pvd(pvd)
     if not frames:
         raise FileNotFoundError(f"{pvd}: no frames in the series")
-    blocks = summary.get("vtm_blocks")
-    if not frames[0][1].endswith(".vtm") or not blocks:
-        raise ValueError(f"{run_dir} holds merged frames (.vtu); the ParaView view reads the "
-                         "multiblock frames: rerun with --output-frames multiblock (the default)")
-    pieces = frame_files(run_dir / frames[0][1])
-    if not pieces:
-        raise FileNotFoundError(f"{run_dir / frames[0][1]}: missing or damaged")
-    fields: dict[str, int] = {}
-    beams = [i for i, b in enumerate(blocks) if b.get("kind") == "beam"]
-    if beams:
-        root = ET.parse(pieces[beams[0]]).getroot()
-        for pd in root.iter("PointData"):
-            for arr in pd.iter("DataArray"):
-                if arr.get("Name") not in _NOT_FIELDS:
-                    fields[str(arr.get("Name"))] = int(arr.get("NumberOfComponents", "1"))
-    force_max = 0.0
+    forces: list[str] | None = None         # contacts.csv's normal forces (None: no file)
     contacts = run_dir / "contacts.csv"
     if contacts.is_file():
         with open(contacts, newline="", encoding="utf-8") as f:
             forces = [row.get("normal_force") or "0" for row in csv.DictReader(f)]
-        try:
-            force_max = max((abs(float(x)) for x in forces), default=0.0)
-        except ValueError:
-            raise ValueError(f"{contacts}: a normal_force is not a number") from None
+    try:
+        force_max = max((abs(float(x)) for x in forces or ()), default=0.0)
+    except ValueError:
+        raise ValueError(f"{contacts}: a normal_force is not a number") from None
+    force_max = force_max if math.isfinite(force_max) else 0.0
     name = str(summary.get("scenario") or pvd.stem)
-    return _Series(name, pvd, list(blocks), fields, force_max if math.isfinite(force_max) else 0.0)
+    first = run_dir / frames[0][1]
+    if not frames[0][1].endswith(".vtm"):       # merged frames: one grid each
+        blocks = _merged_parts(summary, has_contacts=bool(forces))
+        if not first.is_file():
+            raise FileNotFoundError(f"{first}: missing or damaged")
+        skip = _NOT_FIELDS + _CONTACT_FIELDS
+        fields = _point_fields(first, skip) if any(b["kind"] == "beam" for b in blocks) else {}
+        return _Series(name, pvd, blocks, fields, force_max, merged=True)
+    blocks = summary.get("vtm_blocks")
+    if not blocks:
+        raise ValueError(f"{run_dir}/summary.json lists no blocks (vtm_blocks) of its multiblock "
+                         "frames; rerun the scenario with this flexmbs")
+    pieces = frame_files(first)
+    if not pieces:
+        raise FileNotFoundError(f"{first}: missing or damaged")
+    beams = [i for i, b in enumerate(blocks) if b.get("kind") == "beam"]
+    fields = _point_fields(Path(pieces[beams[0]]), _NOT_FIELDS) if beams else {}
+    return _Series(name, pvd, list(blocks), fields, force_max)
+
+
+def _point_fields(path: Path, skip: tuple[str, ...]) -> dict[str, int]:
+    """The point data arrays of the VTK XML file ``path`` but ``skip``: name -> components."""
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        raise FileNotFoundError(f"{path}: missing or damaged") from None
+    return {str(arr.get("Name")): int(arr.get("NumberOfComponents", "1"))
+            for pd in root.iter("PointData") for arr in pd.iter("DataArray")
+            if arr.get("Name") not in skip}
+
+
+def _merged_parts(summary: dict, *, has_contacts: bool) -> list[dict]:
+    """The parts of merged frames as ``vtm_blocks`` lists them for multiblock ones (kind, name,
+    beam radius), from ``summary.json``'s ``vtu_blocks`` (the names behind ``block_id``,
+    ``beam_id``, ...): contact points when contacts.csv has rows, bore outlines when the frames
+    have ``block_id`` 4 and the model clearance joints. A run of a flexmbs that wrote no
+    ``beam_radius`` gets beams without radius (drawn with one radius, as stiffness beams)."""
+    ids = summary.get("vtu_blocks") or {}
+    radii = list(ids.get("beam_radius") or [])
+    parts: list[dict] = [{"kind": "beam", "name": n,
+                          "radius": radii[i] if i < len(radii) else None}
+                         for i, n in enumerate(ids.get("beam_id") or [])]
+    parts += [{"kind": "body", "name": n} for n in ids.get("body_id") or []]
+    if has_contacts:
+        parts.append({"kind": "contacts"})
+    if ids.get("spring_id"):
+        parts.append({"kind": "springs"})
+    if "4" in (ids.get("block_id") or {}) and summary.get("hole_sections"):
+        parts.append({"kind": "hole_sections"})
+    return parts
 
 
 def view_script(run_dir: str | os.PathLike[str], options: ViewOptions = ViewOptions()) -> str:
@@ -138,6 +182,8 @@ def view_script(run_dir: str | os.PathLike[str], options: ViewOptions = ViewOpti
         # 0.4 % of the model's size (as flexmbs render does)
         "TRUE_RADIUS": bool(radii) and all(r is not None for r in radii),
         "HAS": {k: k in kinds for k in ("beam", "body", "contacts", "springs", "hole_sections")},
+        # merged frames: the parts by the cell data block_id (Threshold), not by block name
+        "MERGED": series.merged,
         "FORCE_MAX": series.force_max,
         "CAMERA_DIRECTION": direction,
         "CAMERA_UP": up,
@@ -237,7 +283,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p = sub.add_parser(
         "paraview", help="write a ParaView view script for an output folder",
         description="Write DIR/<name>_view.py, a ParaView Python script that opens the run's "
-                    "multiblock series with beams as tubes of their radius, bodies, contact "
+                    "series (multiblock or merged frames) with beams as tubes of their radius, "
+                    "bodies, contact "
                     "forces and the camera on the model "
                     f"({docs('postprocess', 'paraview')}).")
     p.add_argument("directory", metavar="DIR", help="output folder of a run")
@@ -303,7 +350,9 @@ def run(args: argparse.Namespace) -> int:
 #: PVDReader, ExtractBlock: ``Selectors`` = ``/Root/<block>`` paths of the data assembly, since
 #: 5.10; Tube: ``Scalars``, ``VaryRadius`` 'By Absolute Scalar', ``Capping``; Glyph:
 #: ``GlyphType``, ``OrientationArray``, ``ScaleArray``, ``ScaleFactor``, ``GlyphMode``
-#: 'All Points') and against ParaView 5.10/5.11 trace scripts (ColorBy, GetDisplayProperties,
+#: 'All Points'; Threshold: ``Scalars``, ``LowerThreshold``, ``UpperThreshold``,
+#: ``ThresholdMethod`` 'Between', since 5.10, as pvpython 5.11's ``ListProperties()`` lists them;
+#: ExtractSurface) and against ParaView 5.10/5.11 trace scripts (ColorBy, GetDisplayProperties,
 #: RescaleTransferFunctionToDataRange, SetScalarBarVisibility, GetAnimationScene,
 #: UpdateAnimationUsingDataTimeSteps, SaveScreenshot with ImageResolution). The Tube's number of
 #: sides was renamed (NumberofSides -> NumberOfSides) between versions: the script sets
@@ -322,16 +371,19 @@ _TEMPLATE = '''"""ParaView view of the flexmbs run '@NAME@'
 Beams are tubes of their section radius (point data `radius`, times TUBE_SCALE), coloured by
 COLOR_BY; bodies translucent surfaces; contact points with arrows along the contact normal,
 their length proportional to the normal force (the largest of the run: 8 % of the model's
-size); springs and the bore outlines of the hole sections as lines. The blocks of the series
-are selected by name (Extract Block, /Root/beams, /Root/bodies, /Root/contacts, ...).
+size); springs and the bore outlines of the hole sections as lines. The blocks of multiblock
+frames are selected by name (Extract Block, /Root/beams, /Root/bodies, /Root/contacts, ...);
+the parts of merged frames (MERGED) by their cell data block_id (Threshold: 0 beams, 1 bodies,
+2 contact points, 3 springs, 4 bore outlines), the beams' segments through Extract Surface.
 Edit the constants below to change the view.
 """
 import os
 import sys
 
-from paraview.simple import (Calculator, ColorBy, ExtractBlock, GetActiveViewOrCreate,
-                             GetAnimationScene, GetColorTransferFunction, GetScalarBar, Glyph,
-                             PVDReader, Render, SaveScreenshot, SetActiveSource, Show, Tube)
+from paraview.simple import (Calculator, ColorBy, ExtractBlock, ExtractSurface,
+                             GetActiveViewOrCreate, GetAnimationScene, GetColorTransferFunction,
+                             GetScalarBar, Glyph, PVDReader, Render, SaveScreenshot,
+                             SetActiveSource, Show, Threshold, Tube)
 
 @CONSTANTS@
 
@@ -354,9 +406,23 @@ def _set_first(proxy, names, value):
             continue
 
 
-def _solid_block(reader, view, name, selector, colour):
-    """Show the block ``selector`` of the series in one colour; returns its display."""
-    part = ExtractBlock(registrationName=name, Input=reader, Selectors=[selector])
+def _part(reader, name, selector, block_id):
+    """One part of the series: the block ``selector`` of multiblock frames, the cells whose
+    cell data block_id is ``block_id`` of merged ones."""
+    if not MERGED:
+        return ExtractBlock(registrationName=name, Input=reader, Selectors=[selector])
+    part = Threshold(registrationName=name, Input=reader)
+    part.Scalars = ["CELLS", "block_id"]
+    part.LowerThreshold = block_id
+    part.UpperThreshold = block_id
+    _set_first(part, ("ThresholdMethod",), "Between")
+    return part
+
+
+def _solid_block(reader, view, name, selector, block_id, colour):
+    """Show the part ``selector``/``block_id`` of the series in one colour; returns its
+    display."""
+    part = _part(reader, name, selector, block_id)
     shown = Show(part, view)
     shown.ColorArrayName = ["POINTS", ""]   # a solid colour (not ColorBy(.., None): 5.11)
     shown.DiffuseColor = colour
@@ -395,7 +461,9 @@ def build_view():
     size = max(((b[1] - b[0]) ** 2 + (b[3] - b[2]) ** 2 + (b[5] - b[4]) ** 2) ** 0.5, 1e-9)
 
     if HAS["beam"]:
-        beams = ExtractBlock(registrationName="beams", Input=reader, Selectors=["/Root/beams"])
+        beams = _part(reader, "beams", "/Root/beams", 0)
+        if MERGED:      # line segments of an unstructured grid: the Tube takes poly data
+            beams = ExtractSurface(registrationName="beam lines", Input=beams)
         if TRUE_RADIUS:
             source, scalar = beams, "radius"
             if TUBE_SCALE != 1.0:
@@ -421,11 +489,10 @@ def build_view():
             _COLOURED.append(shown)
             _place_bar(GetColorTransferFunction(COLOR_BY), view, "Upper Right Corner")
     if HAS["body"]:
-        shown = _solid_block(reader, view, "bodies", "/Root/bodies", [1.0, 0.6, 0.1])
+        shown = _solid_block(reader, view, "bodies", "/Root/bodies", 1, [1.0, 0.6, 0.1])
         shown.Opacity = 0.35
     if HAS["contacts"]:
-        contacts = ExtractBlock(registrationName="contacts", Input=reader,
-                                Selectors=["/Root/contacts"])
+        contacts = _part(reader, "contacts", "/Root/contacts", 2)
         points = Show(contacts, view)
         points.SetRepresentationType("Points")
         points.PointSize = 8.0
@@ -443,10 +510,10 @@ def build_view():
         _COLOURED.append(shown)
         _place_bar(GetColorTransferFunction("normal_force"), view, "Upper Left Corner")
     if HAS["springs"]:
-        shown = _solid_block(reader, view, "springs", "/Root/springs", [0.0, 0.45, 0.0])
+        shown = _solid_block(reader, view, "springs", "/Root/springs", 3, [0.0, 0.45, 0.0])
         shown.LineWidth = 3.0
     if HAS["hole_sections"]:
-        _solid_block(reader, view, "hole sections", "/Root/hole_sections", [0.2, 0.2, 0.2])
+        _solid_block(reader, view, "hole sections", "/Root/hole_sections", 4, [0.2, 0.2, 0.2])
 
     view.OrientationAxesVisibility = 1
     view.CameraFocalPoint = centre

@@ -30,10 +30,13 @@ cell data       meaning
 ``block_id``    0 = beam centreline segment (VTK_LINE), 1 = rigid-body surface triangle
                 (VTK_TRIANGLE), 2 = contact point (VTK_VERTEX), 3 = spring-damper
                 (translational: VTK_LINE between its ends; rotational: VTK_VERTEX at the
-                joint point)
+                joint point), 4 = bore outline of a clearance joint's hole section (closed,
+                as VTK_LINE segments; the multiblock's ``hole_sections``)
 ``beam_id``     index of the beam in ``model.beams`` (-1 on other blocks)
 ``body_id``     index of the body in ``model.bodies`` (-1 on other blocks)
 ``spring_id``   index of the spring in ``model.springs`` (-1 on other blocks)
+``joint_id``    index of the joint in ``model.interactions`` (bore outlines; -1 elsewhere)
+``section``     index of the hole section in its joint (bore outlines; -1 elsewhere)
 ==============  =========================================================================
 
 The names behind ``beam_id``/``body_id``/``spring_id`` are listed in ``summary.json`` (``vtu_blocks``).
@@ -78,15 +81,16 @@ if TYPE_CHECKING:
     from ..assembly import Assembly
     from ..solvers.generalized_alpha import State
 
-__all__ = ["BLOCK_BEAM", "BLOCK_BODY", "BLOCK_CONTACT", "BLOCK_NAMES", "BLOCK_SPRING",
+__all__ = ["BLOCK_BEAM", "BLOCK_BODY", "BLOCK_CONTACT", "BLOCK_NAMES", "BLOCK_OUTLINE", "BLOCK_SPRING",
            "OUTPUT_FRAMES", "FrameBuilder", "build_frame", "contact_location"]
 
 BLOCK_BEAM = 0
 BLOCK_BODY = 1
 BLOCK_CONTACT = 2
 BLOCK_SPRING = 3
+BLOCK_OUTLINE = 4
 BLOCK_NAMES = {BLOCK_BEAM: "beam", BLOCK_BODY: "rigid_body", BLOCK_CONTACT: "contact",
-               BLOCK_SPRING: "spring"}
+               BLOCK_SPRING: "spring", BLOCK_OUTLINE: "hole_section"}
 #: the forms of an output frame (scenario key ``simulation.output_frames``, ``--output-frames``)
 OUTPUT_FRAMES = ("multiblock", "merged")
 #: contact arrays of the multiblock only (the merged grid would pad them over every point)
@@ -180,6 +184,7 @@ class FrameBuilder:
                                  if hasattr(j, "section_outlines")]
         self._joint_ids = {str(getattr(j, "name", i)): i for i, j in enumerate(model.interactions)}
         self._outline_cells: tuple[list[np.ndarray], np.ndarray, np.ndarray] | None = None
+        self._outline_segments: tuple[np.ndarray, dict[str, np.ndarray]] | None = None
         self._springs: SpringPart | None = None    # springs_now's copy
         self.bodies = []
         for bi, body in enumerate(model.bodies):
@@ -289,6 +294,27 @@ class FrameBuilder:
         return VTUMesh(np.vstack(pts) if pts else np.zeros((0, 3)), [(VTK_POLY_LINE, lines)],
                        cell_data={"joint_id": joint, "section": section})
 
+    def outline_segments(self, q: np.ndarray) -> VTUMesh:
+        """The bore outlines of :meth:`outline_mesh` as VTK_LINE segments (the merged grid:
+        meshio reads no VTK_POLY_LINE), cell data ``block_id`` = :data:`BLOCK_OUTLINE`,
+        ``joint_id``, ``section``; cells and cell data built at the first frame."""
+        rings = self.outline_mesh(q)
+        if self._outline_segments is None:
+            closed = rings.cells[0][1]
+            segs = [np.column_stack([ring[:-1], ring[1:]]) for ring in closed]
+            counts = np.array([s.shape[0] for s in segs], np.int64)
+            n = int(counts.sum())
+            self._outline_segments = (
+                _constant(np.vstack(segs).astype(np.int64) if segs
+                          else np.zeros((0, 2), np.int64)),
+                {"block_id": _constant(np.full(n, BLOCK_OUTLINE, np.int32)),
+                 "beam_id": _constant(np.full(n, -1, np.int32)),
+                 "body_id": _constant(np.full(n, -1, np.int32)),
+                 "joint_id": _constant(np.repeat(rings.cell_data["joint_id"], counts)),
+                 "section": _constant(np.repeat(rings.cell_data["section"], counts))})
+        segments, cell_data = self._outline_segments
+        return VTUMesh(rings.points, [(VTK_LINE, segments)], cell_data=dict(cell_data))
+
     def springs_now(self) -> SpringPart | None:
         """The springs as a frame of the present state reads them, their mutable part (the
         rotational springs' turns, ``theta_ref``) copied: what :meth:`spring_mesh` needs of
@@ -388,6 +414,8 @@ class FrameBuilder:
             parts.append(part)
         if self.asm.model.springs:
             parts.append(self.spring_mesh(q, v, springs))
+        if self._outline_sources:
+            parts.append(self.outline_segments(q))
         mesh = VTUMesh.merge(parts)
         t = np.array([float(state.t)])
         mesh.field_data = {"time": t, "TimeValue": t.copy()}

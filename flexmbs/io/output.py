@@ -565,6 +565,8 @@ class OutputWriter:
                       "checkpoint": self.checkpoint_path.name if self.checkpoints else None},
             "vtu_blocks": {"block_id": {str(k): v for k, v in BLOCK_NAMES.items()},
                            "beam_id": [b.name for b in model.beams],
+                           "beam_radius": [None if b.radius is None else float(b.radius)
+                                           for b in model.beams],
                            "body_id": [b.name for b in model.bodies],
                            "spring_id": [s.name for s in model.springs],
                            "joint_id": [str(getattr(j, "name", i))

@@ -21,6 +21,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flexmbs.cli import main
@@ -39,6 +40,9 @@ CALLS = []
 _PROPS = {
     "PVDReader": {"FileName", "registrationName"},
     "ExtractBlock": {"Input", "Selectors", "registrationName"},
+    "Threshold": {"Input", "Scalars", "LowerThreshold", "UpperThreshold", "ThresholdMethod",
+                  "registrationName"},
+    "ExtractSurface": {"Input", "registrationName"},
     "Calculator": {"Input", "ResultArrayName", "Function", "registrationName"},
     "Tube": {"Input", "Scalars", "VaryRadius", "Radius", "Capping", "NumberofSides",
              "registrationName"},
@@ -107,6 +111,8 @@ def _source(kind):
 
 PVDReader = _source("PVDReader")
 ExtractBlock = _source("ExtractBlock")
+Threshold = _source("Threshold")
+ExtractSurface = _source("ExtractSurface")
 Calculator = _source("Calculator")
 Tube = _source("Tube")
 Glyph = _source("Glyph")
@@ -166,6 +172,15 @@ def _dump():
 def sleeve_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("pv") / "sleeve"
     assert main(["run", EXAMPLE1, "--t-end", "0.03", "--quiet", "--out", str(out)]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def sleeve_merged(tmp_path_factory):
+    """The run of ``sleeve_run`` with merged frames (one .vtu each)."""
+    out = tmp_path_factory.mktemp("pv") / "sleeve_merged"
+    assert main(["run", EXAMPLE1, "--t-end", "0.03", "--quiet", "--out", str(out),
+                 "--output-frames", "merged"]) == 0
     return out
 
 
@@ -331,12 +346,55 @@ def test_bad_options_are_one_line(sleeve_run, capsys, args, text):
     assert len(err) == 1 and err[0].startswith("flexmbs") and text in err[0]
 
 
-def test_a_merged_series_or_no_folder_is_refused(tmp_path, capsys):
+def test_a_merged_series_gets_the_same_view(sleeve_run, sleeve_merged, tmp_path):
+    """Merged frames (one grid each): the same parts, radius and fields as the multiblock
+    series, each part taken by its ``block_id`` (Threshold) instead of its block name; the
+    beams' line segments go through Extract Surface to the Tube."""
+    texts = {}
+    for run in (sleeve_run, sleeve_merged):
+        assert main(["paraview", str(run), "-q", "--color-by", "axial_strain"]) == 0
+        texts[run] = (run / "curved_beam_sleeve_view.py").read_text()
+    consts = {run: dict(re.findall(r"^(HAS|TRUE_RADIUS|COLOR_BY|COLOR_IS_VECTOR|FORCE_MAX) = "
+                                   r"(.*)$", text, re.M)) for run, text in texts.items()}
+    assert consts[sleeve_merged] == consts[sleeve_run]
+    assert "MERGED = True" in texts[sleeve_merged] and "MERGED = False" in texts[sleeve_run]
+    script = sleeve_merged / "curved_beam_sleeve_view.py"
+    calls = run_with_stub(script, tmp_path)
+    shown = [c[2] for c in calls if c[0] == "show"]
+    assert shown == ["beam tubes", "bodies", "contacts", "contact forces", "hole sections"]
+    assert not [c for c in calls if c[0] == "create" and c[1] == "ExtractBlock"]
+    thresholds = [c for c in calls if c[0] == "set" and c[1] == "Threshold"]
+    assert [c[3] for c in thresholds if c[2] == "Scalars"] == [["CELLS", "block_id"]] * 4
+    assert [c[3] for c in thresholds if c[2] == "LowerThreshold"] == [0, 1, 2, 4]
+    assert [c[3] for c in thresholds if c[2] == "UpperThreshold"] == [0, 1, 2, 4]
+    assert ["set", "ExtractSurface", "Input", "<Threshold>"] in calls
+    assert ["set", "Calculator", "Input", "<ExtractSurface>"] not in calls   # tube scale 1
+    assert ["set", "Tube", "Input", "<ExtractSurface>"] in calls
+    assert ["set", "Glyph", "Input", "<Threshold>"] in calls
+
+
+def test_merged_fields_and_parts_come_from_the_summary_and_the_grid(tmp_path, capsys):
+    """A merged run without contacts or clearance joints: the view draws its beam only, its
+    field names from the grid's point data (not the contact points'); a run whose summary
+    has no beam radii (an older flexmbs) gets one radius for every beam."""
     merged = tmp_path / "merged"
     assert main(["run", CANTILEVER, "--t-end", "0.01", "--quiet", "--out", str(merged),
                  "--output-frames", "merged"]) == 0
-    assert main(["paraview", str(merged)]) == 2
-    assert "--output-frames multiblock" in capsys.readouterr().err
+    assert main(["paraview", str(merged), "-q"]) == 0
+    text = (merged / "cantilever_view.py").read_text()
+    assert "HAS = {'beam': True, 'body': False, 'contacts': False, 'springs': False, " \
+           "'hole_sections': False}" in text and "TRUE_RADIUS = True" in text
+    assert main(["paraview", str(merged), "--color-by", "gap"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown beam field 'gap'" in err and "curvature_magnitude" in err
+    summary = json.loads((merged / "summary.json").read_text())
+    del summary["vtu_blocks"]["beam_radius"]
+    (merged / "summary.json").write_text(json.dumps(summary))
+    assert main(["paraview", str(merged), "-q"]) == 0
+    assert "TRUE_RADIUS = False" in (merged / "cantilever_view.py").read_text()
+
+
+def test_no_folder_is_refused(tmp_path, capsys):
     assert main(["paraview", str(tmp_path / "none")]) == 2
     assert "output folder not found" in capsys.readouterr().err
 
@@ -393,3 +451,54 @@ def test_under_pvpython(sleeve_run, tmp_path):
     assert (tmp_path / "a.png").stat().st_size > 1000
     assert main(["paraview", str(sleeve_run), "--screenshot", str(tmp_path / "b.png")]) == 0
     assert (tmp_path / "b.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+#: run under pvpython: the view script, then what each of its sources holds at the time shown
+PROBE = """
+import json, runpy, sys
+script = sys.argv[1]
+sys.argv = [script]
+runpy.run_path(script, run_name="__main__")
+from paraview.simple import GetSources
+out = {}
+for (name, _), source in GetSources().items():
+    info = source.GetDataInformation()
+    out[name] = [info.GetNumberOfPoints(), list(info.GetBounds())]
+print("SOURCES " + json.dumps(out))
+"""
+
+
+@pytest.mark.skipif(shutil.which("pvpython") is None or shutil.which("pvbatch") is None,
+                    reason="ParaView's pvpython/pvbatch are not on PATH")
+def test_under_pvpython_a_merged_series_shows_what_the_multiblock_shows(sleeve_run,
+                                                                        sleeve_merged, tmp_path):
+    """The real thing, both forms of the same run: every part of the view holds the same
+    points (the beam tubes: the same bounds; their segments are capped one by one) and the
+    screenshots are the same picture."""
+    probe = tmp_path / "probe.py"
+    probe.write_text(PROBE)
+    seen = {}
+    for run in (sleeve_run, sleeve_merged):
+        assert main(["paraview", str(run), "-q"]) == 0
+        proc = run_headless(["pvpython", str(probe), str(run / "curved_beam_sleeve_view.py")])
+        assert proc.returncode == 0, proc.stderr
+        line = next(x for x in proc.stdout.splitlines() if x.startswith("SOURCES "))
+        seen[run] = json.loads(line[len("SOURCES "):])
+    mb, mg = seen[sleeve_run], seen[sleeve_merged]
+    for name in ("bodies", "contacts", "contact forces", "hole sections"):
+        assert mg[name][0] == mb[name][0] > 0, name
+        assert mg[name][1] == pytest.approx(mb[name][1], abs=1e-9), name
+    assert mg["beam tubes"][1] == pytest.approx(mb["beam tubes"][1], abs=1e-6)
+    pictures = []
+    for run in (sleeve_run, sleeve_merged):
+        png = tmp_path / f"{run.name}.png"
+        assert main(["paraview", str(run), "-q", "--screenshot", str(png)]) == 0
+        pictures.append(_pixels(png))
+    differ = np.abs(pictures[0] - pictures[1]).max(axis=-1) > 30
+    assert differ.sum() <= 1e-3 * differ.size
+
+
+def _pixels(png: Path) -> np.ndarray:
+    import imageio.v3 as iio
+
+    return np.asarray(iio.imread(png), float)[..., :3]

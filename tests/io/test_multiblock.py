@@ -229,3 +229,44 @@ def test_the_merged_form_holds_the_same_beams(runs):
         ids = sorted({grid.GetCell(c).GetPointId(j) for c in cells for j in range(2)})
         np.testing.assert_array_equal(vtk_to_numpy(grid.GetPoints().GetData())[ids],
                                       vtk_to_numpy(rail.GetPoints().GetData()))
+
+
+def test_the_merged_form_holds_the_same_bore_outlines(runs):
+    """The merged grid's ``block_id`` 4: the bore outlines of ``hole_sections``, as closed
+    rings of VTK_LINE segments with the same points, ``joint_id`` and ``section`` (cell data;
+    -1 on the other parts); ``summary.json`` names the block and lists the beam radii."""
+    mb, mg = runs["multiblock"], runs["merged"]
+    summary = json.loads((mg / "summary.json").read_text())
+    assert summary["vtu_blocks"]["block_id"]["4"] == "hole_section"
+    assert summary["vtu_blocks"]["beam_radius"] == [
+        b["radius"] for b in json.loads((mb / "summary.json").read_text())["vtm_blocks"]
+        if b["kind"] == "beam"]
+    for (_, f), (_, g) in zip(read_pvd(mb / "two_beams.pvd"), read_pvd(mg / "two_beams.pvd"),
+                              strict=True):
+        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader.SetFileName(str(mg / g))
+        reader.Update()
+        grid = reader.GetOutput()
+        holes = tree(read_vtm(mb / f))["hole_sections"]
+        cell = {k: vtk_to_numpy(grid.GetCellData().GetArray(k))
+                for k in ("block_id", "joint_id", "section")}
+        outline = np.flatnonzero(cell["block_id"] == 4)
+        assert np.all(cell["joint_id"][cell["block_id"] != 4] == -1)
+        pts = vtk_to_numpy(grid.GetPoints().GetData())
+        ring_pts = vtk_to_numpy(holes.GetPoints().GetData())
+        start = 0
+        for r in range(holes.GetNumberOfCells()):       # each ring: its segments in order
+            ring = holes.GetCell(r)
+            m = ring.GetNumberOfPoints() - 1                # closed: ends on its first point
+            segs = outline[start:start + m]
+            a = np.array([grid.GetCell(c).GetPointId(0) for c in segs])
+            b = np.array([grid.GetCell(c).GetPointId(1) for c in segs])
+            assert all(grid.GetCellType(c) == vtk.VTK_LINE for c in segs)
+            np.testing.assert_array_equal(b, np.roll(a, -1))
+            np.testing.assert_array_equal(pts[a], ring_pts[[ring.GetPointId(j)
+                                                            for j in range(m)]])
+            for k in ("joint_id", "section"):
+                ref = vtk_to_numpy(holes.GetCellData().GetArray(k))[r]
+                assert np.all(cell[k][segs] == ref)
+            start += m
+        assert start == outline.size > 0

@@ -23,9 +23,10 @@ BACKGROUND_CUT = 235    # a pixel with a channel below this is not the white bac
 MIN_COVERAGE = 5e-3
 
 
-def _run_example(directory: Path, scenario: str) -> Path:
+def _run_example(directory: Path, scenario: str, *options: str) -> Path:
     assert main(["run", str(EXAMPLES / scenario), "--t-end", "0.05", "--quiet",
-                 "--set", "simulation.output_interval=0.01", "--out", str(directory)]) == 0
+                 "--set", "simulation.output_interval=0.01", "--out", str(directory),
+                 *options]) == 0
     return directory
 
 
@@ -70,6 +71,35 @@ def test_render_png_frames_are_real_pictures(sleeve_run):
         assert 0.1 * 300 < yc < 0.9 * 300 and 0.1 * 400 < xc < 0.9 * 400
     every = postprocess.render(sleeve_run, png_every=4, window_size=(200, 150), progress=False)
     assert [p.name[-10:] for p in every] == ["000000.png", "000004.png"]
+
+
+def test_render_of_merged_frames_is_the_picture_of_multiblock_ones(sleeve_run, tmp_path):
+    """The same run with merged frames (one grid each, parts told apart by ``block_id``):
+    every frame renders as the multiblock's, bore outlines and contact arrows included."""
+    merged = _run_example(tmp_path / "merged", "curved_beam_sleeve.toml",
+                          "--output-frames", "merged")
+    shots = {}
+    for run in (sleeve_run, merged):
+        shots[run] = postprocess.render(run, png_every=1, frames=[0, -1], window_size=(400, 300),
+                                        tube_scale=4, progress=False)
+    assert len(shots[merged]) == len(shots[sleeve_run]) == 2
+    import pyvista as pv
+
+    from postprocess.render import _block  # what render draws of each part
+
+    for (_, fa), (_, fb) in zip(postprocess.read_run(sleeve_run).frames,
+                                postprocess.read_run(merged).frames, strict=True):
+        ga, gb = pv.read(str(fa)), pv.read(str(fb))
+        for part in (0, 1, 2, 4):                   # beams, bodies, contacts, bore outlines
+            pa, pb = _block(ga, part), _block(gb, part)
+            assert pa is not None and pb is not None, part
+            assert (pa.n_points, pa.n_cells > 0) == (pb.n_points, pb.n_cells > 0), part
+            np.testing.assert_allclose(pa.bounds, pb.bounds, rtol=0, atol=1e-12)
+    for a, b in zip(shots[sleeve_run], shots[merged], strict=True):
+        ia, ib = _image(a).astype(float), _image(b).astype(float)
+        assert _ink(ia).mean() > MIN_COVERAGE
+        differ = np.abs(ia[..., :3] - ib[..., :3]).max(axis=-1) > 30
+        assert differ.mean() < 1e-3, (a.name, differ.sum())
 
 
 def test_render_tube_lies_where_the_beam_is(cantilever_run):
