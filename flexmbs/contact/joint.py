@@ -1191,6 +1191,8 @@ CLEARANCE = InteractionKind(
     errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS, ERR_CONTACT_OFF_PLAN),
     enable=_enable_clearance, begin=_begin_clearance, compiled_view=_compiled_view,
     energy=("contact", SlidingClearanceJoint.contact_energy), observe=_observe_clearance,
+    contacts=SlidingClearanceJoint.output, sections=SlidingClearanceJoint.section_records,
+    outlines=SlidingClearanceJoint.section_outlines, hole_record=SlidingClearanceJoint.hole_record,
     follow=Following(off_plan=ERR_CONTACT_OFF_PLAN,
                      own=lambda joint, dofs: np.asarray(joint.geometry.body_dofs, np.int64),
                      elements=_joint_elements, current=_current_windows))
