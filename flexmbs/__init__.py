@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
     from .geometry.curves import Centerline, arc, line, polyline
     from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
     from .model import GROUND, Beam, Model, Node, Pose, RigidBody
+    from .ropes import Rope
     from .simulation import Result, modes, simulate, solve_quasi_static, solve_static
     from .solvers.generalized_alpha import GeneralizedAlpha
     from .solvers.newton import NewtonOptions
@@ -82,6 +83,7 @@ _LAZY = {
     "Node": ".model",
     "Pose": ".model",
     "RigidBody": ".model",
+    "Rope": ".ropes",
     "BeamStiffness": ".beam_sections",
     "CircularSection": ".beam_sections",
     "Material": ".beam_sections",
@@ -145,7 +147,7 @@ __all__ = [
     "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
     "ConvergenceError", "FlexmbsError", "Function", "GROUND", "GeneralizedAlpha", "GeometryError",
     "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",
-    "RedundantConstraintError", "Result", "RigidBody", "ScenarioError", "SimulationStopped",
+    "RedundantConstraintError", "Result", "RigidBody", "Rope", "ScenarioError", "SimulationStopped",
     "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
     "modes", "polyline", "read_curve", "simulate", "solve_quasi_static", "solve_static", "sweep",
     "Tendon", "TendonParts", "TubeJoint",

@@ -45,4 +45,5 @@ SHAPE_CODES = _unique("shape", {
     "circle": 0,
     "superellipse": 1,
     "rounded_rectangle": 2,
+    "rounded_polygon": 3,
 })

@@ -24,6 +24,7 @@ import numpy as np
 
 from ._jit import FLAG, njit
 from .constraints.drivers import DriverPart, drivers_jacobian, drivers_residual
+from .constraints.interaction import InteractionKind
 from .constraints.joints import (
     JointPart,
     NormPart,
@@ -60,16 +61,27 @@ from .elements.group import (
 )
 from .elements.rigid_body import BodiesPart, bodies_jacobian, bodies_residual
 from .loads import LoadsPart, loads_jacobian, loads_residual, loads_set_bases
+from .ropes import ROPE, RopePart, ropes_jacobian, ropes_post_step, ropes_residual
 from .springs import SpringPart, springs_jacobian, springs_post_step, springs_residual
 
 __all__ = ["SystemPart", "residual", "jacobian", "constraint_velocity", "post_step",
            "rebase_static", "set_bases", "ERR_LEFT_BORE", "ERR_END_OF_BEAM", "INTERACTION_KINDS",
-           "KIND_OF_ERROR", "STOPS_RUN", "stops_run"]
+           "KIND_OF_ERROR", "KINDS", "STOPS_RUN", "kind_of", "stops_run"]
 
 #: the compiled interaction kinds, each a field of :class:`SystemPart` whose kernels the
 #: functions below call (docs/extending.md: a new kind is its module, one entry here, a field
 #: and its calls)
-INTERACTION_KINDS = (SLIDING, CLEARANCE)
+INTERACTION_KINDS = (SLIDING, CLEARANCE, ROPE)
+
+#: the record of every compiled interaction kind by name (its interactions' ``term_kind``)
+KINDS = {kind.name: kind for kind in INTERACTION_KINDS}
+
+
+def kind_of(obj: Any) -> InteractionKind | None:
+    """The record of an interaction's compiled kind (None for a Python-only interaction): its
+    output hooks and energy are declared there, not looked for on the object."""
+    return KINDS.get(getattr(obj, "term_kind", ""))
+
 
 #: term kind whose joint list ``error[1]`` indexes, per error code
 KIND_OF_ERROR = {code: kind.name for kind in INTERACTION_KINDS for code in kind.errors}
@@ -104,6 +116,7 @@ class SystemPart(NamedTuple):
     joints: JointPart
     sliding: SlidingPart
     clearance: ClearancePart
+    rope: RopePart
     springs: SpringPart
     drivers: DriverPart
     error: np.ndarray                # (3,) [code, joint, detail] of the last error
@@ -163,14 +176,15 @@ COMPILED_TOGETHER = (("joints", "springs"),)
 def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
     """``r = [r_q; r_lam]``; returns ``(scale, error code)``: the largest single force entering
     ``r_q`` (the force scale of the convergence test) and 0 or an ``ERR_*`` code."""
-    n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, springs, drivers, \
-        error, _bases = sy
+    n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, rope, springs, \
+        drivers, error, _bases = sy
     for i in range(n, r.size):
         r[i] = 0.0
     scale = loads_residual(loads, q, fv, mode, r)
     scale = max(scale, groups_residual(beams, q, v, qdd, mode, r))
     scale = max(scale, bodies_residual(bodies, q, v, qdd, fv, mode, r))
     scale = max(scale, springs_residual(springs, q, v, mode, r))
+    scale = max(scale, ropes_residual(rope, q, v, mode, r))
     linear_residual(linear, n, q, lam, fv, mode, r)
     norms_residual(norms, n, q, lam, r)
     joints_residual(joints, n, q, lam, r)
@@ -184,8 +198,8 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
 def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
     """Iteration matrix into ``data``; returns ``(largest diagonal beam or spring stiffness,
     error code)``."""
-    _n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, springs, drivers, \
-        error, _bases = sy
+    _n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, rope, springs, \
+        drivers, error, _bases = sy
     for i in range(data.size):
         data[i] = 0.0
     kscale = 0.0
@@ -193,6 +207,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
     bodies_jacobian(bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
     loads_jacobian(loads, q, fv, mode, cK, data)
     kscale = max(kscale, springs_jacobian(springs, q, v, mode, cC, cK, data))
+    kscale = max(kscale, ropes_jacobian(rope, q, v, mode, cC, cK, data))
     linear_jacobian(linear, data)
     norms_jacobian(norms, q, lam, cK, data)
     joints_jacobian(joints, q, lam, cK, data)
@@ -209,8 +224,8 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     """Interaction state after a converged step, then the nodal frames re-based where needed
     (:func:`rebase`); must follow a :func:`residual` at this state (whose contact detection it
     reuses). Returns 0 or an ``ERR_*`` code (then nothing is changed)."""
-    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, springs, _drivers, \
-        error, bases = sy
+    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, rope, springs, \
+        _drivers, error, bases = sy
     code = groups_post_step(beams, q, error)
     if code != 0:
         return code
@@ -219,6 +234,7 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
         return code
     clearance_post_step_all(clearance, q)
     springs_post_step(springs, q)
+    ropes_post_step(rope, q, v)
     _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc)
     return 0
 
@@ -241,8 +257,8 @@ def rebase_static(sy, q):  # noqa: ANN001, ANN201
     checks, the joints' state as after a step (:func:`post_step`: slide elements, contact
     tracking and friction anchors, ``q`` the next increment's start), then the re-basing of
     ``q`` (no rates). Returns ``(re-based nodes, 0)`` or ``(0, error code)``."""
-    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, springs, _drivers, \
-        error, bases = sy
+    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, rope, springs, \
+        _drivers, error, bases = sy
     code = groups_post_step(beams, q, error)
     if code != 0:
         return 0, code
@@ -252,6 +268,7 @@ def rebase_static(sy, q):  # noqa: ANN001, ANN201
     clearance_post_step_all(clearance, q)
     springs_post_step(springs, q)
     empty = q[:0]
+    ropes_post_step(rope, q, empty)
     return _rebase(beams, joints, loads, clearance, bases, q, empty, empty, empty), 0
 
 
@@ -261,8 +278,8 @@ def set_bases(sy, log, stop, elements, q):  # noqa: ANN001, ANN201
     takes its base: joints and node moments, and with ``elements`` the element groups too (a
     resumed run; after a re-basing they have them already). ``q``: the re-based start of the
     next step (empty for a resumed run, whose start :meth:`Assembly.begin` sets)."""
-    _n, _m, beams, _bodies, loads, _linear, _norms, joints, _sliding, clearance, _springs, \
-        _drivers, _error, _bases = sy
+    _n, _m, beams, _bodies, loads, _linear, _norms, joints, _sliding, clearance, _rope, \
+        _springs, _drivers, _error, _bases = sy
     _set_bases(beams, joints, loads, clearance, log, stop, elements, q)
 
 

@@ -677,19 +677,8 @@ class Model:
         rest_length)`` or the force-elongation ``table`` ([[e, f], ...], piecewise linear),
         plus ``preload`` and ``damping * dl/dt``. ``rest_length`` defaults to the reference
         distance."""
-        ends = []
-        for obj, pt, what in ((a, point_a, "a"), (b, point_b, "b")):
-            if isinstance(obj, RigidBody):
-                self._check_body(obj, "add_spring_damper")
-            elif isinstance(obj, Node):
-                self._check_node(obj, "add_spring_damper")
-                if np.any(np.asarray(pt, float) != 0.0):
-                    raise ModelError(f"add_spring_damper: point_{what} is not used with a beam "
-                                     "node (the spring acts at the node)")
-            elif obj is not GROUND:
-                raise ModelError(f"add_spring_damper: {what} must be a RigidBody, a beam Node or "
-                                 f"GROUND (got {obj!r})")
-            ends.append(_vec3(pt, f"point_{what}"))
+        ends = [self.end_point(obj, pt, what, "add_spring_damper")
+                for obj, pt, what in ((a, point_a, "a"), (b, point_b, "b"))]
         for key, val in (("stiffness", stiffness), ("damping", damping)):
             if not (math.isfinite(val) and val >= 0):
                 raise ModelError(f"add_spring_damper: {key} must be a finite number >= 0 "
@@ -781,6 +770,23 @@ class Model:
         return spec
 
     # ------------------------------------------------------------------ checks
+    def end_point(self, obj: object, point: ArrayLike3, end: str, what: str) -> np.ndarray:
+        """The point of end ``end`` ("a", "b") of a two-point element (a spring-damper, a rope)
+        on ``obj``, checked: a rigid body of this model (``point`` in its frame), a node of
+        one of its beams (``point`` zero: the element acts at the node) or GROUND (``point``
+        global)."""
+        if isinstance(obj, RigidBody):
+            self._check_body(obj, what)
+        elif isinstance(obj, Node):
+            self._check_node(obj, what)
+            if np.any(np.asarray(point, float) != 0.0):
+                raise ModelError(f"{what}: point_{end} is not used with a beam node (the "
+                                 "element acts at the node)")
+        elif obj is not GROUND:
+            raise ModelError(f"{what}: {end} must be a RigidBody, a beam Node or GROUND "
+                             f"(got {obj!r})")
+        return _vec3(point, f"point_{end}")
+
     def _check_node(self, node: object, what: str) -> None:
         if not isinstance(node, Node) or node.beam not in self.beams:
             raise ModelError(f"{what}: expected a node of a beam of this model (got {node!r})")

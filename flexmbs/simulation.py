@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from . import driver
 from .assembly import Assembly
 from .budget import check_run
 from .checks import RunChecks
@@ -352,7 +353,7 @@ def _warn_undamped_constraints(model: Model, opts: GeneralizedAlpha) -> None:
         nonlinear = [c.name for c in model.constraints if c.kind == "driver"]
     else:
         nonlinear = [c.name for c in model.constraints if c.kind not in _LINEAR_CONSTRAINTS]
-        nonlinear += [j.name for j in model.interactions]
+        nonlinear += [j.name for j in model.interactions if j.constraints()]
     if not nonlinear:
         return
     names = f"{', '.join(nonlinear[:3])}{' ...' if len(nonlinear) > 3 else ''}"
@@ -648,9 +649,9 @@ def interaction_outputs(asm: Assembly, state: State) -> list[dict]:
     """Contact records (contacts.csv columns) of every interaction of the model at ``state``."""
     rows: list[dict] = []
     for obj in asm.model.interactions:
-        fn = getattr(obj, "output", None)
-        if fn is not None:
-            rows.extend(fn(asm, state.q, state.v, state.lam, state.t))
+        kind = driver.kind_of(obj)
+        if kind is not None and kind.contacts is not None:
+            rows.extend(kind.contacts(obj, asm, state.q, state.v, state.lam, state.t))
     return rows
 
 
@@ -658,9 +659,9 @@ def interaction_sections(asm: Assembly, state: State) -> list[dict]:
     """Hole-section records (sections.csv) of every clearance joint at ``state``."""
     rows: list[dict] = []
     for obj in asm.model.interactions:
-        fn = getattr(obj, "section_records", None)
-        if fn is not None:
-            rows.extend(fn(state.q, state.v, state.t))
+        kind = driver.kind_of(obj)
+        if kind is not None and kind.sections is not None:
+            rows.extend(kind.sections(obj, state.q, state.v, state.t))
     return rows
 
 

@@ -62,8 +62,10 @@ from .terms import WITH_DAMPING
 if TYPE_CHECKING:  # pragma: no cover
     from .terms import DofMap
 
-__all__ = ["SpringDamper", "SpringPart", "pack_springs", "spring_energy", "spring_forces", "spring_points",
-           "springs_jacobian", "springs_pattern", "springs_post_step", "springs_residual"]
+__all__ = ["SpringDamper", "SpringPart", "add_measure_matrix", "ends_pattern", "length_hessian",
+           "length_of", "pack_ends", "pack_springs", "reference_point", "spring_energy",
+           "spring_forces", "spring_points", "springs_jacobian", "springs_pattern", "springs_post_step",
+           "springs_residual"]
 
 END = 7                  #: coordinates reserved per end (a body's r, p)
 GROUND_END, NODE_END, BODY_END = 0, 1, 2
@@ -98,10 +100,10 @@ class SpringDamper:
     def end_position(self, which: int) -> np.ndarray:
         """Reference position of end a (0) or b (1)."""
         obj, s = (self.a, self.point_a) if which == 0 else (self.b, self.point_b)
-        return _reference_point(obj, s)
+        return reference_point(obj, s)
 
 
-def _reference_point(obj: Any, s: np.ndarray) -> np.ndarray:
+def reference_point(obj: Any, s: np.ndarray) -> np.ndarray:
     pose = getattr(obj, "pose", None)
     if pose is not None:                                  # a rigid body
         return np.asarray(pose.position, float) + np.asarray(pose.rotation, float) @ s
@@ -158,34 +160,52 @@ def _end_coords(obj: Any, dofs: DofMap) -> tuple[int, np.ndarray]:
     return GROUND_END, np.zeros(0, np.int64)
 
 
-def pack_springs(springs: Sequence[SpringDamper], dofs: DofMap) -> SpringPart:
-    n = len(springs)
+def pack_ends(ends: Sequence[tuple[Any, Any, Any, Any]], dofs: DofMap
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(idx, kind, point, T, pos)`` of the two-point elements ``(a, point_a, b, point_b)``
+    (the spring-dampers, the ropes): their coordinates (END per end, −1 unused), end kinds,
+    points, point tensors of body ends and the CSC positions of their block idx × idx."""
+    n = len(ends)
     w = 2 * END
     idx = np.full((n, w), -1, np.int64)
     kind = np.zeros((n, 2), np.int64)
     point = np.zeros((n, 2, 3))
     T = np.zeros((n, 2, 3, 4, 4))
-    m = max((s.table.shape[0] for s in springs if s.table is not None), default=1)
-    tab = np.zeros((n, m, 2))
-    tab_n = np.zeros(n, np.int64)
     pos = np.full((n, w * w), -1, np.int64)
-    measure = np.array([ANGLE if s.rotational else LENGTH for s in springs], np.int64)
-    tables = []
-    for i, s in enumerate(springs):
-        for e, (obj, pt) in enumerate(((s.a, s.point_a), (s.b, s.point_b))):
+    for i, (a, point_a, b, point_b) in enumerate(ends):
+        for e, (obj, pt) in enumerate(((a, point_a), (b, point_b))):
             kind[i, e], d = _end_coords(obj, dofs)
             idx[i, e * END:e * END + d.size] = d
             point[i, e] = pt
             if kind[i, e] == BODY_END:
                 T[i, e] = point_tensor_of(np.asarray(pt, float))
-        if s.table is not None:
-            tab[i, :s.table.shape[0]] = s.table
-            tab_n[i] = s.table.shape[0]
         used = idx[i] >= 0
         block = np.full((w, w), -1, np.int64)
         block[np.ix_(used, used)] = dofs.positions(idx[i][used], idx[i][used]).reshape(
             used.sum(), used.sum())
         pos[i] = block.ravel()
+    return idx, kind, point, T, pos
+
+
+def ends_pattern(a: Any, b: Any, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The block a two-point element between ``a`` and ``b`` writes (none between grounds)."""
+    d = np.concatenate([_end_coords(a, dofs)[1], _end_coords(b, dofs)[1]])
+    return [(d, d)] if d.size else []
+
+
+def pack_springs(springs: Sequence[SpringDamper], dofs: DofMap) -> SpringPart:
+    n = len(springs)
+    w = 2 * END
+    idx, kind, point, T, pos = pack_ends([(s.a, s.point_a, s.b, s.point_b) for s in springs], dofs)
+    m = max((s.table.shape[0] for s in springs if s.table is not None), default=1)
+    tab = np.zeros((n, m, 2))
+    tab_n = np.zeros(n, np.int64)
+    measure = np.array([ANGLE if s.rotational else LENGTH for s in springs], np.int64)
+    tables = []
+    for i, s in enumerate(springs):
+        if s.table is not None:
+            tab[i, :s.table.shape[0]] = s.table
+            tab_n[i] = s.table.shape[0]
         if s.rotational:
             tables.append(relative_angle_table(_attachment(s.a, s.frame_a),
                                                _attachment(s.b, s.frame_b), END))
@@ -210,12 +230,7 @@ def _attachment(obj: Any, frame: np.ndarray | None) -> Attachment:
 
 
 def springs_pattern(springs: Sequence[SpringDamper], dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
-    out = []
-    for s in springs:
-        d = np.concatenate([_end_coords(s.a, dofs)[1], _end_coords(s.b, dofs)[1]])
-        if d.size:
-            out.append((d, d))
-    return out
+    return [b for s in springs for b in ends_pattern(s.a, s.b, dofs)]
 
 
 @njit
@@ -294,6 +309,14 @@ def _measure(sp, i, q):  # noqa: ANN001, ANN202
     """The length or angle of spring i, with g = dm/dq into sp.g."""
     if sp.measure[i] == ANGLE:
         return _angle(sp, i, q)
+    return length_of(sp, i, q)
+
+
+@njit
+def length_of(sp, i, q):  # noqa: ANN001, ANN201
+    """The length ``l`` between the ends of two-point element i of a part with the ends'
+    fields of :class:`SpringPart` (``idx, kind, point, T, D, x, g``: a spring, a rope), with
+    ``g = dl/dq = D^T n`` into ``sp.g`` (module docstring)."""
     length, n = _kinematics(sp, i, q)
     for a in range(sp.g.size):
         ga = 0.0
@@ -358,6 +381,15 @@ def _second_derivative(sp, i, q):  # noqa: ANN001, ANN202
                 H[a, b] = h
                 H[b, a] = h
         return
+    length_hessian(sp, i, q)
+
+
+@njit
+def length_hessian(sp, i, q):  # noqa: ANN001, ANN201
+    """``H = d2l/dq2`` of two-point element i into ``sp.H`` (module docstring; the part as in
+    :func:`length_of`, with ``H``)."""
+    w = sp.g.size
+    H = sp.H
     length, n = _kinematics(sp, i, q)
     for a in range(w):
         for b in range(w):
@@ -396,22 +428,32 @@ def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
         kscale = max(kscale, abs(kt))
         _second_derivative(sp, i, q)
         c = sp.c[i] if mode[WITH_DAMPING] != 0.0 else 0.0
-        for a in range(w):
-            s = 0.0
-            for b in range(w):
-                if sp.idx[i, b] >= 0:
-                    s += sp.H[a, b] * v[sp.idx[i, b]]
-            hv[a] = s
-        for a in range(w):
-            if sp.idx[i, a] < 0:
-                continue
-            for b in range(w):
-                if sp.idx[i, b] < 0:
-                    continue
-                val = cK * (kt * sp.g[a] * sp.g[b] + f * sp.H[a, b] + c * sp.g[a] * hv[b]) \
-                    + cC * c * sp.g[a] * sp.g[b]
-                data[sp.pos[i, a * w + b]] += val
+        add_measure_matrix(sp, i, f, kt, c, v, cC, cK, data, hv)
     return kscale
+
+
+@njit
+def add_measure_matrix(sp, i, f, kt, c, v, cC, cK, data, hv):  # noqa: ANN001, ANN201, PLR0913
+    """``cK K + cC C`` of the force ``f(m, dm/dt)`` along the measure m of element i into
+    ``data`` (module docstring): ``K = k_t g g^T + f H + c g (H q')^T``, ``C = c g g^T``, with
+    ``k_t = df/dm``, ``c = df/d(dm/dt)`` and g, H in ``sp.g``, ``sp.H`` (a spring, a rope);
+    ``hv``: work (2*END,)."""
+    w = sp.g.size
+    for a in range(w):
+        s = 0.0
+        for b in range(w):
+            if sp.idx[i, b] >= 0:
+                s += sp.H[a, b] * v[sp.idx[i, b]]
+        hv[a] = s
+    for a in range(w):
+        if sp.idx[i, a] < 0:
+            continue
+        for b in range(w):
+            if sp.idx[i, b] < 0:
+                continue
+            val = cK * (kt * sp.g[a] * sp.g[b] + f * sp.H[a, b] + c * sp.g[a] * hv[b]) \
+                + cC * c * sp.g[a] * sp.g[b]
+            data[sp.pos[i, a * w + b]] += val
 
 
 @njit(internal=True)

@@ -35,6 +35,21 @@ def _constants(prefix: str) -> dict[str, int]:
     return found
 
 
+def _polygon_distance(n: int, apothem: float, y: float, z: float) -> float:
+    """Distance of (y, z) outside the regular n-gon of ``apothem`` whose first flat faces +y:
+    the nearest of its sides as segments between its vertices."""
+    corners = [apothem / np.cos(np.pi / n) * np.array([np.cos((2 * k + 1) * np.pi / n),
+                                                        np.sin((2 * k + 1) * np.pi / n)])
+               for k in range(n)]
+    p = np.array([y, z])
+    best = np.inf
+    for k in range(n):
+        a, b = corners[k - 1], corners[k]
+        u = float(np.clip((p - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0))
+        best = min(best, float(np.linalg.norm(p - a - u * (b - a))))
+    return best
+
+
 def test_every_error_code_comes_from_the_table_and_means_one_thing() -> None:
     errors = _constants("ERR_")
     assert len(errors) >= 8
@@ -65,7 +80,9 @@ def test_every_compiled_section_is_dispatched_and_an_unknown_code_is_not_a_shape
                               lambda y, z: np.hypot(max(abs(y) - 2.6e-3, 0.0),
                                                     max(abs(z) - 1.6e-3, 0.0)) / 4e-4 - 1.0
                               if abs(y) > 2.6e-3 and abs(z) > 1.6e-3
-                              else max(abs(y) / 3e-3, abs(z) / 2e-3) - 1.0)}
+                              else max(abs(y) / 3e-3, abs(z) / 2e-3) - 1.0),
+        "rounded_polygon": ({"sides": 6, "apothem": 3e-3, "r": 8e-4},
+                            lambda y, z: _polygon_distance(6, 3e-3 - 8e-4, y, z) / 8e-4 - 1.0)}
     assert set(on_wall) == set(HOLE_SECTIONS.names()) == set(codes.SHAPE_CODES)
     Y, Yp, Ypp = np.zeros(2), np.zeros(2), np.zeros(2)
     for name, (params, wall) in on_wall.items():

@@ -253,3 +253,5 @@ def test_resume_of_a_wire_in_a_flexible_tube_is_bit_identical(tmp_path):
     np.testing.assert_array_equal(bb, ba)
     assert ba[:, 0].max() < 0.5          # renewed: every base tangent turned from x by > 60°
     assert len((full / "contacts.csv").read_text().splitlines()) > 1
+    record = json.loads((full / "summary.json").read_text())["hole_sections"]["lumen"]
+    assert record["tube"] == "tube" and record["sections"] == 31

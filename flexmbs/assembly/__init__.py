@@ -42,7 +42,13 @@ from .packing import BeamGroup, pack_system, term_owners
 from .pattern import SparsePattern
 from .rows import ConstraintRows, NonlinearRows
 
-__all__ = ["Assembly", "BeamGroup", "NonlinearRows"]
+__all__ = ["ENERGIES", "Assembly", "BeamGroup", "NonlinearRows"]
+
+
+#: the energies of :meth:`Assembly.energies` by name: the model's own, then the stored energy
+#: each interaction kind declares on its record (``InteractionKind.energy``)
+ENERGIES = ("total", "kinetic", "strain", "gravity", "spring",
+            *(kind.energy[0] for kind in driver.INTERACTION_KINDS if kind.energy is not None))
 
 
 class Assembly:

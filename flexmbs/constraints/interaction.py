@@ -82,6 +82,14 @@ class InteractionKind:
     ``follow``: a kind whose members' entries the factorisation's plan may hold only near
     where they are on their beams (:class:`Following`).
 
+    Output hooks, each called on one interaction of the kind (the writers ask the record,
+    :func:`flexmbs.driver.kind_of`, never the object what it offers): ``contacts(obj, dofs,
+    q, v, lam, t)``: its rows of ``contacts.csv`` (and the contact points of the frames);
+    ``sections(obj, q, v, t)``: its rows of ``sections.csv``; ``outlines(obj, q, samples)``:
+    its bore's section outlines in the frames ((n, samples, 3)); ``hole_record(obj)``: its
+    entry of ``summary.json``'s ``hole_sections``. The energy (``energy``, above) is listed
+    by the probe ``energy`` and ``Assembly.energies`` from the records.
+
     ``name``: the interactions' ``term_kind`` and the field of
     :class:`~flexmbs.driver.SystemPart` holding the part; ``pattern(obj, dofs)``: the blocks
     ``(rows, cols)`` one interaction writes; ``pack(objs, ctx)``: the part of all of them
@@ -101,6 +109,10 @@ class InteractionKind:
     observe: Callable[[Any, list[Any], np.ndarray, np.ndarray, Callable[[], None] | None],
                       None] | None = None
     follow: Following | None = None
+    contacts: Callable[..., list[dict[str, Any]]] | None = None
+    sections: Callable[..., list[dict[str, Any]]] | None = None
+    outlines: Callable[..., np.ndarray] | None = None
+    hole_record: Callable[[Any], dict[str, Any]] | None = None
 
 
 class ModelParts(Protocol):
@@ -108,6 +120,9 @@ class ModelParts(Protocol):
 
     beams: list[Any]
     bodies: list[Any]
+
+    def end_point(self, obj: Any, point: Any, end: str, what: str) -> np.ndarray:
+        """The checked point of one end of a two-point element (:meth:`flexmbs.model.Model.end_point`)."""
 
 
 class MatrixSink(Protocol):
@@ -172,8 +187,3 @@ class Interaction:
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore :meth:`get_state`."""
-
-    def output(self, dofs: DofMap, q: np.ndarray, v: np.ndarray, lam: np.ndarray,
-               t: float) -> list[dict[str, Any]]:
-        """Contact points (dicts of the contacts.csv columns) for output."""
-        return []

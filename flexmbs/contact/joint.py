@@ -1247,7 +1247,12 @@ CLEARANCE = InteractionKind(
     name="clearance", pattern=clearance_pattern, pack=pack_clearance,
     errors=(ERR_LEFT_BORE, ERR_TOO_MANY_CONTACTS, ERR_CONTACT_OFF_PLAN),
     enable=_enable_clearance, begin=_begin_clearance, compiled_view=_compiled_view,
-    energy=("contact", SlidingClearanceJoint.contact_energy), observe=_observe_clearance,
+    # the hooks call the joint's methods, so that a subclass's own (a tube's record) answer
+    energy=("contact", lambda joint, *a: joint.contact_energy(*a)), observe=_observe_clearance,
+    contacts=lambda joint, *a: joint.output(*a),
+    sections=lambda joint, *a: joint.section_records(*a),
+    outlines=lambda joint, *a: joint.section_outlines(*a),
+    hole_record=lambda joint: joint.hole_record(),
     follow=Following(off_plan=ERR_CONTACT_OFF_PLAN,
                      own=lambda joint, dofs: joint.own_dofs(),
                      elements=_joint_elements, current=_current_windows))

@@ -179,9 +179,14 @@ class FrameBuilder:
                                               [0] if model.beams[b.index].closed else []
                                               ).astype(np.int64)) for b in self.beams]
         #: interactions that report contact points / bore outlines (blocks of the multiblock)
-        self._contact_sources = [j for j in model.interactions if hasattr(j, "output")]
-        self._outline_sources = [(i, j) for i, j in enumerate(model.interactions)
-                                 if hasattr(j, "section_outlines")]
+        from ..driver import kind_of  # the records declare the output hooks
+
+        kinds = [kind_of(j) for j in model.interactions]
+        self._contact_sources = [j for j, k in zip(model.interactions, kinds, strict=True)
+                                 if k is not None and k.contacts is not None]
+        self._outline_sources = [(i, j, k.outlines) for i, (j, k)
+                                 in enumerate(zip(model.interactions, kinds, strict=True))
+                                 if k is not None and k.outlines is not None]
         self._joint_ids = {str(getattr(j, "name", i)): i for i, j in enumerate(model.interactions)}
         self._outline_cells: tuple[list[np.ndarray], np.ndarray, np.ndarray] | None = None
         self._outline_segments: tuple[np.ndarray, dict[str, np.ndarray]] | None = None
@@ -273,13 +278,13 @@ class FrameBuilder:
         """The bore outlines of the clearance joints' sections: one closed poly line each,
         cell data ``joint_id``, ``section``. The cells and their data are the same in every
         frame (built at the first)."""
-        rings = [j.section_outlines(q, OUTLINE_SAMPLES) for _, j in self._outline_sources]
+        rings = [outlines(j, q, OUTLINE_SAMPLES) for _, j, outlines in self._outline_sources]
         if self._outline_cells is None:
             rings_ji: list[np.ndarray] = []
             joints: list[int] = []
             sections: list[int] = []
             start = 0
-            for (ji, _), jr in zip(self._outline_sources, rings, strict=True):
+            for (ji, _, _), jr in zip(self._outline_sources, rings, strict=True):
                 for k, ring in enumerate(jr):
                     m = ring.shape[0]
                     rings_ji.append(_constant(np.append(np.arange(start, start + m),

@@ -531,6 +531,8 @@ class OutputWriter:
     # ------------------------------------------------------------------ summary
     def _summary(self, *, stats: Any = None, wall_time: float | None = None,
                  energy_balance: dict | None = None) -> dict:
+        from ..driver import kind_of  # the records declare the output hooks
+
         if dataclasses.is_dataclass(stats) and not isinstance(stats, type):
             st = dataclasses.asdict(stats)
         else:
@@ -573,8 +575,9 @@ class OutputWriter:
                                         for i, j in enumerate(model.interactions)]},
             "vtm_blocks": (self.frames.block_tree() if self.frames is not None
                            and self.output_frames == "multiblock" else None),
-            "hole_sections": {j.name: j.hole_record() for j in model.interactions
-                              if hasattr(j, "hole_record")},
+            "hole_sections": {j.name: k.hole_record(j) for j, k in
+                              ((j, kind_of(j)) for j in model.interactions)
+                              if k is not None and k.hole_record is not None},
             "metadata": self.metadata,
         })
 

@@ -179,15 +179,21 @@ class BodyOrientationProbe(BodyPositionProbe):
 
 
 class EnergyProbe(Probe):
-    """Total, kinetic, strain, gravitational, spring or contact energy (``Assembly.energies``;
-    spring and contact are 0 in a model without springs or clearance joints)."""
+    """An energy of ``Assembly.energies``: total, kinetic, strain, gravitational, spring, or
+    the stored energy an interaction kind declares on its record (``contact``: clearance
+    joints, ``rope``: ropes); 0 in a model without that kind (:meth:`quantities`)."""
 
-    QUANTITIES = ("total", "kinetic", "strain", "gravity", "spring", "contact")
+    @staticmethod
+    def quantities() -> tuple[str, ...]:
+        """The energies by name (:data:`flexmbs.assembly.ENERGIES`)."""
+        from ..assembly import ENERGIES
+
+        return ENERGIES
 
     def __init__(self, name: str, quantity: str = "total") -> None:
         self.name = _check_name(name)
-        if quantity not in self.QUANTITIES:
-            raise ModelError(f"probe '{name}': quantity must be one of {list(self.QUANTITIES)} "
+        if quantity not in self.quantities():
+            raise ModelError(f"probe '{name}': quantity must be one of {list(self.quantities())} "
                              f"(got {quantity!r})")
         self.quantity = quantity
 
@@ -290,6 +296,30 @@ class ContactForceProbe(Probe):
     def check(self, asm: Any) -> None:
         if self.joint not in asm.model.interactions:
             raise ModelError(f"probe '{self.name}': joint '{self.joint.name}' is not in the model")
+
+
+class RopeProbe(Probe):
+    """A rope's length [m] and tension [N] (0 when slack), columns ``<name>_length`` and
+    ``<name>_tension`` (:meth:`Rope.state_of <flexmbs.ropes.Rope.state_of>`)."""
+
+    def __init__(self, name: str, rope: Any) -> None:
+        from ..ropes import Rope
+
+        self.name = _check_name(name)
+        if not isinstance(rope, Rope):
+            raise ModelError(f"probe '{name}': expected a rope (flexmbs.Rope), got {rope!r}")
+        self.rope = rope
+
+    def columns(self) -> list[str]:
+        return [f"{self.name}_length", f"{self.name}_tension"]
+
+    def evaluate(self, asm: Any, state: Any) -> np.ndarray:
+        length, _rate, tension = self.rope.state_of(state.q, state.v)
+        return np.array([length, tension])
+
+    def check(self, asm: Any) -> None:
+        if self.rope not in asm.model.interactions:
+            raise ModelError(f"probe '{self.name}': rope '{self.rope.name}' is not in the model")
 
 
 class TendonTensionProbe(Probe):

@@ -237,11 +237,11 @@ def test_tilted_beam_centred_gives_axis_points() -> None:
 
 
 def test_registry_and_errors() -> None:
-    assert set(HOLE_SECTIONS) == {"circle", "rounded_rectangle", "superellipse"}
+    assert set(HOLE_SECTIONS) == {"circle", "rounded_polygon", "rounded_rectangle", "superellipse"}
     assert get_section("circle", radius=2.0) == CircleSection(2.0)
     assert get_section("superellipse", a=1.0, b=2.0, exponent=4.0).inscribed_radius() == 1.0
     with pytest.raises(ModelError, match=r"unknown hole section 'hexagon' \(known: circle, "
-                       r"rounded_rectangle, superellipse\)"):
+                       r"rounded_polygon, rounded_rectangle, superellipse\)"):
         get_section("hexagon")
     with pytest.raises(ModelError, match="radius"):
         get_section("circle", radius=-1.0)

@@ -48,18 +48,19 @@ def test_duplicate_and_bad_names_are_rejected() -> None:
 
 
 def test_the_registries_hold_the_documented_names() -> None:
-    assert sections.HOLE_SECTIONS.names() == ("circle", "rounded_rectangle", "superellipse")
+    assert sections.HOLE_SECTIONS.names() == ("circle", "rounded_polygon", "rounded_rectangle",
+                                              "superellipse")
     assert set(laws.CONTACT_LAWS) == {"linear", "hertz", "hunt_crossley", "lankarani_nikravesh"}
     assert sections.SECTION_TYPES is sections.HOLE_SECTIONS and laws.LAWS is laws.CONTACT_LAWS
     assert ELEMENTS.names()[0] == "ancf_cable"
-    assert JOINTS.names() == ("sliding", "sliding_clearance", "tube")
+    assert JOINTS.names() == ("sliding", "sliding_clearance", "rope", "tube")
     assert CONSTRAINTS.names() == ("clamp", "pin", "fix_body", "spherical", "revolute", "prismatic",
                                    "rigid", "prescribed", "joint", "driver")
     assert LOADS.names() == ("point", "distributed")
     assert SPRINGS.names() == ("translational", "rotational")
     assert set(PROBES) == {"beam_point", "body_position", "body_orientation", "body_point",
-                           "energy", "slide_coordinate", "contact_force", "joint_reaction", "reaction",
-                           "tendon_tension", "tendon_displacement"}
+                           "energy", "slide_coordinate", "contact_force", "rope", "joint_reaction",
+                           "reaction", "tendon_tension", "tendon_displacement"}
 
 
 def test_scenario_and_python_fail_with_the_same_message() -> None:

@@ -1,5 +1,6 @@
 """Hole sections, one module a shape (issue "a house easy to change"): :mod:`.circle`,
-:mod:`.superellipse`, :mod:`.rounded_rectangle`; what they share in :mod:`.base`. A shape
+:mod:`.superellipse`, :mod:`.rounded_rectangle`, :mod:`.rounded_polygon`; what they share in
+:mod:`.base`. A shape
 module holds its compiled boundary kernel ``Y, Y′, Y″`` and inside test, its kind code and its
 :class:`HoleSection` class (registered in :data:`HOLE_SECTIONS`; the numpy view is derived
 from the kernel). The two dispatchers below are the only place that lists the compiled shapes:
@@ -19,6 +20,12 @@ from .circle import (
     circle_contains,
     circle_stationary_points,
 )
+from .rounded_polygon import (
+    SHAPE_ROUNDED_POLYGON,
+    RoundedPolygonSection,
+    rounded_polygon_boundary,
+    rounded_polygon_contains,
+)
 from .rounded_rectangle import (
     SHAPE_ROUNDED_RECTANGLE,
     RoundedRectangleSection,
@@ -33,9 +40,10 @@ from .superellipse import (
     superellipse_section_boundary,
 )
 
-__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_RECTANGLE", "SHAPE_SAMPLES",
-           "SHAPE_SUPERELLIPSE",
-           "Candidate", "CircleSection", "Ellipse2D", "HoleSection", "RoundedRectangleSection",
+__all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_POLYGON", "SHAPE_ROUNDED_RECTANGLE",
+           "SHAPE_SAMPLES", "SHAPE_SUPERELLIPSE",
+           "Candidate", "CircleSection", "Ellipse2D", "HoleSection", "RoundedPolygonSection",
+           "RoundedRectangleSection",
            "SuperellipseSection", "circle_boundary",
            "circle_stationary_points", "section_boundary", "section_contains",
            "superellipse_boundary"]
@@ -53,6 +61,8 @@ def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
         rounded_rectangle_boundary(params, psi, Y, Yp, Ypp)
     elif kind == SHAPE_SUPERELLIPSE:
         superellipse_section_boundary(params, psi, Y, Yp, Ypp)
+    elif kind == SHAPE_ROUNDED_POLYGON:
+        rounded_polygon_boundary(params, psi, Y, Yp, Ypp)
     else:
         for c in range(2):
             Y[c] = np.nan
@@ -70,4 +80,6 @@ def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
         return rounded_rectangle_contains(params, y, z)
     if kind == SHAPE_SUPERELLIPSE:
         return superellipse_contains(params, y, z)
+    if kind == SHAPE_ROUNDED_POLYGON:
+        return rounded_polygon_contains(params, y, z)
     return False

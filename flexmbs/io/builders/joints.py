@@ -1,4 +1,5 @@
-"""``[[joints]]`` builders, registry :data:`JOINTS` (``sliding``, ``sliding_clearance``, ``tube``).
+"""``[[joints]]`` builders, registry :data:`JOINTS` (``sliding``, ``sliding_clearance``, ``rope``,
+``tube``).
 
 The bore of a clearance joint and its contact law are plug-in parts with registries of their own,
 shared with the Python API: ``hole = { shape = ... }`` looks the section class up in
@@ -152,6 +153,34 @@ def _sliding_clearance(t: Table, ctx: BuildContext) -> Any:
     except ModelError as exc:   # the start: the body's pose against the beam
         raise ScenarioError(f"{t.path} (with rigid_bodies[{body.name}].pose): "
                             f"{one_line(exc)}") from None
+
+
+@JOINTS.register("rope")
+def _rope(t: Table, ctx: BuildContext) -> Any:
+    """``type = "rope"``: Rope (flexmbs.ropes), ends as a translational spring's (body / beam +
+    node / point, body2 / beam2 + node2 / point2; no second end: the ground at point2)."""
+    from ...ropes import Rope
+    from .springs import read_end
+
+    t.allow(("name", "type", "body", "beam", "node", "point", "body2", "beam2", "node2",
+             "point2", "length", "contact"))
+    a = read_end(t, ctx, "")
+    b = read_end(t, ctx, "2")
+    for k in ("point", "point2"):
+        if t.has(k) and not isinstance(t.raw[k], list):
+            raise t.fail(k, "[x, y, z]", t.raw[k])
+    c = t.table("contact")
+    if c.has("friction") or c.has("friction_velocity"):
+        key = "friction" if c.has("friction") else "friction_velocity"
+        raise ScenarioError(f"{c.key(key)}: a rope has no friction (contact = {{ law, its "
+                            "parameters }})")
+    law = read_contact_law(c)
+    length = t.number("length", gt=0.0, unit="m")
+    with at(t.path):
+        rope = Rope(a, b, length=length, contact=law, name=t.raw["name"],
+                    point_a=t.vector("point", (0.0, 0.0, 0.0), unit="m"),
+                    point_b=t.vector("point2", (0.0, 0.0, 0.0), unit="m"))
+        return ctx.model.add_joint(rope)
 
 
 @JOINTS.register("tube")

@@ -59,21 +59,22 @@ def _body_point(t: Table, ctx: BuildContext) -> probes.Probe:
 @PROBES.register("energy")
 def _energy(t: Table, ctx: BuildContext) -> probes.Probe:
     t.allow(("name", "type", "quantity"))
-    quantity = t.choice("quantity", probes.EnergyProbe.QUANTITIES, "total", what="quantity")
+    quantity = t.choice("quantity", probes.EnergyProbe.quantities(), "total", what="quantity")
     return probes.EnergyProbe(t.raw["name"], quantity)
 
 
-def _joint_probe(cls: type[Any], needs: str, kind: str) -> Builder:
-    """Builder of a probe on a joint that offers the method ``needs`` (``joint = "name"``)."""
+def _joint_probe(cls: type[Any], kinds: tuple[str, ...], what: str) -> Builder:
+    """Builder of a probe on a joint of one of the term kinds ``kinds`` (``joint = "name"``;
+    ``what``: how the message names them)."""
 
     def build(t: Table, ctx: BuildContext) -> probes.Probe:
         t.allow(("name", "type", "joint"))
         name = t.string("joint")
         joint = ctx.joints.get(name)
-        if joint is None or not hasattr(joint, needs):
-            known = ", ".join(k for k, j in ctx.joints.items() if hasattr(j, needs))
-            raise ScenarioError(f"{t.key('joint')}: no {kind} joint named '{name}' "
-                                f"({kind} joints: {known or 'none'})")
+        if joint is None or joint.term_kind not in kinds:
+            known = ", ".join(k for k, j in ctx.joints.items() if j.term_kind in kinds)
+            raise ScenarioError(f"{t.key('joint')}: no {what} joint named '{name}' "
+                                f"({what} joints: {known or 'none'})")
         probe: probes.Probe = cls(t.raw["name"], joint)
         return probe
 
@@ -81,9 +82,10 @@ def _joint_probe(cls: type[Any], needs: str, kind: str) -> Builder:
 
 
 PROBES.register("slide_coordinate",
-                _joint_probe(probes.SlideCoordinateProbe, "slide_coordinate", "sliding"))
+                _joint_probe(probes.SlideCoordinateProbe, ("sliding", "clearance"), "sliding"))
 PROBES.register("contact_force",
-                _joint_probe(probes.ContactForceProbe, "contact_force", "clearance"))
+                _joint_probe(probes.ContactForceProbe, ("clearance",), "clearance"))
+PROBES.register("rope", _joint_probe(probes.RopeProbe, ("rope",), "rope"))
 
 
 @PROBES.register("reaction")
@@ -104,7 +106,7 @@ def _reaction(t: Table, ctx: BuildContext) -> probes.Probe:
 
 
 PROBES.register("joint_reaction",
-                _joint_probe(probes.JointReactionProbe, "reaction_force", "sliding"))
+                _joint_probe(probes.JointReactionProbe, ("sliding",), "sliding"))
 
 
 def _tendon_probe(cls: type[Any]) -> Builder:

@@ -12,15 +12,15 @@ from ...registry import Registry
 from ..tables import Table, is_number, show_value
 from .context import BuildContext, Builder
 
-__all__ = ["SPRINGS"]
+__all__ = ["SPRINGS", "read_end"]
 
 #: ``[[springs]] type = ...`` -> builder(table, ctx)
 SPRINGS: Registry[Builder] = Registry("spring type")
 
 
-def _end(t: Table, ctx: BuildContext, suffix: str) -> Any:
-    """End ``a`` (keys body / beam + node / point) or ``b`` (body2 / beam2 + node2 / point2;
-    absent: the ground at ``point2``)."""
+def read_end(t: Table, ctx: BuildContext, suffix: str) -> Any:
+    """End ``a`` of a two-point element (a spring-damper, a rope; keys body / beam + node /
+    point) or ``b`` (body2 / beam2 + node2 / point2; absent: the ground at ``point2``)."""
     body, beam, node = f"body{suffix}", f"beam{suffix}", f"node{suffix}"
     which = t.exclusive(body, beam)
     if which == body:
@@ -52,8 +52,8 @@ def _translational(t: Table, ctx: BuildContext) -> Any:
     """A spring-damper between two points (Model.add_spring_damper)."""
     t.allow(("type", "name", "body", "beam", "node", "point", "body2", "beam2", "node2",
              "point2", "stiffness", "damping", "rest_length", "preload", "table"))
-    a = _end(t, ctx, "")
-    b = _end(t, ctx, "2")
+    a = read_end(t, ctx, "")
+    b = read_end(t, ctx, "2")
     if t.has("table") and t.has("stiffness"):
         raise ScenarioError(f"{t.key('table')}: give either stiffness or table, not both")
     if not t.has("table") and not t.has("stiffness"):
