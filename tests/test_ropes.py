@@ -15,6 +15,7 @@ is a compile).
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -202,10 +203,17 @@ def test_the_writers_ask_the_kinds_record_not_the_object():
     from flexmbs.io.frames import FrameBuilder
     from flexmbs.ropes import ROPE
 
-    assert CLEARANCE.contacts is SlidingClearanceJoint.output
-    assert CLEARANCE.sections is SlidingClearanceJoint.section_records
-    assert CLEARANCE.outlines is SlidingClearanceJoint.section_outlines
-    assert CLEARANCE.hole_record is SlidingClearanceJoint.hole_record
+    # the clearance record's hooks call the joint's methods, so a subclass answers its own
+    # (a tube joint's hole record names its tube)
+    joint = SimpleNamespace(output=lambda *a: ["contacts", a],
+                            section_records=lambda *a: ["sections", a],
+                            section_outlines=lambda *a: ("outlines", a),
+                            hole_record=lambda: {"hole": "record"})
+    assert CLEARANCE.contacts is not None and CLEARANCE.contacts(joint, 1, 2) == ["contacts", (1, 2)]
+    assert CLEARANCE.sections is not None and CLEARANCE.sections(joint, 3) == ["sections", (3,)]
+    assert CLEARANCE.outlines is not None and CLEARANCE.outlines(joint, 4) == ("outlines", (4,))
+    assert CLEARANCE.hole_record is not None and CLEARANCE.hole_record(joint) == {"hole": "record"}
+    assert hasattr(SlidingClearanceJoint, "section_outlines")
     model, rope, _body, _twin = _model(fm.LinearPenalty(stiffness=K), start=(0.0, 0.0, -L))
     rope.output = lambda *args: [{"x": 1.0}]                # type: ignore[attr-defined]
     rope.section_outlines = lambda *args: np.zeros((1, 4, 3))  # type: ignore[attr-defined]

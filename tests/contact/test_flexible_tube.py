@@ -369,3 +369,52 @@ def test_a_free_pair_keeps_its_momenta_and_its_energy() -> None:
     assert order > 1.8, errors
     assert errors[-1] < 2.5e-4
 
+
+
+def test_a_curved_tube_held_at_every_node_is_the_curved_bore() -> None:
+    """The rigid limit along a curve: a quarter-circle tube (radius 0.2 m) held at every node
+    and a fixed curved bore along the same centreline with the same sections put the same
+    contact forces on a wire pressed outwards against their walls (1e-6 relative; the
+    sections' roll about the axis differs, which a circular lumen does not see)."""
+    R, elements, n_sections = 0.2, 16, 33
+    arc = fm.arc((0, R, 0), R, (0, 0, 0), math.pi / 2, elements=elements)
+    # the wire from before the tube's start to past its end: no wire end inside (a rigid
+    # bore's tip sections would hold it there; a tube has none yet)
+    wire_arc = fm.arc((0, R, 0), R + 1.1e-3,
+                      (-(R + 1.1e-3) * math.sin(0.02), R - (R + 1.1e-3) * math.cos(0.02), 0),
+                      math.pi / 2 + 0.04, elements=24)
+    wire_material = fm.Material(E=2e11, rho=7800)
+    model = fm.Model(gravity=(0, 0, 0))
+    tube = model.add_beam(arc, name="tube", section=fm.CircularSection(3e-3),
+                          material=fm.Material(E=2e9, rho=1200))
+    wire = model.add_beam(wire_arc, name="wire", section=fm.CircularSection(WIRE_R),
+                          material=wire_material)
+    for node in range(tube.n_nodes):
+        model.clamp(tube.node(node))
+    model.add_joint(fm.TubeJoint(wire, tube, inner_radius=LUMEN_R, sections=n_sections,
+                                 contact=fm.LinearPenalty(stiffness=STIFFNESS)))
+    asm = Assembly(model)
+    q = asm.q_ref.copy()
+    dw = asm.beam_dofs(wire)
+    q[dw] += 2e-5 * np.random.default_rng(11).standard_normal(dw.size)
+    n = asm.n_coords
+    rq, rl = np.zeros(n), np.zeros(asm.n_mult)
+    asm.evaluate(q, np.zeros(n), np.zeros(n), np.zeros(asm.n_mult), 0.0, rq, rl)
+
+    rigid = fm.Model(gravity=(0, 0, 0))
+    wire2 = rigid.add_beam(wire_arc, name="wire", section=fm.CircularSection(WIRE_R),
+                           material=wire_material)
+    body = rigid.add_rigid_body(mass=1.0, inertia=(1, 1, 1), name="bore")
+    rigid.fix_body(body)
+    rigid.add_joint(fm.SlidingClearanceJoint(
+        wire2, body, hole=fm.CurvedBore(arc, radius=LUMEN_R, sections=n_sections),
+        contact=fm.LinearPenalty(stiffness=STIFFNESS)))
+    asm2 = Assembly(rigid)
+    q2 = asm2.q_ref.copy()
+    q2[asm2.beam_dofs(wire2)] = q[dw]
+    n2 = asm2.n_coords
+    r2, rl2 = np.zeros(n2), np.zeros(asm2.n_mult)
+    asm2.evaluate(q2, np.zeros(n2), np.zeros(n2), np.zeros(asm2.n_mult), 0.0, r2, rl2)
+    a, b = rq[dw], r2[asm2.beam_dofs(wire2)]
+    assert np.abs(a).max() > 1.0
+    assert np.abs(a - b).max() <= 1e-6 * np.abs(a).max()

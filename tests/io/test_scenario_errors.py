@@ -236,7 +236,7 @@ bending_stiffness = 1.0
      "loads[0].type: unknown load type 'pressure' (known: point, distributed)"),
     # --- joints and probes
     ("joint_unknown_type", SIM + "[[joints]]\nname = 'j'\ntype = 'magic'\n",
-     "joints[j].type: unknown joint type 'magic' (known: sliding, sliding_clearance)"),
+     "joints[j].type: unknown joint type 'magic' (known: sliding, sliding_clearance, rope, tube)"),
     ("joint_missing_beam", SIM + "[[joints]]\nname = 'j'\ntype = 'sliding'\n",
      "joints[j].beam: missing required key"),
     ("joint_unknown_beam", SIM + BEAM + "[[joints]]\nname = 'j'\ntype = 'sliding'\nbeam = 'rial'\n",
