@@ -311,21 +311,64 @@ def tube_start_pose(tube, j, k, q_start, tw):  # noqa: ANN001, ANN201
 
 @njit
 def tube_place_sections(tube, j, q, n_bore, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201
-                        reach, tw):
+                        reach, tip_on, tw):
     """The world origins and axes of tube joint j's sections at ``q`` into ``origins``,
-    ``frames`` (the detection then takes the identity as the hole body's pose) and their
-    tree refitted (:func:`~flexmbs.contact.bores.refit_section_tree`)."""
+    ``frames`` (the detection then takes the identity as the hole body's pose), those of its
+    placed tip sections (``tip_on``; slots ``n_bore + t``, :func:`tube_tip_slots`), and the
+    bore sections' tree refitted (:func:`~flexmbs.contact.bores.refit_section_tree`)."""
     if tube is None:
         return
     if not tube.on[j]:
         return
     pose = _tube_carve(tw)[0]
-    for k in range(n_bore):
+    for k in range(n_bore + tip_on.shape[0]):
+        if k >= n_bore and not tip_on[k - n_bore]:
+            continue
         tube_section(tube, j, k, q, q[:0], tw)
         for c in range(3):
             origins[k, c] = pose[c]
         rotation_into(pose[3:7], frames[k])
     refit_section_tree(origins[:n_bore], reach, tree_c, tree_r, tree_lo, tree_hi)
+
+
+@njit
+def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):  # noqa: ANN001, ANN201
+    """Tube joint j's tip sections (:func:`~flexmbs.contact._detect.place_tips` found each
+    between sections k and k+1, at ``tip_station`` along the tube): slot ``n_bore + t`` rides
+    the tube's element of section k (or k+1) at the station's offset from it, and takes that
+    section's base (so it turns with the tube as its neighbour does). A station in neither
+    neighbour's element (sections farther apart than an element) places no tip."""
+    if tube is None:
+        return
+    if not tube.on[j]:
+        return
+    for t in range(tip_on.shape[0]):
+        if not tip_on[t]:
+            continue
+        s = tip_station[t]
+        k = 0
+        while k < n_bore - 2 and stations[k + 1] <= s:
+            k += 1
+        src = -1
+        xi = tube.xi[j, k] + (s - stations[k]) / tube.length[j, k]
+        if xi <= 1.0 + 1e-12:
+            src = k
+        else:
+            xi = tube.xi[j, k + 1] - (stations[k + 1] - s) / tube.length[j, k + 1]
+            if xi >= -1e-12:
+                src = k + 1
+        if src < 0:
+            tip_on[t] = False
+            continue
+        slot = n_bore + t
+        for c in range(CENTERLINE_SIZE):
+            tube.dofs[j, slot, c] = tube.dofs[j, src, c]
+        tube.length[j, slot] = tube.length[j, src]
+        tube.xi[j, slot] = min(max(xi, 0.0), 1.0)
+        for c in range(3):
+            tube.t_bar[j, slot, c] = tube.t_bar[j, src, c]
+        for c in range(4):
+            tube.p0[j, slot, c] = tube.p0[j, src, c]
 
 
 @njit(internal=True)
@@ -631,10 +674,11 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
     place_due_tips(cl.tips_due, j, cl.q_start, cl.qe, cl.n_elem[j], cl.n_sec[j], cl.elem_dofs[j],
                    cl.body[j], cl.lengths[j], cl.origins[j], cl.frames[j], cl.stations[j],
                    cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], cl.tip_reach[j],
-                   cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j], cl.tip_station[j], cl.work)
+                   cl.r_b[j], cl.shape[j], cl.params[j], cl.tip_on[j], cl.tip_station[j], cl.work,
+                   cl.tube, 2.0 * cl.R_out[j] + cl.r_b[j], cl.tube_work)
     tube_place_sections(cl.tube, j, q, ns - N_TIPS, cl.origins[j], cl.frames[j], cl.tree_c[j],
                         cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], 2.0 * cl.R_out[j] + cl.r_b[j],
-                        cl.tube_work)
+                        cl.tip_on[j], cl.tube_work)
     m, cnt, sc = clearance_forces(
         q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j], cl.spin,
         cl.lengths[j, :ne_j], cl.origins[j, :ns],
@@ -793,17 +837,20 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
             cl.xi_ws[j, k] = cl.xi_out[j, k]
             ws_list[1 + i] = k
         ws_list[0] = out_list[0]
-        _mark_tips_due(cl.tips_due, j, cl.open_ends[j] and not tube_joint(cl.tube, j))
+        _mark_tips_due(cl.tips_due, j, cl.open_ends[j])
         tube_rebase(cl.tube, j, ns - N_TIPS, q, cl.tube_work)
 
 
 @njit(internal=True)
 def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, frames, stations,  # noqa: ANN001, ANN201, PLR0913
                    tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
-                   tip_station, work):
+                   tip_station, work, tube, reach, tw):
     """At the step's first evaluation (``due[j]``): :func:`place_tips` of clearance joint j at
     ``q``, the step's start; ``qe`` work (n_elem, CENTERLINE_SIZE). ``due`` None: no joint of
-    the model has an open bore (the tip sections' code is compiled out, _compiled_view)."""
+    the model has an open bore (the tip sections' code is compiled out, _compiled_view). A
+    flexible tube's sections are placed at ``q`` first (global, the identity as the body's
+    pose; ``reach``: the tree's, as :func:`tube_place_sections`), and its tip sections then
+    ride the tube (:func:`tube_tip_slots`)."""
     if due is None:
         return
     if not due[j]:
@@ -812,6 +859,21 @@ def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, fra
     for e in range(ne):
         for c in range(CENTERLINE_SIZE):
             qe[e, c] = q[elem_dofs[e, c]]
+    if tube_joint(tube, j):
+        _, _, _, _, _, _, _, _, unit_o, unit_f, _ = _tube_carve(tw)
+        for c in range(3):
+            unit_o[c] = 0.0
+            for d in range(3):
+                unit_f[c, d] = 1.0 if c == d else 0.0
+        for t in range(tip_on.shape[0]):
+            tip_on[t] = False
+        tube_place_sections(tube, j, q, ns - N_TIPS, origins[:ns], frames[:ns], tree_c, tree_r,
+                            tree_lo, tree_hi, reach, tip_on, tw)
+        place_tips(qe[:ne], lengths[:ne], unit_o, unit_f, origins[:ns], frames[:ns],
+                   stations[:ns], tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape,
+                   params, tip_on, tip_station, work)
+        tube_tip_slots(tube, j, ns - N_TIPS, stations, tip_on, tip_station)
+        return
     qb, A = _frame(q, body)
     place_tips(qe[:ne], lengths[:ne], qb[:3], A, origins[:ns], frames[:ns], stations[:ns],
                tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,

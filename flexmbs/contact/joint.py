@@ -1187,7 +1187,10 @@ def _begin_clearance(part: ClearancePart, q: np.ndarray) -> None:
     part.tips_due[:] = False
     for j in range(part.r_b.size):
         part.tip_on[j] = False
-        if not part.open_ends[j] or part.tube.on[j]:
+        if part.tube.on[j]:      # a tube's: the step's first evaluation, with the tube's pose
+            part.tips_due[j] = part.open_ends[j]
+            continue
+        if not part.open_ends[j]:
             continue
         ne, ns = int(part.n_elem[j]), int(part.n_sec[j])
         qb = q[part.body[j]]

@@ -203,18 +203,33 @@ class TubeJoint(SlidingClearanceJoint):
         n = len(self.stations)
         self._tube_tbar = tube.t_bar[i, :n]
         self._tube_p0 = tube.p0[i, :n]
+        self._packed = (tube, i)
+
+    def _slot(self, k: int) -> tuple[np.ndarray, float, float, np.ndarray, np.ndarray]:
+        """Section slot k's tube element (coordinates), its length, the station on it and the
+        base: a bore section's, or a tip section's as the compiled step placed it
+        (``clearance_term.tube_tip_slots``)."""
+        n = len(self.stations)
+        if k < n:
+            return (self._section_dofs[k], float(self._outer_lengths[self._tube_elem[k]]),
+                    float(self._tube_xi[k]), self._tube_tbar[k], self._tube_p0[k])
+        tube, i = self._packed
+        return (tube.dofs[i, k], float(tube.length[i, k]), float(tube.xi[i, k]),
+                tube.t_bar[i, k], tube.p0[i, k])
 
     # ------------------------------------------------------------------ the sections
-    def section_poses(self, q: np.ndarray, v: np.ndarray | None = None
+    def section_poses(self, q: np.ndarray, v: np.ndarray | None = None, *, tips: bool = False
                       ) -> tuple[np.ndarray, np.ndarray]:
-        """Poses ``[r, p]`` (n, 7) of the tube's sections at ``q`` and their rates (``v``)."""
-        n = len(self.stations)
+        """Poses ``[r, p]`` (n, 7) of the tube's sections at ``q`` and their rates (``v``);
+        ``tips``: all the slots, the placed tip sections' too (n + N_TIPS; zeros where none)."""
+        n = self.n_slots if tips else len(self.stations)
         poses, rates = np.zeros((n, POSE_SIZE)), np.zeros((n, POSE_SIZE))
         J = np.zeros((POSE_SIZE, CENTERLINE_SIZE))
         for k in range(n):
-            d = self._section_dofs[k]
-            section_pose(np.ascontiguousarray(q[d]), float(self._outer_lengths[self._tube_elem[k]]),
-                         float(self._tube_xi[k]), self._tube_tbar[k], self._tube_p0[k],
+            if k >= len(self.stations) and not self.state.tip_on[k - len(self.stations)]:
+                continue
+            d, length, xi, t_bar, p0 = self._slot(k)
+            section_pose(np.ascontiguousarray(q[d]), length, xi, t_bar, p0,
                          np.zeros(CENTERLINE_SIZE) if v is None else np.ascontiguousarray(v[d]),
                          poses[k], rates[k], J, self._work)
         return poses, rates
@@ -229,8 +244,10 @@ class TubeJoint(SlidingClearanceJoint):
 
     def _detection_frame(self, q: np.ndarray) -> DetectionFrame:
         n = len(self.stations)
-        _, origins, axes = self._planes_at(q)
-        self.state.origins[:n], self.state.axes[:n] = origins, axes
+        origins, axes = self._world_sections(self.section_poses(q, tips=True)[0])
+        on = np.r_[np.ones(n, bool), self.state.tip_on]
+        self.state.origins[on], self.state.axes[on] = origins[on], axes[on]
+        origins = origins[:n]
         tree = tuple(np.array(a, copy=True) for a in self.geometry.tree)
         refit_section_tree(origins, 2.0 * self.hole.section.bounding_radius() + self.beam_radius,
                            *tree)
@@ -238,10 +255,9 @@ class TubeJoint(SlidingClearanceJoint):
 
     def _contact_pose(self, q: np.ndarray, v: np.ndarray, k: int
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        d = self._section_dofs[k]
+        d, length, xi, t_bar, p0 = self._slot(k)
         pose, rate = np.zeros(POSE_SIZE), np.zeros(POSE_SIZE)
-        section_pose(np.ascontiguousarray(q[d]), float(self._outer_lengths[self._tube_elem[k]]),
-                     float(self._tube_xi[k]), self._tube_tbar[k], self._tube_p0[k],
+        section_pose(np.ascontiguousarray(q[d]), length, xi, t_bar, p0,
                      np.ascontiguousarray(v[d]), pose, rate,
                      np.zeros((POSE_SIZE, CENTERLINE_SIZE)), self._work)
         return pose, rate, rotation_matrix(pose[3:7])
@@ -298,7 +314,9 @@ class TubeJoint(SlidingClearanceJoint):
 
     # ------------------------------------------------------------------ refused features
     def place_tips(self, qb: np.ndarray, qe: np.ndarray) -> None:
-        """No tip sections in a flexible tube yet (docs/design-notes.md)."""
+        """A tube's tip sections are placed by the compiled step at its start
+        (``clearance_term.place_due_tips``, ``tube_tip_slots``), which needs the tube's
+        coordinates too; the Python path (``tangent = "frozen_point"``) has none."""
         self.state.tip_on[:] = False
 
     def freeze_detection(self, q: np.ndarray | None, v: np.ndarray | None = None) -> None:

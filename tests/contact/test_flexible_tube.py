@@ -101,15 +101,17 @@ def test_a_section_that_turned_far_takes_a_new_base_without_moving() -> None:
 def wire_in_tube(push: float = 1.1e-3, *, friction: float | None = None, damping: float = 0.0,
                  clamp_tube: bool = False, clamp_wire: bool = False, sections: int = 9,
                  tube_elements: int = 4, wire_elements: int = 6, law: ForceLaw | None = None,
-                 vessel: bool = False) -> tuple[fm.Model, fm.TubeJoint, fm.Beam, fm.Beam]:
+                 vessel: bool = False, span: tuple[float, float] = (-0.01, 0.21)
+                 ) -> tuple[fm.Model, fm.TubeJoint, fm.Beam, fm.Beam]:
     """A tube along x (0 to 0.2 m) and a wire inside it shifted by ``push`` along y (past the
     1 mm clearance: every section in contact). ``vessel``: the tube also runs through a fixed
     rigid bore 50 mm long in its middle, shifted by 1 mm along −y (0.5 mm clearance): it
-    presses the tube onto the wire."""
+    presses the tube onto the wire. ``span``: the wire's ends along x (inside the tube: its
+    tip sections hold them)."""
     model = fm.Model(gravity=(0, 0, 0))
     tube = model.add_beam(fm.line((0, 0, 0), (0.2, 0, 0), elements=tube_elements), name="tube",
                           section=fm.CircularSection(3e-3), material=fm.Material(E=2e9, rho=1200))
-    wire = model.add_beam(fm.line((-0.01, push, 0), (0.21, push, 0), elements=wire_elements),
+    wire = model.add_beam(fm.line((span[0], push, 0), (span[1], push, 0), elements=wire_elements),
                           name="wire", section=fm.CircularSection(WIRE_R),
                           material=fm.Material(E=2e11, rho=7800))
     if clamp_tube:
@@ -140,16 +142,19 @@ def _bent(asm: Assembly, seed: int) -> np.ndarray:
     return q
 
 
-@pytest.mark.parametrize(("friction", "damping", "vessel"),
-                         [(None, 0.0, False), (None, 5.0, False), (0.3, 0.0, False),
-                          (0.3, 5.0, True)])
+@pytest.mark.parametrize(("friction", "damping", "vessel", "span"),
+                         [(None, 0.0, False, (-0.01, 0.21)), (None, 5.0, False, (-0.01, 0.21)),
+                          (0.3, 0.0, False, (-0.01, 0.21)), (0.3, 5.0, True, (-0.01, 0.21)),
+                          (0.3, 0.0, False, (0.06, 0.16))])
 def test_tube_tangent_equals_central_differences(friction: float | None, damping: float,
-                                                 vessel: bool) -> None:
+                                                 vessel: bool, span: tuple[float, float]) -> None:
     """The assembled stiffness and damping matrices over both beams' coordinates against central
     differences of the assembled residual (detection redone at every perturbed state): 1e-6
     relative; frictionless and undamped, K is symmetric. ``vessel``: nested, the tube in a rigid
-    bore too (a tube joint and a rigid-bore joint in one packed part)."""
-    model, joint, tube, wire = wire_in_tube(friction=friction, damping=damping, vessel=vessel)
+    bore too (a tube joint and a rigid-bore joint in one packed part); a short ``span``: both
+    wire ends inside the tube, on tip sections."""
+    model, joint, tube, wire = wire_in_tube(friction=friction, damping=damping, vessel=vessel,
+                                            span=span)
     asm = Assembly(model)
     asm.begin(asm.q_ref)
     n, m = asm.n_coords, asm.n_mult
@@ -157,7 +162,12 @@ def test_tube_tangent_equals_central_differences(friction: float | None, damping
     v = 1e-2 * np.random.default_rng(5).standard_normal(n)
     a, lam = np.zeros(n), np.zeros(m)
     rq, rl = np.zeros(n), np.zeros(m)
+    r1, r2 = np.zeros(n), np.zeros(m)
+    asm.evaluate(q, v, a, lam, 0.0, r1, r2)          # the step's first: places the tips
     assert len(joint._contacts(q, v, False, False)) >= 5
+    if span[0] > 0.0:
+        assert joint.state.tip_on.all()
+        assert {k for k, *_ in joint._contacts(q, v, False, False)} >= {9, 10}
     if vessel:
         outer = next(j for j in model.interactions if isinstance(j, fm.SlidingClearanceJoint)
                      and j is not joint)
@@ -418,3 +428,45 @@ def test_a_curved_tube_held_at_every_node_is_the_curved_bore() -> None:
     a, b = rq[dw], r2[asm2.beam_dofs(wire2)]
     assert np.abs(a).max() > 1.0
     assert np.abs(a - b).max() <= 1e-6 * np.abs(a).max()
+
+
+def test_a_tube_held_at_every_node_holds_the_wire_ends_as_a_rigid_bore() -> None:
+    """Tip sections: a wire whose both ends lie inside the tube (between sections), pressed
+    onto the wall. Held at every node, the tube puts on it the forces of a fixed rigid bore
+    with the same sections (1e-10 relative), tip sections included (both placed, both in
+    contact)."""
+    span = (0.06, 0.16)
+    model, joint, tube, wire = wire_in_tube(clamp_tube=True, span=span)
+    asm = Assembly(model)
+    n = asm.n_coords
+    q = _bent(asm, 7)
+    q[asm.beam_dofs(tube)] = asm.q_ref[asm.beam_dofs(tube)]
+    asm.begin(q)
+    rq, rl = np.zeros(n), np.zeros(asm.n_mult)
+    asm.evaluate(q, np.zeros(n), np.zeros(n), np.zeros(asm.n_mult), 0.0, rq, rl)
+    assert joint.state.tip_on.all()
+
+    rigid = fm.Model(gravity=(0, 0, 0))
+    wire2 = rigid.add_beam(fm.line((span[0], 1.1e-3, 0), (span[1], 1.1e-3, 0), elements=6),
+                           name="wire", section=fm.CircularSection(WIRE_R),
+                           material=fm.Material(E=2e11, rho=7800))
+    body = rigid.add_rigid_body(mass=1.0, inertia=(1, 1, 1), pose=fm.Pose((0.1, 0.0, 0.0)),
+                                name="bore")
+    rigid.fix_body(body)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        bore = rigid.add_joint(fm.SlidingClearanceJoint(
+            wire2, body, hole=fm.Hole(CircleSection(LUMEN_R), 0.2, 9, True),
+            contact=fm.LinearPenalty(stiffness=STIFFNESS)))
+    asm2 = Assembly(rigid)
+    q2 = asm2.q_ref.copy()
+    q2[asm2.beam_dofs(wire2)] = q[asm.beam_dofs(wire)]
+    asm2.begin(q2)
+    n2 = asm2.n_coords
+    r2, rl2 = np.zeros(n2), np.zeros(asm2.n_mult)
+    asm2.evaluate(q2, np.zeros(n2), np.zeros(n2), np.zeros(asm2.n_mult), 0.0, r2, rl2)
+    assert bore.state.tip_on.all()
+    assert np.ptp(joint.state.tip_station - bore.state.tip_station) < 1e-12   # one offset
+    a, b = rq[asm.beam_dofs(wire)], r2[asm2.beam_dofs(wire2)]
+    assert np.abs(a).max() > 1.0
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
