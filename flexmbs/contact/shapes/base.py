@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._jit import njit
 from ...errors import ModelError
 from ...registry import Registry
 
@@ -242,3 +243,20 @@ def _once(name: str, method: Callable[[Any], float]) -> Callable[[Any], float]:
 
 #: scenario name -> hole section class (``hole = { shape = "circle", radius = ... }``)
 HOLE_SECTIONS: Registry[type[HoleSection]] = Registry("hole section")
+
+
+@njit
+def turned_wall(ang, k, y0, y1, t0, t1, c0, c1, Y, Yp, Ypp):  # noqa: ANN001, ANN201, PLR0913
+    """A wall point given in a frame turned by ``ang`` from the section's (a quadrant's or a
+    sector's), into ``Y``, ``Yp``, ``Ypp`` (2,): the point ``y``, its unit tangent ``t`` and
+    curvature vector ``c`` (per arc length) turned, the derivatives scaled by the
+    parametrisation's speed ``k = ds/dψ`` (``Y′ = k R t``, ``Y″ = k² R c``). The one statement
+    of it for the walls of flats and arcs (rounded rectangle, rounded polygon)."""
+    ca = math.cos(ang)
+    sa = math.sin(ang)
+    Y[0] = ca * y0 - sa * y1
+    Y[1] = sa * y0 + ca * y1
+    Yp[0] = k * (ca * t0 - sa * t1)
+    Yp[1] = k * (sa * t0 + ca * t1)
+    Ypp[0] = k * k * (ca * c0 - sa * c1)
+    Ypp[1] = k * k * (sa * c0 + ca * c1)

@@ -16,7 +16,7 @@ import numpy as np
 from ..._jit import njit
 from ...codes import SHAPE_CODES
 from ...errors import ModelError
-from .base import HOLE_SECTIONS, SHAPE_SAMPLES, HoleSection
+from .base import HOLE_SECTIONS, SHAPE_SAMPLES, HoleSection, turned_wall
 
 __all__ = ["SHAPE_ROUNDED_POLYGON", "RoundedPolygonSection", "rounded_polygon_boundary",
            "rounded_polygon_contains", "smallest_corner_radius"]
@@ -62,14 +62,7 @@ def rounded_polygon_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
         c0 = c1 = 0.0
         ang = (j + 1) * beta
     ang += turn
-    ca = math.cos(ang)
-    sa = math.sin(ang)
-    Y[0] = ca * y0 - sa * y1
-    Y[1] = sa * y0 + ca * y1
-    Yp[0] = k * (ca * t0 - sa * t1)
-    Yp[1] = k * (sa * t0 + ca * t1)
-    Ypp[0] = k * k * (ca * c0 - sa * c1)
-    Ypp[1] = k * k * (sa * c0 + ca * c1)
+    turned_wall(ang, k, y0, y1, t0, t1, c0, c1, Y, Yp, Ypp)
 
 
 @njit
