@@ -187,15 +187,15 @@ def test_closed_loop_work_vanishes_with_the_loops_refinement(deg, push):  # noqa
         assert abs(w) / along > 1e-2
 
 
-def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: ANN001
-    """The assembled iteration matrix's stiffness K and damping C parts against central
-    differences of the assembled residual in q and q̇ over the eyelet's and the wire's
-    coordinates at the eyelet (detection redone at every perturbed state, nothing frozen):
-    1e-6 relative. Returns K."""
+def assert_tangent_over(asm: Assembly, q: np.ndarray, v: np.ndarray, idx: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """The assembled iteration matrix's stiffness K and damping C parts, over the coordinates
+    ``idx``, against central differences of the assembled residual in q and q̇ (detection
+    redone at every perturbed state, nothing frozen): 1e-6 of the block's largest entry.
+    Returns the whole K and C."""
     n, m = asm.n_coords, asm.n_mult
     a, lam = np.zeros(n), np.zeros(m)
     rq, rl = np.zeros(n), np.zeros(m)
-    assert joint._contacts(q, v, False, False), "the configuration must have active contacts"
     asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
     K = asm.matrix.toarray()[:n, :n]
     asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 1.0, 0.0))
@@ -206,17 +206,25 @@ def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -
         asm.evaluate(q_, v_, a, lam, 0.0, r1, r2)
         return r1
 
-    idx = np.r_[asm.body_dofs(body), joint.geometry.elem_dofs[3:5].ravel()]
+    k_scale = np.abs(K[np.ix_(idx, idx)]).max()
+    c_scale = max(np.abs(C[np.ix_(idx, idx)]).max(), 1e-12)
     for j in idx:
         e = np.zeros(n)
         e[j] = FD_STEP
         col = (res(q + e, v) - res(q - e, v)) / (2 * FD_STEP)
-        assert np.abs(K[idx, j] - col[idx]).max() <= 1e-6 * np.abs(K[np.ix_(idx, idx)]).max()
+        assert np.abs(K[idx, j] - col[idx]).max() <= 1e-6 * k_scale
         e[j] = 1e-7
         colv = (res(q, v + e) - res(q, v - e)) / 2e-7
-        assert np.abs(C[idx, j] - colv[idx]).max() <= 1e-6 * max(np.abs(C[np.ix_(idx, idx)]).max(),
-                                                                  1e-12)
-    return K
+        assert np.abs(C[idx, j] - colv[idx]).max() <= 1e-6 * c_scale
+    return K, C
+
+
+def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: ANN001
+    """:func:`assert_tangent_over` the eyelet's and the wire's coordinates at the eyelet.
+    Returns K."""
+    assert joint._contacts(q, v, False, False), "the configuration must have active contacts"
+    idx = np.r_[asm.body_dofs(body), joint.geometry.elem_dofs[3:5].ravel()]
+    return assert_tangent_over(asm, q, v, idx)[0]
 
 
 @pytest.mark.parametrize(("deg", "push"), [(30.0, 1.22e-3), (55.0, 1.23e-3), (60.0, 1.22e-3)])
