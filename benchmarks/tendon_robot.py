@@ -34,6 +34,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -187,15 +188,18 @@ class _OutOfTime(Exception):
 
 def run_dynamic(n_disks: int, steps: int, dt: float, *, warmup: int = 2, every: int = 10,
                 max_wall: float | None = None, log: bool = False, retreats: int | None = None,
-                **kw) -> dict:
+                hold: bool = False, **kw) -> dict:
     """``warmup`` steps on one build (compiles or loads the kernels), then ``steps`` steps
     on a fresh build, timed from the integration's start (the initial accelerations solved,
     the first output) to the last step, counters from the integrator; outputs (and progress
     lines with ``log``) every ``every`` steps; stops after ``max_wall`` seconds of
     integration (None: no limit). Generalized-alpha, rho_inf = 0.5, adaptive steps;
-    ``retreats``: Newton's halvings of a rejected iterate (None: the default)."""
-    opts = fm.GeneralizedAlpha(rho_inf=0.5) if retreats is None else fm.GeneralizedAlpha(
-        rho_inf=0.5, newton=fm.NewtonOptions(retreats=retreats))
+    ``retreats``: Newton's halvings of a rejected iterate (None: the default); ``hold``:
+    Newton holds the contacts' active set through a step (``NewtonOptions.hold_contacts``)."""
+    nk: dict[str, Any] = {"hold_contacts": hold}
+    if retreats is not None:
+        nk["retreats"] = retreats
+    opts = fm.GeneralizedAlpha(rho_inf=0.5, newton=fm.NewtonOptions(**nk))
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -312,13 +316,14 @@ def contact_units(n_disks: int, refined: bool = False, **kw) -> dict:
             "clearance_us": best_of(loop_clearance, (m.clearance, q, v, r, error), 50, 3)}
 
 
-def run_static(n_disks: int, load_steps: int, **kw) -> dict:
+def run_static(n_disks: int, load_steps: int, hold: bool = False, **kw) -> dict:
     """Static equilibrium under the full tensions (time ``t_ramp``) by load stepping; where
-    it fails if it does."""
+    it fails if it does. ``hold``: ``NewtonOptions.hold_contacts``."""
     model, handles = build(n_disks, **kw)
     asm = Assembly(model)
     t_full = kw.get("t_ramp", T_RAMP)
     opts = fm.StaticOptions(load_steps=load_steps)
+    opts = dataclasses.replace(opts, newton=dataclasses.replace(opts.newton, hold_contacts=hold))
     t0 = time.perf_counter()
     out: dict = {}
     with warnings.catch_warnings():
@@ -347,10 +352,11 @@ STATIC_CASES = {
 }
 
 
-def static_cases(disks: int, sections: int, load_steps: int = 10, onset: float = 0.0) -> None:
+def static_cases(disks: int, sections: int, load_steps: int = 10, onset: float = 0.0,
+                 hold: bool = False) -> None:
     """Print the static solve of every :data:`STATIC_CASES` entry (a fresh build each)."""
     for name, (tensions, tip, only) in STATIC_CASES.items():
-        r = run_static(disks, load_steps, tensions=tensions, tip_force=tip, only=only,
+        r = run_static(disks, load_steps, hold, tensions=tensions, tip_force=tip, only=only,
                        sections=sections, onset=onset)
         what = (f"{r['increments']} increments, {r['newton']} iterations" if r["status"] ==
                 "converged" else r["error"][:110])
@@ -372,6 +378,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--contact-units", type=int, nargs="*", default=None, metavar="DISKS",
                     help="the clearance joints' cost per residual at these disk counts (tendons "
                          "as built and refined with the disks)")
+    ap.add_argument("--hold", action="store_true",
+                    help="Newton holds the contacts' active set through a step or increment "
+                         "(NewtonOptions(hold_contacts=True))")
     ap.add_argument("--retreats", type=int, default=None,
                     help="Newton's halvings of an iterate the model rejects (default: the "
                          "integrator's)")
@@ -400,7 +409,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore")
             model, _ = build(2, sections=a.sections)      # compile or load the kernels
             fm.solve_static(Assembly(model), fm.StaticOptions(load_steps=2), t=0.0)
-        static_cases(a.disks, a.sections, a.load_steps, a.onset)
+        static_cases(a.disks, a.sections, a.load_steps, a.onset, hold=a.hold)
         return 0
 
     if a.contact_units:
@@ -433,7 +442,7 @@ def main(argv: list[str] | None = None) -> int:
           f"(assembly {info['assembly_s']:.2f} s, plan {info['plan_s']:.2f} s)")
     sys.stdout.flush()
     if a.static:
-        r = run_static(a.disks, a.load_steps, **kw)
+        r = run_static(a.disks, a.load_steps, a.hold, **kw)
         if r["status"] == "converged":
             print(f"static: converged in {r['increments']} increments, {r['newton']} Newton "
                   f"iterations, {r['wall_s']:.2f} s; tip displacement "
@@ -442,7 +451,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"static: FAILED after {r['wall_s']:.2f} s: {r['error']}")
         return 0 if r["status"] == "converged" else 1
     r = run_dynamic(a.disks, a.steps, a.dt, every=a.every, max_wall=a.max_wall or None,
-                    log=a.progress, retreats=a.retreats, **kw)
+                    log=a.progress, retreats=a.retreats, hold=a.hold, **kw)
     print(f"warm-up (build + 2 steps, compile or cache load) {r['warmup_s']:.1f} s")
     print(f"dynamic ({r['status']}): {r['steps']} steps to t = {r['t']:.4g} s "
           f"({r['rejected']} rejected), "

@@ -47,6 +47,7 @@ from .constraints.sliding import (
 from .contact.clearance_term import (
     ERR_LEFT_BORE,
     ClearancePart,
+    clearance_hold,
     clearance_post_step_all,
     clearance_set_bases,
     clearance_terms,
@@ -237,6 +238,15 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
     ropes_post_step(rope, q, v)
     _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc)
     return 0
+
+
+@njit(inline="always")
+def hold_contacts(sy, action):  # noqa: ANN001, ANN201
+    """The clearance joints' held active set (:func:`~flexmbs.contact.clearance_term.clearance_hold`:
+    ``action`` one of its ``HOLD_*``); returns its count for ``HOLD_READ``, else 0."""
+    _n, _m, _beams, _bodies, _loads, _linear, _norms, _joints, _sliding, clearance, _rope, \
+        _springs, _drivers, _error, _bases = sy
+    return clearance_hold(clearance, action)
 
 
 @njit(inline="always")

@@ -22,6 +22,9 @@ holds the step loop.
   nodes, error code)``;
 - ``OP_SET_BASES``: the nodal bases of the records ``system.bases[:coef[0]]`` into every
   holder (a resumed run); returns ``(0, 0)``;
+- ``OP_HOLD``: the clearance joints' held active set
+  (:func:`~flexmbs.contact.clearance_term.clearance_hold`, action ``coef[0]``) for the Python
+  Newton loop; returns ``(its count for HOLD_READ, 0)``;
 - ``OP_STEPS``: up to ``run.n_steps`` generalized-α steps (``fv[k]`` = time-function values at
   the end of step k); returns ``(status, 0)``.
 
@@ -47,14 +50,15 @@ from pathlib import Path
 from typing import Any
 
 from ._jit import njit
-from .driver import jacobian, post_step, rebase_static, residual, set_bases
+from .driver import hold_contacts, jacobian, post_step, rebase_static, residual, set_bases
 from .steploop import alpha_run
 
 __all__ = ["OP_STEPS", "OP_RESIDUAL", "OP_JACOBIAN", "OP_POST_STEP", "OP_REBASE", "OP_SET_BASES",
+           "OP_HOLD",
            "KERNEL_CHOICES", "kernel", "kernels_cached", "prepare", "model_kind", "kernel_choice",
            "announce_compile"]
 
-OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES = range(6)
+OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES, OP_HOLD = range(7)
 
 
 @njit(refcount=False, nogil=True)
@@ -72,6 +76,8 @@ def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: A
     if op == OP_SET_BASES:
         set_bases(system, system.bases, int(coef[0]), True, q[:0])
         return 0.0, 0
+    if op == OP_HOLD:
+        return float(hold_contacts(system, int(coef[0]))), 0
     return float(alpha_run(system, q, v, qdd, lam, fv, mode, r, data, run)), 0
 
 

@@ -31,7 +31,16 @@ from ..constraints.interaction import InteractionKind
 from ..elements import rigid_body as rb
 from ..elements.layout import BASE_RECORD, ElementType
 from ..errors import FlexmbsError, ModelError, OffPlanError
-from ..kernel import OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_RESIDUAL, OP_SET_BASES, kernel, prepare
+from ..kernel import (
+    OP_HOLD,
+    OP_JACOBIAN,
+    OP_POST_STEP,
+    OP_REBASE,
+    OP_RESIDUAL,
+    OP_SET_BASES,
+    kernel,
+    prepare,
+)
 from ..model import Beam, Model, Node, RigidBody
 from ..springs import spring_energy
 from ..steploop import idle_run
@@ -334,6 +343,17 @@ class Assembly:
         if code:
             raise self.error_exception(code, q, t)
         return int(count)
+
+    def hold_contacts(self, action: int) -> int:
+        """The clearance joints' held active set for a Newton solve (``action`` one of
+        :mod:`flexmbs.contact.clearance_term`'s ``HOLD_*``; :mod:`flexmbs.steploop`'s
+        docstring): the points of the last evaluation at odds with the set for ``HOLD_READ``,
+        else 0. A model without clearance joints holds nothing (0)."""
+        z = np.zeros(self.n_coords)
+        value, _ = self._kernel(OP_HOLD, z, z, np.zeros(0), np.zeros(self.n_mult),
+                                self.functions.values(0.0), static_mode(1.0), self._r,
+                                (float(action), 0.0, 0.0))
+        return int(value)
 
     def begin(self, q: np.ndarray) -> None:
         """``q`` is where the next step (or static increment) starts: the reference of the

@@ -378,7 +378,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
                      consistent, paper, law, fric,
                      approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
-                     exact, r_q, K_out, C_out, elem_k, elem_i, fwork, j, tube, tw, ksec, kforce):
+                     exact, r_q, K_out, C_out, elem_k, elem_i, fwork, j, tube, tw, ksec, kforce,
+                     hold, held_on, held_psi):
     """Residual of one clearance joint with a circular bore (docs/theory.md §II.8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
@@ -395,6 +396,12 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     :func:`detect_section` (None: compiled out); ``fwork`` (:data:`FORCES_WORK`) holds every
     work array (nothing is allocated); ``qe`` and ``etree`` are the beam's element coordinates
     at ``q`` and their tree (:func:`beam_geometry`, shared by the joints on one beam).
+
+    ``hold`` (:attr:`ClearancePart.hold`): with ``hold[0]`` set, the points that match a
+    contact of the held active set (``held_on``, ``held_psi``: per section, as the tracked
+    contacts, matched by :func:`tracked_slot`) act, penetrating or not
+    (:func:`~flexmbs.contact.laws.held_law_force`), the others not, and ``hold[1]`` counts the
+    points whose gap disagrees with the set (held and open, or not held and penetrating).
 
     A flexible tube (joint ``j`` of ``tube``, :class:`~flexmbs.contact.tube.TubeSections`): its
     sections' ``origins`` and ``frames`` are global (:func:`tube_place_sections`) and each
@@ -457,6 +464,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     A_k = fwork[o:o + 9].reshape((3, 3))
     count = 0
     scale = 0.0
+    hold_on = hold[0] != 0
     for i in range(m):
         row = rows[i]
         k, eP = int(row[0]), int(row[3])
@@ -473,6 +481,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
             ve[c] = v[elem_dofs[eP, c]]
         slot = tracked_slot(active, psi_track, k, row[11])
         v_app = approach[k, slot] if slot >= 0 else 0.0
+        held = hold_on and tracked_slot(held_on, held_psi, k, row[11]) >= 0
         contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs[eP],
                         twist_dofs[eP], hist)
         if tubular:
@@ -482,7 +491,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
         g, gdot, f, xiP = contact_force(qk, vk, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
-                                        C, geo, pair_work)
+                                        C, geo, pair_work, held)
         row[GAP_COL] = g
         row[GAP_COL + 1] = gdot
         for c in range(4):
@@ -491,7 +500,12 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         row[FORCE_COL + 1] = xiP
         for c in range(12):
             row[GEOMETRY_COL + c] = geo[c]
-        if g >= 0.0:
+        if hold_on:
+            if held != (g < 0.0):
+                hold[1] += 1
+            if not held:
+                continue
+        elif g >= 0.0:
             continue
         if tubular:      # Jᵀ λ on the tube's element
             tube_force(tube, j, k, J_k, Qc, sign, r_q)
@@ -518,7 +532,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
             contact_tangent(qk, vk, ok, fk, qe[eI], lengths[eI],
                             row[CROSSING_COL + 1],
                             qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
-                            fric, hist, v_app, consistent, paper, Qx, KX, C)
+                            fric, hist, v_app, consistent, paper, Qx, KX, C, held)
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]
@@ -643,6 +657,10 @@ class ClearancePart(NamedTuple):
     kforce: np.ndarray               # work (n_contacts, 7): its force on the section's pose
     indptr: np.ndarray               # the iteration matrix's CSC pattern (a tube's entries are
     indices: np.ndarray              #   found in it: _tube_tangent)
+    hold: np.ndarray                 # (2,) int64 state: [held active set in force (1) or not,
+                                     # points of the last evaluation at odds with it]
+    held: np.ndarray                 # (nj, max_ns, P) state: the held active set (in use,
+    held_psi: np.ndarray             # (nj, max_ns, P)   section angle; clearance_hold)
     # (tips_due, spin and paper are None in the kernel's copy when no joint of the model uses
     # them: contact.joint._compiled_view, their code is then not compiled)
 
@@ -690,7 +708,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
         cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
         cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.beam_qe[b], cl.rows[j],
         want_tangent, cl.exact[j], r, K, C, elem, elem_i, cl.fwork, j, cl.tube, cl.tube_work,
-        cl.ksec, cl.kforce)
+        cl.ksec, cl.kforce, cl.hold, cl.held[j, :ns], cl.held_psi[j, :ns])
     if m == _OVERFLOW:
         cl.n_candidates[j] = 0
         error[0] = ERR_TOO_MANY_CONTACTS
@@ -719,6 +737,7 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
     exact whenever the section plane crosses the contact point's element)."""
     if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0.0, 0
+    cl.hold[1] = 0
     ne = CENTERLINE_SIZE
     scale = 0.0
     rr = cl.scratch if want_tangent else r
@@ -786,6 +805,50 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
                     if at >= 0:     # the shared node's entries (see clearance_pattern)
                         data[at] += cK * cl.K[i, 7 + a, I_OFF + c]
     return scale, 0
+
+
+#: :func:`clearance_hold` actions (``HOLD_KEEP``: none, :func:`flexmbs.steploop.hold_action`)
+HOLD_OFF, HOLD_TRACKED, HOLD_CURRENT, HOLD_READ = range(4)
+HOLD_KEEP = -1
+
+
+@njit(internal=True)
+def clearance_hold(cl, action):  # noqa: ANN001, ANN201
+    """The active set the Newton iterations of a step hold (``NewtonOptions.hold_contacts``,
+    :func:`flexmbs.steploop.alpha_run`): ``HOLD_TRACKED`` holds the contacts tracked from the
+    last converged step (the step's start), ``HOLD_CURRENT`` the penetrating points of the last
+    evaluation (their rows: the next evaluation at the same state is the plain one),
+    ``HOLD_OFF`` ends the hold (every evaluation outside a step's iterations is plain).
+    Returns, for ``HOLD_READ``, the points of the last evaluation whose gap disagrees with the
+    held set (:func:`clearance_forces`), else 0."""
+    if cl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
+        return 0
+    if action == HOLD_READ:
+        return cl.hold[1] if cl.hold[0] != 0 else 0
+    if action == HOLD_OFF:
+        cl.hold[0] = 0
+        cl.hold[1] = 0
+        return 0
+    P = cl.held.shape[2]
+    for j in range(cl.r_b.size):
+        ns = cl.n_sec[j]
+        for k in range(ns):
+            for p in range(P):
+                cl.held[j, k, p] = cl.active[j, k, p] if action == HOLD_TRACKED else False
+                cl.held_psi[j, k, p] = cl.psi[j, k, p] if action == HOLD_TRACKED else 0.0
+        if action != HOLD_CURRENT or not cl.enabled[j]:
+            continue
+        for i in range(cl.n_candidates[j]):
+            if cl.rows[j, i, GAP_COL] < 0.0:
+                k = int(cl.rows[j, i, 0])
+                for p in range(P):
+                    if not cl.held[j, k, p]:
+                        cl.held[j, k, p] = True
+                        cl.held_psi[j, k, p] = cl.rows[j, i, 11]
+                        break
+    cl.hold[0] = 1
+    cl.hold[1] = 0
+    return 0
 
 
 @njit(internal=True)

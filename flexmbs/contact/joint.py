@@ -1118,7 +1118,9 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.zeros(FORCES_WORK),
         c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)),
         *_beams(joints, max_ne), _tubes(joints, max_ns), np.zeros(TUBE_WORK),
-        np.zeros(n_contacts, i64), np.zeros((n_contacts, 7)), *ctx.matrix_pattern())
+        np.zeros(n_contacts, i64), np.zeros((n_contacts, 7)), *ctx.matrix_pattern(),
+        np.zeros(2, i64), np.zeros((nj, max_ns, MAX_POINTS), np.bool_),
+        np.zeros((nj, max_ns, MAX_POINTS)))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
         j.packed_tube(part.tube, i)

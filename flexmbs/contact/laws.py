@@ -48,6 +48,7 @@ __all__ = [
     "LAWS",
     "get_law",
     "law_force",
+    "held_law_force",
     "N_LAW",
     "DAMPING_ONSET",
     "law_energy",
@@ -103,6 +104,21 @@ def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
     if f <= 0.0:
         return 0.0, 0.0, 0.0
     return f, kt, ct
+
+
+@njit
+def held_law_force(law, delta, delta_dot, approach_velocity, held):  # noqa: ANN001, ANN201
+    """:func:`law_force`, and for a contact the Newton iterations hold in the active set
+    (``held``, :class:`~flexmbs.solvers.newton.NewtonOptions` ``hold_contacts``) at ``δ ≤ 0``
+    the elastic part's extension: ``(Kδ, K, 0)`` for a linear law without onset (the force
+    pulls: the held problem has no kink at δ = 0), 0 otherwise (every other law is C¹ there
+    with a zero slope, so its extension is 0). The held set is made consistent with the gaps
+    before a step is accepted, so no converged state holds a pulling contact."""
+    if held and delta <= 0.0:
+        if law[1] == 1.0 and law[5] == 0.0:
+            return law[0] * delta, law[0], 0.0
+        return 0.0, 0.0, 0.0
+    return law_force(law, delta, delta_dot, approach_velocity)
 
 
 @njit

@@ -37,7 +37,7 @@ from .laws import (
     ForceLaw,
     Friction,
     RegularizedCoulomb,
-    law_force,
+    held_law_force,
     no_friction,
     tangential_force,
 )
@@ -339,7 +339,7 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):  # noqa: ANN001, ANN2
 
 @njit
 def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0912, PLR0913, PLR0915, C901
-                  approach_velocity, want_tangent, Qc, K, C, geo, work):
+                  approach_velocity, want_tangent, Qc, K, C, geo, work, held=False):
     """Penalty force of one contact point and its Gauss–Newton tangent (docs/theory.md §II.4–§II.5).
 
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
@@ -352,11 +352,13 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     the friction terms at frozen n, u_Q, ξ_P and ``C = c_t BᵀB`` plus friction (N_LOCAL,
     N_LOCAL), and ``geo`` (:data:`N_GEO`) = [n, P, Q, F_H, d_new (body coordinates), stuck];
     ``work`` (:data:`PAIR_WORK`): its scratch (the frictionless path allocates nothing).
+    ``held``: the contact is in the active set the Newton iterations hold
+    (:func:`~flexmbs.contact.laws.held_law_force`: a linear law pulls at g > 0).
     Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
                                                             length, xi0, r_b, work)
-    f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
+    f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held)
     F_H = work[_WORK_FH:_WORK_W]
     for c in range(3):
         F_H[c] = f * n[c]

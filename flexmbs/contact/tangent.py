@@ -29,7 +29,7 @@ import numpy as np
 from .._jit import njit
 from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
-from .laws import FRICTION_NONE, FRICTION_STICK, law_force, tangential_force
+from .laws import FRICTION_NONE, FRICTION_STICK, held_law_force, tangential_force
 from .pair import (
     HIST_TWIST,
     N_LOCAL,
@@ -260,7 +260,8 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
 
 @njit
 def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
-                    r_b, law, fric, hist, approach_velocity, consistent, paper, Qc, K, C):
+                    r_b, law, fric, hist, approach_velocity, consistent, paper, Qc, K, C,
+                    held=False):
     """Force and exact tangent of one detected contact.
 
     ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin;
@@ -433,7 +434,7 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     for j in range(N_LOCAL):
         Bn[j] = nc[0] * W[0, j] + nc[1] * W[1, j] + nc[2] * W[2, j]
     # ---- force F_H = f n + F_t
-    f, kt, ct = law_force(law, -g, -gdot, approach_velocity)
+    f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held)
     Df = np.empty(NX)
     for j in range(NX):
         Df[j] = -kt * Dg[j] - ct * Dgdot[j]

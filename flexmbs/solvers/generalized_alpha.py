@@ -225,6 +225,9 @@ class _AlphaStep:
     def stiffness_scale(self) -> float:
         return self.asm.stiffness_scale
 
+    def hold(self, action: int) -> int:
+        return self.asm.hold_contacts(action)
+
 
 class _VelocityStep(_AlphaStep):
     """The velocity corrector of one step, seen by :class:`Newton`: q fixed, unknowns ``u``
@@ -256,6 +259,11 @@ class _VelocityStep(_AlphaStep):
                             1.0 / self.gp, self._r)
         self.r_lam[:] = self._r[n:]
         return self.r_q, self.r_lam, scale
+
+    def hold(self, action: int) -> int:
+        """Nothing held: q is fixed at the converged step's, whose contacts agree with their
+        gaps (the compiled corrector holds nothing either)."""
+        return 0
 
     def apply(self, dx, factor: float) -> None:
         n = self.r_q.size
@@ -656,7 +664,8 @@ class _CompiledStepper:
             refresh_cost=float(o.refresh_cost), keep_acceleration=self.keep_acceleration,
             info=self.info, velocity=self.velocity, factor_v=self.factor_v,
             indptr=self.pattern[0], indices=self.pattern[1], velocity_rows=self.velocity_rows,
-            step_tolerance=float(tolerance), retreats=int(o.retreats))
+            step_tolerance=float(tolerance), retreats=int(o.retreats),
+            hold_contacts=bool(o.hold_contacts))
         value, _ = kernel(OP_STEPS, asm.kernel_system, st.q, st.v, st.qdd, st.lam, fv, self.mode,
                           self._coef, self.r, self.data, run)
         status = int(value)

@@ -45,7 +45,10 @@ class StaticOptions:
     easy_iterations : int, default 8
         Newton iterations up to which an increment counts as easy (the next grows by 1.5).
     newton : NewtonOptions, optional
-        Newton settings (default: full Newton, 40 iterations, 10 retreats).
+        Newton settings (default: full Newton, 40 iterations, 10 retreats; contacts not held:
+        holding them through an increment cost the tendon robot's statics 3.6× the
+        iterations and two of its load cases, design notes, "A Newton that holds the
+        contacts").
     """
 
     load_steps: int = 1
@@ -111,6 +114,9 @@ class _StaticStep:
 
     def stiffness_scale(self) -> float:
         return self.asm.stiffness_scale
+
+    def hold(self, action: int) -> int:
+        return self.asm.hold_contacts(action)
 
 
 def solve_static(asm: Assembly, options: StaticOptions | None = None, *,

@@ -31,7 +31,7 @@ def _point(qe: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 def _reference(x: np.ndarray, vel: np.ndarray, sec: tuple, law: np.ndarray, fric: np.ndarray,
                hist: np.ndarray, start: tuple[float, float, float], same: bool,
-               tbar: np.ndarray | None = None) -> tuple[np.ndarray, tuple]:
+               tbar: np.ndarray | None = None, *, held: bool = False) -> tuple[np.ndarray, tuple]:
     """Q_c of one contact at coordinates ``x = [body, e_I, e_P, φ_P]`` (numpy, Newton solves)
     in the section ``sec = (u_o, frame)`` (origin and axes in body coordinates); with ``tbar``
     (2, 3) e_P is a rod's element whose nodes' charts have these base tangents (its twists
@@ -79,7 +79,7 @@ def _reference(x: np.ndarray, vel: np.ndarray, sec: tuple, law: np.ndarray, fric
     Qc, K, C = np.empty(N_LOCAL), np.empty((N_LOCAL, N_EXT)), np.empty((N_LOCAL, N_LOCAL))
     g, _, f = contact_tangent(qb, vel[:7], u_o, frame, qI, L_ELEM, xi, qP, vel[7:TWIST_OFF], spin,
                               L_ELEM, xp, phi, Y, Yp, Ypp, R_BEAM, law, fric, hist, 0.3, False,
-                              np.ones(1, np.bool_), Qc, K, C)
+                              np.ones(1, np.bool_), Qc, K, C, held)
     return Qc, (K, C, xi, phi, xp, g, f)
 
 
@@ -146,7 +146,8 @@ def _history(x: np.ndarray, same: bool, seed: int) -> np.ndarray:
 
 def _check_tangent(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray,
                    fric: np.ndarray, hist: np.ndarray, same: bool, info: tuple,
-                   tbar: np.ndarray | None = None, step: float = 1e-7) -> None:
+                   tbar: np.ndarray | None = None, step: float = 1e-7, *,
+                   held: bool = False) -> None:
     """K and C of the contact at ``info`` against central differences of :func:`_reference`
     (relative ``step``)."""
     K, C, xi, phi, xp = info[:5]
@@ -159,9 +160,10 @@ def _check_tangent(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray
         xp_, xm_ = x.copy(), x.copy()
         xp_[j] += h
         xm_[j] -= h
-        Kfd[:, j] = -(_reference(xp_, vel, sec, law_a, fric, hist, start, same, tbar)[0]
-                      - _reference(xm_, vel, sec, law_a, fric, hist, start, same, tbar)[0]
-                      ) / (2 * h)
+        Kfd[:, j] = -(_reference(xp_, vel, sec, law_a, fric, hist, start, same, tbar,
+                                 held=held)[0]
+                      - _reference(xm_, vel, sec, law_a, fric, hist, start, same, tbar,
+                                   held=held)[0]) / (2 * h)
     if same:   # e_I and e_P are one element: their columns add
         K = K.copy()
         K[:, I_OFF:P_OFF] += K[:, P_OFF:T_OFF]
@@ -173,8 +175,9 @@ def _check_tangent(x: np.ndarray, vel: np.ndarray, sec: tuple, law_a: np.ndarray
         vp, vm = vel.copy(), vel.copy()
         vp[j] += h
         vm[j] -= h
-        Cfd[:, j] = -(_reference(x, vp, sec, law_a, fric, hist, start, same, tbar)[0]
-                      - _reference(x, vm, sec, law_a, fric, hist, start, same, tbar)[0]) / (2 * h)
+        Cfd[:, j] = -(_reference(x, vp, sec, law_a, fric, hist, start, same, tbar, held=held)[0]
+                      - _reference(x, vm, sec, law_a, fric, hist, start, same, tbar,
+                                   held=held)[0]) / (2 * h)
     assert np.abs(C - Cfd).max() <= 1e-6 * max(np.abs(Cfd).max(), 1e-12) + 1e-12
 
 
@@ -288,3 +291,26 @@ def test_a_rods_turning_surface_tangent_equals_central_differences(law_kind: str
     # the slip speed r_b ω is near the laws' regularisation: central differences need a
     # smaller step (their error measured ∝ h²: 2.7e-6 → 2.7e-8 from h = 1e-7 to 1e-8)
     _check_tangent(x, vel, sec, law_a, fric, hist, same, info, tbar, step=1e-8)
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.3])
+@pytest.mark.parametrize(("tilt", "offset", "same"), [(0.05, 3e-4, True), (0.6, 8e-4, False)],
+                         ids=["one_element", "two_elements"])
+def test_a_held_open_contact_pulls_with_an_exact_tangent(tilt: float, offset: float, same: bool,
+                                                         mu: float) -> None:
+    """A contact the Newton iterations hold (``NewtonOptions.hold_contacts``) whose gap has
+    opened: the linear law's extension pulls, ``f = −k g`` (laws.held_law_force), no friction;
+    its K and C against central differences; not held, the same point has no force."""
+    x, vel = _configuration(tilt, offset, same, seed=3)
+    law_a = np.array([1e6, 1.0, 0.0, 0.0, 1e-3, 0.0, 0.0])
+    sec = (np.array([0.01 if tilt < 0.5 else 0.0, 0.0, 0.0]), FRAMES["straight"])
+    fric = _regularised(mu)
+    hist = _history(x, same, seed=4)
+    found = [_reference(x, vel, sec, law_a, fric, hist, (0.5, phi0, 0.5), same, held=True)[1]
+             for phi0 in np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)]
+    info = min((i for i in found if i[5] > 0.0), key=lambda i: i[5])   # an open point
+    g, f = info[5], info[6]
+    assert f == pytest.approx(-1e6 * g, rel=1e-12)
+    _check_tangent(x, vel, sec, law_a, fric, hist, same, info, held=True)
+    Qc, plain = _reference(x, vel, sec, law_a, fric, hist, info[2:5], same)
+    assert plain[6] == 0.0 and np.abs(Qc).max() == 0.0

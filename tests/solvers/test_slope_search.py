@@ -49,6 +49,9 @@ class Atan:
     def stiffness_scale(self) -> float:
         return 0.0
 
+    def hold(self, action: int) -> int:   # no contacts to hold
+        return 0
+
 
 def _newton(**kw) -> Newton:
     return Newton(fm.NewtonOptions(modified=False, max_iterations=30, **kw), 1.0)

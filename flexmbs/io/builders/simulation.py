@@ -21,7 +21,7 @@ PREDICTORS = ("constant_acceleration", "zero_acceleration")
 _NEWTON_KEYS = {"max_iterations": "int", "relative_tolerance": "pos", "constraint_tolerance": "pos",
                 "modified": "bool", "line_search": "bool", "refresh_ratio": "ratio",
                 "refresh_iterations": "pos", "refresh_cost": "pos", "retreats": "count",
-                "slope_search": "bool"}
+                "slope_search": "bool", "hold_contacts": "bool"}
 
 
 @dataclass(frozen=True, kw_only=True)
