@@ -84,8 +84,9 @@ class NewtonOptions:
         the linear law's extension), no other point does; once the held problem has nearly
         converged, a set at odds with the gaps is replaced by the iterate's contacts and Newton
         continues (:mod:`flexmbs.steploop`, :func:`~flexmbs.steploop.hold_action`). The
-        accepted state solves the plain equations to the same tolerance. For contacts that
-        tap (tendons in their holes: 8.6× fewer steps); not for impacts, where the held step
+        accepted state solves the plain equations to the same tolerance. For contacts of the
+        plain linear law that tap (tendons in their holes: 8.6× fewer steps; with the law's
+        smooth onset, no gain); not for impacts, where the held step
         can settle on a deep-penetration solution that plain Newton's halving avoids (design
         notes, "A Newton that holds the contacts").
     """
