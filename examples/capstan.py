@@ -9,7 +9,10 @@ tube's shape, so it carries no bending moment there: the capstan (Euler–Eytelw
 when T ρ² ≫ EI (here ≈ 100). Contact: linear penalty and friction that sticks (μ = 0.2),
 sections every 2 mm. Prints the pull force while the wire slides against the capstan law.
 
-    python examples/capstan.py [--wrap 90] [--mu 0.2] [--t-end 0.2]
+    python examples/capstan.py [--wrap 90] [--mu 0.2] [--t-end 0.2] [--housing]
+
+``--housing``: the tube is a Bowden cable's housing, a beam clamped at every node, and the
+wire runs through it by a ``fm.TubeJoint`` (the same law within 1 %).
 """
 
 from __future__ import annotations
@@ -52,22 +55,36 @@ def wire_path(wrap: float, ds: float = ELEMENT) -> tuple[np.ndarray, np.ndarray]
 
 def build(wrap: float, mu: float, *, speed: float = 0.02, ramp: float = 0.02,
           stiffness: float = 2e6, motion: fm.TimeFunction | None = None,
-          damping: float = 1e-4) -> tuple[fm.Model, fm.Beam, str]:
+          damping: float = 1e-4, housing: bool = False) -> tuple[fm.Model, fm.Beam, str]:
     """The wire through the tube; returns (model, wire, name of the pull's prescribed motion).
     The exit end moves along the exit line by ``motion(t)`` (default: at ``speed`` from
-    ``ramp``, when the load is in); ``damping``: the wire's material damping [s]."""
+    ``ramp``, when the load is in); ``damping``: the wire's material damping [s].
+    ``housing``: the tube is a Bowden cable's housing, a steel beam along the arc (outer radius
+    1.5 mm, one element per 5 mm) clamped at every node (``support0``, ``support1``, ...), the
+    wire through it by a :class:`~flexmbs.TubeJoint`, instead of a fixed rigid body's curved
+    bore."""
     pts, tans = wire_path(wrap)
     model = fm.Model(name="capstan", gravity=(0.0, 0.0, 0.0))
     wire = model.add_beam(fm.polyline(pts, tans), section=fm.CircularSection(WIRE_R),
                           material=STEEL, damping=damping, name="wire")
-    tube = model.add_rigid_body(mass=1.0, inertia=(1e-3, 1e-3, 1e-3), name="tube")
-    model.fix_body(tube)
-    arc = fm.arc((0.0, 0.0, 0.0), RHO, (-RHO, 0.0, 0.0), -wrap, normal=(0.0, 0.0, 1.0),
-                 elements=64)
-    model.add_joint(fm.SlidingClearanceJoint(
-        wire, tube, hole=fm.CurvedBore(arc, radius=BORE, spacing=SPACING),
-        contact=fm.LinearPenalty(stiffness=stiffness), friction=fm.Friction(mu=mu),
-        name="tube"))
+    contact, friction = fm.LinearPenalty(stiffness=stiffness), fm.Friction(mu=mu)
+    if housing:
+        arc = fm.arc((0.0, 0.0, 0.0), RHO, (-RHO, 0.0, 0.0), -wrap, normal=(0.0, 0.0, 1.0),
+                     elements=max(4, round(RHO * wrap / ELEMENT)))
+        tube_beam = model.add_beam(arc, section=fm.CircularSection(1.5e-3), material=STEEL,
+                                   name="housing")
+        for k in range(tube_beam.n_nodes):
+            model.clamp(tube_beam.node(k), name=f"support{k}")
+        model.add_joint(fm.TubeJoint(wire, tube_beam, inner_radius=BORE, spacing=SPACING,
+                                     contact=contact, friction=friction, name="tube"))
+    else:
+        tube = model.add_rigid_body(mass=1.0, inertia=(1e-3, 1e-3, 1e-3), name="tube")
+        model.fix_body(tube)
+        arc = fm.arc((0.0, 0.0, 0.0), RHO, (-RHO, 0.0, 0.0), -wrap, normal=(0.0, 0.0, 1.0),
+                     elements=64)
+        model.add_joint(fm.SlidingClearanceJoint(
+            wire, tube, hole=fm.CurvedBore(arc, radius=BORE, spacing=SPACING),
+            contact=contact, friction=friction, name="tube"))
     # the load: T_LOAD back along the entry line, ramped in
     model.add_point_load(wire.first_node, (0.0, -T_LOAD, 0.0),
                          function=fm.Ramp(start=0.0, end=ramp, value=1.0, smooth=True))
@@ -85,9 +102,11 @@ def build(wrap: float, mu: float, *, speed: float = 0.02, ramp: float = 0.02,
     return model, wire, "pull"
 
 
-def pull_force(wrap: float, mu: float, t_end: float = 0.2, dt: float = 2e-4) -> dict:
-    """Run and return the pull force history along the exit line and the capstan value."""
-    model, wire, pull = build(wrap, mu)
+def pull_force(wrap: float, mu: float, t_end: float = 0.2, dt: float = 2e-4, *,
+               housing: bool = False) -> dict:
+    """Run and return the pull force history along the exit line and the capstan value
+    (``housing``: :func:`build`'s)."""
+    model, wire, pull = build(wrap, mu, housing=housing)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = fm.simulate(model, t_end=t_end, dt=dt, output_interval=5e-3,
@@ -103,8 +122,10 @@ def main() -> None:
     ap.add_argument("--wrap", type=float, default=90.0, help="wrap angle [deg] (90 or 180)")
     ap.add_argument("--mu", type=float, default=0.2)
     ap.add_argument("--t-end", type=float, default=0.2)
+    ap.add_argument("--housing", action="store_true",
+                    help="a Bowden cable: the tube is a beam clamped at every node (TubeJoint)")
     a = ap.parse_args()
-    out = pull_force(math.radians(a.wrap), a.mu, a.t_end)
+    out = pull_force(math.radians(a.wrap), a.mu, a.t_end, housing=a.housing)
     for t, f in zip(out["t"][::4], out["pull"][::4], strict=False):
         print(f"t = {t:6.3f} s   pull = {f:8.3f} N")
     late = out["pull"][out["t"] > 0.5 * a.t_end + 0.01]
