@@ -15,7 +15,7 @@
    crosses; the same for one evaluation of the residual and Newton's matrix (the joint's own
    work, without the factorisation), and the matrix's reserved non-zeros.
 
-    python benchmarks/tube.py [--steps 200]
+    python benchmarks/tube.py [--steps 200] [--parts 123]
 """
 
 from __future__ import annotations
@@ -148,7 +148,8 @@ def flexible_against_rigid(steps: int, length: float = 0.4, sections: int = 201
                                                  sections=sections, contact=law))
             key = f"{kind}{'' if with_joint else '_alone'}"
             out[key] = 1e6 * _run(model, steps, 1e-4)[0]
-            out[key + "_evaluation"], out[key + "_nnz"] = _evaluation(model)
+            (out[key + "_evaluation"], out[key + "_nnz"],
+             out[key + "_planned"]) = _evaluation(model)
     for kind in ("rigid", "flexible"):
         for what in ("", "_evaluation"):
             out[f"{kind}{what}_per_section"] = (out[kind + what]
@@ -156,9 +157,9 @@ def flexible_against_rigid(steps: int, length: float = 0.4, sections: int = 201
     return out
 
 
-def _evaluation(model: fm.Model, calls: int = 200) -> tuple[float, int]:
-    """µs per evaluation of the residual and Newton's matrix at the state after 5 ms, and the
-    matrix's reserved non-zeros."""
+def _evaluation(model: fm.Model, calls: int = 200) -> tuple[float, int, int]:
+    """µs per evaluation of the residual and Newton's matrix at the state after 5 ms, the
+    matrix's reserved non-zeros, and those a plan that follows the contacts there reads."""
     from flexmbs.assembly import Assembly
 
     asm = Assembly(model)
@@ -171,32 +172,41 @@ def _evaluation(model: fm.Model, calls: int = 200) -> tuple[float, int]:
     t0 = time.perf_counter()
     for _ in range(calls):
         asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(1.0, 1.0, 1.0))
-    return 1e6 * (time.perf_counter() - t0) / calls, int(asm.matrix.nnz)
+    per = 1e6 * (time.perf_counter() - t0) / calls
+    windows = asm.contact_windows(1)
+    planned = (asm.matrix.nnz if windows is None
+               else int(np.count_nonzero(asm.factor_plan(windows=windows).keep)))
+    return per, int(asm.matrix.nnz), planned
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--parts", default="123", help="the parts to run, e.g. 3")
     a = ap.parse_args()
-    print("| tube length | sections | µs per step | set-up per run |")
-    print("|---|---|---|---|")
-    for length in (0.1, 1.0, 10.0):
-        (dt, fixed), n = far_sections(length, a.steps)
-        print(f"| {length:g} m | {n} | {1e6 * dt:.1f} | {1e3 * fixed:.1f} ms |")
-    (dt, fixed), n_el, ns, (per, crossed, rows) = long_wire(max(10, a.steps // 10))
-    print(f"\n{n_el}-element wire through a {ns}-section quarter circle: "
-          f"{1e6 * dt:.0f} µs per step, {1 / dt:.0f} steps per second; detection "
-          f"{1e6 * per:.2f} µs per crossed section ({crossed} crossed, {rows} candidates, "
-          "called from Python)")
+    if "1" in a.parts:
+        print("| tube length | sections | µs per step | set-up per run |")
+        print("|---|---|---|---|")
+        for length in (0.1, 1.0, 10.0):
+            (dt, fixed), n = far_sections(length, a.steps)
+            print(f"| {length:g} m | {n} | {1e6 * dt:.1f} | {1e3 * fixed:.1f} ms |")
+    if "2" in a.parts:
+        (dt, fixed), n_el, ns, (per, crossed, rows) = long_wire(max(10, a.steps // 10))
+        print(f"\n{n_el}-element wire through a {ns}-section quarter circle: "
+              f"{1e6 * dt:.0f} µs per step, {1 / dt:.0f} steps per second; detection "
+              f"{1e6 * per:.2f} µs per crossed section ({crossed} crossed, {rows} candidates, "
+              "called from Python)")
+    if "3" not in a.parts:
+        return
     c = flexible_against_rigid(a.steps)
     print("\n| bore | µs per step (without the joint) | per crossed section | evaluation µs "
-          "(without) | per crossed section | reserved non-zeros (without) |")
-    print("|---|---|---|---|---|---|")
+          "(without) | per crossed section | reserved non-zeros (without) | planned, following |")
+    print("|---|---|---|---|---|---|---|")
     for k in ("rigid", "flexible"):
         print(f"| {k} | {c[k]:.0f} ({c[k + '_alone']:.0f}) | {c[k + '_per_section']:.2f} | "
               f"{c[k + '_evaluation']:.0f} ({c[k + '_alone_evaluation']:.0f}) | "
               f"{c[k + '_evaluation_per_section']:.2f} | {c[k + '_nnz']:.0f} "
-              f"({c[k + '_alone_nnz']:.0f}) |")
+              f"({c[k + '_alone_nnz']:.0f}) | {c[k + '_planned']:.0f} |")
     for what in ("", "_evaluation"):
         print(f"flexible / rigid per crossed section{what.replace('_', ', ')}: "
               f"{c['flexible' + what + '_per_section'] / c['rigid' + what + '_per_section']:.2f}")

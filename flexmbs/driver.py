@@ -12,8 +12,9 @@ entry :func:`flexmbs.kernel.kernel` (called from Python directly, e.g. by a test
 compiled on its own).
 
 ``mode`` = ``[load factor, with inertia, with damping]`` (:mod:`flexmbs.terms`); ``fv`` holds
-the values of the model's time functions at the current time; ``error`` (int64, 3) receives
-``[code, index of the joint within its kind, detail]`` of a failure.
+the values of the model's time functions at the current time; ``error`` (int64, 4) receives
+``[code, index of the joint within its kind, detail, window row]`` of a failure (the row of
+the plan's windows for an off-plan error, :class:`~flexmbs.constraints.interaction.Following`).
 """
 
 from __future__ import annotations
@@ -120,7 +121,7 @@ class SystemPart(NamedTuple):
     rope: RopePart
     springs: SpringPart
     drivers: DriverPart
-    error: np.ndarray                # (3,) [code, joint, detail] of the last error
+    error: np.ndarray                # (4,) [code, joint, detail, window row] of the last error
     bases: np.ndarray                # (nodes with a twist, 7) re-based nodes' records (§2.4)
 
     def without_absent(self, present: dict[str, bool]) -> SystemPart:

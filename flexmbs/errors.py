@@ -26,7 +26,7 @@ class ConvergenceError(FlexmbsError):
 class OffPlanError(ConvergenceError):
     """A joint's Jacobian fell outside the elements the factorisation's plan follows it on
     (:meth:`flexmbs.assembly.Assembly.follow`): the solve is to be re-planned and repeated, not
-    shortened. ``widen`` = (error code, member, element) for
+    shortened. ``widen`` = (error code, window row, element) for
     :meth:`~flexmbs.assembly.Assembly.contact_windows`."""
 
     def __init__(self, message: str, widen: tuple[int, int, int]) -> None:

@@ -112,6 +112,7 @@ class Assembly:
         self._kernel_ready = False
         self._plans: dict[tuple[bool, bytes | None], Any] = {}
         self._window_index: list[tuple[np.ndarray, np.ndarray, np.ndarray, list]] | None = None
+        self._rows: list[tuple[InteractionKind, list[tuple[Any, np.ndarray]]]] | None = None
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
@@ -269,7 +270,7 @@ class Assembly:
             if code and self.off_plan(code):
                 err = self.system.error
                 raise OffPlanError(str(self.error_exception(code, q, t)),
-                                   (int(code), int(err[1]), int(err[2])))
+                                   (int(code), int(err[3]), int(err[2])))
             if code:
                 raise self.error_exception(code, q, t)
             if kscale > 0:
@@ -454,32 +455,43 @@ class Assembly:
     def _following(self) -> list[tuple[InteractionKind, list[Any]]]:
         """The kinds whose members the plan may follow along their beams, with their members
         (:class:`~flexmbs.constraints.interaction.Following`), in :data:`driver.
-        INTERACTION_KINDS` order: the order of the rows of :meth:`contact_windows`."""
+        INTERACTION_KINDS` order."""
         return [(kind, self.joint_lists[kind.name]) for kind in driver.INTERACTION_KINDS
                 if kind.follow is not None and self.joint_lists[kind.name]]
 
+    def _window_rows(self) -> list[tuple[InteractionKind, list[tuple[Any, np.ndarray]]]]:
+        """Per following kind its windows' rows, each (member, its own unknowns of the row):
+        the order of the rows of :meth:`contact_windows` (a member has one row, a flexible
+        tube one per element); built once."""
+        if self._rows is None:
+            self._rows = []
+            for kind, objs in self._following():
+                assert kind.follow is not None
+                self._rows.append((kind, [(obj, np.unique(np.asarray(own, np.int64)))
+                                          for obj in objs for own in kind.follow.own(obj, self)]))
+        return self._rows
+
     def contact_windows(self, reach: int, widen: tuple[int, int, int] | None = None,
                         keep: np.ndarray | None = None) -> np.ndarray | None:
-        """Per member of a following kind (the sliding joints, then the clearance joints) the
-        elements ``[lo, hi)`` of its beam the plan holds its entries on: ``reach`` elements
-        either side of where it is at the step's start (its current element; its sections'
-        crossings), as ``(n_members, 2)``; None without such members. ``widen = (code, member,
-        element)``: a driver error that found the member outside its window (its element is
-        added); ``keep``: earlier windows that the new ones contain (a re-plan that failed
-        again: the windows only grow)."""
-        following = self._following()
-        if not following:
+        """Per window row of the members of a following kind (the sliding joints, then the
+        clearance joints; :meth:`_window_rows`) the elements ``[lo, hi)`` of its beam the plan
+        holds its entries on: ``reach`` elements either side of where it is at the step's start
+        (its current element; its sections' crossings), as ``(n_rows, 2)``; None without such
+        members. ``widen = (code, row, element)``: a driver error that found the row's member
+        outside its window there (the element is added); ``keep``: earlier windows that the
+        new ones contain (a re-plan that failed again: the windows only grow)."""
+        rows = self._window_rows()
+        if not rows:
             return None
         out = []
-        for kind, _ in following:
+        for kind, members in rows:
             assert kind.follow is not None
             w = kind.follow.current(getattr(self.system, kind.name), reach)
             if widen is not None and widen[0] == kind.follow.off_plan:
                 j, e = widen[1], widen[2]
                 lo, hi = (w[j] if w[j, 1] > w[j, 0] else (e, e + 1))
                 w[j] = min(lo, max(e - reach, 0)), max(hi, e + reach + 1)
-                n_elem = len(kind.follow.elements(self.joint_lists[kind.name][j]))
-                w[j, 1] = min(w[j, 1], n_elem)
+                w[j, 1] = min(w[j, 1], len(kind.follow.elements(members[j][0])))
             out.append(w)
         windows = np.ascontiguousarray(np.concatenate(out), dtype=np.int64)
         if keep is not None:
@@ -493,14 +505,14 @@ class Assembly:
         (:meth:`contact_windows`; None: its whole beam): a member's Jacobian outside its window
         reports its kind's ``off_plan`` code instead of writing entries the plan left out."""
         at = 0
-        for kind, objs in self._following():
+        for kind, members in self._window_rows():
             part = getattr(self.system, kind.name)
             if windows is None:
                 part.window[:, 0] = 0
-                part.window[:, 1] = [len(kind.follow.elements(obj)) for obj in objs]   # type: ignore[union-attr]
+                part.window[:, 1] = [len(kind.follow.elements(obj)) for obj, _ in members]   # type: ignore[union-attr]
             else:
-                part.window[:] = windows[at:at + len(objs)]
-            at += len(objs)
+                part.window[:] = windows[at:at + len(members)]
+            at += len(members)
 
     def off_plan(self, code: int) -> bool:
         """Whether a driver error ``code`` says a member left the elements the plan follows it
@@ -510,36 +522,38 @@ class Assembly:
 
     def _window_entries(self, windows: np.ndarray) -> np.ndarray:
         """The stored positions a plan following the members on ``windows`` reads: all but a
-        member's own unknowns against its beam's coordinates outside its window's elements
-        (zero while it is inside: only the elements it is on are written), unless another
-        member with the same own unknowns and beam has them in its window, or an owner that
-        does not follow reserved them. One pass over the candidate positions (a re-plan's
-        set-up)."""
+        row's own unknowns against its beam's coordinates outside its window's elements (zero
+        while it is inside: only the elements it is on are written), unless another row whose
+        own unknowns hold the entry's (another member with the same own unknowns and beam; a
+        tube's neighbouring element, which shares a node) has them in its window, or an owner
+        that does not follow reserved them. One pass over the candidate positions (a
+        re-plan's set-up)."""
         if self._window_index is None:
             self._window_index = self._following_index()
-        keep = np.ones(self.matrix.nnz, bool)
+        candidate = np.zeros(self.matrix.nnz, bool)
+        covered = np.zeros(self.matrix.nnz, bool)
         windows = np.asarray(windows, np.int64)
         for pos, dloc, fixed, members in self._window_index:
-            covered = fixed.copy()
+            cov = fixed.copy()
             for i, first, last in members:
                 lo, hi = windows[i]
-                covered |= (first[dloc] < hi) & (last[dloc] >= lo)
-            keep[pos[~covered]] = False
-        return keep
+                cov |= (first[dloc] < hi) & (last[dloc] >= lo)
+            candidate[pos] = True
+            covered[pos[cov]] = True
+        return ~candidate | covered
 
     def _following_index(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, list]]:
-        """What :meth:`_window_entries` reads, built once: per group of members with the same
-        own unknowns and beam, the stored positions of their (own, beam) entries both ways, the
+        """What :meth:`_window_entries` reads, built once: per group of rows with the same own
+        unknowns and beam, the stored positions of their (own, beam) entries both ways, the
         beam coordinate of each (its place in the group's list), whether an owner that does
-        not follow reserved it, and per member (its row in the windows) the first and last of
-        its elements holding each coordinate (none: outside every window)."""
+        not follow reserved it, and per row (its row in the windows) the first and last of
+        its member's elements holding each coordinate (none: outside every window)."""
         groups: dict[tuple[bytes, int], tuple[np.ndarray, np.ndarray, list]] = {}
         spans: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         i = 0
-        for kind, objs in self._following():
+        for kind, members in self._window_rows():
             assert kind.follow is not None
-            for obj in objs:
-                own = np.unique(kind.follow.own(obj, self))
+            for obj, own in members:
                 elems = np.asarray(kind.follow.elements(obj), np.int64)
                 span_key = (id(obj.beam), elems.tobytes())      # members of one beam share it
                 if span_key not in spans:

@@ -149,7 +149,7 @@ def pack_system(owners: list[TermOwner], model: Model, ctx: PackContext) -> Pack
     groups: list[BeamGroup] = parts.pop("beams")
     system = driver.SystemPart(
         n=ctx.n_coords, m=ctx.n_total - ctx.n_coords, beams=_element_parts(groups, ctx), **parts,
-        error=np.zeros(3, np.int64),
+        error=np.zeros(4, np.int64),
         bases=np.zeros((sum(2 * g.dofs.shape[0] for g in groups
                             if g.element_type.rebase is not None), BASE_RECORD)))
     kernel_system = system.without_absent({owner.field: owner.present for owner in owners})

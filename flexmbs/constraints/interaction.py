@@ -33,20 +33,21 @@ EnergyFlow = Literal["conserves", "dissipates", "works"]
 class Following:
     """How the factorisation's plan follows the members of a kind along their beams (the
     sliding joint's current element, the clearance joint's contacts): the plan holds a
-    member's *own* unknowns against its beam only on the elements of its *window*
-    ``[lo, hi)``, stored in the part's ``window`` array (n_members, 2), and the member's
-    Jacobian reports ``off_plan`` (member in ``error[1]``, element in ``error[2]``) instead of
-    writing an entry outside it; the step is then retried on a new plan
+    member's *own* unknowns against its beam only on the elements of a *window* ``[lo, hi)``,
+    stored in the part's ``window`` array (n_rows, 2), and the member's Jacobian reports
+    ``off_plan`` (member in ``error[1]``, element in ``error[2]``, window row in ``error[3]``)
+    instead of writing an entry outside it; the step is then retried on a new plan
     (:meth:`flexmbs.assembly.Assembly.follow`).
 
-    ``own(obj, dofs)``: the member's unknowns whose entries against its beam follow it (the
-    slide coordinate and multipliers; the hole body's coordinates); ``elements(obj)``: its
-    beam's coordinates per element, (n_elem, k), −1 padded; ``current(part, reach)``: every
-    member's window at the state the next step starts from, ``reach`` elements either side of
-    the elements it is on."""
+    ``own(obj, dofs)``: the member's unknowns whose entries against its beam follow it, one
+    array per window row of the member (the slide coordinate and multipliers; the hole body's
+    coordinates; a flexible tube's coordinates per element, each with a window of its own);
+    ``elements(obj)``: its beam's coordinates per element, (n_elem, k), −1 padded;
+    ``current(part, reach)``: every row's window at the state the next step starts from,
+    ``reach`` elements either side of the elements it is on, in the members' order."""
 
     off_plan: int
-    own: Callable[[Any, DofMap], np.ndarray]
+    own: Callable[[Any, DofMap], list[np.ndarray]]
     elements: Callable[[Any], np.ndarray]
     current: Callable[[Any, int], np.ndarray]
 

@@ -737,7 +737,8 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
 def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data, error):  # noqa: ANN001, ANN201
     """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the exact derivatives of −Q_s in the element
     coordinates, s, ṡ and λ_pos (:func:`sliding_axial_force`); returns 0, or
-    ``ERR_OFF_PLAN`` (joint in ``error[1]``, element in ``error[2]``) when a joint's element
+    ``ERR_OFF_PLAN`` (joint in ``error[1]`` and ``error[3]``, element in ``error[2]``) when a
+    joint's element
     lies outside its ``window``: its entries there are not in the factorisation's plan."""
     if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return 0
@@ -746,6 +747,7 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data, error):  # noqa: ANN001, A
             error[0] = ERR_OFF_PLAN
             error[1] = j
             error[2] = sl.element[j]
+            error[3] = j          # its window's row
             return ERR_OFF_PLAN
     for j in range(sl.s_dof.size):
         k, ed, sd, ne_j = _joint_values(sl, j, q)
@@ -799,10 +801,11 @@ def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
     return 0
 
 
-def _own_unknowns(joint: SlidingJoint, dofs: DofMap) -> np.ndarray:
-    """The slide coordinate and the kept multipliers: what couples with the joint's beam."""
+def _own_unknowns(joint: SlidingJoint, dofs: DofMap) -> list[np.ndarray]:
+    """The slide coordinate and the kept multipliers: what couples with the joint's beam (one
+    window row)."""
     rows = dofs.multiplier_rows(joint.constraints()[0])
-    return np.concatenate([[joint.geometry.s_dof], dofs.n_coords + rows[rows >= 0]]).astype(np.int64)
+    return [np.concatenate([[joint.geometry.s_dof], dofs.n_coords + rows[rows >= 0]]).astype(np.int64)]
 
 
 def _current_windows(part: SlidingPart, reach: int) -> np.ndarray:

@@ -264,6 +264,24 @@ def tube_joint(tube, j):  # noqa: ANN001, ANN201
 
 
 @njit
+def window_row(cl, j, k):  # noqa: ANN001, ANN201
+    """The row of ``cl.window`` that holds the elements the plan follows section k of clearance
+    joint j on: the joint's row, or for a flexible tube the row of the section's element (each
+    of a tube's elements couples only with the inner beam near its own sections)."""
+    return cl.win_row[j] + _tube_row(cl.tube, j, k)
+
+
+@njit
+def _tube_row(tube, j, k):  # noqa: ANN001, ANN202
+    """Section k's element's rank among tube joint j's (0: not a tube; ``tube`` None: none is)."""
+    if tube is None:
+        return 0
+    if not tube.on[j]:
+        return 0
+    return tube.row[j, k]
+
+
+@njit
 def tube_section(tube, j, k, q, v, tw):  # noqa: ANN001, ANN201
     """Pose, rate and ``J`` of section k of clearance joint j into ``tube_work`` when its bore
     is a flexible tube (:func:`~flexmbs.contact.tube.section_pose`); returns whether it is.
@@ -369,6 +387,7 @@ def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):  # noqa: ANN
             tube.t_bar[j, slot, c] = tube.t_bar[j, src, c]
         for c in range(4):
             tube.p0[j, slot, c] = tube.p0[j, src, c]
+        tube.row[j, slot] = tube.row[j, src]
 
 
 @njit(internal=True)
@@ -566,7 +585,8 @@ ERR_LEFT_BORE = ERROR_CODES["left_bore"]
 #: ``error[1]``, contacts in ``error[2]``; :data:`CONTACTS_PER_SECTION`)
 ERR_TOO_MANY_CONTACTS = ERROR_CODES["too_many_contacts"]
 #: error code of the tangent: a contact's element lies outside the elements the factorisation's
-#: plan follows the joint on (``window``; joint in ``error[1]``, element in ``error[2]``); the
+#: plan follows the joint on (``window``; joint in ``error[1]``, element in ``error[2]``, the
+#: window's row in ``error[3]``: :func:`window_row`); the
 #: step is retried after a new plan (:meth:`flexmbs.assembly.Assembly.follow_contacts`)
 ERR_CONTACT_OFF_PLAN = ERROR_CODES["contact_off_plan"]
 #: contacts per section the tangent's work arrays hold on average (plus
@@ -644,9 +664,11 @@ class ClearancePart(NamedTuple):
     spin: np.ndarray                 # work (N_SPIN,) a contact element's spin (element_spin)
     paper: np.ndarray                # (nj,) the paper's detection (not ``consistent``)
     fwork: np.ndarray                # work (FORCES_WORK,) clearance_forces' arrays
-    window: np.ndarray               # (nj, 2) state: the elements [lo, hi) the factorisation's
-                                     # plan holds the joint's (body, beam) entries on (the whole
-                                     # beam unless Assembly.follow_contacts set it)
+    window: np.ndarray               # (n_rows, 2) state: the elements [lo, hi) the
+                                     # factorisation's plan holds the joint's (body, beam)
+                                     # entries on (the whole beam unless Assembly.follow set
+                                     # it); a row per joint, a flexible tube's per element
+    win_row: np.ndarray              # (nj,) the joint's first row of ``window`` (window_row)
     beam_of: np.ndarray              # (nj,) the joint's beam: its row of the next three
     beam_joint: np.ndarray           # (nb,) a joint on the beam (its elem_dofs, lengths)
     beam_qe: np.ndarray              # work (nb, max_ne, CENTERLINE_SIZE): the beam's elements
@@ -759,14 +781,16 @@ def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: AN
             scale = sc
         if not want_tangent:
             continue
-        lo, hi = cl.window[j, 0], cl.window[j, 1]
         for i in range(cnt):
             eP = cl.kelem[i]
             eI = cl.kelem_i[i]
+            row = window_row(cl, j, cl.ksec[i])
+            lo, hi = cl.window[row, 0], cl.window[row, 1]
             if eP < lo or eP >= hi or eI < lo or eI >= hi:
                 error[0] = ERR_CONTACT_OFF_PLAN
                 error[1] = j
                 error[2] = eP if eP < lo or eP >= hi else eI
+                error[3] = row
                 return scale, ERR_CONTACT_OFF_PLAN
         if tube_joint(cl.tube, j):
             for i in range(cnt):

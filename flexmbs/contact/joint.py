@@ -401,9 +401,15 @@ class SlidingClearanceJoint(Interaction):
         self.state = self.state._replace(t_bar=np.zeros((ne, N_TWIST, 3)))
 
     def own_dofs(self) -> np.ndarray:
-        """The coordinates the bore moves with (the hole body's): the joint's entries against
-        its beam (:func:`clearance_pattern`) and its plan windows' own unknowns."""
+        """The coordinates the bore moves with (the hole body's)."""
         return np.asarray(self.geometry.body_dofs, np.int64)
+
+    def window_owns(self) -> list[np.ndarray]:
+        """The coordinates the bore moves with, by the rows of the plan's windows
+        (:class:`~flexmbs.constraints.interaction.Following`): each couples with the beam
+        (:func:`clearance_pattern`) and the plan holds it against the elements of its window
+        only. A rigid bore: its body's, one row."""
+        return [self.own_dofs()]
 
     def tube_sections(self) -> tuple[np.ndarray, ...] | None:
         """A flexible tube's sections (:class:`~flexmbs.contact.tube_joint.TubeJoint`); a rigid
@@ -1014,14 +1020,17 @@ class SlidingClearanceJoint(Interaction):
 # ---------------------------------------------------------------------------------------------
 # the clearance-joint term of the assembler (flexmbs.terms)
 def clearance_pattern(joint: SlidingClearanceJoint, dofs: DofMap) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The hole body couples with every coordinate of the beam (contacts move along it). The
-    exact tangent's coupling of a contact point's element with a neighbouring crossing element
-    uses the entries the beam already has (their shared node): reserving the rest would widen
-    the band of every beam by a node (measured: Example 1 20 % slower) for entries of order
-    ξ² near the shared node."""
-    own = joint.own_dofs()
-    cols = np.concatenate([own, joint.geometry.beam_dofs])
-    return [(own, cols), (cols, own)]
+    """The hole body couples with itself and with every coordinate of the beam (contacts move
+    along it); a flexible tube each element with itself and the beam
+    (:meth:`SlidingClearanceJoint.window_owns`). The exact tangent's coupling of a contact
+    point's element with a neighbouring crossing element uses the entries the beam already has
+    (their shared node): reserving the rest would widen the band of every beam by a node
+    (measured: Example 1 20 % slower) for entries of order ξ² near the shared node."""
+    out = []
+    for own in joint.window_owns():
+        cols = np.concatenate([own, joint.geometry.beam_dofs])
+        out += [(own, cols), (cols, own)]
+    return out
 
 
 def _chart_tangents(joint: SlidingClearanceJoint, ctx: PackContext) -> np.ndarray:
@@ -1116,7 +1125,9 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
         np.array([j.geometry.tip_reach for j in joints], float), np.zeros(nj, np.bool_),
         np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
         np.zeros(FORCES_WORK),
-        c(np.array([[0, len(j.geometry.lengths)] for j in joints], i64).reshape(nj, 2)),
+        c(np.array([[0, len(j.geometry.lengths)] for j in joints for _ in j.window_owns()],
+                   i64).reshape(-1, 2)),
+        np.cumsum([0] + [len(j.window_owns()) for j in joints[:-1]], dtype=i64)[:nj],
         *_beams(joints, max_ne), _tubes(joints, max_ns), np.zeros(TUBE_WORK),
         np.zeros(n_contacts, i64), np.zeros((n_contacts, 7)), *ctx.matrix_pattern(),
         np.zeros(2, i64), np.zeros((nj, max_ns, MAX_POINTS), np.bool_),
@@ -1134,16 +1145,17 @@ def _tubes(joints: list[SlidingClearanceJoint], max_ns: int) -> TubeSections:
     CS = CENTERLINE_SIZE
     out = TubeSections(on=np.zeros(nj, np.bool_), dofs=np.zeros((nj, max_ns, CS), np.int64),
                        length=np.ones((nj, max_ns)), xi=np.zeros((nj, max_ns)),
-                       t_bar=np.zeros((nj, max_ns, 3)), p0=np.zeros((nj, max_ns, 4)))
+                       t_bar=np.zeros((nj, max_ns, 3)), p0=np.zeros((nj, max_ns, 4)),
+                       row=np.zeros((nj, max_ns), np.int64))
     for i, j in enumerate(joints):
         sections = j.tube_sections()
         if sections is None:
             continue
-        dofs, length, xi, t_bar, p0 = sections
+        dofs, length, xi, t_bar, p0, row = sections
         n = len(xi)
         out.on[i] = True
         out.dofs[i, :n], out.length[i, :n], out.xi[i, :n] = dofs, length, xi
-        out.t_bar[i, :n], out.p0[i, :n] = t_bar, p0
+        out.t_bar[i, :n], out.p0[i, :n], out.row[i, :n] = t_bar, p0, row
     return out
 
 
@@ -1232,16 +1244,26 @@ def _joint_elements(joint: SlidingClearanceJoint) -> np.ndarray:
 
 
 def _current_windows(part: ClearancePart, reach: int) -> np.ndarray:
-    """Per joint the elements its sections cross at the step's start (``elem_ws``), ``reach``
-    either side, clipped to its beam; none crossed: an empty window (a contact found later
-    re-plans)."""
-    out = np.zeros((part.r_b.size, 2), np.int64)
+    """Per window row (a joint's; a flexible tube's per element, :func:`~flexmbs.contact.
+    clearance_term.window_row`) the elements its sections cross at the step's start
+    (``elem_ws``, the placed tip sections too), ``reach`` either side, clipped to its beam;
+    none crossed: an empty window (a contact found later re-plans)."""
+    lo = np.full(part.window.shape[0], np.iinfo(np.int64).max, np.int64)
+    hi = np.full(part.window.shape[0], -1, np.int64)
     for j in range(part.r_b.size):
-        ns, ne = int(part.n_sec[j]) - N_TIPS, int(part.n_elem[j])
-        crossed = np.concatenate([part.elem_ws[j, :ns], part.elem_ws[j, ns:ns + N_TIPS][part.tip_on[j]]])
-        crossed = crossed[crossed >= 0]
-        if crossed.size:
-            out[j] = max(int(crossed.min()) - reach, 0), min(int(crossed.max()) + reach + 1, ne)
+        ns = int(part.n_sec[j])
+        slots = np.r_[np.arange(ns - N_TIPS), ns - N_TIPS + np.flatnonzero(part.tip_on[j])]
+        crossed = part.elem_ws[j, slots]
+        slots, crossed = slots[crossed >= 0], crossed[crossed >= 0]
+        rows = part.win_row[j] + (part.tube.row[j, slots] if part.tube.on[j]
+                                  else np.zeros(slots.size, np.int64))
+        np.minimum.at(lo, rows, crossed)
+        np.maximum.at(hi, rows, crossed)
+    ne = part.n_elem[np.searchsorted(part.win_row, np.arange(lo.size), side="right") - 1]
+    out = np.zeros((lo.size, 2), np.int64)
+    on = hi >= 0
+    out[on, 0] = np.maximum(lo[on] - reach, 0)
+    out[on, 1] = np.minimum(hi[on] + reach + 1, ne[on])
     return out
 
 
@@ -1259,5 +1281,5 @@ CLEARANCE = InteractionKind(
     outlines=lambda joint, *a: joint.section_outlines(*a),
     hole_record=lambda joint: joint.hole_record(),
     follow=Following(off_plan=ERR_CONTACT_OFF_PLAN,
-                     own=lambda joint, dofs: joint.own_dofs(),
+                     own=lambda joint, dofs: joint.window_owns(),
                      elements=_joint_elements, current=_current_windows))

@@ -254,3 +254,5 @@ class TubeSections(NamedTuple):
     xi: np.ndarray          # (nj, max_ns) the section's station on it
     t_bar: np.ndarray       # (nj, max_ns, 3) state: base tangents (rebase)
     p0: np.ndarray          # (nj, max_ns, 4) state: base frames
+    row: np.ndarray         # (nj, max_ns) the window row of the section's element: its rank
+                            # among the joint's tube elements (the plan follows each apart)

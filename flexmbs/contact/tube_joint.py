@@ -181,6 +181,14 @@ class TubeJoint(SlidingClearanceJoint):
     def own_dofs(self) -> np.ndarray:
         return np.asarray(self._own, np.int64)
 
+    def window_owns(self) -> list[np.ndarray]:
+        """Every tube element that carries a section, a row of the plan's windows of its own:
+        an element couples only with the inner beam near its own sections, so the plan holds
+        each against the inner beam's elements there (:func:`~flexmbs.contact.clearance_term.
+        window_row`), not the whole tube against the whole wire."""
+        elements = np.unique(self._tube_elem)
+        return [self._outer_dofs[e] for e in elements]
+
     def tube_sections(self) -> tuple[np.ndarray, ...]:
         ns = self.n_slots
         n = len(self.stations)
@@ -197,7 +205,9 @@ class TubeJoint(SlidingClearanceJoint):
         p0 = np.zeros((ns, 4))
         p0[:n] = self._tube_p0
         p0[n:] = self._tube_p0[0]
-        return dofs, length, xi, t_bar, p0
+        row = np.zeros(ns, np.int64)         # tip slots: set where they are placed
+        row[:n] = np.searchsorted(np.unique(self._tube_elem), self._tube_elem)
+        return dofs, length, xi, t_bar, p0, row
 
     def packed_tube(self, tube: TubeSections, i: int) -> None:
         n = len(self.stations)

@@ -79,7 +79,7 @@ class FollowingStaticLU:
         return self.lu.solve(b)
 
     def replan(self, widen: tuple[int, int, int], again: bool) -> None:
-        """A joint left its windows (``widen``: the error's code, member, element): a plan
+        """A joint left its windows (``widen``: the error's code, window row, element): a plan
         around where every joint is now and where the solve found it; ``again``: the last new
         plan failed too (its windows are kept: they only grow)."""
         windows = self.asm.contact_windows(FOLLOW_REACH, widen,

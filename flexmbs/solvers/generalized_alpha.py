@@ -603,7 +603,7 @@ class _CompiledStepper:
         new plan too (its windows are kept as well)."""
         err = self.asm.system.error
         windows = self.asm.contact_windows(
-            FOLLOW_REACH, (int(self.info[self.cc.INFO_CODE]), int(err[1]), int(err[2])),
+            FOLLOW_REACH, (int(self.info[self.cc.INFO_CODE]), int(err[3]), int(err[2])),
             keep=self.windows if again else None)
         assert windows is not None
         self._plan_on(windows, self.lu.factor.border, self.lu.sparse)
