@@ -152,13 +152,17 @@ class Beam:
         ε0 of the normal force ``N = EA (ε − ε0)`` (ε0 < 0: pretension).
     element : str, default "ancf_cable"
         Element type: ``"ancf_cable"`` or ``"ancf_rod14"``.
+    stress_free : Centerline or None
+        The stress-free shape when it is not ``centerline`` (which is then only where the beam
+        starts): the same elements, node for node.
     """
 
     def __init__(self, name: str, centerline: Centerline, stiffness: BeamStiffness, *,
                  options: CableOptions | None, damping: float, reference_axial_strain: float,
-                 element: str = "ancf_cable") -> None:
+                 element: str = "ancf_cable", stress_free: Centerline | None = None) -> None:
         self.name = name
         self.centerline = centerline
+        self.stress_free = stress_free
         self.stiffness = stiffness
         self.options = options
         self.damping = float(damping)
@@ -351,6 +355,37 @@ class LoadSpec:
     function: TimeFunction
 
 
+def _stress_free_shape(shape: Centerline, centerline: Centerline, element: str,
+                       elements: int | None) -> Centerline:
+    """``add_beam``'s ``stress_free``, checked against the starting ``centerline``: a
+    Centerline of the same elements (resampled to ``elements`` when given), lengths and
+    closure."""
+    if not isinstance(shape, Centerline):
+        raise ModelError("add_beam: stress_free must be a flexmbs Centerline (use fm.line, "
+                         "fm.arc, fm.polyline or fm.read_curve)")
+    if element != "ancf_cable":
+        raise ModelError(f"add_beam: stress_free is for element 'ancf_cable'; element {element!r} "
+                         "takes its twist charts from one shape: give its stress-free shape as "
+                         "the centreline")
+    if elements is not None and elements != shape.n_elem:
+        from .geometry.curves import polyline
+
+        shape = polyline(shape.points, shape.tangents, closed=shape.closed, elements=int(elements))
+    if shape.n_elem != centerline.n_elem or shape.closed != centerline.closed:
+        raise ModelError(f"add_beam: stress_free has {shape.n_elem} elements"
+                         f"{' (closed)' if shape.closed else ''}, the centreline "
+                         f"{centerline.n_elem}{' (closed)' if centerline.closed else ''}: give "
+                         "both the same elements (or elements = <n> to resample both)")
+    a, b = np.asarray(shape.lengths, float), np.asarray(centerline.lengths, float)
+    worst = int(np.argmax(np.abs(a - b) / b))
+    if abs(a[worst] - b[worst]) > 1e-6 * b[worst]:
+        raise ModelError(f"add_beam: stress_free element {worst} is {a[worst]:.6g} m long, the "
+                         f"centreline's {b[worst]:.6g} m: the stress-free shape must have the "
+                         "starting shape's element lengths (use reference_axial_strain for a "
+                         "stretch)")
+    return shape
+
+
 class Model:
     """Container of the mechanical system.
 
@@ -423,9 +458,15 @@ class Model:
                  material: Material | None = None, name: str | None = None,
                  options: CableOptions | None = None, damping: float = 0.0,
                  reference_axial_strain: float = 0.0, elements: int | None = None,
-                 element: str = "ancf_cable") -> Beam:
+                 element: str = "ancf_cable", stress_free: Centerline | None = None) -> Beam:
         """Add a beam of ``element``s on ``centerline`` (stress-free reference): the 12-DOF
         ``"ancf_cable"`` (default) or the torsion-capable 14-DOF ``"ancf_rod14"``.
+
+        ``stress_free``: the beam starts on ``centerline`` but its stress-free shape is this
+        one (a pre-curved tube inserted straight, a bent wire threaded through a tube): the
+        same number of elements of the same lengths (resampled with ``elements`` too), its
+        nodes matched in order. The cable only: the rod's twist charts are taken from one
+        shape.
 
         ``section`` is a :class:`CircularSection` (with ``material``) or explicit
         :class:`BeamStiffness`. ``damping`` is stiffness-proportional [s]: axial and bending
@@ -464,9 +505,12 @@ class Model:
                              "or a CircularSection with a Material")
         if element == "ancf_cable":
             options = options or CableOptions()
+        if stress_free is not None:
+            stress_free = _stress_free_shape(stress_free, centerline, element, elements)
         beam = Beam(self._unique(name, "beam"), centerline, stiffness,
                     options=options, damping=damping,
-                    reference_axial_strain=reference_axial_strain, element=element)
+                    reference_axial_strain=reference_axial_strain, element=element,
+                    stress_free=stress_free)
         self.beams.append(beam)
         return beam
 

@@ -78,11 +78,13 @@ class DofMap(Protocol):
 class PackContext(DofMap, Protocol):
     """What a term kind's ``pack`` sees besides the numbering (implemented by the assembler):
     the model's time functions (a kernel reads their values from ``fv``), the size of the
-    unknowns and the coordinates the model starts from."""
+    unknowns, the coordinates the model starts from and those of the elements' stress-free
+    shapes (``q_free``: ``q_ref`` but for beams given a ``stress_free`` shape)."""
 
     functions: FunctionTable
     n_total: int
     q_ref: np.ndarray
+    q_free: np.ndarray
 
     def matrix_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """The iteration matrix's CSC ``(indptr, indices)`` (int64; fixed once packed)."""

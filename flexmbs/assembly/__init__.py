@@ -73,6 +73,8 @@ class Assembly:
         self.numbering = numbering = Numbering(model)
         self.n_coords = numbering.n_coords
         self.q_ref, self.v_init = numbering.q_ref, numbering.v_init
+        self.q_free = numbering.q_free
+        self._rest_fraction = 1.0      # relax_towards_stress_free: as packed
         self.beam_slices = numbering.beam_slices
         numbering.bind_interactions(self)
         self.length_scale = length_scale(model)
@@ -116,6 +118,26 @@ class Assembly:
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
                       matrix=(0.0, 0.0, 1.0), with_damping=False)
+
+    def relax_towards_stress_free(self, fraction: float) -> None:
+        """The elements of the beams given a ``stress_free`` shape rest ``fraction`` of the way
+        from their starting shapes to it (:meth:`~flexmbs.assembly.numbering.Numbering.
+        rest_coordinates`; 1, as packed: the stress-free shapes): statics ramps it with the
+        load factor, so that a pre-curved tube inserted straight is a path, not a jump. The
+        element types' own rest state, recomputed and written into the packed parts."""
+        if not self.numbering.prestressed or fraction == self._rest_fraction:
+            return
+        q = self.numbering.rest_coordinates(fraction)
+        for spec, group in zip(self.numbering.groups, self.groups, strict=True):
+            if not any(beam.stress_free is not None for beam in spec.beams):
+                continue
+            size = spec.element_type.layout.element_size
+            fresh = spec.element_type.pack(spec.dofs, spec.props, spec.options, q,
+                                           np.zeros((spec.dofs.shape[0], size * size), np.int64))
+            for old, new in zip(group.part.rest, fresh.rest, strict=True):
+                if isinstance(old, np.ndarray):
+                    old[...] = new
+        self._rest_fraction = float(fraction)
 
     # ================================================================== numbering (DofMap)
     def node_dofs(self, node: Node) -> np.ndarray:

@@ -4,6 +4,7 @@ and velocity they start from; the groups of beams that share one kernel call."""
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -59,11 +60,16 @@ class Numbering:
         self._coord_labels = labels
         q0 = np.zeros(off)
         v0 = np.zeros(off)
+        free = []                            # beams that start away from their stress-free shape
         for beam in model.beams:
             o = self.beam_offset[id(beam)]
             nodal = beam.element_type.reference_nodal_coordinates(beam.centerline.points,
                                                                   beam.centerline.tangents)
             q0[o:o + nodal.size] = nodal.ravel()
+            if beam.stress_free is not None:
+                shape = beam.stress_free
+                free.append((o, beam.element_type.reference_nodal_coordinates(shape.points,
+                                                                              shape.tangents)))
         for body in model.bodies:
             o = self.body_offset[id(body)]
             p = body.pose.quaternion
@@ -73,8 +79,46 @@ class Numbering:
             v0[o + 3:o + 7] = rb.pdot_from_omega_global(p, body.angular_velocity)
         self.q_ref = q0
         self.v_init = v0
+        # the elements' stress-free coordinates: q_ref but where a beam's stress_free says
+        self.q_free = q0.copy()
+        for o, nodal in free:
+            self.q_free[o:o + nodal.size] = nodal.ravel()
+        self.prestressed = [beam for beam in model.beams if beam.stress_free is not None]
         self._interactions = list(model.interactions)
         self.groups, self.beam_slices = self._group_beams(model)
+
+    def rest_coordinates(self, fraction: float) -> np.ndarray:
+        """The elements' stress-free coordinates part of the way from the starting shapes
+        (``fraction`` 0: ``q_ref``) to the beams' ``stress_free`` shapes (1: ``q_free``): the
+        nodes moved on straight lines, their tangents turned on great circles (a path for
+        statics to follow, :meth:`~flexmbs.assembly.Assembly.relax_towards_stress_free`)."""
+        q = self.q_free.copy()
+        f = float(fraction)
+        for beam in self.prestressed:
+            a, b = beam.centerline, beam.stress_free
+            assert b is not None
+            t0 = np.asarray(a.tangents, float)
+            t1 = np.asarray(b.tangents, float)
+            t0 = t0 / np.linalg.norm(t0, axis=1)[:, None]
+            t1 = t1 / np.linalg.norm(t1, axis=1)[:, None]
+            theta = np.arccos(np.clip(np.einsum("ij,ij->i", t0, t1), -1.0, 1.0))
+            worst = int(np.argmax(theta))
+            if f < 1.0 and theta[worst] > math.radians(179.0):
+                raise ModelError(
+                    f"beam '{beam.name}': node {worst}'s stress-free tangent turns "
+                    f"{math.degrees(theta[worst]):.1f} deg from its starting one, too far for "
+                    "the static path from the starting shape; start the beam nearer its "
+                    "stress_free shape")
+            sin = np.sin(theta)
+            small = sin < 1e-9
+            wa = np.where(small, 1.0 - f, np.sin((1.0 - f) * theta) / np.where(small, 1.0, sin))
+            wb = np.where(small, f, np.sin(f * theta) / np.where(small, 1.0, sin))
+            tangents = wa[:, None] * t0 + wb[:, None] * t1
+            points = (1.0 - f) * np.asarray(a.points, float) + f * np.asarray(b.points, float)
+            nodal = beam.element_type.reference_nodal_coordinates(points, tangents)
+            o = self.beam_offset[id(beam)]
+            q[o:o + nodal.size] = nodal.ravel()
+        return q
 
     def bind_interactions(self, dofs: DofMap) -> None:
         """Tell every interaction its numbering (:meth:`Interaction.bind`, through the

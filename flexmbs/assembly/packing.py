@@ -161,7 +161,7 @@ def _pack_groups(specs: list[GroupSpec], ctx: PackContext) -> list[BeamGroup]:
     for spec in specs:
         pos = np.array([ctx.positions(d, d).reshape(-1) for d in spec.dofs], np.int64)
         out.append(BeamGroup(spec.element_type, spec.options, spec.beams,
-                             spec.element_type.pack(spec.dofs, spec.props, spec.options, ctx.q_ref, pos)))
+                             spec.element_type.pack(spec.dofs, spec.props, spec.options, ctx.q_free, pos)))
     return out
 
 

@@ -199,6 +199,7 @@ class _Path:
     def __exit__(self, *exc: object) -> None:
         if isinstance(self.factor, FollowingStaticLU):
             self.factor.release()
+        self.asm.relax_towards_stress_free(1.0)
 
     def follow(self, t0: float, t1: float, load0: float, load1: float, first: float) -> int:
         """From the equilibrium at ``(t0, load0)`` to ``(t1, load1)`` in adaptive increments
@@ -222,6 +223,8 @@ class _Path:
             saved = prob.save()
             prob.t = t0 + trial * (t1 - t0) if trial < 1.0 else t1
             prob.load = load0 + trial * (load1 - load0)
+            # beams that start away from their stress-free shape: the prestress with the loads
+            asm.relax_towards_stress_free(prob.load)
             try:
                 st = newton.solve(prob, full=True)
             except OffPlanError as exc:

@@ -8,6 +8,7 @@ builder reads the element's own keys, the shared ones (:data:`BEAM_KEYS`) throug
 from __future__ import annotations
 
 import math
+from contextlib import nullcontext
 from dataclasses import replace
 
 import numpy as np
@@ -30,7 +31,7 @@ _MATERIAL_KEYS = ("youngs_modulus", "density", "poisson_ratio", "shear_modulus")
 _EXPLICIT_KEYS = ("axial_stiffness", "bending_stiffness", "mass_per_length", "torsional_stiffness")
 #: keys of every beam, whatever its element
 BEAM_KEYS = ("name", "geometry", "elements", "element", "radius", *_MATERIAL_KEYS, *_EXPLICIT_KEYS,
-             "damping", "reference_axial_strain")
+             "damping", "reference_axial_strain", "stress_free")
 
 
 def build_beam(t: Table, ctx: BuildContext) -> Beam:
@@ -58,6 +59,10 @@ def _ancf_rod14(t: Table, ctx: BuildContext) -> Beam:
     from ``shear_modulus``/``poisson_ratio`` (with radius + youngs_modulus) or an explicit
     ``torsional_stiffness``; ``twist_inertia`` ρJ_p [kg m] optional with an explicit section."""
     t.allow((*BEAM_KEYS, "twist_inertia"))
+    if t.has("stress_free"):
+        raise ScenarioError(f"{t.key('stress_free')}: element 'ancf_rod14' takes its twist charts "
+                            "from one shape: give its stress-free shape as the geometry (or use "
+                            "element = \"ancf_cable\")")
     centerline, stiffness = _geometry_and_section(t, ctx)
     if stiffness.torsional_stiffness is None:
         raise ScenarioError(f"{t.key('torsional_stiffness')}: missing: element 'ancf_rod14' "
@@ -78,10 +83,17 @@ def _geometry_and_section(t: Table, ctx: BuildContext) -> tuple[Centerline, Beam
 
 def _add(t: Table, ctx: BuildContext, centerline: Centerline, stiffness: BeamStiffness, *,
          element: str, options: CableOptions | None) -> Beam:
-    return ctx.model.add_beam(centerline, section=stiffness, name=t.raw["name"], options=options,
-                              damping=t.number("damping", 0.0, ge=0, unit="s"),
-                              reference_axial_strain=t.number("reference_axial_strain", 0.0,
-                                                              gt=-1, lt=1, unit="1"), element=element)
+    """The beam into the model; ``stress_free = { line | arc | polyline | mesh }`` (the same
+    grammar as ``geometry``): the shape it is stress-free in when it starts on another."""
+    free = None
+    if t.has("stress_free"):
+        free = read_geometry(ctx, t.table("stress_free"), t.integer("elements", None, ge=1), t)
+    damping = t.number("damping", 0.0, ge=0, unit="s")
+    eps0 = t.number("reference_axial_strain", 0.0, gt=-1, lt=1, unit="1")
+    with at(t.key("stress_free")) if free is not None else nullcontext():
+        return ctx.model.add_beam(centerline, section=stiffness, name=t.raw["name"],
+                                  options=options, damping=damping, reference_axial_strain=eps0,
+                                  element=element, stress_free=free)
 
 
 def read_geometry(ctx: BuildContext, g: Table, elements: int | None, beam: Table) -> Centerline:
