@@ -126,6 +126,34 @@ RETURN_SPRING = 2e4       # the output's spring to the ground [N/m]
 SPRING_ARM = 1.0          # its ground point: this far back along the entry line [m]
 
 
+class Stroke(fm.TimeFunction):
+    """``amplitude sin(2π frequency t)`` started from rest: times 3x² − 2x³ (x = t / τ) over
+    the first quarter period τ, where it reaches ``amplitude`` (no velocity jump at t = 0,
+    which would strike the wire's damping)."""
+
+    def __init__(self, *, amplitude: float, frequency: float) -> None:
+        self.amplitude, self.frequency = float(amplitude), float(frequency)
+
+    def _parts(self, t: float) -> tuple[float, float, float, float, float, float]:
+        w, tau = 2.0 * math.pi * self.frequency, 0.25 / self.frequency
+        x = min(max(t / tau, 0.0), 1.0)
+        h, h1, h2 = (3 * x * x - 2 * x ** 3, 6 * x * (1 - x) / tau,
+                     6 * (1 - 2 * x) / tau ** 2) if x < 1 else (1.0, 0.0, 0.0)
+        return math.sin(w * t), math.cos(w * t), w, h, h1, h2
+
+    def __call__(self, t: float) -> float:
+        s, _, _, h, _, _ = self._parts(t)
+        return self.amplitude * s * h
+
+    def d1(self, t: float) -> float:
+        s, c, w, h, h1, _ = self._parts(t)
+        return self.amplitude * (w * c * h + s * h1)
+
+    def d2(self, t: float) -> float:
+        s, c, w, h, h1, h2 = self._parts(t)
+        return self.amplitude * (-w * w * s * h + 2 * w * c * h1 + s * h2)
+
+
 def build_backlash(wrap: float, *, bore: float = BORE, mu: float = 0.0,
                    amplitude: float = 0.7e-3, frequency: float = 5.0,
                    spring: float = RETURN_SPRING, spring_damping: float = 3.0,
@@ -134,10 +162,11 @@ def build_backlash(wrap: float, *, bore: float = BORE, mu: float = 0.0,
     straight for :data:`HOUSING_STRAIGHT`, round the bend and straight again (a steel beam
     clamped at every node, ``support0``, ...; the wire through it by a
     :class:`~flexmbs.TubeJoint` of radius ``bore``; ``mu`` = 0: frictionless). The input, the
-    exit end, moves along the exit line by ``amplitude sin(2π frequency t)`` (prescribed
-    ``"pull"``, positive out of the housing); the output, the entry end, is held back along the
-    entry line by a spring of ``spring`` [N/m] (and ``spring_damping`` [N s/m], near critical
-    for the wire's mass) to a ground point :data:`SPRING_ARM` behind it, unstressed as built.
+    exit end, moves along the exit line by ``amplitude sin(2π frequency t)`` started from
+    rest (:class:`Stroke`; prescribed ``"pull"``, positive out of the housing); the output,
+    the entry end, is held back along the entry line by a spring of ``spring`` [N/m] (and
+    ``spring_damping`` [N s/m], near critical for the wire's mass) to a ground point
+    :data:`SPRING_ARM` behind it, unstressed as built.
     Pulled, the wire is in tension and lies against the bend's inner wall (path radius ρ − c,
     c = ``bore`` − r); pushed, in compression against the outer one (ρ + c). Neither end is
     held across its line, so the wire takes the wall's offset path; the housing's straights
@@ -164,8 +193,8 @@ def build_backlash(wrap: float, *, bore: float = BORE, mu: float = 0.0,
     if not np.isclose(abs(t_out[axis]), 1.0):
         raise ValueError("the example pulls along a coordinate axis: wrap = 90 or 180 degrees")
     model.prescribe(wire.last_node, [axis],
-                    fm.Sine(amplitude=float(np.sign(t_out[axis])) * amplitude,
-                            frequency=frequency), name="pull")
+                    Stroke(amplitude=float(np.sign(t_out[axis])) * amplitude,
+                           frequency=frequency), name="pull")
     return model, wire
 
 
