@@ -85,9 +85,18 @@ def _carried(x, t_bar, h, Dh, D2h, second):  # noqa: ANN001, ANN202, PLR0915
     """The smallest rotation ``h`` (4) from ``t̄`` to ``x/|x|``, its derivative ``Dh`` (4, 3)
     and, with ``second``, its second derivative ``D2h`` (4, 3, 3) with respect to ``x``."""
     ell = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+    a = ell + t_bar[0] * x[0] + t_bar[1] * x[1] + t_bar[2] * x[2]
+    if not ell > 0.0 or not a > 1e-12 * ell:
+        # no tangent (a folded element), or one turned back onto −t̄: no smallest rotation. An
+        # iterate, never a state (the bases are renewed long before): NaN, which the Newton
+        # loops reject (the step is cut), instead of a division by zero in compiled code
+        h[:] = math.nan
+        Dh[:] = math.nan
+        if second:
+            D2h[:] = math.nan
+        return
     u0, u1, u2 = x[0] / ell, x[1] / ell, x[2] / ell
     u = (u0, u1, u2)
-    a = ell + t_bar[0] * x[0] + t_bar[1] * x[1] + t_bar[2] * x[2]
     w = (t_bar[1] * x[2] - t_bar[2] * x[1], t_bar[2] * x[0] - t_bar[0] * x[2],
          t_bar[0] * x[1] - t_bar[1] * x[0])
     f = 1.0 / math.sqrt(2.0 * ell * a)

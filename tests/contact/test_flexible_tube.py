@@ -51,6 +51,21 @@ def _pose(qe: np.ndarray, xi: float, tb: np.ndarray, p0: np.ndarray, ve: np.ndar
     return pose, vel, J
 
 
+@pytest.mark.parametrize("slope", [0.0, -1.0], ids=["folded", "turned_back"])
+def test_a_section_without_a_smallest_rotation_is_nan_not_a_crash(slope: float) -> None:
+    """An iterate whose tube element has no tangent at the section (folded) or one turned back
+    onto −t̄ has no section frame: NaN (the Newton loops reject the iterate and cut the step),
+    not a division by zero inside compiled code (seen: a catheter and its wire fed at
+    different speeds from rest, the first iterate folding the catheter's first element)."""
+    qe = np.zeros(CENTERLINE_SIZE)
+    qe[6] = 0.1 * max(slope, 0.0) + 0.1 * slope      # x of the second node
+    qe[3], qe[9] = slope, slope                       # both slopes along ±x (0: a point)
+    pose, _, J = _pose(qe, 0.5, np.array([1.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0, 0.0]),
+                       np.zeros(CENTERLINE_SIZE))
+    assert np.isnan(pose[3:]).all() and np.isnan(J[3:]).all()
+    assert np.isfinite(pose[:3]).all()                # where it is stays defined
+
+
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_section_pose_and_its_derivatives(seed: int) -> None:
     """The section's frame has its normal along the tube's tangent and a unit quaternion; J, the
