@@ -20,9 +20,9 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from exudyn_models import CANTILEVER, exudyn_available, run_exudyn_cantilever  # noqa: E402
+from exudyn_models import CANTILEVER, exudyn_available, run_exudyn_cantilever
 
-import flexmbs as fm  # noqa: E402
+import flexmbs as fm
 
 
 def build_flexmbs(n_elem: int) -> tuple[fm.Model, fm.Beam]:

@@ -22,10 +22,10 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from exudyn_models import _quiet_settings, exudyn_available, solve_dynamic_timed  # noqa: E402
+from exudyn_models import _quiet_settings, exudyn_available, solve_dynamic_timed
 
-import flexmbs as fm  # noqa: E402
-import flexmbs.solvers.generalized_alpha as ga  # noqa: E402
+import flexmbs as fm
+import flexmbs.solvers.generalized_alpha as ga
 
 LINK = 0.1
 MASS = 0.1

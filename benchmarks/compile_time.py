@@ -85,7 +85,7 @@ def _child(kind: str, out_json: str, out_dir: str) -> None:
     def timed(cls: type, meth: str, part: str) -> None:
         orig = getattr(cls, meth)
 
-        def wrapper(self, *a, **k):  # noqa: ANN001, ANN002, ANN003, ANN202
+        def wrapper(self, *a, **k):
             t = time.perf_counter()
             try:
                 return orig(self, *a, **k)
@@ -96,7 +96,7 @@ def _child(kind: str, out_json: str, out_dir: str) -> None:
     timed(codegen.CPUCodeLibrary, "add_llvm_module", "functions")
     fn_sizes: list[tuple[str, str, int, float]] = []   # (library, function, instructions, s)
     if os.environ.get("COMPILE_TIME_IR_SIZES") == "1":
-        def optimize_functions(self, ll_module):  # noqa: ANN001, ANN202
+        def optimize_functions(self, ll_module):
             ll_module.data_layout = self._codegen._data_layout
             for func in ll_module.functions:
                 size = sum(len(list(b.instructions)) for b in func.blocks)

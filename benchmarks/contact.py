@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from unit_loops import best_of, loop_factorize, loop_solve  # noqa: E402
 
 
-def _best(fn, args, n: int = 300) -> float:  # noqa: ANN001
+def _best(fn, args, n: int = 300) -> float:
     """Best of 7 repeats, microseconds per call."""
     return best_of(fn, args, n)
 
@@ -46,19 +46,19 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     @njit(refcount=False)
-    def loop_residual(m, q, v, qdd, lam, fv, mode, r, n):  # noqa: ANN001, ANN202
+    def loop_residual(m, q, v, qdd, lam, fv, mode, r, n):
         for _ in range(n):
             cm.residual(m, q, v, qdd, lam, fv, mode, r)
 
     @njit(refcount=False)
-    def loop_clearance(m, q, v, r, n):  # noqa: ANN001, ANN202
+    def loop_clearance(m, q, v, r, n):
         cl = m.clearance
         for _ in range(n):     # the clearance residual of joint 0, as the driver calls it
             _joint_forces(cl, 0, q, v, FLAG[0], r, cl.no_K, cl.no_C, cl.no_elem, cl.no_elem,
                           m.error)
 
     @njit(refcount=False)
-    def loop_jacobian(m, q, v, qdd, lam, fv, mode, data, n):  # noqa: ANN001, ANN202
+    def loop_jacobian(m, q, v, qdd, lam, fv, mode, data, n):
         for _ in range(n):
             cm.jacobian(m, q, v, qdd, lam, fv, mode, 1.0, 0.05, 1e-8, data)
 

@@ -48,7 +48,7 @@ def exudyn_available() -> bool:
     if _exu is not None:
         return True
     try:
-        import exudyn  # noqa: F401
+        import exudyn
     except Exception:  # pragma: no cover - depends on environment
         return False
     _exu = exudyn

@@ -30,7 +30,7 @@ from flexmbs.kernel import OP_JACOBIAN  # noqa: E402
 from flexmbs.terms import dynamic_mode  # noqa: E402
 
 
-def _kind(plan) -> str:  # noqa: ANN001
+def _kind(plan) -> str:
     if plan.sparse:
         return "sparse (KLU)"
     return f"band {plan.bandwidth}, border {plan.border.size}" + (

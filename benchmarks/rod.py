@@ -23,23 +23,23 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from exudyn_models import CANTILEVER  # noqa: E402
+from exudyn_models import CANTILEVER
 
-import flexmbs as fm  # noqa: E402
-from flexmbs._jit import njit  # noqa: E402
-from flexmbs.assembly import Assembly  # noqa: E402
-from flexmbs.elements.group import element_jacobian, element_residual  # noqa: E402
-from flexmbs.terms import dynamic_mode  # noqa: E402
+import flexmbs as fm
+from flexmbs._jit import njit
+from flexmbs.assembly import Assembly
+from flexmbs.elements.group import element_jacobian, element_residual
+from flexmbs.terms import dynamic_mode
 
 
 @njit(refcount=False)
-def _residuals(part, q, v, qdd, mode, r, repeats):  # noqa: ANN001, ANN202
+def _residuals(part, q, v, qdd, mode, r, repeats):
     for _ in range(repeats):
         element_residual(part, q, v, qdd, mode, r)
 
 
 @njit(refcount=False)
-def _jacobians(part, q, v, qdd, mode, data, repeats):  # noqa: ANN001, ANN202
+def _jacobians(part, q, v, qdd, mode, data, repeats):
     for _ in range(repeats):
         element_jacobian(part, q, v, qdd, mode, 1.0, 0.5, 0.25, data)
 
@@ -72,7 +72,7 @@ def kernel_costs(n: int = 64, repeats: int = 200) -> dict[str, float]:
     return out
 
 
-def _timed(fn, *args) -> float:  # noqa: ANN001
+def _timed(fn, *args) -> float:
     t = time.perf_counter()
     fn(*args)
     return time.perf_counter() - t

@@ -34,9 +34,9 @@ from scipy.special import ellipk
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from exudyn_models import _quiet_settings, alpha_settings, exudyn_available  # noqa: E402
+from exudyn_models import _quiet_settings, alpha_settings, exudyn_available
 
-import flexmbs as fm  # noqa: E402
+import flexmbs as fm
 
 CASE = dict(
     radius=1.0,                 # arc radius rho_0 [m]

@@ -42,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     from flexmbs.terms import dynamic_mode
 
     @njit(refcount=False)
-    def loop_groups(parts, q, v, qdd, mode, data, n):  # noqa: ANN001, ANN202
+    def loop_groups(parts, q, v, qdd, mode, data, n):
         for _ in range(n):
             groups_jacobian(parts, q, v, qdd, mode, 1.0, 0.05, 1e-8, data)
 

@@ -41,9 +41,9 @@ import numpy as np
 if __package__ in (None, ""):      # run as a script: the checkout's flexmbs
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import flexmbs as fm  # noqa: E402
-from flexmbs.assembly import Assembly  # noqa: E402
-from flexmbs.solvers.generalized_alpha import IntegrationStats, State  # noqa: E402
+import flexmbs as fm
+from flexmbs.assembly import Assembly
+from flexmbs.solvers.generalized_alpha import IntegrationStats, State
 
 LENGTH = 0.4                   # backbone length [m]
 ROD_R = 0.7e-3

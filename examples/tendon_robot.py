@@ -128,7 +128,7 @@ def build(case: str = "mixed", disks: int = 20, mu: float = 0.0,
     return model, {"backbone": backbone, "disks": bodies, "tendons": tendons}
 
 
-def _vec(v) -> str:  # noqa: ANN001
+def _vec(v) -> str:
     return "[" + ", ".join(repr(float(x) if abs(x) > 1e-15 else 0.0) for x in v) + "]"
 
 
@@ -226,7 +226,7 @@ def probes(parts: dict) -> list:
     return out
 
 
-def report(asm, q: np.ndarray, parts: dict) -> None:  # noqa: ANN001
+def report(asm, q: np.ndarray, parts: dict) -> None:
     """Print the tip's position and every tendon's span tensions and pulled length at ``q``."""
     tip = q[asm.node_dofs(parts["backbone"].last_node)[:3]]
     print(f"tip at ({1e3 * tip[0]:.2f}, {1e3 * tip[1]:.2f}, {1e3 * tip[2]:.2f}) mm")

@@ -116,7 +116,7 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 
-def read_curve(path, **kwargs):  # noqa: ANN001, ANN201 - thin lazy wrapper (meshio import cost)
+def read_curve(path, **kwargs):
     """Read a beam centreline from a mesh file (gmsh .msh, .vtu, ...); see geometry.mesh_input.
 
     Parameters

@@ -96,7 +96,7 @@ for _kind in INTERACTION_KINDS:
 
 
 @njit(inline="always")
-def stops_run(code):  # noqa: ANN001, ANN201
+def stops_run(code):
     """Whether a post-step error ``code`` stops the run with the step standing (:data:`STOPS_RUN`)."""
     return 0 <= code < STOPS_RUN.size and STOPS_RUN[code]
 
@@ -175,7 +175,7 @@ COMPILED_TOGETHER = (("joints", "springs"),)
 
 
 @njit(inline="always")
-def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
+def residual(sy, q, v, qdd, lam, fv, mode, r):
     """``r = [r_q; r_lam]``; returns ``(scale, error code)``: the largest single force entering
     ``r_q`` (the force scale of the convergence test) and 0 or an ``ERR_*`` code."""
     n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, rope, springs, \
@@ -197,7 +197,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):
     """Iteration matrix into ``data``; returns ``(largest diagonal beam or spring stiffness,
     error code)``."""
     _n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, rope, springs, \
@@ -222,7 +222,7 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):  # noqa: ANN001, A
 
 
 @njit(inline="always")
-def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
+def post_step(sy, q, v, qdd, acc):
     """Interaction state after a converged step, then the nodal frames re-based where needed
     (:func:`rebase`); must follow a :func:`residual` at this state (whose contact detection it
     reuses). Returns 0 or an ``ERR_*`` code (then nothing is changed)."""
@@ -242,7 +242,7 @@ def post_step(sy, q, v, qdd, acc):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def hold_contacts(sy, action):  # noqa: ANN001, ANN201
+def hold_contacts(sy, action):
     """The clearance joints' held active set (:func:`~flexmbs.contact.clearance_term.clearance_hold`:
     ``action`` one of its ``HOLD_*``); returns its count for ``HOLD_READ``, else 0."""
     _n, _m, _beams, _bodies, _loads, _linear, _norms, _joints, _sliding, clearance, _rope, \
@@ -251,7 +251,7 @@ def hold_contacts(sy, action):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc):  # noqa: ANN001, ANN202
+def _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc):
     """Nodes whose tangent turned far from its base get a new chart (docs/theory.md §I.2.4): the
     element groups change their coordinates (``q, v, qdd`` and the integrator's ``acc``; an
     empty array is left out) and record the new bases, which the joints and node moments
@@ -263,7 +263,7 @@ def _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc):  # noqa: AN
 
 
 @njit(inline="always")
-def rebase_static(sy, q):  # noqa: ANN001, ANN201
+def rebase_static(sy, q):
     """After a converged static increment (following a residual at ``q``): the elements'
     checks, the joints' state as after a step (:func:`post_step`: slide elements, contact
     tracking and friction anchors, ``q`` the next increment's start), then the re-basing of
@@ -284,7 +284,7 @@ def rebase_static(sy, q):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def set_bases(sy, log, stop, elements, q):  # noqa: ANN001, ANN201
+def set_bases(sy, log, stop, elements, q):
     """Every holder of a node listed in ``log[:stop]`` (records ``[twist coordinate, t̄, D̄]``)
     takes its base: joints and node moments, and with ``elements`` the element groups too (a
     resumed run; after a re-basing they have them already). ``q``: the re-based start of the
@@ -295,7 +295,7 @@ def set_bases(sy, log, stop, elements, q):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _set_bases(beams, joints, loads, clearance, log, stop, elements, q):  # noqa: ANN001, ANN202
+def _set_bases(beams, joints, loads, clearance, log, stop, elements, q):
     if elements:
         groups_set_bases(beams, log, stop)
     joints_set_bases(joints, log, stop)
@@ -304,7 +304,7 @@ def _set_bases(beams, joints, loads, clearance, log, stop, elements, q):  # noqa
 
 
 @njit
-def constraint_velocity(indptr, indices, n, data, v, rows, scale, r):  # noqa: ANN001, ANN201
+def constraint_velocity(indptr, indices, n, data, v, rows, scale, r):
     """``r[n + i] = scale rows[i] (Φ_q v)_i`` with ``Φ_q`` read from the constraint rows of the
     iteration matrix (CSC ``indptr``, ``indices``, ``data`` after :func:`jacobian`): the
     velocity-level constraints from what every owner already wrote, no second statement of

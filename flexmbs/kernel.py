@@ -62,7 +62,7 @@ OP_STEPS, OP_RESIDUAL, OP_JACOBIAN, OP_POST_STEP, OP_REBASE, OP_SET_BASES, OP_HO
 
 
 @njit(refcount=False, nogil=True)
-def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):  # noqa: ANN001, ANN201
+def kernel(op, system, q, v, qdd, lam, fv, mode, coef, r, data, run):
     """See the module docstring."""
     if op == OP_RESIDUAL:
         return residual(system, q, v, qdd, lam, fv[0], mode, r)
@@ -87,7 +87,7 @@ def kernels_cached() -> bool:
     :func:`prepare`)."""
     try:
         return bool(kernel._cache._cache_file._load_index())
-    except Exception:   # no numba, caching disabled, or numba internals changed  # noqa: BLE001
+    except Exception:   # no numba, caching disabled, or numba internals changed
         return True
 
 
@@ -150,7 +150,7 @@ def prepare(args: tuple[Any, ...], complete: Any = None) -> Any:
     candidates = {"auto": (own, complete), "own": (own,), "complete": (complete,)}[choice]
     try:
         sigs = [_signature(args, system) for system in candidates]
-    except Exception:   # no numba (FLEXMBS_DISABLE_JIT)  # noqa: BLE001
+    except Exception:   # no numba (FLEXMBS_DISABLE_JIT)
         return candidates[0]
     for system, sig in zip(candidates, sigs, strict=True):
         if _is_ready(sig):
@@ -160,7 +160,7 @@ def prepare(args: tuple[Any, ...], complete: Any = None) -> Any:
     _READY.add(sig)
     try:
         folder = Path(kernel._cache._cache_path)
-    except Exception:   # caching disabled or numba internals changed  # noqa: BLE001
+    except Exception:   # caching disabled or numba internals changed
         return system
     kind = model_kind(system, complete=system is complete)
     times = _read_times(folder)
@@ -187,7 +187,7 @@ def _is_ready(sig: tuple[Any, ...]) -> bool:
     try:
         cache = kernel._cache
         return cache._index_key(sig, kernel.targetctx.codegen()) in cache._cache_file._load_index()
-    except Exception:   # caching disabled or numba internals changed  # noqa: BLE001
+    except Exception:   # caching disabled or numba internals changed
         return False
 
 

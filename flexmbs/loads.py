@@ -281,7 +281,7 @@ def moments_pattern(moments: list) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 @njit
-def node_moment(g, T, base, twist, Q, dQ):  # noqa: ANN001, ANN201
+def node_moment(g, T, base, twist, Q, dQ):
     """Generalized force of a moment T on a beam node with slope g, and its derivative ∂Q/∂g
     (docs/theory.md §I.1.2, §I.2.3). With t = g/|g|, c = t̄·t:
 
@@ -329,7 +329,7 @@ def node_moment(g, T, base, twist, Q, dQ):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _moment_of(ld, k, q, g, Q, dQ):  # noqa: ANN001, ANN202
+def _moment_of(ld, k, q, g, Q, dQ):
     """``Q``, ``dQ`` of node moment k at ``q`` (``g``: scratch for the node's slope)."""
     for c in range(3):
         g[c] = q[ld.m_slope[k, c]]
@@ -337,7 +337,7 @@ def _moment_of(ld, k, q, g, Q, dQ):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def loads_set_bases(ld, log, stop):  # noqa: ANN001, ANN201
+def loads_set_bases(ld, log, stop):
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, docs/theory.md §I.2.4):
     moments on them read the new base tangent."""
     for k in range(ld.m_twist.size):
@@ -348,7 +348,7 @@ def loads_set_bases(ld, log, stop):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
+def loads_residual(ld, q, fv, mode, r):
     """Initialises ``r_q = −λ Q_ext(q, t)`` (λ: load factor); returns max |r_q|."""
     lf = mode[LOAD_FACTOR]
     n = ld.f_const.size
@@ -375,7 +375,7 @@ def loads_residual(ld, q, fv, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def loads_jacobian(ld, q, fv, mode, cK, data):  # noqa: ANN001, ANN201
+def loads_jacobian(ld, q, fv, mode, cK, data):
     """``−cK λ ∂Q_ext/∂q`` of the node moments into ``data``."""
     if ld.m_fn.size == 0:
         return

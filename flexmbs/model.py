@@ -645,7 +645,7 @@ class Model:
         return self._add_constraint(ConstraintSpec(kind, self._unique(name, kind), a, b, pa, pb, fa, fb,
                                                    translation=tr, rotation=ro))
 
-    def add_driver(self, joint: ConstraintSpec, function=None, *,  # noqa: ANN001 - TimeFunction-like
+    def add_driver(self, joint: ConstraintSpec, function=None, *,
                    motion: Literal["rotation", "slide"] | None = None,
                    name: str | None = None) -> ConstraintSpec:
         """A motor on ``joint``: its relative rotation about the joint axis (``motion =
@@ -685,7 +685,7 @@ class Model:
             joint, kind="driver", name=self._unique(name, "driver"), motion=motion,
             function=as_time_function(function if function is not None else 0.0)))
 
-    def add_joint(self, joint):  # noqa: ANN001, ANN201 - any Interaction
+    def add_joint(self, joint):
         """Attach a joint or contact interaction (e.g. :class:`flexmbs.SlidingJoint`)."""
         from .constraints.interaction import Interaction
 

@@ -203,7 +203,7 @@ def pack_ropes(ropes: list[Rope], ctx: PackContext | DofMap) -> RopePart:
 
 
 @njit
-def _rope_force(rp, i, q, v, damping):  # noqa: ANN001, ANN202
+def _rope_force(rp, i, q, v, damping):
     """g into rp.g; returns ``(l, dl/dt, f, ∂f/∂δ, ∂f/∂δ̇)`` of rope i (the rate 0 without
     ``damping``: statics)."""
     length = length_of(rp, i, q)
@@ -217,7 +217,7 @@ def _rope_force(rp, i, q, v, damping):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def ropes_residual(rp, q, v, mode, r):  # noqa: ANN001, ANN201
+def ropes_residual(rp, q, v, mode, r):
     """``r_q += f g`` for every rope; returns the largest tension (the force scale of the
     convergence test)."""
     if rp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -235,7 +235,7 @@ def ropes_residual(rp, q, v, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def ropes_jacobian(rp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
+def ropes_jacobian(rp, q, v, mode, cC, cK, data):
     """``cK K + cC C`` of every taut rope into ``data`` (module docstring); returns the
     largest ``∂f/∂δ``."""
     if rp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -252,7 +252,7 @@ def ropes_jacobian(rp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def ropes_post_step(rp, q, v):  # noqa: ANN001, ANN201
+def ropes_post_step(rp, q, v):
     """After a converged step: a rope that became taut keeps its stretch rate as its approach
     velocity, a slack one forgets it (``v`` empty: statics, no rate)."""
     if rp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)

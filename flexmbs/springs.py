@@ -234,7 +234,7 @@ def springs_pattern(springs: Sequence[SpringDamper], dofs: DofMap) -> list[tuple
 
 
 @njit
-def _elastic(sp, i, e):  # noqa: ANN001, ANN202
+def _elastic(sp, i, e):
     """(force, stiffness) of the elastic law at elongation e."""
     m = sp.tab_n[i]
     if m == 0:
@@ -248,7 +248,7 @@ def _elastic(sp, i, e):  # noqa: ANN001, ANN202
 
 
 @njit
-def _kinematics(sp, i, q):  # noqa: ANN001, ANN202
+def _kinematics(sp, i, q):
     """Ends into sp.x, D = dd/dq into sp.D; returns (l, n)."""
     D = sp.D
     D[:, :] = 0.0
@@ -287,7 +287,7 @@ def _kinematics(sp, i, q):  # noqa: ANN001, ANN202
 
 
 @njit
-def _angle(sp, i, q):  # noqa: ANN001, ANN202
+def _angle(sp, i, q):
     """θ of a rotational spring (module docstring) with g into sp.g; c, s and their gradients
     in sp.cs, sp.dcs."""
     w = sp.g.size
@@ -305,7 +305,7 @@ def _angle(sp, i, q):  # noqa: ANN001, ANN202
 
 
 @njit
-def _measure(sp, i, q):  # noqa: ANN001, ANN202
+def _measure(sp, i, q):
     """The length or angle of spring i, with g = dm/dq into sp.g."""
     if sp.measure[i] == ANGLE:
         return _angle(sp, i, q)
@@ -313,7 +313,7 @@ def _measure(sp, i, q):  # noqa: ANN001, ANN202
 
 
 @njit
-def length_of(sp, i, q):  # noqa: ANN001, ANN201
+def length_of(sp, i, q):
     """The length ``l`` between the ends of two-point element i of a part with the ends'
     fields of :class:`SpringPart` (``idx, kind, point, T, D, x, g``: a spring, a rope), with
     ``g = dl/dq = D^T n`` into ``sp.g`` (module docstring)."""
@@ -327,7 +327,7 @@ def length_of(sp, i, q):  # noqa: ANN001, ANN201
 
 
 @njit
-def _force(sp, i, q, v, mode):  # noqa: ANN001, ANN202
+def _force(sp, i, q, v, mode):
     """g into sp.g; returns (measure, f, k_t, rate)."""
     value = _measure(sp, i, q)
     rate = 0.0
@@ -342,7 +342,7 @@ def _force(sp, i, q, v, mode):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def springs_residual(sp, q, v, mode, r):  # noqa: ANN001, ANN201
+def springs_residual(sp, q, v, mode, r):
     """``r_q += f g`` for every spring-damper; returns the largest of its parts (elastic,
     preload, damping), the force scale of the convergence test (a preloaded spring in
     equilibrium has f = 0 but is not force-free)."""
@@ -359,7 +359,7 @@ def springs_residual(sp, q, v, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit
-def _second_derivative(sp, i, q):  # noqa: ANN001, ANN202
+def _second_derivative(sp, i, q):
     """H = d2m/dq2 into sp.H (module docstring); follows :func:`_measure` at the same q."""
     w = sp.g.size
     H = sp.H
@@ -385,7 +385,7 @@ def _second_derivative(sp, i, q):  # noqa: ANN001, ANN202
 
 
 @njit
-def length_hessian(sp, i, q):  # noqa: ANN001, ANN201
+def length_hessian(sp, i, q):
     """``H = d2l/dq2`` of two-point element i into ``sp.H`` (module docstring; the part as in
     :func:`length_of`, with ``H``)."""
     w = sp.g.size
@@ -415,7 +415,7 @@ def length_hessian(sp, i, q):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
+def springs_jacobian(sp, q, v, mode, cC, cK, data):
     """``cK K + cC C`` of every spring-damper into ``data`` (module docstring); returns the
     largest tangent stiffness k_t (the round-off floor of the convergence test)."""
     if sp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -433,7 +433,7 @@ def springs_jacobian(sp, q, v, mode, cC, cK, data):  # noqa: ANN001, ANN201
 
 
 @njit
-def add_measure_matrix(sp, i, f, kt, c, v, cC, cK, data, hv):  # noqa: ANN001, ANN201, PLR0913
+def add_measure_matrix(sp, i, f, kt, c, v, cC, cK, data, hv):
     """``cK K + cC C`` of the force ``f(m, dm/dt)`` along the measure m of element i into
     ``data`` (module docstring): ``K = k_t g g^T + f H + c g (H q')^T``, ``C = c g g^T``, with
     ``k_t = df/dm``, ``c = df/d(dm/dt)`` and g, H in ``sp.g``, ``sp.H`` (a spring, a rope);
@@ -457,7 +457,7 @@ def add_measure_matrix(sp, i, f, kt, c, v, cC, cK, data, hv):  # noqa: ANN001, A
 
 
 @njit(internal=True)
-def springs_post_step(sp, q):  # noqa: ANN001, ANN201
+def springs_post_step(sp, q):
     """After a converged step: every rotational spring's angle becomes the centre of its next
     branch (``theta_ref``), so that θ follows the joint through whole turns."""
     if sp is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)

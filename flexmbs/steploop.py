@@ -138,7 +138,7 @@ def idle_factor() -> BorderedFactor:
 
 
 @njit
-def renew_jacobian(step_its, cycle_steps, cycle_its, refresh_cost):  # noqa: ANN001, ANN201
+def renew_jacobian(step_its, cycle_steps, cycle_its, refresh_cost):
     """Renewal rule for modified Newton: refresh the Jacobian at the next step when the last
     step's iterations exceed the average cost per step of the current cycle (the steps since
     the last refresh), ``(refresh_cost + cycle_its) / cycle_steps``, in iterations; this
@@ -147,7 +147,7 @@ def renew_jacobian(step_its, cycle_steps, cycle_its, refresh_cost):  # noqa: ANN
 
 
 @njit
-def hold_action(err, updates, disagree):  # noqa: ANN001, ANN201
+def hold_action(err, updates, disagree):
     """What a Newton iteration that holds the contacts' active set does after an evaluation
     with error ``err`` (in tolerances) whose points disagree with the held set at ``disagree``
     places, the set updated ``updates`` times in this solve (module docstring): ``HOLD_KEEP``,
@@ -161,7 +161,7 @@ def hold_action(err, updates, disagree):  # noqa: ANN001, ANN201
 
 
 @njit
-def _slow(err, err_prev, ratio, max_more):  # noqa: ANN001, ANN202
+def _slow(err, err_prev, ratio, max_more):
     """Modified Newton contracts too slowly: rate above ``ratio`` or more than ``max_more``
     further iterations predicted at the current rate (same rule as newton.Newton)."""
     rho = err / err_prev
@@ -171,7 +171,7 @@ def _slow(err, err_prev, ratio, max_more):  # noqa: ANN001, ANN202
 
 
 @njit
-def step_error(a, a_old, h, beta, gamma, tolerance):  # noqa: ANN001, ANN201
+def step_error(a, a_old, h, beta, gamma, tolerance):
     """Local error estimate of a generalized-alpha step in q, scaled by ``tolerance``:
     ``max_i |(β − γ/2 + 1/12) h² (a_{n+1} − a_n)_i| / tolerance``; 1 = at the tolerance.
 
@@ -192,7 +192,7 @@ def step_error(a, a_old, h, beta, gamma, tolerance):  # noqa: ANN001, ANN201
 
 
 @njit
-def _restore(backup, q, v, qdd, a, lam):  # noqa: ANN001, ANN202
+def _restore(backup, q, v, qdd, a, lam):
     n = q.size
     for i in range(n):
         q[i] = backup[0, i]
@@ -204,7 +204,7 @@ def _restore(backup, q, v, qdd, a, lam):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):  # noqa: ANN001, ANN201, C901, PLR0912, PLR0915
+def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):
     """Up to ``run.n_steps`` gen-alpha steps of size ``run.h`` (settings and work arrays in
     ``run``, an :class:`AlphaRun`): predictor, modified-Newton iterations
     (Jacobian refreshed in place when needed), corrector, with ``run.velocity`` the velocity

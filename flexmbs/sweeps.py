@@ -142,7 +142,7 @@ def _short_keys(keys: Sequence[str]) -> dict[str, str]:
 
 
 def make_cases(grid: Mapping[str, Sequence[Any]] | None = None,
-               zip: Mapping[str, Sequence[Any]] | None = None,  # noqa: A002
+               zip: Mapping[str, Sequence[Any]] | None = None,
                overrides: Sequence[str] = ()) -> list[Case]:
     """The cases of a sweep: the Cartesian product of the ``grid`` lists, times the ``zip``
     lists taken side by side (all of one length). Keys are ``--set`` key paths; ``overrides``
@@ -271,7 +271,7 @@ def run_case(scenario: str, overrides: Sequence[str], folder: str,
         status = run_scenario(sc, folder, overrides=overrides).status
     except (FlexmbsError, OSError) as exc:
         status = f"failed: {_one_line(exc)}"
-    except Exception as exc:   # noqa: BLE001 - an internal error: recorded, the sweep goes on
+    except Exception as exc:
         status = f"failed: internal error {type(exc).__name__}: {_one_line(exc)}"
     row = read_case(folder)
     if status != "completed" or not row:
@@ -317,7 +317,7 @@ def _prepare_kernel(scenario: str, overrides: Sequence[str]) -> None:
     previous, kernel.announce_compile = kernel.announce_compile, announce
     try:
         Assembly(load_scenario(scenario, overrides).model)
-    except Exception:   # noqa: BLE001 - the worker runs the case and records the error
+    except Exception:
         pass
     finally:
         kernel.announce_compile = previous
@@ -460,7 +460,7 @@ def _remote_client(scheduler: str) -> tuple[Any, Callable[[], None]]:
 
 
 def sweep(scenario: str | os.PathLike[str], grid: Mapping[str, Sequence[Any]] | None = None, *,
-          zip: Mapping[str, Sequence[Any]] | None = None,  # noqa: A002 - the CLI's --zip
+          zip: Mapping[str, Sequence[Any]] | None = None,
           overrides: Sequence[str] = (), out: str | os.PathLike[str] | None = None, client: Any = None,
           scheduler: str | None = None, workers: int | None = None,
           report: Callable[[Case, dict[str, Any], int, int, bool], None] | None = None,
@@ -621,7 +621,7 @@ def _collect(futures: dict[Any, Case], rows: dict[int, dict[str, Any]], cases: S
             row = {"status": f"failed: worker died {exc.allowed_failures + 1} times running case "
                              f"{case.name} (killed, out of memory or a crash such as a segfault; "
                              f"its starts are in {ATTEMPTS_DIR}/{case.name})"}
-        except Exception as exc:   # noqa: BLE001 - the task could not run (e.g. not importable)
+        except Exception as exc:
             row = {"status": f"failed: worker error {type(exc).__name__}: {_one_line(exc)}"}
         finally:
             fut.release()

@@ -227,7 +227,7 @@ def _read_frame(pv: Any, path: Path) -> Any:
     vtk.vtkObject.GlobalWarningDisplayOff()
     try:
         grid = pv.read(str(path))
-    except Exception as exc:   # noqa: BLE001 - VTK raises assorted errors on damaged files
+    except Exception as exc:
         raise ValueError(f"frame {path} cannot be read ({exc})") from None
     if getattr(grid, "n_blocks", None) == 0 or getattr(grid, "n_points", 1) == 0 or (
             hasattr(grid, "n_blocks") and not any(p.n_points for p in _leaves(grid))):

@@ -171,7 +171,7 @@ def test_ctrl_c_that_a_c_extension_turns_into_another_error_is_one_line(monkeypa
 
     from flexmbs import cli
 
-    def start(argv):  # noqa: ANN001, ANN202
+    def start(argv):
         try:
             os.kill(os.getpid(), signal.SIGINT)
             time.sleep(5)
@@ -209,7 +209,7 @@ def test_ctrl_c_wrapped_by_python_is_still_an_interrupt(monkeypatch, capsys):
     the model module loaded): still one line and exit 130; other errors are not swallowed."""
     from flexmbs import cli
 
-    def wrapped(argv):  # noqa: ANN001, ANN202
+    def wrapped(argv):
         try:
             raise KeyboardInterrupt
         except KeyboardInterrupt as exc:
@@ -219,7 +219,7 @@ def test_ctrl_c_wrapped_by_python_is_still_an_interrupt(monkeypatch, capsys):
     assert cli.main(["run", SLEEVE]) == cli.EXIT_INTERRUPTED
     assert capsys.readouterr().err.strip() == "flexmbs: error: interrupted"
 
-    def plain(argv):  # noqa: ANN001, ANN202
+    def plain(argv):
         raise RuntimeError("a bug")
 
     monkeypatch.setattr(cli, "_main", plain)
@@ -380,7 +380,7 @@ def test_a_signal_inside_numba_waits_for_the_next_step():
     from flexmbs.errors import Interrupted
 
     inside_numba = {"__name__": "numba.core.compiler", "os": os, "signal": signal, "time": time}
-    exec("def compile_step():\n"                          # noqa: S102 - a frame of numba's
+    exec("def compile_step():\n"
          "    os.kill(os.getpid(), signal.SIGINT)\n"
          "    for _ in range(1000):\n"
          "        time.sleep(0.001)\n", inside_numba)

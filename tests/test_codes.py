@@ -104,7 +104,7 @@ def test_a_section_with_an_unlisted_code_is_refused_by_the_joint() -> None:
     import flexmbs as fm
 
     class Odd(CircleSection):
-        def compiled_shape(self):  # noqa: ANN202
+        def compiled_shape(self):
             return 99, np.zeros(4)
 
     model = fm.Model()

@@ -17,8 +17,8 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
-import curved_beam_sleeve as ex1  # noqa: E402
-import solar_array_wing_flat as ex2  # noqa: E402
+import curved_beam_sleeve as ex1
+import solar_array_wing_flat as ex2
 
 #: agreement of the matrix with central differences of the residual (relative to the largest
 #: entry of the block)

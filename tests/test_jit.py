@@ -110,12 +110,12 @@ def test_a_caller_outside_the_package_is_stamped_with_the_package(tmp_path, monk
     assert package not in tuple(mod.plain._cache._impl._locator.get_source_stamp())
 
 
-def _arrays_returned_without_refcount(dispatchers) -> list[str]:  # noqa: ANN001
+def _arrays_returned_without_refcount(dispatchers) -> list[str]:
     """Compiled signatures of reference-count-free kernels whose result holds an array (the
     caller would release a reference it was never given, ``_jit.njit``)."""
     from numba.core import types
 
-    def holds_array(t) -> bool:  # noqa: ANN001
+    def holds_array(t) -> bool:
         if isinstance(t, types.Array):
             return True
         if isinstance(t, types.BaseTuple):
@@ -180,7 +180,7 @@ def test_reference_counting_is_stated_and_kept_where_arrays_are_returned():
     assert _arrays_returned_without_refcount(dispatchers.values()) == []
 
     @njit(refcount=False, cache=False)
-    def planted(a):  # noqa: ANN001, ANN202 - numba accepts only an argument here
+    def planted(a):
         return a
 
     planted(np.ones(3))
@@ -196,11 +196,11 @@ def test_internal_kernel_serves_compiled_callers_and_refuses_python():
     from flexmbs._jit import njit
 
     @njit(internal=True, cache=False)
-    def doubled(a):  # noqa: ANN001, ANN202
+    def doubled(a):
         return 2.0 * a[0]
 
     @njit(cache=False)
-    def caller(a):  # noqa: ANN001, ANN202
+    def caller(a):
         return doubled(a) + 1.0
 
     assert caller(np.array([3.0])) == 7.0

@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[2]   # the checkout: its flexmbs, postpr
 sys.path[:0] = [str(ROOT), str(ROOT / "examples")]
 
 
-def _run(out: Path, t_end: float, rerun: bool, **kw) -> Path:  # noqa: ANN003
+def _run(out: Path, t_end: float, rerun: bool, **kw) -> Path:
     from curved_beam_sleeve import build  # examples/curved_beam_sleeve.py
 
     import flexmbs as fm
@@ -43,7 +43,7 @@ def _run(out: Path, t_end: float, rerun: bool, **kw) -> Path:  # noqa: ANN003
     return out
 
 
-def _tilt(run) -> np.ndarray:  # noqa: ANN001
+def _tilt(run) -> np.ndarray:
     """Angle between the sleeve axis and the undeformed rail tangent at s (the arc
     phi = s - pi/4 with tangent (cos phi, 0, sin phi)); it includes the rail's own rotation
     under the moving sleeve, which is what the clearance-free curve shows."""
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     ide10 = postprocess.read_run(_run(base / "hole10_ideal", args.sensitivity_t_end, args.rerun,
                                       ideal=True, hole_length=0.01))
 
-    def save(fig, name: str) -> None:  # noqa: ANN001
+    def save(fig, name: str) -> None:
         fig.tight_layout()
         fig.savefig(figs / name, dpi=110)
         plt.close(fig)

@@ -80,7 +80,7 @@ def sensitivity(t_end: float, out: Path) -> list[tuple[str, float, float, float,
     return rows
 
 
-def _two_point_share(run) -> float:  # noqa: ANN001 - a postprocess Run
+def _two_point_share(run) -> float:
     """Share of the outputs at which eyelet 1's middle section touches at two points."""
     middle = max(int(r["section"]) for r in run.sections if r["joint"] == "grommet1") // 2
     times = {}
@@ -117,7 +117,7 @@ def _sensitivity_figure(out: Path, path: Path) -> None:
     plt.close(fig)
 
 
-def _points_figure(run, path: Path) -> None:  # noqa: ANN001 - a postprocess Run
+def _points_figure(run, path: Path) -> None:
     """Deepest contact points per section of eyelets 1 and 2 over time (contacts.csv)."""
     import matplotlib.pyplot as plt
     import numpy as np

@@ -50,7 +50,7 @@ MOTIONS = {"rotation": ROTATION, "slide": SLIDE}
 
 
 @njit
-def driver_weights(motion, target, w):  # noqa: ANN001, ANN201
+def driver_weights(motion, target, w):
     """Weights ``w`` of the table's equations and the offset b of ``Φ = Σ w_k φ_k − b``."""
     if motion == ROTATION:
         w[0] = -math.sin(target)
@@ -62,7 +62,7 @@ def driver_weights(motion, target, w):  # noqa: ANN001, ANN201
 
 
 @njit
-def driver_values(table, e0, e1, motion, target, q_local, phi_k, jac_k, w, jac, work):  # noqa: ANN001, ANN201
+def driver_values(table, e0, e1, motion, target, q_local, phi_k, jac_k, w, jac, work):
     """Φ of one driver (returned) and ``Φ_q`` into ``jac`` (module docstring; ``work``: the term
     kernels' scratch)."""
     term_values(table, e0, e1, q_local, phi_k, jac_k, work)
@@ -79,7 +79,7 @@ def driver_values(table, e0, e1, motion, target, q_local, phi_k, jac_k, w, jac, 
 
 
 @njit
-def driver_hessian(table, e0, e1, motion, target, q_local, lam, w, lam_k, H, work):  # noqa: ANN001, ANN201
+def driver_hessian(table, e0, e1, motion, target, q_local, lam, w, lam_k, H, work):
     """``λ ∂²Φ/∂q²`` of one driver into ``H``."""
     driver_weights(motion, target, w)
     for k in range(e1 - e0):
@@ -232,7 +232,7 @@ def pack_drivers(drivers: list[JointDriver], dofs: DofMap, functions: FunctionTa
 
 
 @njit(inline="always")
-def _driver(dr, d, q, fv, mode):  # noqa: ANN001, ANN202
+def _driver(dr, d, q, fv, mode):
     """Φ of driver d (returned with its first coordinate and coordinate count); Φ_q in dr.jac."""
     c0 = dr.coord_ptr[d]
     nloc = dr.coord_ptr[d + 1] - c0
@@ -246,7 +246,7 @@ def _driver(dr, d, q, fv, mode):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def drivers_residual(dr, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
+def drivers_residual(dr, n, q, lam, fv, mode, r):
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every driver."""
     if dr is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
@@ -261,7 +261,7 @@ def drivers_residual(dr, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def drivers_jacobian(dr, q, lam, fv, mode, cK, data):  # noqa: ANN001, ANN201
+def drivers_jacobian(dr, q, lam, fv, mode, cK, data):
     """Φ_q, Φ_qᵀ and ``cK λ ∂²Φ/∂q²`` of every driver."""
     if dr is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return

@@ -198,7 +198,7 @@ def concatenate_tables(tables: list[TermTable]) -> tuple[TermTable, np.ndarray]:
 
 
 @njit(refcount=False)
-def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):  # noqa: ANN001, ANN202
+def _node_director(directors, q_node, t_bar, d_bar, val, jac, hes, hessian):
     """:func:`flexmbs.elements.ancf_rod.node_director` for a table that has node directors. For
     one without (``directors`` None) numba prunes the call by the argument's type, so models
     without them compile none of the rod's code (about 10 s of a first run)."""
@@ -742,7 +742,7 @@ class BeamNodeRigid(_TermConstraint):
 # ---------------------------------------------------------------------------------------------
 # the joint terms of the assembler (flexmbs.terms)
 @njit(refcount=False)
-def euler_norm(p):  # noqa: ANN001, ANN201
+def euler_norm(p):
     """Haug 1989, docs/theory.md §I.5: ``Φ^p = pᵀp − 1`` (its gradient is ``2p``, its Hessian ``2I``)."""
     return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - 1.0
 
@@ -859,7 +859,7 @@ def pack_joints(constraints: list, dofs: DofMap) -> JointPart:
 
 
 @njit(refcount=False, internal=True)
-def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
+def norms_residual(nm, n, q, lam, r):
     """``r_λ = pᵀp − 1``, ``r_p += 2p λ`` of every body."""
     if nm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
@@ -873,7 +873,7 @@ def norms_residual(nm, n, q, lam, r):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False, internal=True)
-def norms_jacobian(nm, q, lam, cK, data):  # noqa: ANN001, ANN201
+def norms_jacobian(nm, q, lam, cK, data):
     if nm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
     for i in range(nm.rows.size):
@@ -886,7 +886,7 @@ def norms_jacobian(nm, q, lam, cK, data):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
+def _term_constraint(tm, c, q):
     """Φ, Φ_q of joint c into ``tm.phi``, ``tm.jac``; returns (first coordinate, coordinates,
     first equation, end of equations)."""
     c0 = tm.coord_ptr[c]
@@ -900,7 +900,7 @@ def _term_constraint(tm, c, q):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False, internal=True)
-def joints_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
+def joints_residual(tm, n, q, lam, r):
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ`` of every joint of the term tables."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return
@@ -917,7 +917,7 @@ def joints_residual(tm, n, q, lam, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def joints_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
+def joints_set_bases(tm, log, stop):
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, docs/theory.md §I.2.4):
     the directors (NODE_DIRECTOR) of joints holding them read the new bases."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -939,7 +939,7 @@ def joints_set_bases(tm, log, stop):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False, internal=True)
-def joints_jacobian(tm, q, lam, cK, data):  # noqa: ANN001, ANN201
+def joints_jacobian(tm, q, lam, cK, data):
     """Φ_q, Φ_qᵀ and ``cK Σ λ_i ∂²Φ_i/∂q²`` of every joint of the term tables."""
     if tm is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
         return

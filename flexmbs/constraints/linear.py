@@ -59,7 +59,7 @@ def pack_linear(matrix: sp.csr_matrix, rhs0: np.ndarray, fn_rows: list[int], fn_
 
 
 @njit(internal=True)
-def linear_residual(li, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
+def linear_residual(li, n, q, lam, fv, mode, r):
     """``r_λ = A q − b − λ_load f(t)``, ``r_q += Aᵀλ``."""
     for row in range(li.rhs0.size):
         acc = -li.rhs0[row]
@@ -74,7 +74,7 @@ def linear_residual(li, n, q, lam, fv, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def linear_jacobian(li, data):  # noqa: ANN001, ANN201
+def linear_jacobian(li, data):
     """The constant entries ``A`` and ``Aᵀ`` of the iteration matrix."""
     for k in range(li.data.size):
         data[li.pos[k]] += li.data[k]

@@ -57,14 +57,14 @@ N_SLIDE = S_INDEX + 1
 
 
 @njit
-def _shape_x(xi, L):  # noqa: ANN001, ANN202
+def _shape_x(xi, L):
     """Hermite S1..S4 and their x-derivatives (as :func:`flexmbs.elements.ancf_cable.shape_functions`)."""
     S, dS, ddS = shape_xi(xi, L)
     return S, dS / L, ddS / (L * L)
 
 
 @njit
-def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
+def sliding_values(ql, L, start, T, n_eq, phi, jac):
     """Φ and Φ_q of the sliding joint on one element (Sugiyama et al. 2003, docs/theory.md §II.7).
 
     ``ql = [r_H, p, e_k (CENTERLINE_SIZE), s]`` (N_SLIDE); ``T`` (3, 3, 4, 4) = point tensors of
@@ -110,7 +110,7 @@ def sliding_values(ql, L, start, T, n_eq, phi, jac):  # noqa: ANN001, ANN201
 
 
 @njit
-def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
+def sliding_hessian(ql, L, start, T, n_eq, lam, H):
     """``H = Σ_i λ_i ∂²Φ_i/∂q²`` (N_SLIDE, N_SLIDE) of :func:`sliding_values` (exact, symmetric)."""
     p = ql[3:7]
     S, dS, ddS = _shape_x((ql[S_INDEX] - start) / L, L)
@@ -169,7 +169,7 @@ def sliding_hessian(ql, L, start, T, n_eq, lam, H):  # noqa: ANN001, ANN201
 
 
 @njit
-def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, fr, anchor, stuck, f_axial):  # noqa: ANN001, ANN201
+def sliding_axial_force(q_elem, L, start, s, s_rate, lam_pos, fr, anchor, stuck, f_axial):
     """Generalized force on s, ``Q_s = |r′|(f_ax + F)`` (docs/theory.md §II.7), and its exact
     derivatives. ``fr`` = :meth:`~flexmbs.contact.laws.Friction.parameters` ``[law, μ, μ_s, k_t,
     c_t, ε_v]``; N = |λ_⊥|, ``λ_⊥ = λ_pos − (λ_pos·t)t``.
@@ -675,7 +675,7 @@ def pack_sliding(joints: list[SlidingJoint], ctx: PackContext) -> SlidingPart:
 
 
 @njit(inline="always")
-def _joint_values(sl, j, q):  # noqa: ANN001, ANN202
+def _joint_values(sl, j, q):
     """Φ, Φ_q of sliding joint j on its current element; returns (element, its dofs, s dof,
     equations)."""
     k = sl.element[j]
@@ -692,7 +692,7 @@ def _joint_values(sl, j, q):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
+def _joint_force(sl, j, k, sd, q, v, lam, fv):
     """Axial and friction force on s of sliding joint j (:func:`sliding_axial_force`)."""
     lp = np.zeros(3)
     for a in range(3):
@@ -704,7 +704,7 @@ def _joint_force(sl, j, k, sd, q, v, lam, fv):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
+def sliding_residual(sl, n, q, v, lam, fv, r):
     """``r_λ = Φ``, ``r_q += Φ_qᵀλ``, ``r_s −= Q_s`` of every sliding joint; keeps the stick
     law's anchor and stick flag of this state for :func:`sliding_post_step`; returns max |Q_s|."""
     if sl is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -734,7 +734,7 @@ def sliding_residual(sl, n, q, v, lam, fv, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data, error):  # noqa: ANN001, ANN201
+def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data, error):
     """Φ_q, Φ_qᵀ, ``cK Σλ_i ∂²Φ_i/∂q²`` and the exact derivatives of −Q_s in the element
     coordinates, s, ṡ and λ_pos (:func:`sliding_axial_force`); returns 0, or
     ``ERR_OFF_PLAN`` (joint in ``error[1]`` and ``error[3]``, element in ``error[2]``) when a
@@ -777,7 +777,7 @@ def sliding_jacobian(sl, q, v, lam, fv, cC, cK, data, error):  # noqa: ANN001, A
 
 
 @njit(internal=True)
-def sliding_post_step(sl, q, error):  # noqa: ANN001, ANN201
+def sliding_post_step(sl, q, error):
     """After a converged step (and a :func:`sliding_residual` at its state): the current
     element of every slide coordinate, and the stick law's anchor and stick flag of that
     residual; ``ERR_END_OF_BEAM`` (joint in ``error[1]``, nothing changed) when s left its

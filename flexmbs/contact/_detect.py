@@ -70,7 +70,7 @@ TIP_SETBACK = 0.5
 
 
 @njit(inline="always")
-def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):  # noqa: ANN001, ANN202
+def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):
     """Origin ``r_H + A u_o`` and axes ``A frame`` (normal, e_y, e_z) of a hole section."""
     for c in range(3):
         origin[c] = r_H[c] + A[c, 0] * u_o[0] + A[c, 1] * u_o[1] + A[c, 2] * u_o[2]
@@ -80,7 +80,7 @@ def _section_plane(r_H, A, u_o, frame, origin, n, ey, ez):  # noqa: ANN001, ANN2
 
 
 @njit
-def reset_crossings(elem_out, out_list):  # noqa: ANN001, ANN201
+def reset_crossings(elem_out, out_list):
     """``elem_out[k] = −1`` wherever it is set, from its list ``out_list`` (``[count, k₀, k₁,
     …]``, count −1: not known, every section is reset); the list is emptied. Sections never
     crossed cost nothing."""
@@ -95,7 +95,7 @@ def reset_crossings(elem_out, out_list):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _to_body(x, r_H, A, out):  # noqa: ANN001, ANN202
+def _to_body(x, r_H, A, out):
     """Body coordinates ``Aᵀ(x − r_H)`` of the point x (A homogeneous in p: divided by |p|⁴)."""
     scale = A[0, 0] * A[0, 0] + A[1, 0] * A[1, 0] + A[2, 0] * A[2, 0]
     for c in range(3):
@@ -104,7 +104,7 @@ def _to_body(x, r_H, A, out):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots, cross_n, cross_e,  # noqa: ANN001, ANN202, PLR0913
+def _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots, cross_n, cross_e,
                    cross_xi, touched, n_touched):
     """The crossings of element e with the plane of section k (none unless its control points
     straddle the plane; warm-started at the last step's crossing), recorded up to
@@ -129,7 +129,7 @@ def _cross_section(qe, lengths, e, k, origin, n, elem_ws, xi_ws, roots, cross_n,
 
 
 @njit(internal=True)
-def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list, elem_out, r_b,  # noqa: ANN001, ANN202, PLR0913
+def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list, elem_out, r_b,
                    shape, params, R_out, origin, n, ey, ez, roots):
     """An open bore: a section crossed inside the bore at the step's start (``elem_ws[k] ≥ 0``)
     and not now. Legitimate if the beam has left the plane there (its end passed: the elements
@@ -165,7 +165,7 @@ def _lost_crossing(qe, lengths, r_H, A, origins, frames, n_reg, elem_ws, ws_list
 
 
 @njit
-def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi, etree,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo, tree_hi, etree,
                    open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws, xi_ws, ws_list,
                    elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in, consistent, paper,
                    out, fwork):
@@ -381,7 +381,7 @@ def detect_section(qe, lengths, r_H, A, origins, frames, tree_c, tree_r, tree_lo
 
 
 @njit(internal=True)
-def _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b, origin, ey, ez,  # noqa: ANN001, ANN202, PLR0913
+def _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b, origin, ey, ez,
                       shape, params, psis, phis, kinds, depths, Y, Yp, Ypp, out, count):
     """The paper's detection of the section-k ellipse crossed by element e at ξ (docs/theory.md
     §II.6: common normals of ellipse and bore, then the closest point of the wall point on the
@@ -441,7 +441,7 @@ def _paper_candidates(paper, qe, lengths, k, e, xi, cy, cz, eax, eay, a, b, orig
 
 
 @njit
-def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201, PLR0913
+def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, tree_lo, tree_hi,
                tip_reach, r_b, shape, params, tip_on, tip_station, work):
     """The tip sections of an open bore at the start of a step (issue 30, "the free tip"):
     an end of the beam inside the bore past the last section it crosses would otherwise go
@@ -519,7 +519,7 @@ def place_tips(qe, lengths, r_H, A, origins, frames, stations, tree_c, tree_r, t
 
 
 @njit
-def angle_distance(a, b):  # noqa: ANN001, ANN201
+def angle_distance(a, b):
     """Distance of two section angles on the circle [rad], in [0, π]."""
     d = abs(a - b) % (2.0 * np.pi)
     return min(d, 2.0 * np.pi - d)

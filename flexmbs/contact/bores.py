@@ -319,7 +319,7 @@ def section_tree(origins: np.ndarray, reach: float) -> tuple[np.ndarray, ...]:
 
 
 @njit
-def refit_section_tree(origins, reach, centre, radius, lo, hi):  # noqa: ANN001, ANN201
+def refit_section_tree(origins, reach, centre, radius, lo, hi):
     """:func:`section_tree`'s spheres again for sections that moved (a flexible tube's, at
     every evaluation): the same nodes and ranges, each node's centre the mean of its
     sections' ``origins`` and its radius their largest distance plus ``reach``. O(n log n)."""
@@ -349,7 +349,7 @@ def refit_section_tree(origins, reach, centre, radius, lo, hi):  # noqa: ANN001,
 
 
 @njit(inline="always")
-def sections_near(centre, radius, lo, hi, x, rho, stack, out):  # noqa: ANN001, ANN201
+def sections_near(centre, radius, lo, hi, x, rho, stack, out):
     """Sections whose discs (the tree's ``reach``) may meet the sphere ``(x, rho)`` (body
     coordinates): their indices into ``out`` (ascending within each leaf), returns how many.
     ``stack``: int64 work array of at least 64."""
@@ -381,7 +381,7 @@ def sections_near(centre, radius, lo, hi, x, rho, stack, out):  # noqa: ANN001, 
 
 
 @njit
-def section_between(origins, frames, stations, k, lam, origin, frame):  # noqa: ANN001, ANN201
+def section_between(origins, frames, stations, k, lam, origin, frame):
     """A section plane between sections k and k+1 at the fraction ``lam`` of their distance
     along the bore (a free tip's section, :func:`~flexmbs.contact._detect.place_tips`):
     ``origin`` on the cubic Hermite curve through both origins with the sections' normals as

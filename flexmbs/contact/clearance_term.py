@@ -66,7 +66,7 @@ MATCH_ANGLE = 0.5
 
 
 @njit
-def tracked_slot(active, psi_track, k, psi):  # noqa: ANN001, ANN201
+def tracked_slot(active, psi_track, k, psi):
     """Slot of the tracked contact of section k nearest to section angle ``psi`` (within
     :data:`MATCH_ANGLE`), −1 for a new contact."""
     best = MATCH_ANGLE
@@ -81,7 +81,7 @@ def tracked_slot(active, psi_track, k, psi):  # noqa: ANN001, ANN201
 
 
 @njit
-def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN201
+def tracked_approach(approach, active, psi_track, k, psi):
     """Approach velocity stored for the contact of section k nearest to section angle ``psi``
     (:func:`tracked_slot`), 0 for a new contact."""
     slot = tracked_slot(active, psi_track, k, psi)
@@ -89,7 +89,7 @@ def tracked_approach(approach, active, psi_track, k, psi):  # noqa: ANN001, ANN2
 
 
 @njit
-def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, twist_dofs, hist):  # noqa: ANN001, ANN201
+def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, twist_dofs, hist):
     """History of a contact (pair.N_HISTORY) from its tracked slot (−1: a new contact, no
     anchor, counted as sticking) and the coordinates the step started from (the element's
     twists where it has them, ``twist_dofs`` ≥ 0)."""
@@ -105,7 +105,7 @@ def contact_history(anchor, stuck, slot, k, q_start, body_dofs, elem_dofs, twist
 
 
 @njit
-def element_spin(q, v, twist_dofs, t_bar, spin):  # noqa: ANN001, ANN201
+def element_spin(q, v, twist_dofs, t_bar, spin):
     """The spin data (pair.N_SPIN) of a contact element: its nodes' twists, their rates and
     their charts' base tangents ``t_bar`` (2, 3); ``spin[0] = 0`` for an element without twist
     (``twist_dofs`` −1, a cable). ``spin`` None: no joint of the model holds a beam with
@@ -121,7 +121,7 @@ def element_spin(q, v, twist_dofs, t_bar, spin):  # noqa: ANN001, ANN201
 
 
 @njit
-def clearance_update(rows, m, sections, approach, active, psi_track, anchor, stuck):  # noqa: ANN001, ANN201, C901, PLR0912
+def clearance_update(rows, m, sections, approach, active, psi_track, anchor, stuck):
     """Contact state after a converged step from the candidate rows of the converged state
     (with ``gap``, ``gap_rate`` and the friction history): every penetrating point is matched
     to the nearest tracked contact of its section (section angle, greedy by distance, within
@@ -216,7 +216,7 @@ def clearance_update(rows, m, sections, approach, active, psi_track, anchor, stu
 
 
 @njit
-def _frame(q, body_dofs):  # noqa: ANN001, ANN202
+def _frame(q, body_dofs):
     """Hole body [r, p] and rotation A(p) (homogeneous) (:func:`_frame_into`)."""
     qb = np.empty(7)
     A = np.empty((3, 3))
@@ -225,7 +225,7 @@ def _frame(q, body_dofs):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _frame_into(q, body_dofs, qb, A):  # noqa: ANN001, ANN202
+def _frame_into(q, body_dofs, qb, A):
     """Hole body [r, p] into ``qb`` and its rotation A(p) (homogeneous) into ``A``."""
     for i in range(7):
         qb[i] = q[body_dofs[i]]
@@ -233,7 +233,7 @@ def _frame_into(q, body_dofs, qb, A):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _tube_carve(tw):  # noqa: ANN001, ANN202
+def _tube_carve(tw):
     """The arrays of a tube joint's work (:data:`TUBE_WORK`; views, nothing allocated)."""
     P, CS = POSE_SIZE, CENTERLINE_SIZE
     pose = tw[0:P]
@@ -256,7 +256,7 @@ def _tube_carve(tw):  # noqa: ANN001, ANN202
 
 
 @njit
-def tube_joint(tube, j):  # noqa: ANN001, ANN201
+def tube_joint(tube, j):
     """Whether clearance joint j's bore is a flexible tube (``tube`` None: none is)."""
     if tube is None:
         return False
@@ -264,7 +264,7 @@ def tube_joint(tube, j):  # noqa: ANN001, ANN201
 
 
 @njit
-def window_row(cl, j, k):  # noqa: ANN001, ANN201
+def window_row(cl, j, k):
     """The row of ``cl.window`` that holds the elements the plan follows section k of clearance
     joint j on: the joint's row, or for a flexible tube the row of the section's element (each
     of a tube's elements couples only with the inner beam near its own sections)."""
@@ -272,7 +272,7 @@ def window_row(cl, j, k):  # noqa: ANN001, ANN201
 
 
 @njit
-def _tube_row(tube, j, k):  # noqa: ANN001, ANN202
+def _tube_row(tube, j, k):
     """Section k's element's rank among tube joint j's (0: not a tube; ``tube`` None: none is)."""
     if tube is None:
         return 0
@@ -282,7 +282,7 @@ def _tube_row(tube, j, k):  # noqa: ANN001, ANN202
 
 
 @njit
-def tube_section(tube, j, k, q, v, tw):  # noqa: ANN001, ANN201
+def tube_section(tube, j, k, q, v, tw):
     """Pose, rate and ``J`` of section k of clearance joint j into ``tube_work`` when its bore
     is a flexible tube (:func:`~flexmbs.contact.tube.section_pose`); returns whether it is.
     ``tube`` None: no tube in the model (compiled out)."""
@@ -300,7 +300,7 @@ def tube_section(tube, j, k, q, v, tw):  # noqa: ANN001, ANN201
 
 
 @njit
-def tube_force(tube, j, k, J, Qc, sign, r_q):  # noqa: ANN001, ANN201
+def tube_force(tube, j, k, J, Qc, sign, r_q):
     """A contact's force ``sign Qc[:7]`` on section k's pose, taken to the tube's element
     (``Jᵀ``) and subtracted from ``r_q``."""
     if tube is None:
@@ -313,7 +313,7 @@ def tube_force(tube, j, k, J, Qc, sign, r_q):  # noqa: ANN001, ANN201
 
 
 @njit
-def tube_start_pose(tube, j, k, q_start, tw):  # noqa: ANN001, ANN201
+def tube_start_pose(tube, j, k, q_start, tw):
     """Section k's pose at the step's start ``q_start`` into ``tube_work``'s ``start`` (the
     friction's reference, as a hole body's coordinates at the step's start); uses ``G`` and
     ``H`` as scratch."""
@@ -328,7 +328,7 @@ def tube_start_pose(tube, j, k, q_start, tw):  # noqa: ANN001, ANN201
 
 
 @njit
-def tube_place_sections(tube, j, q, n_bore, origins, frames, tree_c, tree_r, tree_lo, tree_hi,  # noqa: ANN001, ANN201
+def tube_place_sections(tube, j, q, n_bore, origins, frames, tree_c, tree_r, tree_lo, tree_hi,
                         reach, tip_on, tw):
     """The world origins and axes of tube joint j's sections at ``q`` into ``origins``,
     ``frames`` (the detection then takes the identity as the hole body's pose), those of its
@@ -350,7 +350,7 @@ def tube_place_sections(tube, j, q, n_bore, origins, frames, tree_c, tree_r, tre
 
 
 @njit
-def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):  # noqa: ANN001, ANN201
+def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):
     """Tube joint j's tip sections (:func:`~flexmbs.contact._detect.place_tips` found each
     between sections k and k+1, at ``tip_station`` along the tube): slot ``n_bore + t`` rides
     the tube's element of section k (or k+1) at the station's offset from it, and takes that
@@ -391,7 +391,7 @@ def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):  # noqa: ANN
 
 
 @njit(internal=True)
-def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,  # noqa: ANN001, ANN201, PLR0913, C901, PLR0912, PLR0915
+def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,
                      tree_c, tree_r, tree_lo,
                      tree_hi, etree, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
                      xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
@@ -688,7 +688,7 @@ class ClearancePart(NamedTuple):
 
 
 @njit
-def beam_geometry(q, elem_dofs, lengths, qe, etree):  # noqa: ANN001, ANN201
+def beam_geometry(q, elem_dofs, lengths, qe, etree):
     """A beam's element coordinates ``qe`` (n_elem, CENTERLINE_SIZE) at ``q`` and their bounding
     spheres' tree ``etree`` (:func:`~flexmbs.elements.centerline.element_tree`): once per
     evaluation for every joint on the beam."""
@@ -705,7 +705,7 @@ def contact_capacity(max_sections: int) -> int:
 
 
 @njit(inline="always")
-def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # noqa: ANN001, ANN202
+def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):
     """:func:`clearance_forces` of clearance joint j; records the candidates' count and, if the
     beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
     ne_j = cl.n_elem[j]
@@ -746,7 +746,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):  # n
 
 
 @njit(internal=True)
-def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):  # noqa: ANN001, ANN201, C901
+def clearance_terms(cl, q, v, want_tangent, cC, cK, r, data, error):
     """Contact forces of every (enabled) clearance joint subtracted from ``r_q`` (``r``), or
     with ``want_tangent`` their tangent ``cK K + cC C`` into ``data`` (exact or Gauss–Newton,
     per joint; the residual then goes to ``cl.scratch``); one compiled function for both (its
@@ -837,7 +837,7 @@ HOLD_KEEP = -1
 
 
 @njit(internal=True)
-def clearance_hold(cl, action):  # noqa: ANN001, ANN201
+def clearance_hold(cl, action):
     """The active set the Newton iterations of a step hold (``NewtonOptions.hold_contacts``,
     :func:`flexmbs.steploop.alpha_run`): ``HOLD_TRACKED`` holds the contacts tracked from the
     last converged step (the step's start), ``HOLD_CURRENT`` the penetrating points of the last
@@ -876,7 +876,7 @@ def clearance_hold(cl, action):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
+def clearance_set_bases(cl, log, stop, q):
     """Re-based nodes (``log[:stop]``, records ``[twist coordinate, t̄, D̄]``, docs/theory.md
     §I.2.4): the contact elements holding them read the new base tangent; ``q`` (its twists
     changed), unless empty (a resumed run: :func:`~flexmbs.contact.joint._begin_clearance`),
@@ -899,7 +899,7 @@ def clearance_set_bases(cl, log, stop, q):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
+def clearance_post_step_all(cl, q):
     """After a converged step (following a residual at that state, whose detection it reuses):
     warm starts moved to the converged crossings, contacts tracked (:func:`clearance_update`),
     ``q`` the start of the next step, where the tip sections of open bores will be placed
@@ -929,7 +929,7 @@ def clearance_post_step_all(cl, q):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, frames, stations,  # noqa: ANN001, ANN201, PLR0913
+def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, frames, stations,
                    tree_c, tree_r, tree_lo, tree_hi, tip_reach, r_b, shape, params, tip_on,
                    tip_station, work, tube, reach, tw):
     """At the step's first evaluation (``due[j]``): :func:`place_tips` of clearance joint j at
@@ -968,7 +968,7 @@ def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, fra
 
 
 @njit
-def _mark_tips_due(due, j, open_end):  # noqa: ANN001, ANN202
+def _mark_tips_due(due, j, open_end):
     """The next step's first evaluation places joint j's tip sections (an open bore)."""
     if due is None:
         return
@@ -976,7 +976,7 @@ def _mark_tips_due(due, j, open_end):  # noqa: ANN001, ANN202
 
 
 @njit
-def tube_rebase(tube, j, n_bore, q, tw):  # noqa: ANN001, ANN201
+def tube_rebase(tube, j, n_bore, q, tw):
     """After a converged step: the sections of tube joint j whose tangent turned far take new
     bases (:func:`~flexmbs.contact.tube.rebase`; their poses do not change)."""
     if tube is None:
@@ -991,7 +991,7 @@ def tube_rebase(tube, j, n_bore, q, tw):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _csc_add(indptr, indices, data, row, col, value):  # noqa: ANN001, ANN202
+def _csc_add(indptr, indices, data, row, col, value):
     """``data[(row, col)] += value`` if the pattern holds the entry (binary search in the
     column's sorted rows); else nothing (as the rigid bore's entries outside the pattern)."""
     lo = indptr[col]
@@ -1009,7 +1009,7 @@ def _csc_add(indptr, indices, data, row, col, value):  # noqa: ANN001, ANN202
 
 
 @njit
-def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):  # noqa: ANN001, ANN202, C901, PLR0912
+def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
     """Contact i of tube joint j into the iteration matrix: its rigid-bore blocks
     (``cl.K[i]``, ``cl.C[i]``, columns and rows of the hole body's pose ``b``) taken to the
     tube's element ``e_o`` through ``b = b(e_o)`` (:mod:`flexmbs.contact.tube`):

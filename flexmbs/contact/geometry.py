@@ -36,7 +36,7 @@ __all__ = [
 
 
 @njit(inline="always")
-def _ellipse_axes(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN202
+def _ellipse_axes(tangent_vec, normal, e_y, e_z, r_b):
     """:func:`section_ellipse` with the axes as 3-tuples (no allocation): the one statement."""
     nt = math.sqrt(dot3(tangent_vec, tangent_vec))
     t = (tangent_vec[0] / nt, tangent_vec[1] / nt, tangent_vec[2] / nt)
@@ -54,7 +54,7 @@ def _ellipse_axes(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN202
 
 
 @njit
-def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
+def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):
     """Tangent-cylinder section ellipse (docs/theory.md §II.2): ``(a, b, e_a, e_b, cos θ)``.
 
     ``b = r_b``, ``a = r_b / cos θ`` with ``cos θ = |t·n|``; ``e_b = t×n/|t×n|`` (minor axis),
@@ -71,7 +71,7 @@ def section_ellipse(tangent_vec, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
 
 
 @njit
-def to_section(x, origin, e_y, e_z):  # noqa: ANN001, ANN201
+def to_section(x, origin, e_y, e_z):
     """2D section coordinates ``((x − O)·e_y, (x − O)·e_z)`` of a 3D point (docs/theory.md §II.2)."""
     d = x - origin
     out = np.empty(2)
@@ -81,13 +81,13 @@ def to_section(x, origin, e_y, e_z):  # noqa: ANN001, ANN201
 
 
 @njit
-def from_section(y, origin, e_y, e_z):  # noqa: ANN001, ANN201
+def from_section(y, origin, e_y, e_z):
     """3D point ``O + y₀ e_y + y₁ e_z`` of 2D section coordinates."""
     return origin + y[0] * e_y + y[1] * e_z
 
 
 @njit
-def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_distance):  # noqa: ANN001, ANN201
+def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_distance):
     """The beam in one hole section (docs/theory.md §II.2): the crossing of its axis with the section
     plane ``(origin, normal)`` (warm-started at ``(elem0, xi0)``, within ``max_distance`` of
     the origin) and the ellipse of its cross-section there, in section coordinates (e_y, e_z).
@@ -105,7 +105,7 @@ def section_state(q_e, lengths, origin, normal, e_y, e_z, elem0, xi0, r_b, max_d
 
 
 @njit(refcount=False)
-def section_ellipse_at(q_e, lengths, e, xi, origin, normal, e_y, e_z, r_b):  # noqa: ANN001, ANN201
+def section_ellipse_at(q_e, lengths, e, xi, origin, normal, e_y, e_z, r_b):
     """The beam's section ellipse where its axis crosses the plane at ``(e, xi)``, in section
     coordinates: ``(cy, cz, a, b, eax, eay)`` (centre, semi-axes a ≥ b, unit major axis)."""
     r, rx, _ = element_point_values(q_e[e], lengths[e], xi)

@@ -533,7 +533,7 @@ class SlidingClearanceJoint(Interaction):
     def _approach_for(self, k: int, psi: float) -> float:
         return tracked_approach(self.state.approach, self.state.active, self.state.psi, int(k), float(psi))
 
-    def _contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
+    def _contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):
         """(section, index, kind, elem, ContactResult, a, b, psi) for every penetrating point
         (psi: section angle of the hole point); the result for the last state is kept (output
         rows, section records and probes ask for the same state)."""
@@ -584,7 +584,7 @@ class SlidingClearanceJoint(Interaction):
         self._records = (kept[0], out)
         return out
 
-    def _detect_contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):  # noqa: ANN202
+    def _detect_contacts(self, q: np.ndarray, v: np.ndarray, want_tangent: bool, update: bool):
         """:meth:`_contacts` without the cache.
 
         With ``self._frozen`` (a list from :meth:`freeze_detection`) the detected hole points

@@ -63,7 +63,7 @@ __all__ = [
 
 
 @njit
-def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
+def law_force(law, delta, delta_dot, approach_velocity):
     """``(f, ∂f/∂δ, ∂f/∂δ̇)`` of ``f = Kδⁿ(1 + χδ̇/v₀) + c_d s(δ) δ̇`` (docs/theory.md §II.5),
     ``law`` = ``[K, n, χ, c_d, v_min, onset, damping_onset]``, ``v₀ = max(|δ̇⁽⁻⁾|, v_min)``; 0
     for ``δ ≤ 0`` and clamped at 0. With n = 1 and ``onset`` δ₀ > 0 the elastic part is
@@ -107,7 +107,7 @@ def law_force(law, delta, delta_dot, approach_velocity):  # noqa: ANN001, ANN201
 
 
 @njit
-def held_law_force(law, delta, delta_dot, approach_velocity, held):  # noqa: ANN001, ANN201
+def held_law_force(law, delta, delta_dot, approach_velocity, held):
     """:func:`law_force`, and for a contact the Newton iterations hold in the active set
     (``held``, :class:`~flexmbs.solvers.newton.NewtonOptions` ``hold_contacts``) at ``δ ≤ 0``
     the elastic part's extension: ``(Kδ, K, 0)`` for a linear law without onset (the force
@@ -122,7 +122,7 @@ def held_law_force(law, delta, delta_dot, approach_velocity, held):  # noqa: ANN
 
 
 @njit
-def law_energy(law, delta):  # noqa: ANN001, ANN201
+def law_energy(law, delta):
     """Potential ``Φ(δ) = Kδⁿ⁺¹/(n + 1)`` of the elastic part of :func:`law_force` (``Φ′ = Kδⁿ``;
     0 for ``δ ≤ 0``; with an onset δ₀: ``Kδ³/(6δ₀)``, then ``K(δ²/2 − δ₀δ/2 + δ₀²/6)``): the
     section potential of docs/theory.md §II.4b. The damping terms have none."""
@@ -137,7 +137,7 @@ def law_energy(law, delta):  # noqa: ANN001, ANN201
 
 
 @njit
-def coulomb_force(mu, eps_v, v_t, f_n, F, dF_dv, g):  # noqa: ANN001, ANN201
+def coulomb_force(mu, eps_v, v_t, f_n, F, dF_dv, g):
     """Regularised Coulomb ``F = −μ f_n v_t/√(|v_t|² + ε²)`` into ``F`` (3,), ``dF_dv`` (3,3) and
     ``g = ∂F/∂f_n`` (3,) (docs/theory.md §II.5)."""
     s = math.sqrt(v_t[0] * v_t[0] + v_t[1] * v_t[1] + v_t[2] * v_t[2] + eps_v * eps_v)
@@ -150,7 +150,7 @@ def coulomb_force(mu, eps_v, v_t, f_n, F, dF_dv, g):  # noqa: ANN001, ANN201
 
 
 @njit
-def coulomb_return_map(T, radius, F, dF_dT, t_hat):  # noqa: ANN001, ANN201
+def coulomb_return_map(T, radius, F, dF_dT, t_hat):
     """Coulomb return mapping of a trial tangential force ``T`` (3,) onto the friction cone of
     radius ``ρ = μ f_N`` (docs/design-notes.md "Friction that sticks"). Stick, ``|T| ≤ ρ``:
     ``F = T``, ``∂F/∂T = I``, ``t̂ = 0``; slip: ``F = ρ T/|T|``, ``∂F/∂T = ρ/|T| (I − t̂t̂ᵀ)``,
@@ -174,7 +174,7 @@ def coulomb_return_map(T, radius, F, dF_dT, t_hat):  # noqa: ANN001, ANN201
 
 
 @njit
-def tangential_force(fric, stuck, f_n, d, v_t, F, dF_dd, dF_dv, dF_dfn, d_new):  # noqa: ANN001, ANN201, PLR0913
+def tangential_force(fric, stuck, f_n, d, v_t, F, dF_dd, dF_dv, dF_dfn, d_new):
     """Friction force of one contact from the parameter vector ``fric`` (:meth:`Friction.parameters`)
     with its derivatives (docs/design-notes.md "Friction that sticks").
 

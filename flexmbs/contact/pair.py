@@ -80,7 +80,7 @@ class ContactResult(NamedTuple):
 
 
 @njit
-def contact_map(Bp, S):  # noqa: ANN001, ANN201
+def contact_map(Bp, S):
     """``W = ∂(x_Q − x_P)/∂q_c = [I, 2T(u_Q)p, −S(ξ_P)]`` (3, N_LOCAL) at fixed u_Q and ξ_P
     (docs/theory.md §II.4): ``Bp`` = 2T(u_Q)p (3, 4), ``S`` the shape functions at ξ_P (4,)
     (:func:`contact_map_into` a new array)."""
@@ -90,7 +90,7 @@ def contact_map(Bp, S):  # noqa: ANN001, ANN201
 
 
 @njit
-def contact_map_into(Bp, S, W):  # noqa: ANN001, ANN201
+def contact_map_into(Bp, S, W):
     """:func:`contact_map` written into ``W`` (3, N_LOCAL)."""
     for c in range(3):
         for j in range(N_LOCAL):
@@ -117,7 +117,7 @@ PAIR_WORK = _WORK_B + N_LOCAL
 
 
 @njit
-def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):  # noqa: ANN001, ANN202
+def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):
     """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
     rx, rxx, ell)``, the arrays views of ``work`` (:data:`PAIR_WORK`; no allocation), dS, rx,
     rxx tuples; see :func:`contact_geometry`."""
@@ -172,7 +172,7 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):  #
 
 
 @njit
-def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
+def _gap_hessian(n, W, T, dS, rx, rxx, ell):
     """The consistent ``∂²g_N/∂q_c²`` (N_LOCAL, N_LOCAL) of §5 (ξ_P variation, Euler-parameter part)."""
     H = np.zeros((N_LOCAL, N_LOCAL))
     for i in range(N_LOCAL):
@@ -204,7 +204,7 @@ def _gap_hessian(n, W, T, dS, rx, rxx, ell):  # noqa: ANN001, ANN202
 
 
 @njit
-def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):  # noqa: ANN001, ANN201
+def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):
     """Gap kinematics of one contact (docs/theory.md §II.4–§II.5), numba kernel.
 
     Returns ``(xi, g, gdot, n, P, Q, B (N_LOCAL,), W (3, N_LOCAL), H (N_LOCAL, N_LOCAL))`` with
@@ -246,7 +246,7 @@ def no_spin() -> np.ndarray:
 
 
 @njit
-def node_spins(spin, q_elem, v_elem, b, db, w, dw):  # noqa: ANN001, ANN201
+def node_spins(spin, q_elem, v_elem, b, db, w, dw):
     """The contact element's nodes' chart spins (docs/theory.md §I.2.4, the rod's generated
     ``spin`` map, the one its twist inertia uses): node a's section turns about its tangent at
     ``φ̇_a + w_a`` with ``w_a = b_a·ġ_a``; writes ``b`` (2, 3), ``∂b_a/∂g_a`` ``db`` (2, 3, 3),
@@ -268,7 +268,7 @@ def node_spins(spin, q_elem, v_elem, b, db, w, dw):  # noqa: ANN001, ANN201
 
 
 @njit
-def spin_map(spin, q_elem, v_elem, xi, r_b, rx, n, Wf, b, db, w, dw):  # noqa: ANN001, ANN201
+def spin_map(spin, q_elem, v_elem, xi, r_b, rx, n, Wf, b, db, w, dw):
     """The beam surface's turn under the contact (docs/design-notes.md "Torque and drag"): the
     surface point ``C = P + r_b n`` of a rod moves by ``ω (t × n) r_b`` with the section spin
     ``ω = Σ N_a (φ̇_a + w_a)`` interpolated as the rod's twist inertia does (N_0 = 1 − ξ,
@@ -294,7 +294,7 @@ def spin_map(spin, q_elem, v_elem, xi, r_b, rx, n, Wf, b, db, w, dw):  # noqa: A
 
 
 @njit
-def twist_increment(spin, hist, q_elem, xi, b, bbar, dg):  # noqa: ANN001, ANN201
+def twist_increment(spin, hist, q_elem, xi, b, bbar, dg):
     """The section's turn at ξ over the step, ``Δψ = Σ N_a (φ_a − φ_a,n + b̄_a·Δg_a)`` with
     ``b̄_a = ½(b_a(g_a) + b_a(g_a,n))`` on the same chart (the chart spin integrated by the
     trapezoidal rule; ``hist``: the step's start). Writes ``bbar``, ``dg`` (2, 3); returns Δψ."""
@@ -316,7 +316,7 @@ def twist_increment(spin, hist, q_elem, xi, b, bbar, dg):  # noqa: ANN001, ANN20
 
 
 @njit
-def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):  # noqa: ANN001, ANN201, PLR0913
+def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):
     """Trial elastic tangential displacement of a sticking contact (docs/design-notes.md
     "Friction that sticks"): ``Δ = A d_A + (Q − P) − (Q_n − P_n) + turn``, ``d = (I − nnᵀ)Δ``,
     with the material points in contact now (hole point u_Q, beam point ξ_P: shape functions
@@ -338,7 +338,7 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):  # noqa: ANN001, ANN2
 
 
 @njit
-def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,  # noqa: ANN001, ANN201, PLR0912, PLR0913, PLR0915, C901
+def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,
                   approach_velocity, want_tangent, Qc, K, C, geo, work, held=False):
     """Penalty force of one contact point and its Gauss–Newton tangent (docs/theory.md §II.4–§II.5).
 

@@ -16,7 +16,7 @@ __all__ = ["quartic_real_roots", "trig_quadratic_roots"]
 
 
 @njit
-def _trig_f(phi, al, be, ga):  # noqa: ANN001, ANN202
+def _trig_f(phi, al, be, ga):
     """``f = al sin φ cos φ + be sin φ + ga cos φ`` and ``f′`` (the stationarity condition of a
     quadratic trigonometric polynomial, docs/theory.md §II.3)."""
     s = math.sin(phi)
@@ -27,7 +27,7 @@ def _trig_f(phi, al, be, ga):  # noqa: ANN001, ANN202
 
 
 @njit
-def _cubic_largest_root(b, c, d):  # noqa: ANN001, ANN202
+def _cubic_largest_root(b, c, d):
     """Largest real root of ``m³ + b m² + c m + d`` (Cardano / trigonometric form), polished by
     two Newton steps."""
     p = c - b * b / 3.0
@@ -56,7 +56,7 @@ def _cubic_largest_root(b, c, d):  # noqa: ANN001, ANN202
 
 
 @njit
-def _quadratic_seeds(s1, s0, out, n):  # noqa: ANN001, ANN202
+def _quadratic_seeds(s1, s0, out, n):
     """Real roots of ``y² + s1 y + s0``; complex ones with ``|imag| ≤ 1e-6(1 + |real|)`` count
     as real (near-double roots, polished by the caller)."""
     disc = s1 * s1 - 4.0 * s0
@@ -75,7 +75,7 @@ def _quadratic_seeds(s1, s0, out, n):  # noqa: ANN001, ANN202
 
 
 @njit
-def quartic_real_roots(c4, c3, c2, c1, c0, out):  # noqa: ANN001, ANN201
+def quartic_real_roots(c4, c3, c2, c1, c0, out):
     """Real (and nearly real) roots of ``c4 t⁴ + c3 t³ + c2 t² + c1 t + c0`` into ``out`` (≥ 4),
     returns their number. Ferrari's factorisation through the largest root of the resolvent
     cubic; closed form, a few hundred flops (``np.roots`` costs an eigenvalue problem).
@@ -133,7 +133,7 @@ _SIN_QUARTER = (0.0, _H, 1.0, _H, 0.0, -_H, -1.0, -_H)
 
 
 @njit
-def trig_quadratic_roots(al, be, ga, scale, phis, signs, seeds):  # noqa: ANN001, ANN201
+def trig_quadratic_roots(al, be, ga, scale, phis, signs, seeds):
     """Roots of ``f(φ) = al sin φ cos φ + be sin φ + ga cos φ`` on [0, 2π) into ``phis`` (≥ 5)
     with the sign of ``f′`` into ``signs``; returns their number (at most 4). ``seeds`` (≥ 5)
     is work.

@@ -67,7 +67,7 @@ __all__ = [
 
 
 @njit
-def _support(cy, cz, eax, eay, a, b, N0, N1):  # noqa: ANN001, ANN202
+def _support(cy, cz, eax, eay, a, b, N0, N1):
     """Ellipse point with outward normal N: ``X = c + ΣN/√(NᵀΣN)``, and ``TᵀJ_E T`` for the
     tangent T = (−N1, N0) (docs/theory.md §II.6)."""
     na = N0 * eax + N1 * eay            # components of N along e_a, e_b
@@ -86,7 +86,7 @@ def _support(cy, cz, eax, eay, a, b, N0, N1):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def _common_normal_f(kind, params, cy, cz, eax, eay, a, b, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+def _common_normal_f(kind, params, cy, cz, eax, eay, a, b, psi, Y, Yp, Ypp):
     """``F(ψ) = T·(X(N(ψ)) − Y(ψ))``, ``F′``, ``d = N·(X − Y)`` and the ellipse angle of X."""
     section_boundary(kind, params, psi, Y, Yp, Ypp)
     speed = math.hypot(Yp[0], Yp[1])
@@ -103,7 +103,7 @@ def _common_normal_f(kind, params, cy, cz, eax, eay, a, b, psi, Y, Yp, Ypp):  # 
 
 
 @njit
-def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, phi_out,  # noqa: ANN001, ANN201
+def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, phi_out,
                          kind_out, depth_out):
     """Every stationary point of the penetration of the ellipse through a compiled section
     (generic detector of docs/theory.md §II.6, compiled): ``F(ψ)`` sampled at ``samples`` points,

@@ -55,13 +55,13 @@ PAIR_MAX_STEP = 0.3
 
 
 @njit(inline="always")
-def _in_space(origin, ey, ez, y0, y1, c):  # noqa: ANN001, ANN202
+def _in_space(origin, ey, ez, y0, y1, c):
     """Component c of the section point (y0, y1) in space: ``o + y0 e_y + y1 e_z``."""
     return origin[c] + y0 * ey[c] + y1 * ez[c]
 
 
 @njit(inline="always")
-def _line_distance2(w0, w1, eax, eay, s2):  # noqa: ANN001, ANN202
+def _line_distance2(w0, w1, eax, eay, s2):
     """Squared distance of the in-plane offset w from the crossing to the axis' tangent line:
     ``ℓ² = wᵀ(I − sin²θ e_a e_aᵀ)w`` (the line model)."""
     wa = w0 * eax + w1 * eay
@@ -69,7 +69,7 @@ def _line_distance2(w0, w1, eax, eay, s2):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):
     """``f = ½ dℓ²/dψ``, ``f′`` and ``ℓ²`` of the line model at ψ (section coordinates)."""
     section_boundary(kind, params, psi, Y, Yp, Ypp)
     w0 = Y[0] - cy
@@ -83,7 +83,7 @@ def _line_model_f(kind, params, cy, cz, eax, eay, s2, psi, Y, Yp, Ypp):  # noqa:
 
 
 @njit
-def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, kind_out,  # noqa: ANN001, ANN201
+def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, kind_out,
                       ell_out, work, iwork):
     """Stationary points of the distance between the section wall and the tangent line of the
     beam axis (the seeds of :func:`stationary_pair`): crossing ``(cy, cz)``, major axis
@@ -150,7 +150,7 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
 
 
 @njit(internal=True)
-def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):
     """Wall point at ψ, its closest axis point and the reduced ``D′(ψ)``, ``D″(ψ)``."""
     section_boundary(shape, params, psi, Y, Yp, Ypp)
     w0 = _in_space(origin, ey, ez, Y[0], Y[1], 0)
@@ -182,7 +182,7 @@ def _pair_state(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp
 
 
 @njit(internal=True, refcount=False)
-def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, Yp, Ypp):
     """Newton on both unknowns of ``∇D(ξ, ψ) = 0`` at once (one axis point and one wall point
     per iteration, no inner projection), from ξ one projection step off the seed. Returns
     ``(converged, psi, elem, xi, ell, d2)`` (d2: the reduced D″, whose sign is the kind)."""
@@ -228,7 +228,7 @@ def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, 
 
 
 @njit
-def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, elem0, xi0, Y, Yp, Ypp):  # noqa: ANN001, ANN201, E501
+def stationary_pair(qe, lengths, origin, ey, ez, shape, params, psi0, kind0, elem0, xi0, Y, Yp, Ypp):
     """Converge one contact pair of a section from a seed (docs/theory.md §II.4b).
 
     First Newton on (ξ, ψ) together (:func:`_joint_newton`, 2–3 iterations, accepted when it

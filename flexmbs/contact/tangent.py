@@ -52,7 +52,7 @@ T_OFF = 7 + 2 * CENTERLINE_SIZE
 
 
 @njit
-def _body_basis():  # noqa: ANN202
+def _body_basis():
     """``T(e_j)`` (3, 3, 4, 4): the point tensors of the body's unit vectors (T is linear in u)."""
     Te = np.zeros((3, 3, 4, 4))
     u = np.zeros(3)
@@ -64,7 +64,7 @@ def _body_basis():  # noqa: ANN202
 
 
 @njit
-def _t_times(u, x):  # noqa: ANN001, ANN202
+def _t_times(u, x):
     """``2 T(u) x`` (3, 4) = ∂(A(p)u)/∂p at p = x (with x = p) or the velocity term (x = ṗ)
     (:func:`~flexmbs.elements.rigid_body.point_jacobian_of`)."""
     out = np.empty((3, 4))
@@ -73,7 +73,7 @@ def _t_times(u, x):  # noqa: ANN001, ANN202
 
 
 @njit
-def _d_dot(a, Da, b, Db, out):  # noqa: ANN001, ANN202
+def _d_dot(a, Da, b, Db, out):
     """``out = D(a·b) = Daᵀ b + aᵀ Db`` (vectors a, b (3,), derivatives (3, N_EXT))."""
     for j in range(out.size):
         out[j] = (Da[0, j] * b[0] + Da[1, j] * b[1] + Da[2, j] * b[2]
@@ -81,7 +81,7 @@ def _d_dot(a, Da, b, Db, out):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y, Yp,  # noqa: ANN001, ANN202, PLR0913, PLR0915
+def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y, Yp,
                       Ypp):
     """Wall point ``Q = o + Y(ψ)`` of the paper's detection and its derivative (3, N_EXT): the
     crossing ξ_I, the section ellipse and the 2-D common normal differentiated implicitly
@@ -194,7 +194,7 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
 
 
 @njit(internal=True)
-def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  # noqa: ANN001, ANN202
+def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):
     """Wall point ``Q = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` of the consistent pair (docs/theory.md §II.4b)
     and its derivative (3, N_EXT): ψ moves with the coordinates by the implicit-function theorem
     on ``r₁ = (x − Q)·x_ξ = 0``, ``r₂ = (x − Q)·Q_ψ = 0`` (x on e_P at ξ_P), ``[Δξ, Δψ] =
@@ -259,7 +259,7 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):  #
 
 
 @njit
-def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,  # noqa: ANN001, ANN201, C901, PLR0912, PLR0913, PLR0915
+def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,
                     r_b, law, fric, hist, approach_velocity, consistent, paper, Qc, K, C,
                     held=False):
     """Force and exact tangent of one detected contact.

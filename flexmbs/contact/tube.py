@@ -46,7 +46,7 @@ POSE_WORK = 3 + 3 + 4 + 12 + 36 + 16 + 4 + 9
 
 
 @njit(inline="always")
-def _carve(work):  # noqa: ANN001, ANN202
+def _carve(work):
     """The work arrays of :data:`POSE_WORK` (views, nothing allocated)."""
     x = work[0:3]
     xd = work[3:6]
@@ -60,7 +60,7 @@ def _carve(work):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _right_product(p0, M):  # noqa: ANN001, ANN202
+def _right_product(p0, M):
     """``M`` (4, 4) with ``M h = h ⊗ p̄`` (Hamilton product; ``A(h ⊗ p̄) = A(h) A(p̄)``)."""
     s, a, b, c = p0[0], p0[1], p0[2], p0[3]
     M[0, 0], M[0, 1], M[0, 2], M[0, 3] = s, -a, -b, -c
@@ -70,7 +70,7 @@ def _right_product(p0, M):  # noqa: ANN001, ANN202
 
 
 @njit
-def quaternion_after(h, p0, out):  # noqa: ANN001, ANN201
+def quaternion_after(h, p0, out):
     """``out = h ⊗ p̄`` (the rotation ``A(p̄)`` followed by ``A(h)``)."""
     s, a, b, c = p0[0], p0[1], p0[2], p0[3]
     h0, h1, h2, h3 = h[0], h[1], h[2], h[3]
@@ -81,7 +81,7 @@ def quaternion_after(h, p0, out):  # noqa: ANN001, ANN201
 
 
 @njit
-def _carried(x, t_bar, h, Dh, D2h, second):  # noqa: ANN001, ANN202, PLR0915
+def _carried(x, t_bar, h, Dh, D2h, second):
     """The smallest rotation ``h`` (4) from ``t̄`` to ``x/|x|``, its derivative ``Dh`` (4, 3)
     and, with ``second``, its second derivative ``D2h`` (4, 3, 3) with respect to ``x``."""
     ell = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
@@ -130,7 +130,7 @@ def _carried(x, t_bar, h, Dh, D2h, second):  # noqa: ANN001, ANN202, PLR0915
 
 
 @njit
-def section_pose(qe, length, xi, t_bar, p0, ve, pose, vel, J, work):  # noqa: ANN001, ANN201
+def section_pose(qe, length, xi, t_bar, p0, ve, pose, vel, J, work):
     """Pose ``b = [r, p]`` (7) of the section at station ``xi`` of the element ``qe``
     (CENTERLINE_SIZE) with base tangent ``t̄`` and base frame ``p̄``, its rate ``ḃ`` (from
     the element's rates ``ve``) and ``J = ∂b/∂e`` (7, CENTERLINE_SIZE) (module docstring);
@@ -179,7 +179,7 @@ def section_pose(qe, length, xi, t_bar, p0, ve, pose, vel, J, work):  # noqa: AN
 
 
 @njit
-def pose_curvature(qe, length, xi, t_bar, p0, ve, lam, H, G, work):  # noqa: ANN001, ANN201
+def pose_curvature(qe, length, xi, t_bar, p0, ve, lam, H, G, work):
     """The pose's second-order terms at the section of :func:`section_pose`:
     ``H = Σ_i λ_i ∂²b_i/∂e²`` (CENTERLINE_SIZE, CENTERLINE_SIZE) for the force ``λ`` (7) on
     ``b``, and ``G = ∂(J ė)/∂e`` (7, CENTERLINE_SIZE), the pose rate's derivative at fixed
@@ -227,7 +227,7 @@ def pose_curvature(qe, length, xi, t_bar, p0, ve, lam, H, G, work):  # noqa: ANN
 
 
 @njit
-def rebase(qe, length, xi, t_bar, p0, work):  # noqa: ANN001, ANN201
+def rebase(qe, length, xi, t_bar, p0, work):
     """After a converged step: a section whose tangent turned more than ``acos(REBASE_COS)``
     from its base tangent takes its current tangent and frame as its base (``t_bar``, ``p0``
     updated in place; the pose is unchanged); ``work`` (:data:`POSE_WORK`). Returns whether

@@ -20,7 +20,7 @@ __all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_wh"
 
 
 @njit(refcount=False)
-def triad(x, p, val, jac):  # noqa: ANN001, ANN201
+def triad(x, p, val, jac):
     """node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄] (values, Jacobian)"""
     g0 = x[0]
     g1 = x[1]
@@ -206,7 +206,7 @@ def triad(x, p, val, jac):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def triad_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
+def triad_h(x, p, val, jac, hes):
     """node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄] (values, Jacobian, Hessians)"""
     g0 = x[0]
     g1 = x[1]
@@ -833,7 +833,7 @@ def triad_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def twist(x, p, val, jac):  # noqa: ANN001, ANN201
+def twist(x, p, val, jac):
     """nodal triads -> Δθ: x = [t0, d20, t1, d21] (values, Jacobian)"""
     ta0 = x[0]
     ta1 = x[1]
@@ -1010,7 +1010,7 @@ def twist(x, p, val, jac):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def twist_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
+def twist_h(x, p, val, jac, hes):
     """nodal triads -> Δθ: x = [t0, d20, t1, d21] (values, Jacobian, Hessians)"""
     ta0 = x[0]
     ta1 = x[1]
@@ -1869,7 +1869,7 @@ def twist_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def curvatures(x, p, val, jac):  # noqa: ANN001, ANN201
+def curvatures(x, p, val, jac):
     """point -> (K1, K2, K3): x = [r′, r″, t0, d20, Δθ], p = [ξ, L, μ] (values, Jacobian)"""
     rp0 = x[0]
     rp1 = x[1]
@@ -2192,7 +2192,7 @@ def curvatures(x, p, val, jac):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def curvatures_wh(x, p, hes):  # noqa: ANN001, ANN201
+def curvatures_wh(x, p, hes):
     """point -> (K1, K2, K3): x = [r′, r″, t0, d20, Δθ], p = [ξ, L, μ], σ: the weighted Hessian Σ_j σ_j ∂²K_j/∂x² only (p = [ξ, L, μ, σ])"""
     rp0 = x[0]
     rp1 = x[1]
@@ -3641,7 +3641,7 @@ def curvatures_wh(x, p, hes):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def axial(x, p, val, jac):  # noqa: ANN001, ANN201
+def axial(x, p, val, jac):
     """point -> ε: x = r′, p = [μ] (values, Jacobian)"""
     rp0 = x[0]
     rp1 = x[1]
@@ -3657,7 +3657,7 @@ def axial(x, p, val, jac):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def axial_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
+def axial_h(x, p, val, jac, hes):
     """point -> ε: x = r′, p = [μ] (values, Jacobian, Hessians)"""
     rp0 = x[0]
     rp1 = x[1]
@@ -3686,7 +3686,7 @@ def axial_h(x, p, val, jac, hes):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def spin(x, p, val, jac):  # noqa: ANN001, ANN201
+def spin(x, p, val, jac):
     """node (g, ġ) -> (w, b, s, c): x = [g, ġ], p = [t̄] (values, Jacobian)"""
     g0 = x[0]
     g1 = x[1]
@@ -4169,7 +4169,7 @@ def spin(x, p, val, jac):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def spin_value(x, p, val):  # noqa: ANN001, ANN201
+def spin_value(x, p, val):
     """node (g, ġ) -> (w, b, s, c): x = [g, ġ], p = [t̄] (values)"""
     g0 = x[0]
     g1 = x[1]

@@ -150,7 +150,7 @@ class CableRest(NamedTuple):
 # ---------------------------------------------------------------------------------------------
 # shape functions and quadrature
 @njit(inline="always")
-def hermite_basis(xi, L):  # noqa: ANN001, ANN201
+def hermite_basis(xi, L):
     """Cubic Hermite shape functions S1..S4 (docs/theory.md §I.1.1) and their first, second and third
     ξ-derivatives, as four 4-tuples (no allocation): the one statement of the element's basis."""
     x2 = xi * xi
@@ -164,7 +164,7 @@ def hermite_basis(xi, L):  # noqa: ANN001, ANN201
 
 
 @njit
-def _basis_table(xi, L, S, dS, ddS):  # noqa: ANN001, ANN202
+def _basis_table(xi, L, S, dS, ddS):
     for i in range(xi.size):
         s, d, dd, _ = hermite_basis(xi[i], L[i])
         for n in range(4):
@@ -192,7 +192,7 @@ def shape_functions(xi: np.ndarray, length: np.ndarray
 
 
 @njit
-def shape_xi(xi, length):  # noqa: ANN001, ANN201
+def shape_xi(xi, length):
     """S1..S4 and their ξ-derivatives (docs/theory.md §II.0) as arrays (4,) (:func:`hermite_basis`)."""
     s, d, dd, _ = hermite_basis(xi, length)
     S = np.empty(4)
@@ -206,13 +206,13 @@ def shape_xi(xi, length):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _combine(w, q, c):  # noqa: ANN001, ANN202
+def _combine(w, q, c):
     """Component c of ``Σ_m w_m q_m`` over the element's four coordinate triples."""
     return w[0] * q[c] + w[1] * q[3 + c] + w[2] * q[6 + c] + w[3] * q[9 + c]
 
 
 @njit(inline="always")
-def element_point_values(q, L, xi):  # noqa: ANN001, ANN201
+def element_point_values(q, L, xi):
     """Centreline point of one element: ``r, r_ξ, r_ξξ`` at ξ as three 3-tuples (no
     allocation: the crossing and projection Newton loops) from its coordinates
     ``q = [r0, r0′, r1, r1′]`` (any real ξ: the cubic is extrapolated), r = S(ξ) q."""
@@ -223,7 +223,7 @@ def element_point_values(q, L, xi):  # noqa: ANN001, ANN201
 
 
 @njit
-def element_point(q, L, xi):  # noqa: ANN001, ANN201
+def element_point(q, L, xi):
     """:func:`element_point_values` as arrays (3,) ``r, r_ξ, r_ξξ``."""
     v, vx, vxx = element_point_values(q, L, xi)
     r = np.empty(3)
@@ -391,13 +391,13 @@ def kernel_work() -> KernelWork:
 
 
 @njit(inline="always")
-def _at(d, x, e, c):  # noqa: ANN001, ANN202
+def _at(d, x, e, c):
     """Σ_n d[n] x[e, 3n + c] with the four shape-function values as scalars."""
     return d[0] * x[e, c] + d[1] * x[e, 3 + c] + d[2] * x[e, 6 + c] + d[3] * x[e, 9 + c]
 
 
 @njit(inline="always")
-def _axial_point(q, v, e, k, rest, EA, dA):  # noqa: ANN001, ANN202
+def _axial_point(q, v, e, k, rest, EA, dA):
     """The axial resultant at axial point k of element e (docs/theory.md §I.1.4): a = S′q, the
     unit tangent t = a/|a|, |a|, t·ȧ, N = EA(|a|/μ − 1 − ε_off) + d_ε t·ȧ/μ and ȧ = S′q̇;
     every quantity a scalar (both kernels: :func:`_internal_forces`, :func:`_internal_kernel`)."""
@@ -414,7 +414,7 @@ def _axial_point(q, v, e, k, rest, EA, dA):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _bending_point(q, v, e, k, rest, EI, dB, scalar):  # noqa: ANN001, ANN202
+def _bending_point(q, v, e, k, rest, EI, dB, scalar):
     """The bending terms at bending point k of element e (docs/theory.md §I.1.4): a = S′q,
     b = S″q and their rates ȧ, ḃ, g = μ|a|², the curvature K = a×b/g, its rate
     K̇ = B1 ȧ + B2 ḃ = (a×ḃ − b×ȧ)/g − 2μ(a·ȧ) K/g, the moment m_eff (vector law
@@ -465,7 +465,7 @@ def _bending_point(q, v, e, k, rest, EI, dB, scalar):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
+def _internal_forces(q, v, props, rest, scalar, force):
     """Q_int per element without its derivatives (docs/theory.md §I.1.4): the residual's kernel.
     The quadrature points' terms are scalars (:func:`_axial_point`, :func:`_bending_point`),
     held in registers: 4.6 → 2.4 µs for Example 1's 16 elements against the tangent kernel's
@@ -501,7 +501,7 @@ def _internal_forces(q, v, props, rest, scalar, force):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _add_skew(M, x, s):  # noqa: ANN001, ANN202
+def _add_skew(M, x, s):
     """``M += s x̃`` (x̃ the cross-product matrix of x: x̃ y = x × y)."""
     M[0, 1] -= s * x[2]
     M[0, 2] += s * x[1]
@@ -512,7 +512,7 @@ def _add_skew(M, x, s):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def _add_point_blocks(mat, e, W, ds, dds, P11, P12, P21, P22, TU):  # noqa: ANN001, ANN202
+def _add_point_blocks(mat, e, W, ds, dds, P11, P12, P21, P22, TU):
     """``mat[e] += W Gᵀ [P11 P12; P21 P22] G``, G = [S′ ⊗ I; S″ ⊗ I]: node block (n, m)
     += W (S′_nS′_m P11 + S′_nS″_m P12 + S″_nS′_m P21 + S″_nS″_m P22), in two stages
     T_n = W(S′_n P11 + S″_n P21), U_n = W(S′_n P12 + S″_n P22) (``TU``, (8, 3, 3)), then
@@ -534,7 +534,7 @@ def _add_point_blocks(mat, e, W, ds, dds, P11, P12, P21, P22, TU):  # noqa: ANN0
 
 
 @njit
-def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, damp, work):  # noqa: ANN001, ANN202, C901, PLR0912, PLR0915
+def _internal_kernel(q, v, props, rest, scalar, want_k, want_c, force, stiff, damp, work):
     """Q_int, ∂Q_int/∂q, ∂Q_int/∂q̇ per element (docs/theory.md §I.1.4, derivation in the notes).
 
     Each S′_i has a single non-zero component, so every 12×12 contribution of a quadrature point
@@ -923,7 +923,7 @@ def _empty_rest() -> CableRest:
 
 
 @njit
-def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
+def beam_residual(bm, q, v, qdd, mode, r):
     """``r_q += Q_int(q, q̇) (+ M q̈ with inertia)`` of the elements (docs/theory.md §I.1.2, §I.1.4);
     returns the largest single force (an element force entry or a row of M q̈)."""
     gather_states(bm, q, v, mode)
@@ -932,7 +932,7 @@ def beam_residual(bm, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit
-def beam_jacobian(bm, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def beam_jacobian(bm, q, v, qdd, mode, cM, cC, cK, data):
     """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` into the CSC ``data``; returns the largest
     diagonal stiffness entry (the scale of the rounding floor of the convergence test)."""
     gather_states(bm, q, v, mode)

@@ -207,7 +207,7 @@ def new_work() -> RodWork:
 # ---------------------------------------------------------------------------------------------
 # the nodal maps and the strain measures (values; docs/theory.md §I.2.1–2.2)
 @njit(refcount=False)
-def _node_inputs(q_e, t_bar, d_bar, w, a):  # noqa: ANN001, ANN202
+def _node_inputs(q_e, t_bar, d_bar, w, a):
     """Node slot ``a``'s (g, φ) into ``x_node`` and its base (t̄, D̄) into ``p_node``."""
     o = a * NODE_SIZE
     for c in range(3):
@@ -218,7 +218,7 @@ def _node_inputs(q_e, t_bar, d_bar, w, a):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _shared_triad(w, hessian):  # noqa: ANN001, ANN202
+def _shared_triad(w, hessian):
     """Node 0's triad (and its Hessian) is the previous element's node 1: copy slot 1 to 0."""
     for c in range(6):
         w.t_val[0, c] = w.t_val[1, c]
@@ -230,7 +230,7 @@ def _shared_triad(w, hessian):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _nodal_jacobian(w):  # noqa: ANN001, ANN202
+def _nodal_jacobian(w):
     """``x_tw`` from both triads, and ``n_jac`` = ∂(t_0, d2_0, Δθ)/∂u (after the twist map)."""
     nj = w.n_jac
     for c in range(6):
@@ -246,14 +246,14 @@ def _nodal_jacobian(w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _twist_inputs(w):  # noqa: ANN001, ANN202
+def _twist_inputs(w):
     for a in range(2):
         for c in range(6):
             w.x_tw[6 * a + c] = w.t_val[a, c]
 
 
 @njit(refcount=False)
-def _nodal(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
+def _nodal(q_e, t_bar, d_bar, w, shared):
     """Both nodal triads and Δθ of one element, with ``n_jac``: the derivatives of
     n = (t_0, d2_0, Δθ) with respect to u = (g_0, φ_0, g_1, φ_1). ``shared``: node 0 is the
     previous element's node 1, whose triad is still in the work arrays."""
@@ -268,7 +268,7 @@ def _nodal(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _nodal_hessian(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
+def _nodal_hessian(q_e, t_bar, d_bar, w, shared):
     """:func:`_nodal` with the second derivatives ``n_hes`` (the tangent's; ``shared`` as
     there, the previous element's Hessian too)."""
     if shared:
@@ -307,7 +307,7 @@ def _nodal_hessian(q_e, t_bar, d_bar, w, shared):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _centerline_rows(q_e, L, xi, w):  # noqa: ANN001, ANN202
+def _centerline_rows(q_e, L, xi, w):
     """r′, r″ at ξ into ``x_z`` and their weights ``ab`` (∂z/∂q of the centreline rows: r′ and
     r″ are Σ_m ab[·, m] X_m over the Hermite coordinates X_m = CENTERLINE[3m:3m+3])."""
     _, dS, ddS, _ = hermite_basis(xi, L)
@@ -326,7 +326,7 @@ def _centerline_rows(q_e, L, xi, w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _curvature_point(q_e, L, xi, mu, w):  # noqa: ANN001, ANN202
+def _curvature_point(q_e, L, xi, mu, w):
     """(K1, K2, K3) at ξ (after :func:`_nodal`) into ``c_val``, with ``c_jac`` with respect to
     z = (r′, r″, t_0, d2_0, Δθ)."""
     _centerline_rows(q_e, L, xi, w)
@@ -341,7 +341,7 @@ def _curvature_point(q_e, L, xi, mu, w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _curvature_hessian(w, weights, out):  # noqa: ANN001, ANN202
+def _curvature_hessian(w, weights, out):
     """``out = Σ_j weights_j ∂²K_j/∂z²`` at the point of the last :func:`_curvature_point`."""
     for j in range(3):
         w.p_c[3 + j] = weights[j]
@@ -349,7 +349,7 @@ def _curvature_hessian(w, weights, out):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _axial_point(q_e, L, xi, mu, w):  # noqa: ANN001, ANN202
+def _axial_point(q_e, L, xi, mu, w):
     """ε at ξ into ``a_val``, with ``a_jac`` with respect to r′."""
     _centerline_rows(q_e, L, xi, w)
     w.p_a[0] = mu
@@ -357,7 +357,7 @@ def _axial_point(q_e, L, xi, mu, w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _z_dot(ab, n_jac, x, n_z, nodal, out):  # noqa: ANN001, ANN202
+def _z_dot(ab, n_jac, x, n_z, nodal, out):
     """``out = ∂z/∂q · x`` (the first ``n_z`` inputs z) for an element vector x (14,)."""
     for c in range(3):
         a = 0.0
@@ -378,7 +378,7 @@ def _z_dot(ab, n_jac, x, n_z, nodal, out):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _z_transpose(ab, n_jac, y, n_z, nodal, out):  # noqa: ANN001, ANN202
+def _z_transpose(ab, n_jac, y, n_z, nodal, out):
     """``out += (∂z/∂q)ᵀ y`` for y over the first ``n_z`` inputs z."""
     for m in range(4):
         for c in range(3):
@@ -395,7 +395,7 @@ def _z_transpose(ab, n_jac, y, n_z, nodal, out):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):  # noqa: ANN001, ANN202
+def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):
     """(ε, K1, K2, K3) at the points ``xi`` of one element into ``out`` (len(xi), 4); μ per point."""
     _nodal(q_e, t_bar, d_bar, w, False)
     for k in range(xi.size):
@@ -407,7 +407,7 @@ def _strains_at(q_e, L, t_bar, d_bar, xi, mu, w, out):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _energies(q_e, props, rest, work, out):  # noqa: ANN001, ANN202
+def _energies(q_e, props, rest, work, out):
     for e in range(q_e.shape[0]):
         L = props.length[e]
         _nodal(q_e[e], rest.t_bar[e], rest.d_bar[e], work, False)
@@ -455,7 +455,7 @@ def strain_measures(q_e: np.ndarray, t_bar: np.ndarray, d_bar: np.ndarray, lengt
 # ---------------------------------------------------------------------------------------------
 # internal force and its exact derivatives (docs/theory.md §I.2.3)
 @njit(refcount=False)
-def _point_force(val, jac, n_z, coef, ref, W, beta, ve, w, nodal, force):  # noqa: ANN001, ANN202
+def _point_force(val, jac, n_z, coef, ref, W, beta, ve, w, nodal, force):
     """Add one quadrature point's force of the strains ``val`` (with their derivatives ``jac``
     with respect to the first ``n_z`` inputs z; ∂z/∂q is sparse: the Hermite weights ``ab`` on
     the centreline and, with ``nodal``, ``n_jac`` on the nodal inputs u):
@@ -501,7 +501,7 @@ def _point_force(val, jac, n_z, coef, ref, W, beta, ve, w, nodal, force):  # noq
 
 
 @njit(refcount=False)
-def _point_tangent(jac, hes, h_sig, n_z, coef, W, beta, w, nodal, want_c, stiff, damp):  # noqa: ANN001, ANN202, C901, PLR0912
+def _point_tangent(jac, hes, h_sig, n_z, coef, W, beta, w, nodal, want_c, stiff, damp):
     """Add one quadrature point's tangents (after :func:`_point_force`, with its ``sig`` and
     ``z_v``; ``hes`` the strains' Hessians with respect to z and ``h_sig = sig``, or, without
     damping, their sum weighted by σ, ``hes[0] = Σ_j σ_j ∂²e_j/∂z²`` and ``h_sig = [1]``):
@@ -596,7 +596,7 @@ def _point_tangent(jac, hes, h_sig, n_z, coef, W, beta, w, nodal, want_c, stiff,
 
 
 @njit(refcount=False)
-def _nodal_force(w, force):  # noqa: ANN001, ANN202
+def _nodal_force(w, force):
     """``Q_u += (∂n/∂u)ᵀ g_n``: the nodal part of an element's force (:func:`_point_force`)."""
     nj = w.n_jac
     gn = w.g_n
@@ -608,7 +608,7 @@ def _nodal_force(w, force):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _centerline_tangent(w, stiff):  # noqa: ANN001, ANN202
+def _centerline_tangent(w, stiff):
     """The centreline-centreline block of an element's tangent, summed over its points in
     ``p_cc`` (:func:`_point_tangent`), into the element matrix."""
     pcc = w.p_cc
@@ -619,7 +619,7 @@ def _centerline_tangent(w, stiff):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _nodal_tangent(w, stiff):  # noqa: ANN001, ANN202
+def _nodal_tangent(w, stiff):
     """The nodal blocks of an element's tangent (:func:`_point_tangent`) through ∂n/∂u: the
     centreline-nodal ``p_cn ∂n/∂u`` (both ways) and ``(∂n/∂u)ᵀ p_nn ∂n/∂u + Σ_c g_n,c
     ∂²n_c/∂u²``."""
@@ -652,7 +652,7 @@ def _nodal_tangent(w, stiff):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _element_coefficients(props, e, w):  # noqa: ANN001, ANN202
+def _element_coefficients(props, e, w):
     """The section stiffnesses C_j of element ``e`` into the work arrays."""
     w.a_coef[0] = props.EA[e]
     w.c_coef[0] = props.GJ[e]
@@ -661,7 +661,7 @@ def _element_coefficients(props, e, w):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _element_forces(q, v, props, rest, w, e, force):  # noqa: ANN001, ANN202
+def _element_forces(q, v, props, rest, w, e, force):
     """Element ``e``'s internal force into ``force`` (zeroed here); :func:`_rod_tangents` makes
     the same pass with the tangents."""
     L = props.length[e]
@@ -689,7 +689,7 @@ def _element_forces(q, v, props, rest, w, e, force):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _rod_forces(q, v, props, rest, w, force):  # noqa: ANN001, ANN202
+def _rod_forces(q, v, props, rest, w, force):
     """Q_int = ∂U/∂q + damping of every element (:func:`_point_force`; docs/theory.md §I.2.2,
     the axial strain at the Lobatto points, the curvatures at the Gauss points, W = w μ L)."""
     for e in range(q.shape[0]):
@@ -697,7 +697,7 @@ def _rod_forces(q, v, props, rest, w, force):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: ANN001, ANN202, C901
+def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):
     """Q_int, ∂Q_int/∂q and (with ``want_c``) ∂Q_int/∂q̇ of every element, by the chain rule
     through the generated maps: e = e(z(q)), z = (r′, r″, n(u)),
 
@@ -767,7 +767,7 @@ def _rod_tangents(q, v, props, rest, w, want_c, force, stiff, damp):  # noqa: AN
 
 
 @njit(refcount=False)
-def _same_node(q, rest, e):  # noqa: ANN001, ANN202
+def _same_node(q, rest, e):
     """Whether node 0 of element ``e`` has exactly the inputs (g, φ, t̄, D̄) of node 1 of
     element ``e − 1`` (a shared node: its triad is the same)."""
     for i in range(SLOPE, NODE_SIZE):
@@ -896,7 +896,7 @@ def rest_state(q_ref_e: np.ndarray, props: RodProperties, t_bar: np.ndarray,
 
 
 @njit
-def node_director(q_node, t_bar, d_bar, val, jac, hes, hessian):  # noqa: ANN001, ANN201
+def node_director(q_node, t_bar, d_bar, val, jac, hes, hessian):
     """The director d2 (3,) of a node ``q_node = [r, g, φ]`` on its base (t̄, D̄) into ``val``,
     its derivatives with respect to (g, φ) into ``jac`` (3, 4) and, with ``hessian``, ``hes``
     (3, 4, 4) (what a joint holding the node's section reads, §2.3)."""
@@ -1046,7 +1046,7 @@ def pack_rods(element_dofs: np.ndarray, props: RodProperties, options: object, q
 
 
 @njit(refcount=False)
-def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
+def rod_residual(rp, q, v, qdd, mode, r):
     """``r_q += Q_int(q, q̇) (+ M q̈ and the sections' spin inertia)`` of the rod elements;
     returns the force scale."""
     gather_states(rp, q, v, mode)
@@ -1058,7 +1058,7 @@ def rod_residual(rp, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def rod_jacobian(rp, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def rod_jacobian(rp, q, v, qdd, mode, cM, cC, cK, data):
     """``cK ∂Q/∂q + cC ∂Q/∂q̇ + cM ∂Q/∂q̈`` of the internal and inertial forces into ``data``;
     returns the stiffness scale."""
     gather_states(rp, q, v, mode)
@@ -1070,7 +1070,7 @@ def rod_jacobian(rp, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):  # noqa: ANN001, ANN202, C901, PLR0912
+def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):
     """The sections' spin inertia beyond the constant ``M_φ φ̈`` (§2.3, §2.4): the twist
     kinetic energy ``½ ωᵀ M_φ ω`` per element counts the spin ``ω_a = φ̇_a + w_a`` of each
     node's section (``w_a = b_a·ġ_a`` the spin of its chart, generated ``spin`` map), so the
@@ -1165,7 +1165,7 @@ def _spin_inertia(rp, q, v, qdd, r, data, cM, cC, cK, matrix):  # noqa: ANN001, 
 
 
 @njit(refcount=False)
-def _same_spin_node(rp, e):  # noqa: ANN001, ANN202
+def _same_spin_node(rp, e):
     """Whether node 0 of element ``e`` is node 1 of element ``e − 1`` with the same base tangent
     (then its spin map is the same)."""
     for i in range(SLOPE, SLOPE + 3):
@@ -1178,7 +1178,7 @@ def _same_spin_node(rp, e):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def rod_post_step(rp, q, error):  # noqa: ANN001, ANN201
+def rod_post_step(rp, q, error):
     """After a converged step: every node's tangent within :data:`TURN_LIMIT` of its base
     tangent (``rp.limits[1]``), else :data:`ERR_NODE_TURNED` with ``error[2]`` = 2 × element +
     node slot."""
@@ -1191,7 +1191,7 @@ def rod_post_step(rp, q, error):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def _base_cosine(rp, q, e, a):  # noqa: ANN001, ANN202
+def _base_cosine(rp, q, e, a):
     """t̄·t of node slot ``a`` of element ``e``: the cosine of its tangent's turn from its base."""
     o = a * NODE_SIZE + SLOPE
     g0 = q[rp.dofs[e, o]]
@@ -1202,7 +1202,7 @@ def _base_cosine(rp, q, e, a):  # noqa: ANN001, ANN202
 
 
 @njit
-def rod_rebase(rp, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN201
+def rod_rebase(rp, q, v, qdd, acc, log, count):
     """Re-base every node whose tangent turned past :data:`REBASE_LIMIT` (``rp.limits[0]``) from
     its base (§2.4):
     ``t̄ ← t, D̄ ← d2, φ ← 0`` (the triad, hence every strain, unchanged), ``φ̇ ← φ̇ + ω_SR·t``
@@ -1263,7 +1263,7 @@ def rod_rebase(rp, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN201
 
 
 @njit
-def rod_set_bases(rp, log, start, stop):  # noqa: ANN001, ANN201
+def rod_set_bases(rp, log, start, stop):
     """Give the nodes of ``log[start:stop]`` (records ``[twist coordinate, t̄, D̄]``) their bases in
     every element that holds them; returns ``stop``."""
     for i in range(start, stop):

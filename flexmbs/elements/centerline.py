@@ -26,18 +26,18 @@ __all__ = ["dot3", "cross3", "beam_point", "section_crossing", "section_crossing
            "closest_point_kernel"]
 
 @njit(inline="always")
-def _clip(x, lo, hi):  # noqa: ANN001, ANN202
+def _clip(x, lo, hi):
     return lo if x < lo else (hi if x > hi else x)
 
 
 @njit
-def beam_point(q_e, lengths, elem, xi):  # noqa: ANN001, ANN201
+def beam_point(q_e, lengths, elem, xi):
     """``(r, r_ξ, r_ξξ)`` of element ``elem`` at ξ (docs/theory.md §II.0, r = S(ξ)e_k)."""
     return _elem_point(q_e[elem], lengths[elem], xi)
 
 
 @njit(inline="always")
-def _locate(s, n):  # noqa: ANN001, ANN202
+def _locate(s, n):
     """Global parameter s ∈ [0, n] -> (element, ξ); a node belongs to the element it starts."""
     e = int(math.floor(s))
     if e < 0:
@@ -48,12 +48,12 @@ def _locate(s, n):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def dot3(a, b):  # noqa: ANN001, ANN202
+def dot3(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 @njit(inline="always")
-def cross3(a, b):  # noqa: ANN001, ANN202
+def cross3(a, b):
     out = np.empty(3)
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
@@ -62,7 +62,7 @@ def cross3(a, b):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _phi_at(q_e, lengths, origin, normal, s):  # noqa: ANN001, ANN202
+def _phi_at(q_e, lengths, origin, normal, s):
     n = q_e.shape[0]
     e, xi = _locate(s, n)
     r, rx, _ = element_point_values(q_e[e], lengths[e], xi)
@@ -71,7 +71,7 @@ def _phi_at(q_e, lengths, origin, normal, s):  # noqa: ANN001, ANN202
 
 
 @njit
-def bracketed_newton_step(s, f, df, lo, hi, flo):  # noqa: ANN001, ANN201
+def bracketed_newton_step(s, f, df, lo, hi, flo):
     """One Newton step on a bracketed root, bisection when it would leave the bracket: the
     bracket ``[lo, hi]`` (``flo`` = f(lo)) shrinks to the side of s that keeps the sign change.
     Returns ``(s_new, lo, hi, flo)`` (used by every bracketed root search of the package)."""
@@ -87,7 +87,7 @@ def bracketed_newton_step(s, f, df, lo, hi, flo):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter, s0):  # noqa: ANN001, ANN202
+def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter, s0):
     """Root of φ(s) in [lo, hi] with φ(lo)φ(hi) ≤ 0: Newton from ``s0`` (the midpoint when
     ``s0`` is not inside the bracket), bisection if it leaves the bracket."""
     s = s0 if lo < s0 < hi else 0.5 * (lo + hi)
@@ -103,7 +103,7 @@ def _solve_in_bracket(q_e, lengths, origin, normal, lo, hi, flo, tol, max_iter, 
 
 
 @njit(inline="always")
-def _control_point(q, L, m, c):  # noqa: ANN001, ANN202
+def _control_point(q, L, m, c):
     """Component c of the element's Bézier control point m: ``r0``, ``r0 + L r0′/3``,
     ``r1 − L r1′/3``, ``r1`` (the cubic lies in their convex hull)."""
     if m == 0:
@@ -116,7 +116,7 @@ def _control_point(q, L, m, c):  # noqa: ANN001, ANN202
 
 
 @njit(inline="always")
-def element_bounding_sphere(q, L, centre):  # noqa: ANN001, ANN201
+def element_bounding_sphere(q, L, centre):
     """A sphere holding the element's centreline (the cubic's Bézier control points ``r0``,
     ``r0 + L r0′/3``, ``r1 − L r1′/3``, ``r1``: the curve lies in their convex hull): writes the
     centre (3,) and returns the radius."""
@@ -142,7 +142,7 @@ def element_tree_size(n_elem: int) -> int:
 
 
 @njit
-def element_tree(q_e, lengths, tree):  # noqa: ANN001, ANN201
+def element_tree(q_e, lengths, tree):
     """Bounding spheres of a chain's elements and of their consecutive runs, for a broad phase
     that visits O(log n) of them (issue 52: a hole's detection no longer touches every element
     of its beam). ``tree`` (:func:`element_tree_size`, 4): rows ``[centre, radius]`` in heap
@@ -179,7 +179,7 @@ def element_tree(q_e, lengths, tree):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def element_plane_range(q, L, origin, normal):  # noqa: ANN001, ANN201
+def element_plane_range(q, L, origin, normal):
     """Least and largest signed distance ``n·(P − O)`` of the element's Bézier control points
     from the plane (the centreline cannot cross the plane unless they straddle it)."""
     lo = np.inf
@@ -194,7 +194,7 @@ def element_plane_range(q, L, origin, normal):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, s_out):  # noqa: ANN001, ANN201
+def element_crossings(q_e, lengths, e, origin, normal, tol, max_iter, xi_start, s_out):
     """Every crossing of element ``e`` with the plane ``n·(x − O) = 0`` (chain parameter
     ``s = e + ξ`` into ``s_out``, at most 3: a cubic). When the Bézier control values of φ
     are monotone the cubic has one root, found by bracketed Newton from ``xi_start`` (the last
@@ -265,7 +265,7 @@ def section_crossing(q_e: np.ndarray, lengths: np.ndarray, origin: np.ndarray, n
 
 
 @njit
-def section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, tol, max_iter, max_distance):  # noqa: ANN001, ANN201
+def section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, tol, max_iter, max_distance):
     """Crossing of the beam centreline with the plane n·(x − O) = 0 (docs/theory.md §II.2).
 
     Safeguarded Newton on φ(s) = n·(r(s) − O) from ``s = elem0 + xi0`` (steps ≤ 1 element, across
@@ -354,7 +354,7 @@ def closest_point(q_e: np.ndarray, lengths: np.ndarray, Q: np.ndarray, elem0: in
 
 
 @njit
-def closest_point_kernel(q_e, lengths, Q, elem0, xi0, tol, max_iter):  # noqa: ANN001, ANN201
+def closest_point_kernel(q_e, lengths, Q, elem0, xi0, tol, max_iter):
     """Closest-point projection of Q on the centreline (docs/theory.md §II.4).
 
     Newton on ``h(s) = (r − Q)·r_ξ`` with ``h_ξ = r_ξ·r_ξ + (r − Q)·r_ξξ`` from ``s = elem0 + xi0``;

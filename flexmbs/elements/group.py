@@ -36,7 +36,7 @@ __all__ = ["gather_states", "add_residual", "add_matrix", "element_residual", "e
 
 
 @njit(inline="always")
-def gather_states(part, q, v, mode):  # noqa: ANN001, ANN201
+def gather_states(part, q, v, mode):
     """``qe, ve`` of the part's elements from the global ``q, v`` (``ve = 0`` without damping)."""
     damping = mode[WITH_DAMPING] != 0.0
     dofs = part.dofs
@@ -47,7 +47,7 @@ def gather_states(part, q, v, mode):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def add_residual(part, qdd, mode, r):  # noqa: ANN001, ANN201
+def add_residual(part, qdd, mode, r):
     """``r += Q_int (+ M q̈ with inertia)`` from ``part.force``; returns the largest single force
     (an element force entry or a row of M q̈)."""
     inertia = mode[WITH_INERTIA] != 0.0
@@ -71,7 +71,7 @@ def add_residual(part, qdd, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(inline="always")
-def add_matrix(part, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def add_matrix(part, cM, cC, cK, data):
     """``cK ∂Q_int/∂q + cC ∂Q_int/∂q̇ + cM M`` from ``part.stiff, part.damp, part.mass`` into the
     CSC ``data``; returns the largest diagonal stiffness (the rounding floor's scale)."""
     dofs = part.dofs
@@ -135,69 +135,69 @@ if HAVE_NUMBA:
         return None
 
     @overload(element_residual)
-    def _residual_overload(part, q, v, qdd, mode, r):  # noqa: ANN001, ANN202
+    def _residual_overload(part, q, v, qdd, mode, r):
         et = _registered(part)
         if et is None:
             return None
         kernel = et.residual
 
-        def impl(part, q, v, qdd, mode, r):  # noqa: ANN001, ANN202
+        def impl(part, q, v, qdd, mode, r):
             return kernel(part, q, v, qdd, mode, r)
         return impl
 
     @overload(element_post_step)
-    def _post_step_overload(part, q, error):  # noqa: ANN001, ANN202
+    def _post_step_overload(part, q, error):
         et = _registered(part)
         if et is None:
             return None
         check = et.post_step
         if check is None:
-            def none(part, q, error):  # noqa: ANN001, ANN202
+            def none(part, q, error):
                 return np.int64(0)
             return none
 
-        def impl(part, q, error):  # noqa: ANN001, ANN202
+        def impl(part, q, error):
             return np.int64(check(part, q, error))
         return impl
 
     @overload(element_rebase)
-    def _rebase_overload(part, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN202
+    def _rebase_overload(part, q, v, qdd, acc, log, count):
         et = _registered(part)
         if et is None:
             return None
         rebase = et.rebase
         if rebase is None:
-            def none(part, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN202
+            def none(part, q, v, qdd, acc, log, count):
                 return count
             return none
 
-        def impl(part, q, v, qdd, acc, log, count):  # noqa: ANN001, ANN202
+        def impl(part, q, v, qdd, acc, log, count):
             return rebase(part, q, v, qdd, acc, log, count)
         return impl
 
     @overload(element_set_bases)
-    def _set_bases_overload(part, log, start, stop):  # noqa: ANN001, ANN202
+    def _set_bases_overload(part, log, start, stop):
         et = _registered(part)
         if et is None:
             return None
         set_bases = et.set_bases
         if set_bases is None:
-            def none(part, log, start, stop):  # noqa: ANN001, ANN202
+            def none(part, log, start, stop):
                 return stop
             return none
 
-        def impl(part, log, start, stop):  # noqa: ANN001, ANN202
+        def impl(part, log, start, stop):
             return set_bases(part, log, start, stop)
         return impl
 
     @overload(element_jacobian)
-    def _jacobian_overload(part, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
+    def _jacobian_overload(part, q, v, qdd, mode, cM, cC, cK, data):
         et = _registered(part)
         if et is None:
             return None
         kernel = et.jacobian
 
-        def impl(part, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN202
+        def impl(part, q, v, qdd, mode, cM, cC, cK, data):
             return kernel(part, q, v, qdd, mode, cM, cC, cK, data)
         return impl
 
@@ -223,14 +223,14 @@ if HAVE_NUMBA:
     def _nth_compiled(k: int) -> Any:
         """``parts[k]``, or ``None`` past the end of the tuple, decided when typed."""
         @intrinsic
-        def nth(typingctx, parts):  # noqa: ANN001, ANN202
+        def nth(typingctx, parts):
             if k < len(parts):
-                def codegen(context, builder, sig, args):  # noqa: ANN001, ANN202
+                def codegen(context, builder, sig, args):
                     return impl_ret_borrowed(context, builder, sig.return_type,
                                              builder.extract_value(args[0], k))
                 return parts.types[k](parts), codegen
 
-            def codegen_none(context, builder, sig, args):  # noqa: ANN001, ANN202
+            def codegen_none(context, builder, sig, args):
                 return context.get_constant_null(sig.return_type)
             return types.none(parts), codegen_none
         return nth
@@ -242,14 +242,14 @@ if HAVE_NUMBA:
         for every kernel it calls). For ``None`` or an unregistered kernel: ``0`` of type
         ``result``, or the argument at ``passthrough``."""
         @intrinsic
-        def call(typingctx, part, *args):  # noqa: ANN001, ANN202
+        def call(typingctx, part, *args):
             args = args[0] if len(args) == 1 and isinstance(args[0], types.StarArgTuple) else args
             kernel = None if isinstance(part, types.NoneType) else getattr(
                 _registered(part), field, None)
             rtype = result if passthrough is None else args[passthrough]
             sig = rtype(part, types.StarArgTuple(args))
             if kernel is None:
-                def codegen_absent(context, builder, signature, cargs):  # noqa: ANN001, ANN202
+                def codegen_absent(context, builder, signature, cargs):
                     if passthrough is None:
                         return context.get_constant(rtype, 0)
                     return builder.extract_value(cargs[1], passthrough)
@@ -257,7 +257,7 @@ if HAVE_NUMBA:
             fnty = typingctx.resolve_value_type(kernel)
             ksig = typingctx.resolve_function_type(fnty, (part, *args), {})
 
-            def codegen(context, builder, signature, cargs):  # noqa: ANN001, ANN202
+            def codegen(context, builder, signature, cargs):
                 flat = [cargs[0]] + [builder.extract_value(cargs[1], i) for i in range(len(args))]
                 value = context.get_function(fnty, ksig)(builder, flat)
                 return context.cast(builder, value, ksig.return_type, rtype)
@@ -290,7 +290,7 @@ _n0, _n1, _n2, _n3, _n4, _n5, _n6, _n7 = _nth
 
 
 @njit(internal=True)
-def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
+def groups_residual(parts, q, v, qdd, mode, r):
     """``r_q += Q_int + M q̈`` of every element group; the largest single force."""
     s = _residual(_n0(parts), q, v, qdd, mode, r)
     s = max(s, _residual(_n1(parts), q, v, qdd, mode, r))
@@ -303,7 +303,7 @@ def groups_residual(parts, q, v, qdd, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def groups_jacobian(parts, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def groups_jacobian(parts, q, v, qdd, mode, cM, cC, cK, data):
     """The matrix blocks of every element group; the largest diagonal stiffness."""
     s = _jacobian(_n0(parts), q, v, qdd, mode, cM, cC, cK, data)
     s = max(s, _jacobian(_n1(parts), q, v, qdd, mode, cM, cC, cK, data))
@@ -316,7 +316,7 @@ def groups_jacobian(parts, q, v, qdd, mode, cM, cC, cK, data):  # noqa: ANN001, 
 
 
 @njit(inline="always")
-def _check(part, q, error, k, found):  # noqa: ANN001, ANN202
+def _check(part, q, error, k, found):
     """The first error code of the groups' checks; ``error[1]`` = the part's position."""
     if found != 0:
         return found
@@ -328,7 +328,7 @@ def _check(part, q, error, k, found):  # noqa: ANN001, ANN202
 
 
 @njit(internal=True)
-def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
+def groups_post_step(parts, q, error):
     """The element groups' checks after a converged step: the first error code (``error[1]`` =
     the part's position in ``parts``), or 0."""
     found = _check(_n0(parts), q, error, 0, 0)
@@ -342,7 +342,7 @@ def groups_post_step(parts, q, error):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
+def groups_rebase(parts, q, v, qdd, acc, log):
     """Re-base the nodal frames of every element group that has charts (docs/theory.md §I.2.4) after
     a converged step; returns the number of records written to ``log``."""
     count = _rebase(_n0(parts), q, v, qdd, acc, log, 0)
@@ -356,7 +356,7 @@ def groups_rebase(parts, q, v, qdd, acc, log):  # noqa: ANN001, ANN201
 
 
 @njit(internal=True)
-def groups_set_bases(parts, log, stop):  # noqa: ANN001, ANN201
+def groups_set_bases(parts, log, stop):
     """Give every listed node (``log[:stop]``) its base, in whichever group holds it."""
     _set_bases(_n0(parts), log, 0, stop)
     _set_bases(_n1(parts), log, 0, stop)

@@ -170,7 +170,7 @@ def e_hat(y: np.ndarray) -> np.ndarray:
 
 
 @njit
-def point_tensor_of(u):  # noqa: ANN001, ANN201
+def point_tensor_of(u):
     """Symmetric ``T_k(u)`` (3, 4, 4) with ``(A(p)u)_k = pᵀT_k(u)p`` for every p (A homogeneous)
     (:func:`point_tensor_into` a new array)."""
     T = np.empty((3, 4, 4))
@@ -179,7 +179,7 @@ def point_tensor_of(u):  # noqa: ANN001, ANN201
 
 
 @njit
-def point_tensor_into(u, T):  # noqa: ANN001, ANN201
+def point_tensor_into(u, T):
     """:func:`point_tensor_of` written into ``T`` (3, 4, 4).
 
     Derivation [D]: ``Au = (e0² − eᵀe) u + 2e(eᵀu) + 2e0 (e × u)``, read off term by term.
@@ -218,7 +218,7 @@ def point_tensor_contract(s: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 @njit(refcount=False)
-def point_jacobian_of(T, p, B, Au):  # noqa: ANN001, ANN201
+def point_jacobian_of(T, p, B, Au):
     """Haug's ``B(p, u) = ∂(A(p)u)/∂p = 2T(u)p`` (3, 4) into ``B`` and ``A(p)u = pᵀT(u)p``
     (3,) into ``Au``, from the point tensor ``T = T(u)`` of :func:`point_tensor_of`; with a rate
     ``ṗ`` in place of p, ``B`` is ``2T(u)ṗ = ∂(B(p, u)ṗ)/∂p``. The one compiled statement of
@@ -315,11 +315,6 @@ def pdot_from_omega_body(p: np.ndarray, w_body: np.ndarray) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------
 # inertia
-def _gjg(inertia: np.ndarray, Ga: np.ndarray, Gb: np.ndarray) -> np.ndarray:
-    """``Gaᵀ J′ Gb`` batched (nb,4,4)."""
-    return np.einsum("bki,bkl,blj->bij", Ga, inertia, Gb)
-
-
 def mass_matrix(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray) -> np.ndarray:
     """docs/theory.md §I.5: ``M = diag(m I3, 4 GᵀJ′G)`` (nb,7,7); singular along p (see Φ^p)."""
     mass = np.ascontiguousarray(mass, dtype=float)
@@ -365,7 +360,7 @@ def inertial_residual(mass: np.ndarray, inertia: np.ndarray, p: np.ndarray, pd: 
 
 
 @njit
-def rotation(p):  # noqa: ANN001, ANN201
+def rotation(p):
     """``A(p)`` (3, 3), the homogeneous rotation matrix of docs/theory.md §I.5 (:func:`rotation_into`)."""
     A = np.empty((3, 3))
     rotation_into(p, A)
@@ -373,7 +368,7 @@ def rotation(p):  # noqa: ANN001, ANN201
 
 
 @njit
-def rotation_into(p, A):  # noqa: ANN001, ANN201
+def rotation_into(p, A):
     """``A(p)`` into ``A`` (3, 3), the homogeneous rotation matrix of docs/theory.md §I.5 (the one
     statement)."""
     e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
@@ -390,7 +385,7 @@ def rotation_into(p, A):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def _g_times(p, x):  # noqa: ANN001, ANN202
+def _g_times(p, x):
     """``G(p) x`` (a 3-tuple), ``G(p) = [−e, −ẽ + e0 I]``; p, x 4-vectors (arrays or tuples).
     ``G(p) x = −G(x) p``."""
     return (-p[1] * x[0] + p[0] * x[1] + p[3] * x[2] - p[2] * x[3],
@@ -399,7 +394,7 @@ def _g_times(p, x):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _gt_times(p, y):  # noqa: ANN001, ANN202
+def _gt_times(p, y):
     """``G(p)ᵀ y = Ĝ(y) p`` (a 4-tuple), ``Ĝ(y) = [[0, −yᵀ], [y, −ỹ]]`` (docs/theory.md §I.5)."""
     return (-p[1] * y[0] - p[2] * y[1] - p[3] * y[2],
             p[0] * y[0] - p[3] * y[1] + p[2] * y[2],
@@ -408,7 +403,7 @@ def _gt_times(p, y):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _j_times(J, x):  # noqa: ANN001, ANN202
+def _j_times(J, x):
     """``J x`` (a 3-tuple) for the 3 × 3 inertia J and a 3-vector (array or tuple)."""
     return (J[0, 0] * x[0] + J[0, 1] * x[1] + J[0, 2] * x[2],
             J[1, 0] * x[0] + J[1, 1] * x[1] + J[1, 2] * x[2],
@@ -416,14 +411,14 @@ def _j_times(J, x):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False)
-def _unit(j):  # noqa: ANN001, ANN202
+def _unit(j):
     """The j-th unit 4-vector (a tuple): column j of a 4-column product."""
     return (1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0,
             1.0 if j == 3 else 0.0)
 
 
 @njit(refcount=False)
-def inertial_force_p(J, p, pd, pdd, out):  # noqa: ANN001, ANN201
+def inertial_force_p(J, p, pd, pdd, out):
     """docs/theory.md §I.5: the p rows of ``M q̈ − Q_v``, ``4GᵀJ′G p̈ − 8ĠᵀJ′Ġ p`` (Ġ = G(ṗ)),
     into ``out`` (4,); no scratch arrays."""
     a = _gt_times(p, _j_times(J, _g_times(p, pdd)))
@@ -435,7 +430,7 @@ def inertial_force_p(J, p, pd, pdd, out):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def inertial_derivatives(J, p, pd, pdd, dq, dv):  # noqa: ANN001, ANN201
+def inertial_derivatives(J, p, pd, pdd, dq, dv):
     """∂/∂p and ∂/∂ṗ (4, 4) of :func:`inertial_force_p` into ``dq``, ``dv``, by the Ĝ identities
     of docs/theory.md §I.5: ``∂(4GᵀJ′Gp̈)/∂p = 4[Ĝ(J′Gp̈) − GᵀJ′G(p̈)]``,
     ``∂(8ĠᵀJ′Ġp)/∂p = 8ĠᵀJ′Ġ``, ``∂(8ĠᵀJ′Ġp)/∂ṗ = 8[Ĝ(J′Ġp) − ĠᵀJ′G]``; column by column."""
@@ -522,7 +517,7 @@ def applied_torque_body(p: np.ndarray, n_body: np.ndarray) -> tuple[np.ndarray, 
 # ---------------------------------------------------------------------------------------------
 # kernels shared by every path (one statement of each equation)
 @njit(refcount=False)
-def rotational_mass(J, p, out):  # noqa: ANN001, ANN201
+def rotational_mass(J, p, out):
     """``4 GᵀJ′G`` (4, 4), the Euler-parameter block of the body mass matrix (docs/theory.md §I.5),
     column by column."""
     for j in range(4):
@@ -532,7 +527,7 @@ def rotational_mass(J, p, out):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def point_force_p(T, F, f, p, out):  # noqa: ANN001, ANN201
+def point_force_p(T, F, f, p, out):
     """``Q_p = 2 f C(s′, F) p`` with ``C = Σ_k F_k T_k(s′)`` (docs/theory.md §I.5, applied force)."""
     for a in range(4):
         acc = 0.0
@@ -545,7 +540,7 @@ def point_force_p(T, F, f, p, out):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def point_force_dp(T, F, f, out):  # noqa: ANN001, ANN201
+def point_force_dp(T, F, f, out):
     """``∂Q_p/∂p = 2 f C(s′, F)`` (4, 4) of :func:`point_force_p`."""
     for a in range(4):
         for b in range(4):
@@ -556,7 +551,7 @@ def point_force_dp(T, F, f, out):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False)
-def torque_p(n, f, p, out):  # noqa: ANN001, ANN201
+def torque_p(n, f, p, out):
     """Global torque f·n: ``Q_p = 2 f Eᵀn = 2 f Ê(n)p``, ``Ê(n) = [[0, −nᵀ], [n, ñ]]``
     (docs/theory.md §I.5)."""
     out[0] = -2.0 * f * (n[0] * p[1] + n[1] * p[2] + n[2] * p[3])
@@ -566,7 +561,7 @@ def torque_p(n, f, p, out):  # noqa: ANN001, ANN201
 
 
 @njit
-def torque_dp(n, f, out):  # noqa: ANN001, ANN201
+def torque_dp(n, f, out):
     """``∂Q_p/∂p = 2 f Ê(n)`` (4, 4) of :func:`torque_p`."""
     e = np.zeros(4)
     col = np.empty(4)
@@ -629,7 +624,7 @@ def pack_bodies(bodies: list, loads: list, dofs: DofMap, functions: FunctionTabl
 
 
 @njit(inline="always")
-def _gather(b, i, q, v, qdd, rates):  # noqa: ANN001, ANN202
+def _gather(b, i, q, v, qdd, rates):
     """Body i's p (and with ``rates`` ṗ, p̈) into the part's work vectors."""
     for k in range(4):
         j = b.dofs[i, 3 + k]
@@ -640,7 +635,7 @@ def _gather(b, i, q, v, qdd, rates):  # noqa: ANN001, ANN202
 
 
 @njit(refcount=False, internal=True)
-def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
+def bodies_residual(b, q, v, qdd, fv, mode, r):
     """``r_q += M q̈ − Q_v`` (with inertia, :func:`inertial_force_p`) ``− Q_ext`` of the body
     loads (docs/theory.md §I.5); returns the largest single force."""
     if b is None:   # none in the model: compiled to nothing (driver.OPTIONAL_KINDS)
@@ -682,7 +677,7 @@ def bodies_residual(b, q, v, qdd, fv, mode, r):  # noqa: ANN001, ANN201
 
 
 @njit(refcount=False, internal=True)
-def bodies_jacobian(b, q, v, qdd, fv, mode, cM, cC, cK, data):  # noqa: ANN001, ANN201
+def bodies_jacobian(b, q, v, qdd, fv, mode, cM, cC, cK, data):
     """``cM M + cC ∂r/∂q̇ + cK ∂r/∂q`` of :func:`bodies_residual` into the CSC ``data`` (without
     inertia, e.g. in statics, only ``cM M``: the optional mass-proportional stabiliser); only
     the nonzero entries (the r rows: ``cM m I``; the p-p block)."""

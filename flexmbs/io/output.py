@@ -479,7 +479,7 @@ class OutputWriter:
                 try:
                     self._store(job)
                     self._written = job.written
-                except BaseException as exc:  # noqa: BLE001 - raised in the caller's thread
+                except BaseException as exc:
                     self._failure = exc
             with self._stored:
                 if self._pending:

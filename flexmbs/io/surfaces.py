@@ -84,7 +84,7 @@ def _mesh_surface(shape: dict, body_name: str) -> tuple[np.ndarray, np.ndarray]:
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
             m = meshio.read(shape["file"])
-    except Exception as exc:  # noqa: BLE001 - re-raised with the body named
+    except Exception as exc:
         raise ModelError(f"body '{body_name}': cannot read shape mesh {shape['file']!r} ({exc})") from exc
     with np.errstate(all="ignore"):
         size = float(np.abs(np.asarray(m.points, float) * float(shape.get("scale", 1.0))).max(

@@ -559,7 +559,7 @@ def _tree_backward(t: TreeFactor, x: np.ndarray) -> None:
 
 
 @njit(inline="always")
-def _fill(block, data, pos, fr, fc, lo, hi):  # noqa: ANN001, ANN202
+def _fill(block, data, pos, fr, fc, lo, hi):
     """Adds the CSC entries ``data[pos[lo:hi]]`` into ``block[fr, fc]``; returns 0.0, or nan
     if one of them is inf or nan (the probe of :func:`bordered_factorize`)."""
     probe = 0.0

@@ -116,7 +116,7 @@ def test_reaction_probe_in_a_scenario_and_errors(tmp_path, capsys):
 STEEL = fm.Material(E=2e11, rho=7800.0, nu=0.3)
 
 
-def _rod(length: float = 0.5, elements: int = 10, radius: float = 5e-3):  # noqa: ANN202
+def _rod(length: float = 0.5, elements: int = 10, radius: float = 5e-3):
     model = fm.Model()
     rod = model.add_beam(fm.line((0, 0, 0), (length, 0, 0), elements=elements),
                          section=fm.CircularSection(radius), material=STEEL,

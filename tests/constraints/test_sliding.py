@@ -119,7 +119,7 @@ def test_axial_force_on_the_ring():
     assert np.abs(s - (0.2 + 0.5 * (2.0 / 0.5) * res.t**2)).max() < 1e-6
 
 
-def _ring_pushed_along(tmp_path, follow: bool, t_end: float, *, resume: bool = False):  # noqa: ANN202
+def _ring_pushed_along(tmp_path, follow: bool, t_end: float, *, resume: bool = False):
     """The ring of test_axial_force_on_the_ring on a beam of 32 elements (6.25 cm): it slides
     over about three elements in 0.3 s; ``follow``: the compiled loop's plan follows it
     (forced: alone on its beam the fixed plan is the cheaper one), else the fixed plan; full

@@ -218,7 +218,7 @@ def test_concatenate_tables():
 
 
 @njit(cache=False)
-def _all_joints(table, eq_ptr, q_all, q_ptr, lam, phi, jac, H, work):  # noqa: ANN001, ANN202
+def _all_joints(table, eq_ptr, q_all, q_ptr, lam, phi, jac, H, work):
     """What the compiled integrator does: every joint of a concatenated table in one loop, with
     one scratch."""
     for k in range(eq_ptr.size - 1):

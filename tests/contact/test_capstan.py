@@ -22,7 +22,7 @@ import pytest
 from tests.conftest import FULL, load_example
 
 
-def _capstan():  # noqa: ANN202
+def _capstan():
     return load_example("capstan")
 
 

@@ -110,7 +110,7 @@ def test_frictionless_sleeve_slides_down_an_incline_with_g_sin_alpha():
     assert acc == pytest.approx(G * np.sin(alpha), rel=2e-3)
 
 
-def _slide_on_incline(alpha: float, hole=None):  # noqa: ANN001, ANN202
+def _slide_on_incline(alpha: float, hole=None):
     """Stiff rod inclined by alpha, sleeve resting on it, 0.25 s: (slide acceleration fitted
     over 0.05-0.25 s, result, sleeve, joint)."""
     d = (np.cos(alpha), 0.0, -np.sin(alpha))

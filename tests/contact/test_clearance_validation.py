@@ -23,7 +23,7 @@ from flexmbs.io.probes import ContactForceProbe
 from tests.conftest import FULL
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples"))
-from curved_beam_sleeve import build  # noqa: E402  (examples/curved_beam_sleeve.py, Example 1)
+from curved_beam_sleeve import build
 
 M_SLEEVE, G = 0.21441, 9.81
 E_STEEL = 2.1e11
@@ -171,7 +171,7 @@ def _brute_force_maxima(theta_deg: float, detection: str, n: int = 200_001) -> n
 
 
 @pytest.mark.parametrize("detection", ["consistent", "paper"])
-def test_two_contact_points_in_one_section(detection):  # noqa: ANN001
+def test_two_contact_points_in_one_section(detection):
     """docs/theory.md §II.3: with r_b/R < cos(theta) < sqrt(r_b/R) (0.909 < cos 21 deg = 0.934 <
     0.953) and the minor vertex pushed into the wall, a^2/b = 2.29 mm > |X - O| = 2.25 mm: the
     vertex is a local minimum of the distance and two symmetric maxima appear.
@@ -212,7 +212,7 @@ def test_two_contact_points_in_one_section(detection):  # noqa: ANN001
 
 
 @pytest.mark.parametrize("detection", ["consistent", "paper"])
-def test_section_force_is_continuous_across_the_split(detection):  # noqa: ANN001
+def test_section_force_is_continuous_across_the_split(detection):
     """At the pitchfork theta* = 19.47 deg (paper: a^2/b = 2.25 mm; consistent: 19.70 deg) one
     maximum splits into two
     maxima and a penetrating minimum, all with the same depth; the rule "+maxima, -minima"

@@ -77,7 +77,7 @@ def _tube(n_elem: int = 30, pull: float = 0.03) -> tuple[fm.Model, fm.Beam]:
 
 
 def _run(tmp_path, follow: bool, t_end: float = 0.2, *, resume: bool = False,
-         sparse: bool = False, tube: bool = False):  # noqa: ANN202
+         sparse: bool = False, tube: bool = False):
     ratio, cost = ga.FOLLOW_COST_RATIO, ordering.factor_cost
     ga.FOLLOW_COST_RATIO = np.inf if follow else 0.0
     if sparse:            # every band and border dearer than the sparse LU
@@ -207,7 +207,7 @@ def test_statics_on_a_plan_that_follows_the_contacts(monkeypatch):
     solutions, replans = [], []
     original = factor.FollowingStaticLU.replan
 
-    def counted(self, widen, again):  # noqa: ANN001, ANN202
+    def counted(self, widen, again):
         replans.append(widen)
         original(self, widen, again)
 

@@ -35,7 +35,7 @@ BEND_RADIUS = 0.03
 BORE_LENGTH = 8e-3
 
 
-def bent_bore(sections: int = 9, radius: float = BEND_RADIUS, **kw) -> fm.CurvedBore:  # noqa: ANN003
+def bent_bore(sections: int = 9, radius: float = BEND_RADIUS, **kw) -> fm.CurvedBore:
     """An arc through the body origin with tangent body x there, bending towards body +y."""
     angle = BORE_LENGTH / radius
     start = (-radius * math.sin(angle / 2), radius - radius * math.cos(angle / 2), 0.0)
@@ -99,7 +99,7 @@ def test_a_straight_path_is_the_straight_bore():
 
 @pytest.mark.parametrize(("deg", "push", "axis"), [(0.0, 1.1e-3, "y"), (8.0, 0.9e-3, "y"),
                                                    (8.0, 0.8e-3, "z")])
-def test_curved_bore_force_is_the_gradient_of_its_potential(deg, push, axis):  # noqa: ANN001
+def test_curved_bore_force_is_the_gradient_of_its_potential(deg, push, axis):
     """Force = −∂V/∂q by central differences (1e-7 relative) with sections turned along the
     curve; the bend puts the contacts at the bore's ends (pushed along y) or along it (z)."""
     model, joint, body, _ = eyelet_on_wire(math.radians(deg), push, axis, hole=bent_bore())
@@ -113,7 +113,7 @@ def test_curved_bore_force_is_the_gradient_of_its_potential(deg, push, axis):  #
 
 
 @pytest.mark.parametrize(("friction", "ramp"), [(None, None), (0.3, None), (None, 0.5)])
-def test_curved_bore_tangent_equals_central_differences(friction, ramp):  # noqa: ANN001
+def test_curved_bore_tangent_equals_central_differences(friction, ramp):
     """The assembled iteration matrix (exact contact tangent with turned sections; the stick
     law when friction is on; with ``ramp``, every contact inside the damped law's viscous
     ramp, its δ-derivative c s′(δ) δ̇ in the stiffness, issue 53 item 2) against central
@@ -208,7 +208,7 @@ gravity = [0, 0, 0]
 ARC = "path = { arc = { center = [0, 0.03, 0], radius = 0.03, start = [0, 0, 0], angle = 0.3 } }"
 
 
-def _load(tmp_path, hole: str):  # noqa: ANN001, ANN202
+def _load(tmp_path, hole: str):
     from flexmbs.io.scenario import load_scenario
 
     f = tmp_path / "s.toml"
@@ -216,7 +216,7 @@ def _load(tmp_path, hole: str):  # noqa: ANN001, ANN202
     return load_scenario(f)
 
 
-def test_scenario_bore_along_a_path(tmp_path):  # noqa: ANN001
+def test_scenario_bore_along_a_path(tmp_path):
     sc = _load(tmp_path, ARC + ", spacing = 1e-3")
     joint = next(j for j in sc.model.interactions if isinstance(j, fm.SlidingClearanceJoint))
     assert isinstance(joint.hole, fm.CurvedBore)
@@ -232,7 +232,7 @@ def test_scenario_bore_along_a_path(tmp_path):  # noqa: ANN001
 
 # ---------------------------------------------------------------------------------------------
 # open ends and crossings found by the section tree (issue 30, item 2)
-def _wire_into_bore(open_ends: bool, tip: float = 0.0, push: float = 1.3e-3,  # noqa: ANN202
+def _wire_into_bore(open_ends: bool, tip: float = 0.0, push: float = 1.3e-3,
                     feed: float = 0.0):
     """A clamped wire along x ending at ``tip``, a 40 mm bore (21 sections) centred at the
     origin, pushed along y so the wire touches its wall; with ``feed`` the clamp moves the
@@ -347,7 +347,7 @@ def test_a_beam_looping_back_crosses_each_section_twice():
         assert res.f_n == pytest.approx(k * delta, rel=1e-9)
 
 
-def test_more_contacts_than_the_tangent_holds_is_a_clear_error(monkeypatch):  # noqa: ANN001
+def test_more_contacts_than_the_tangent_holds_is_a_clear_error(monkeypatch):
     """The tangent's work arrays hold CONTACTS_PER_SECTION contacts per section (plus a margin):
     a joint with more at once rejects the iterate with a message that names the joint (here the
     hairpin's 18 contacts against a capacity cut to 4)."""

@@ -65,7 +65,7 @@ def _rows(joint: fm.SlidingClearanceJoint, q: np.ndarray) -> tuple[int, np.ndarr
     return m, joint._rows[:max(m, 0)].copy()
 
 
-def test_detection_through_the_tree_equals_a_scan_of_every_element(monkeypatch) -> None:  # noqa: ANN001
+def test_detection_through_the_tree_equals_a_scan_of_every_element(monkeypatch) -> None:
     """The hairpin's two strands in one bore (each section crossed twice), its wire moved at
     random: the rows (sections, candidates, crossings, contact points) are the scan's, bit for
     bit, and some configurations have contacts."""

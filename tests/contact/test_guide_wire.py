@@ -17,11 +17,11 @@ import numpy as np
 from tests.conftest import FULL, load_example
 
 
-def _example():  # noqa: ANN202
+def _example():
     return load_example("guide_wire")
 
 
-def _distance_to_path(path, x: np.ndarray) -> tuple[float, float]:  # noqa: ANN001
+def _distance_to_path(path, x: np.ndarray) -> tuple[float, float]:
     """Distance of x from the vessel's centre-line and its arc length there (dense samples)."""
     s = np.linspace(0.0, path.total_length, 4001)
     pts = np.array([path.frame_at(float(si))[0] for si in s])
@@ -52,7 +52,7 @@ def test_a_fed_wire_follows_the_curved_tube():
         assert (tip[-1] - end) @ t_end > 0.01
 
 
-def test_the_scenario_reads_the_vessel_from_a_mesh_and_balances_the_feed(tmp_path):  # noqa: ANN001
+def test_the_scenario_reads_the_vessel_from_a_mesh_and_balances_the_feed(tmp_path):
     """examples/guide_wire.toml (vessel from meshes/vessel.msh, probes of the insertion force
     and the vessel's contact force) to 0.4 s, the tip in the first bend: the feeder pushes the
     wire slowly, so its force along x is the vessel's contact force along x (momentum balance,

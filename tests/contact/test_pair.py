@@ -45,7 +45,7 @@ def _Q(s: dict, q_c: np.ndarray, v_c: np.ndarray, law: ForceLaw, **kw: object) -
     return np.concatenate([r.Q_body, r.Q_elem])
 
 
-def _fd(fun, x: np.ndarray) -> np.ndarray:  # noqa: ANN001
+def _fd(fun, x: np.ndarray) -> np.ndarray:
     cols = []
     for j in range(x.size):
         e = np.zeros(x.size)

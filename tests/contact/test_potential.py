@@ -33,7 +33,7 @@ def eyelet_on_wire(theta: float, push: float, axis: str = "y", *, r_b: float = W
                    hole: fm.Hole | None = None, detection: str = "consistent",
                    stiffness: float = STIFFNESS, damping: float = 0.0, free: bool = False,
                    law: ForceLaw | None = None, friction: float | None = None,
-                   elements: int = 8, at: float = 0.003, half: float = 0.1):  # noqa: ANN201
+                   elements: int = 8, at: float = 0.003, half: float = 0.1):
     """Wire along x from −half to half (0.1 m; clamped at both ends), eyelet at x = ``at`` turned by θ
     about y (its axis towards z), pushed by ``push`` along its y (the section ellipse's minor
     axis: two points past a²/b = R) or z (major axis). Returns (model, joint, body, wire)."""
@@ -63,7 +63,7 @@ def _tangent_directions(p: np.ndarray) -> np.ndarray:
     return np.linalg.svd(np.eye(4) - np.outer(p, p))[0][:, :3].T
 
 
-def gradient_error(joint, body, asm: Assembly, q: np.ndarray) -> tuple[float, dict]:  # noqa: ANN001
+def gradient_error(joint, body, asm: Assembly, q: np.ndarray) -> tuple[float, dict]:
     """max |r − ∂V/∂q| / max |r| over the body's translations and rotations (tangent to the
     Euler-parameter constraint: the radial part is the normalisation's) and the wire elements
     at the eyelet; and the kinds of the points per section."""
@@ -90,7 +90,7 @@ def gradient_error(joint, body, asm: Assembly, q: np.ndarray) -> tuple[float, di
     return float(np.max(np.abs(res - fd)) / np.max(np.abs(res))), kinds
 
 
-def _bent(asm: Assembly, joint, seed: int = 1) -> np.ndarray:  # noqa: ANN001
+def _bent(asm: Assembly, joint, seed: int = 1) -> np.ndarray:
     """Reference coordinates with the wire's two elements at the eyelet bent a little."""
     q = asm.q_ref.copy()
     ed = joint.geometry.elem_dofs[3:5].ravel()
@@ -117,7 +117,7 @@ GRADIENT_CASES = [  # θ [deg], push, axis, wire radius, hole (None: circle R = 
 
 
 @pytest.mark.parametrize(("deg", "push", "axis", "r_b", "hole", "points"), GRADIENT_CASES)
-def test_contact_force_is_the_gradient_of_the_section_potential(deg, push, axis, r_b, hole,  # noqa: ANN001
+def test_contact_force_is_the_gradient_of_the_section_potential(deg, push, axis, r_b, hole,
                                                                 points):
     """Force = −∂V/∂q by central differences, 5°–75°, one and two points per section, circle
     and superellipse bores: 1e-7 relative (measured ≤ 6e-9)."""
@@ -131,7 +131,7 @@ def test_contact_force_is_the_gradient_of_the_section_potential(deg, push, axis,
 
 
 @pytest.mark.parametrize(("deg", "push", "floor"), [(55, 1.23e-3, 0.05), (60, 1.22e-3, 0.2)])
-def test_the_papers_detection_is_not_a_gradient_at_steep_crossings(deg, push, floor):  # noqa: ANN001
+def test_the_papers_detection_is_not_a_gradient_at_steep_crossings(deg, push, floor):
     """The same check with ``detection = "paper"``: off by 10 % at 55°, 40 % at 60° (why the
     consistent detection is the default)."""
     model, joint, body, _ = eyelet_on_wire(math.radians(deg), push, detection="paper")
@@ -172,7 +172,7 @@ def _loop_work(detection: str, n: int, deg: tuple[float, float], push: tuple[flo
 @pytest.mark.parametrize(("deg", "push"), [((10.0, 20.0), (1.205e-3, 1.215e-3)),
                                            ((44.0, 54.0), (1.21e-3, 1.25e-3)),
                                            ((46.0, 56.0), (1.21e-3, 1.25e-3))])
-def test_closed_loop_work_vanishes_with_the_loops_refinement(deg, push):  # noqa: ANN001
+def test_closed_loop_work_vanishes_with_the_loops_refinement(deg, push):
     """The contact does no work around a closed loop of poses: the trapezoidal loop work falls
     like n⁻² (n = 40 → 160: at least 10×) to below 1e-4 of the work along the loop; the
     paper's detection keeps a loop work of several % at 44°–56° whatever the refinement."""
@@ -219,7 +219,7 @@ def assert_tangent_over(asm: Assembly, q: np.ndarray, v: np.ndarray, idx: np.nda
     return K, C
 
 
-def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: ANN001
+def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """:func:`assert_tangent_over` the eyelet's and the wire's coordinates at the eyelet.
     Returns K."""
     assert joint._contacts(q, v, False, False), "the configuration must have active contacts"
@@ -228,7 +228,7 @@ def _checked_tangent(asm: Assembly, joint, body, q: np.ndarray, v: np.ndarray) -
 
 
 @pytest.mark.parametrize(("deg", "push"), [(30.0, 1.22e-3), (55.0, 1.23e-3), (60.0, 1.22e-3)])
-def test_exact_tangent_equals_central_differences_and_is_symmetric(deg, push):  # noqa: ANN001
+def test_exact_tangent_equals_central_differences_and_is_symmetric(deg, push):
     """The exact tangent of the consistent contact equals central differences of the
     assembled residual; without damping and friction it is the Hessian of the potential plus
     the wire's stiffness, symmetric to 1e-9 (on the directions tangent to the Euler parameters'
@@ -250,7 +250,7 @@ def test_exact_tangent_equals_central_differences_and_is_symmetric(deg, push):  
 
 
 @pytest.mark.parametrize("deg", [30.0, 55.0])
-def test_damping_and_friction_act_at_the_pair_with_an_exact_tangent(deg):  # noqa: ANN001
+def test_damping_and_friction_act_at_the_pair_with_an_exact_tangent(deg):
     """Damping and friction at the same points (item 5): with a damped penalty (20 N s/m)
     and regularised Coulomb friction (μ = 0.3) at a sliding, rocking state the iteration
     matrix's stiffness and damping parts equal central differences of the assembled residual
@@ -311,7 +311,7 @@ def _free_eyelet_energy_error(detection: str, dt: float) -> tuple[float, float, 
     body.velocity = np.array([0.05, 0.0, 0.0]) + 0.1 * body.pose.rotation[:, 1]
     most = [0]
 
-    def watch(state) -> None:  # noqa: ANN001
+    def watch(state) -> None:
         per: dict[int, int] = {}
         for k, _j, kind, *_ in joint._contacts(state.q, state.v, False, False):
             per[k] = per.get(k, 0) + (kind > 0)
@@ -370,7 +370,7 @@ def test_the_contact_potential_is_reported_with_the_energies():
 
 
 @pytest.mark.parametrize("onset", [1e-7, 1e-3])
-def test_the_smooth_onset_keeps_the_potential_s_gradient_and_the_exact_tangent(onset):  # noqa: ANN001
+def test_the_smooth_onset_keeps_the_potential_s_gradient_and_the_exact_tangent(onset):
     """The linear law with a smooth onset (LinearPenalty(onset=...): C¹, quadratic below the
     onset): the forces stay the gradient of the section potential and the exact tangent equals
     central differences, with the penetrations beyond the onset (1e-7 m) and within it (1e-3

@@ -120,7 +120,7 @@ def test_a_polygon_rounded_to_its_apothem_is_the_circle():
     (6, 2.45e-3, 2.2e-3, 0.321, "corner"),
     (6, 2.3e-3, 1.5e-3, 1.22, "straddled"),
 ])
-def test_rounded_polygon_tangent_equals_central_differences(n, a, r, angle, where):  # noqa: ANN001, PLR0913
+def test_rounded_polygon_tangent_equals_central_differences(n, a, r, angle, where):
     """The rail pressing a flat, a corner (r larger than the rail: one maximum on the arc) or
     a corner it straddles (r smaller: a maximum on a flat and a minimum on the arc) of a
     hexagonal bore: the assembled matrix with the exact contact tangent (friction, damping)

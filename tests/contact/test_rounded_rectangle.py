@@ -117,7 +117,7 @@ def test_a_round_rounded_rectangle_is_the_circle():
     (2.45e-3, 2.45e-3, 2.2e-3, 1.02, "corner"),
     (2.2e-3, 2.2e-3, 1.4e-3, 1.02, "straddled"),
 ])
-def test_rounded_rectangle_tangent_equals_central_differences(w, h, r, angle, where):  # noqa: ANN001, PLR0913
+def test_rounded_rectangle_tangent_equals_central_differences(w, h, r, angle, where):
     """The rail pressing a flat, a corner (r larger than the rail: one maximum on the arc), or
     a corner it straddles (r smaller: a maximum on each flat and a minimum on the arc): the
     assembled matrix with the exact contact tangent (friction, damping) equals central

@@ -296,7 +296,7 @@ def test_a_sections_radii_are_computed_once(monkeypatch):
     calls = []
     real = SuperellipseSection.boundary
 
-    def counted(self, psi):  # noqa: ANN001, ANN202
+    def counted(self, psi):
         calls.append(np.size(psi))
         return real(self, psi)
 

@@ -159,7 +159,7 @@ def test_static_solution_holds_below_the_friction_angle_and_none_exists_above():
 def test_a_run_resumed_with_anchors_in_flight_is_bit_identical(tmp_path):
     """The anchors and stick states are state: a run stopped while the sleeve slides and its
     contacts' anchors move resumes bit for bit; a changed friction law is refused."""
-    def run(t_end: float, out, resume: bool = False, mu: float = 0.3) -> fm.Result:  # noqa: ANN001
+    def run(t_end: float, out, resume: bool = False, mu: float = 0.3) -> fm.Result:
         model, _ = _incline(18.0, fm.Friction(mu=mu, mu_static=0.35))
         return fm.simulate(model, t_end=t_end, dt=1e-3, output_interval=0.02, out=out,
                            resume=resume, record_energy=False, write_vtu=False)

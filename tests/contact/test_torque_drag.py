@@ -104,7 +104,7 @@ def test_turning_a_rod_splits_its_friction_into_drag_and_torque(law: str) -> Non
 BEND_R, BEND_BORE, BEND_WIRE = 0.1, 0.8e-3, 0.5e-3
 
 
-def _u_tube_path(ds: float = 2e-2, entry: float = 0.3, exit_: float = 0.06):  # noqa: ANN202
+def _u_tube_path(ds: float = 2e-2, entry: float = 0.3, exit_: float = 0.06):
     """Straight along +y into a half circle (centre at the origin, from (−ρ, 0, 0) over the
     top), straight out along −y: nodes and unit tangents."""
     pts, tans = [], []

@@ -72,7 +72,7 @@ def elastica() -> dict[str, float]:
 
     Qe = (RHO + BORE) * np.array([math.sin(ALPHA), math.cos(ALPHA)])
 
-    def shoot(u: np.ndarray):  # noqa: ANN202
+    def shoot(u: np.ndarray):
         M0, Fx, Fy, S = u
         y0 = RHO - BORE + WIRE_R + 2.0 * Fy / K
 
@@ -119,7 +119,7 @@ def _first_guess(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([x, y, np.zeros_like(x)], axis=1), t / np.linalg.norm(t, axis=1)[:, None]
 
 
-def _wire_in_tube():  # noqa: ANN202
+def _wire_in_tube():
     model = fm.Model(name="tube_elastica")
     wire = model.add_beam(fm.line((-LENGTH / 2, -1.0, 0.0), (LENGTH / 2, -1.0, 0.0), ELEMENTS),
                           section=fm.CircularSection(WIRE_R), material=STEEL, name="wire")

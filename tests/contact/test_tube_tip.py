@@ -87,7 +87,7 @@ WIRE_R, BORE, K, F_TIP = 0.5e-3, 1e-3, 1e6, 1.0
 X_CLAMP, X_TIP = -0.01, 0.025
 
 
-def _propped(load_steps: int = 10):  # noqa: ANN202
+def _propped(load_steps: int = 10):
     model = fm.Model(name="propped_tip", gravity=(0.0, 0.0, 0.0))
     wire = model.add_beam(fm.line((X_CLAMP, 0.0, 0.0), (X_TIP, 0.0, 0.0), 14),
                           section=fm.CircularSection(WIRE_R), material=STEEL, name="wire")

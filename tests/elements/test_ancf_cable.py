@@ -67,7 +67,7 @@ def make_props(L: np.ndarray, *, EA: float | np.ndarray = 100.0, EI: float | np.
         bending_damping=np.full(n, d_K), reference_axial_strain=np.full(n, eps0))
 
 
-def forces(q, v, props, rest, options, *, matrices=False):  # noqa: ANN001, ANN202
+def forces(q, v, props, rest, options, *, matrices=False):
     n = q.shape[0]
     F = np.zeros((n, 12))
     if not matrices:
@@ -175,7 +175,7 @@ def test_gravity_distributed_and_point_loads() -> None:
 
 
 # --- 2./3. analytic force and tangents vs finite differences -------------------------------------
-def _perturbed_arc(rng: np.random.Generator, n: int = 3):  # noqa: ANN202
+def _perturbed_arc(rng: np.random.Generator, n: int = 3):
     q_ref, L = arc_elements(n)
     q = q_ref + 0.08 * rng.standard_normal(q_ref.shape)
     return q_ref, L, q
@@ -199,7 +199,7 @@ def test_force_is_gradient_of_strain_energy(options: cable.CableOptions,
     np.testing.assert_allclose(F, G, rtol=0, atol=RTOL_FD * np.abs(F).max())
 
 
-def _assert_tangents_match_fd(K, C, q, v, props, rest, options):  # noqa: ANN001, ANN202
+def _assert_tangents_match_fd(K, C, q, v, props, rest, options):
     """``K = ∂Q/∂q`` and ``C = ∂Q/∂q̇`` against central differences of the forces."""
     K_fd = np.zeros_like(K)
     C_fd = np.zeros_like(C)

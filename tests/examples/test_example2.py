@@ -66,7 +66,7 @@ def _eyelet_on_a_held_wire(theta_deg: float, detection: str = "consistent"):
 
 @pytest.mark.filterwarnings("ignore:joint .* starts .* into the bore wall")
 @pytest.mark.parametrize("detection", ["consistent", "paper"])
-def test_two_point_threshold_in_the_middle_section(detection):  # noqa: ANN001
+def test_two_point_threshold_in_the_middle_section(detection):
     """Below theta* = 51.0 deg (paper; 51.35 deg consistent) one contact point in the middle
     section, above it two (deepest points, with the penetrating minimum between them counted
     negative), symmetric about the minor axis; the wire crossing the example's eyelets at
@@ -90,7 +90,7 @@ def test_two_point_threshold_in_the_middle_section(detection):  # noqa: ANN001
 
 @pytest.mark.filterwarnings("ignore:joint .* starts .* into the bore wall")
 @pytest.mark.parametrize("detection", ["consistent", "paper"])
-def test_middle_section_force_is_continuous_across_the_threshold(detection):  # noqa: ANN001
+def test_middle_section_force_is_continuous_across_the_threshold(detection):
     """The middle section's force at theta* +- eps: the jump shrinks with eps (first order: the
     smooth change of the force with theta), while the sum over the deepest points alone would
     jump by the whole force k * DEPTH."""
@@ -203,7 +203,7 @@ def _energy_drift(stiffness: float, detection: str, t_end: float) -> tuple[float
 
 @pytest.mark.slow
 @pytest.mark.parametrize("stiffness", [4e4, 2e4])
-def test_energy_balance_of_the_frictionless_undamped_variant(stiffness):  # noqa: ANN001
+def test_energy_balance_of_the_frictionless_undamped_variant(stiffness):
     """No contact, hinge or wire damping, no friction: kinetic + wire strain + hinge springs +
     contact penalty energy stays constant to 1e-3 of the energy that moves between the stores
     (measured over 1 s: 7e-5 at k = 4e4 N/m, the default, 1.4e-6 at 2e4), while the contact

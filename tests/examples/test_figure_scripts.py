@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[2]
 FIGURES = ROOT / "examples" / "figures"
 
 
-def load(name: str):  # noqa: ANN201 - a module
+def load(name: str):
     spec = importlib.util.spec_from_file_location(f"figures_{name}", FIGURES / f"{name}.py")
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)

@@ -14,7 +14,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples"))
 
-import helical_spring  # noqa: E402
+import helical_spring
 
 
 def test_helical_spring_example(tmp_path, capsys):

@@ -13,7 +13,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def load(path: Path, name: str):  # noqa: ANN201 - a module
+def load(path: Path, name: str):
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
@@ -22,7 +22,7 @@ def load(path: Path, name: str):  # noqa: ANN201 - a module
 
 
 @pytest.fixture(scope="module")
-def example():  # noqa: ANN201
+def example():
     return load(ROOT / "examples" / "tendon_robot.py", "tendon_robot_example")
 
 

@@ -330,7 +330,7 @@ def test_locate_outside_raises() -> None:
          "coincident end points"),
     ],
 )
-def test_errors(call, match: str) -> None:  # noqa: ANN001
+def test_errors(call, match: str) -> None:
     with pytest.raises(GeometryError, match=match):
         call()
 

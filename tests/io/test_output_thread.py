@@ -39,7 +39,7 @@ def slow_disk(monkeypatch):
     """Each output takes 50 ms to store (the writer's thread falls behind the run)."""
     real = OutputWriter._store
 
-    def slow(self, job):  # noqa: ANN001, ANN202
+    def slow(self, job):
         time.sleep(0.05)
         real(self, job)
 
@@ -255,7 +255,7 @@ def test_the_outputs_not_on_disk_are_bounded_by_time(tmp_path, monkeypatch, max_
     real = OutputWriter._store
     stored: set[float] = set()
 
-    def slow(self, job):  # noqa: ANN001, ANN202
+    def slow(self, job):
         time.sleep(0.15)
         real(self, job)
         stored.add(float(job.state.t))

@@ -315,7 +315,7 @@ def test_background_series_loses_no_frame_to_an_interrupt_while_waiting(tmp_path
 
     real = vtu._store
 
-    def slow(path, text, atomic):  # noqa: ANN001, ANN202 - the worker's writes take a while
+    def slow(path, text, atomic):
         time.sleep(0.3)
         return real(path, text, atomic)
 
@@ -324,7 +324,7 @@ def test_background_series_loses_no_frame_to_an_interrupt_while_waiting(tmp_path
     series = VTUSeries(tmp_path / "run.pvd", background=True)
     series.write(0.0, mesh)
 
-    def interrupt(signum, frame):  # noqa: ANN001, ANN202
+    def interrupt(signum, frame):
         raise KeyboardInterrupt
 
     old = signal.signal(signal.SIGALRM, interrupt)
@@ -339,7 +339,7 @@ def test_background_series_loses_no_frame_to_an_interrupt_while_waiting(tmp_path
     assert read_pvd(tmp_path / "run.pvd") == [(0.0, "vtu/run_000000.vtu")]
     assert (tmp_path / "vtu" / "run_000000.vtu").is_file()
 
-    def full(path, text, atomic):  # noqa: ANN001, ANN202 - a full disk
+    def full(path, text, atomic):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(vtu, "_store", full)

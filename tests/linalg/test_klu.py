@@ -20,10 +20,10 @@ import scipy.sparse.linalg as spla
 if sys.platform == "win32":   # kvxopt's Windows wheel links KLU into its module, exports none
     pytest.skip("no SuiteSparse KLU library on Windows", allow_module_level=True)
 
-from numba import njit  # noqa: E402
-from numba.core.errors import TypingError  # noqa: E402
+from numba import njit
+from numba.core.errors import TypingError
 
-from flexmbs.linalg import klu  # noqa: E402
+from flexmbs.linalg import klu
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -373,7 +373,7 @@ def test_rotational_spring_wound_three_turns_keeps_its_torque():
     w, k = 2 * np.pi, 0.7
     m, L, I_c = 2.0, 0.5, 0.05
 
-    def build():  # noqa: ANN202
+    def build():
         model = fm.Model(gravity=(0, -9.81, 0))
         body = model.add_rigid_body(mass=m, inertia=(0.001, I_c, I_c), position=(L, 0, 0),
                                     name="arm")
@@ -401,7 +401,7 @@ def test_a_resumed_run_keeps_the_turns_of_its_rotational_springs(tmp_path):
     the angle two turns short)."""
     w, k = 2 * np.pi, 0.7
 
-    def run(t_end, out, resume=False):  # noqa: ANN001, ANN202
+    def run(t_end, out, resume=False):
         model = fm.Model(gravity=(0, -9.81, 0))
         body = model.add_rigid_body(mass=2.0, inertia=(0.001, 0.05, 0.05), position=(0.5, 0, 0),
                                     name="arm")

@@ -14,8 +14,8 @@ import pytest
 pytest.importorskip("pyvista")
 pytest.importorskip("matplotlib")
 
-import postprocess  # noqa: E402
-from flexmbs.cli import main  # noqa: E402
+import postprocess
+from flexmbs.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 N_FRAMES = 6            # t = 0, 0.01, ..., 0.05

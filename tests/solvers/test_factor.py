@@ -67,7 +67,7 @@ def _massless(asm: Assembly) -> np.ndarray:
     return owner
 
 
-def _agrees(factor, A: sp.csc_matrix, rng: np.random.Generator,  # noqa: ANN001
+def _agrees(factor, A: sp.csc_matrix, rng: np.random.Generator,
             tol: float = SUPERLU_TOL) -> bool:
     """Same solution as SuperLU to ``tol`` relative."""
     factor.factorize(A)

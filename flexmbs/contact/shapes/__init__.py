@@ -50,7 +50,7 @@ __all__ = ["HOLE_SECTIONS", "SHAPE_CIRCLE", "SHAPE_ROUNDED_POLYGON", "SHAPE_ROUN
 
 
 @njit
-def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+def section_boundary(kind, params, psi, Y, Yp, Ypp):
     """``Y(ψ), Y′, Y″`` of a compiled hole section (``kind``, ``params`` of
     :meth:`HoleSection.compiled_shape`): the detectors and the contact tangent read the wall
     through it. An unknown ``kind`` (a shape module whose code is not dispatched here) gives a
@@ -71,7 +71,7 @@ def section_boundary(kind, params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
 
 
 @njit
-def section_contains(kind, params, y, z):  # noqa: ANN001, ANN201
+def section_contains(kind, params, y, z):
     """Whether the point (y, z) lies inside the compiled hole section (on the wall counts);
     an unknown ``kind``: nowhere (the beam axis is then outside the bore at once)."""
     if kind == SHAPE_CIRCLE:

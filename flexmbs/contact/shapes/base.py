@@ -246,7 +246,7 @@ HOLE_SECTIONS: Registry[type[HoleSection]] = Registry("hole section")
 
 
 @njit
-def turned_wall(ang, k, y0, y1, t0, t1, c0, c1, Y, Yp, Ypp):  # noqa: ANN001, ANN201, PLR0913
+def turned_wall(ang, k, y0, y1, t0, t1, c0, c1, Y, Yp, Ypp):
     """A wall point given in a frame turned by ``ang`` from the section's (a quadrant's or a
     sector's), into ``Y``, ``Yp``, ``Ypp`` (2,): the point ``y``, its unit tangent ``t`` and
     curvature vector ``c`` (per arc length) turned, the derivatives scaled by the

@@ -23,7 +23,7 @@ SHAPE_CIRCLE = SHAPE_CODES["circle"]
 
 
 @njit
-def circle_boundary(R, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+def circle_boundary(R, psi, Y, Yp, Ypp):
     """Wall point ``Y(ψ) = R(cos ψ, sin ψ)`` of a circular section and its first and second
     ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,) (section coordinates; compiled boundary of
     :class:`CircleSection`, what the exact contact tangent reads)."""
@@ -38,13 +38,13 @@ def circle_boundary(R, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
 
 
 @njit
-def circle_contains(params, y, z):  # noqa: ANN001, ANN201
+def circle_contains(params, y, z):
     """Whether (y, z) lies inside the circle of radius ``params[0]`` (on the wall counts)."""
     return y * y + z * z <= params[0] * params[0]
 
 
 @njit
-def circle_stationary_points(cx, cy, eax, eay, a, b, R):  # noqa: ANN001, ANN201
+def circle_stationary_points(cx, cy, eax, eay, a, b, R):
     """Stationary angles of ``D(φ) = ½|X(φ)|²`` for an ellipse in a centred circle (docs/theory.md §II.3).
 
     ``f = D′ = (b² − a²) sin φ cos φ + a d_a sin φ − b d_b cos φ`` solved in closed form by

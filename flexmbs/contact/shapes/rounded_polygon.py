@@ -26,7 +26,7 @@ SHAPE_ROUNDED_POLYGON = SHAPE_CODES["rounded_polygon"]
 
 
 @njit
-def rounded_polygon_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+def rounded_polygon_boundary(params, psi, Y, Yp, Ypp):
     """Wall point ``Y(ψ)`` of the section ``params = [n, a, r, angle]`` and its first and
     second ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,): arc length ``s = ψ P / 2π`` along
     the perimeter ``P = 2 n h + 2π r`` (``h = (a − r) tan(π/n)``, a flat's half length) from
@@ -66,7 +66,7 @@ def rounded_polygon_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
 
 
 @njit
-def rounded_polygon_contains(params, y, z):  # noqa: ANN001, ANN201
+def rounded_polygon_contains(params, y, z):
     """Whether (y, z) lies inside the section ``params = [n, a, r, angle]`` (on the wall
     counts): the point turned into the sector of its nearest flat and mirrored about that
     flat's normal, inside the flat or within r of the corner's centre."""

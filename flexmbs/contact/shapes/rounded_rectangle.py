@@ -25,7 +25,7 @@ SHAPE_ROUNDED_RECTANGLE = SHAPE_CODES["rounded_rectangle"]
 
 
 @njit
-def rounded_rectangle_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+def rounded_rectangle_boundary(params, psi, Y, Yp, Ypp):
     """Wall point ``Y(ψ)`` of the section ``params = [w, h, r, angle]`` and its first and second
     ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,): arc length ``s = ψ P / 2π`` along the
     perimeter ``P = 4(w − r) + 4(h − r) + 2πr`` from (w, 0), CCW, so ``|Y′| = P/2π`` and
@@ -72,7 +72,7 @@ def rounded_rectangle_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
 
 
 @njit
-def rounded_rectangle_contains(params, y, z):  # noqa: ANN001, ANN201
+def rounded_rectangle_contains(params, y, z):
     """Whether (y, z) lies inside the section ``params = [w, h, r, angle]`` (on the wall counts)."""
     cb = math.cos(params[3])
     sb = math.sin(params[3])

@@ -22,7 +22,7 @@ SHAPE_SUPERELLIPSE = SHAPE_CODES["superellipse"]
 
 
 @njit
-def superellipse_boundary(A, B, n, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+def superellipse_boundary(A, B, n, psi, Y, Yp, Ypp):
     """Wall point of the superellipse ``|y/A|ⁿ + |z/B|ⁿ = 1`` in the radial parametrisation
     ``Y(ψ) = ρ(ψ)(cos ψ, sin ψ)``, ``ρ = g^(−1/n)``, ``g = |cos ψ/A|ⁿ + |sin ψ/B|ⁿ``, and its
     first and second ψ-derivatives into ``Y``, ``Yp``, ``Ypp`` (2,) (compiled boundary of
@@ -53,7 +53,7 @@ def superellipse_boundary(A, B, n, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
 
 
 @njit
-def superellipse_section_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN201
+def superellipse_section_boundary(params, psi, Y, Yp, Ypp):
     """:func:`superellipse_boundary` of the section ``params = [a, b, n, angle]``, its a axis
     turned by ``angle`` from e_y towards e_z."""
     beta = params[3]
@@ -68,7 +68,7 @@ def superellipse_section_boundary(params, psi, Y, Yp, Ypp):  # noqa: ANN001, ANN
 
 
 @njit
-def superellipse_contains(params, y, z):  # noqa: ANN001, ANN201
+def superellipse_contains(params, y, z):
     """Whether (y, z) lies inside the section ``params = [a, b, n, angle]`` (on the wall counts)."""
     n = params[2]
     cb = math.cos(params[3])
