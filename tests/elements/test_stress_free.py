@@ -124,3 +124,38 @@ def test_a_stress_free_shape_must_match_the_beams_elements():
     bent.clamp(hairpin.first_node)
     with pytest.raises(ModelError, match="too far for the static path"):
         fm.solve_static(Assembly(bent), fm.StaticOptions(load_steps=4))
+
+
+def test_the_scenario_key_builds_the_same_beam(tmp_path):
+    """``[[beams]] stress_free = { arc = ... }`` is the Python API's ``stress_free``: the same
+    equilibrium (the beam springs back onto the arc)."""
+    from flexmbs.io.scenario import load_scenario
+
+    L, R, n = 0.2, 0.2, 10
+    (tmp_path / "pre.toml").write_text(f"""
+name = "pre_curved"
+[simulation]
+t_end = 0.01
+dt = 1e-3
+gravity = [0.0, 0.0, 0.0]
+[[beams]]
+name = "tube"
+geometry = {{ line = {{ start = [0.0, 0.0, 0.0], end = [{L}, 0.0, 0.0] }} }}
+stress_free = {{ arc = {{ center = [0.0, {R}, 0.0], radius = {R}, start = [0.0, 0.0, 0.0], angle = {L / R} }} }}
+elements = {n}
+radius = 5e-4
+youngs_modulus = 2e11
+density = 7800.0
+[[constraints]]
+type = "clamp"
+name = "root"
+beam = "tube"
+node = "first"
+""")
+    model = load_scenario(tmp_path / "pre.toml").model
+    assert model.beams[0].stress_free is not None
+    on_arc = fm.Model(gravity=(0.0, 0.0, 0.0))
+    b = on_arc.add_beam(_arc(R, L, n), section=fm.CircularSection(5e-4), material=STEEL)
+    on_arc.clamp(b.first_node)
+    st = fm.solve_static(Assembly(model))
+    assert np.abs(st.q - Assembly(on_arc).q_ref).max() < 1e-12
