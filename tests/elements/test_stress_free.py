@@ -141,7 +141,7 @@ gravity = [0.0, 0.0, 0.0]
 [[beams]]
 name = "tube"
 geometry = {{ line = {{ start = [0.0, 0.0, 0.0], end = [{L}, 0.0, 0.0] }} }}
-stress_free = {{ arc = {{ center = [0.0, {R}, 0.0], radius = {R}, start = [0.0, 0.0, 0.0], angle = {L / R} }} }}
+stress_free.arc = {{ center = [0.0, {R}, 0.0], radius = {R}, start = [0, 0, 0], angle = {L / R} }}
 elements = {n}
 radius = 5e-4
 youngs_modulus = 2e11
