@@ -56,13 +56,19 @@ def pytest_sessionstart(session: pytest.Session) -> None:
                             f"{time.perf_counter() - start:.0f} s (exit {codes})")
 
 
-def load_example(name: str) -> ModuleType:
-    """The example script ``examples/<name>.py`` as a module (its model builders)."""
-    spec = importlib.util.spec_from_file_location(f"example_{name}", EXAMPLES / f"{name}.py")
+def load_module(path: Path, name: str) -> ModuleType:
+    """The script ``path`` as a module named ``name`` (an example's or a figure script's
+    functions)."""
+    spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def load_example(name: str) -> ModuleType:
+    """The example script ``examples/<name>.py`` as a module (its model builders)."""
+    return load_module(EXAMPLES / f"{name}.py", f"example_{name}")
 
 
 def straight_beam(model: fm.Model, n_elem: int, *, length: float = 1.0, EA: float = 1e7,

@@ -13,7 +13,6 @@ The run (0.18 s) takes 10 s CPU."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import sys
 from pathlib import Path
@@ -21,20 +20,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import load_module
+
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def load(path: Path, name: str):
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
 def example():
-    return load(ROOT / "examples" / "bowden_lever.py", "bowden_lever_example")
+    return load_module(ROOT / "examples" / "bowden_lever.py", "bowden_lever_example")
 
 
 def test_the_lever_turns_by_the_pull_less_the_capstan_loss(example) -> None:
@@ -95,7 +88,7 @@ def test_the_scenario_file_is_the_script_s_model_and_runs(example, tmp_path) -> 
 
 
 def test_the_figure_script_finds_the_checkout(capsys) -> None:
-    module = load(ROOT / "examples" / "figures" / "bowden_lever.py", "figures_bowden_lever")
+    module = load_module(ROOT / "examples" / "figures" / "bowden_lever.py", "figures_bowden_lever")
     assert module.ROOT == ROOT
     with pytest.raises(SystemExit) as exc:
         module.main(["--help"])

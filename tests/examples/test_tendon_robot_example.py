@@ -3,27 +3,20 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.conftest import load_module
+
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def load(path: Path, name: str):
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
 def example():
-    return load(ROOT / "examples" / "tendon_robot.py", "tendon_robot_example")
+    return load_module(ROOT / "examples" / "tendon_robot.py", "tendon_robot_example")
 
 
 def test_the_load_cases_build_the_issue_robot(example):
@@ -62,7 +55,7 @@ def test_a_short_run_writes_what_the_figures_read(example, tmp_path, capsys):
 
 
 def test_the_figure_script_finds_the_checkout(capsys):
-    module = load(ROOT / "examples" / "figures" / "tendon_robot.py", "figures_tendon_robot")
+    module = load_module(ROOT / "examples" / "figures" / "tendon_robot.py", "figures_tendon_robot")
     assert module.ROOT == ROOT
     with pytest.raises(SystemExit) as exc:
         module.main(["--help"])
