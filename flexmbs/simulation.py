@@ -374,6 +374,27 @@ def _warn_undamped_constraints(model: Model, opts: GeneralizedAlpha) -> None:
         FlexmbsWarning, stacklevel=1)
 
 
+def _warn_motions_at_speed(model: Model, t_end: float) -> None:
+    """A prescribed motion of a beam's node whose function moves at t = 0 while the beam starts
+    at rest: the first step answers the velocity jump with an impulse (large reactions, the
+    beam's damping force, a whipped tip), which is seldom meant. Only the start is checked:
+    a rate of at least 1e-3 of the motion's range over the run per run length."""
+    for c in model.constraints:
+        if c.kind != "prescribed" or c.function is None or not isinstance(c.a, Node):
+            continue
+        rate = float(c.function.d1(0.0))
+        times = np.linspace(0.0, t_end, 65)
+        span = float(np.ptp([c.function(float(t)) for t in times]))
+        if not (span > 0.0 and abs(rate) * t_end > 1e-3 * span):
+            continue
+        warnings.warn(
+            f"prescribed motion '{c.name}' (beam '{c.a.beam.name}' node {c.a.index}) starts at "
+            f"speed: its function's rate at t = 0 is {rate:.3g} per s while the beam starts at "
+            "rest, a jump the first step answers with an impulse (large reactions and damping "
+            "forces); start it from rest (a ramp with smooth = true) unless that is meant",
+            FlexmbsWarning, stacklevel=3)
+
+
 def simulate(model: Model | Assembly, *, t_end: float, dt: float,
              integrator: GeneralizedAlpha | None = None, output_interval: float | None = None,
              initial_static: bool = False, record_energy: bool = True,
@@ -480,6 +501,7 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
                              f"and t_end = {t_end:.6g}; give a later t_end")
     if not resume:
         check_masses(asm)        # bad input, before the folder is written
+        _warn_motions_at_speed(asm.model, t_end)
     writer: OutputWriter | None = None
     if out is not None:
         meta = {"dt": dt, "t_end": t_end, "output_interval": output_interval,
