@@ -60,16 +60,11 @@ class Numbering:
         self._coord_labels = labels
         q0 = np.zeros(off)
         v0 = np.zeros(off)
-        free = []                            # beams that start away from their stress-free shape
         for beam in model.beams:
             o = self.beam_offset[id(beam)]
             nodal = beam.element_type.reference_nodal_coordinates(beam.centerline.points,
                                                                   beam.centerline.tangents)
             q0[o:o + nodal.size] = nodal.ravel()
-            if beam.stress_free is not None:
-                shape = beam.stress_free
-                free.append((o, beam.element_type.reference_nodal_coordinates(shape.points,
-                                                                              shape.tangents)))
         for body in model.bodies:
             o = self.body_offset[id(body)]
             p = body.pose.quaternion
@@ -79,11 +74,10 @@ class Numbering:
             v0[o + 3:o + 7] = rb.pdot_from_omega_global(p, body.angular_velocity)
         self.q_ref = q0
         self.v_init = v0
-        # the elements' stress-free coordinates: q_ref but where a beam's stress_free says
-        self.q_free = q0.copy()
-        for o, nodal in free:
-            self.q_free[o:o + nodal.size] = nodal.ravel()
+        # beams that start away from their stress-free shape; the elements' stress-free
+        # coordinates: q_ref but where a beam's stress_free says
         self.prestressed = [beam for beam in model.beams if beam.stress_free is not None]
+        self.q_free = self.rest_coordinates(1.0)
         self._interactions = list(model.interactions)
         self.groups, self.beam_slices = self._group_beams(model)
 
@@ -92,7 +86,7 @@ class Numbering:
         (``fraction`` 0: ``q_ref``) to the beams' ``stress_free`` shapes (1: ``q_free``): the
         nodes moved on straight lines, their tangents turned on great circles (a path for
         statics to follow, :meth:`~flexmbs.assembly.Assembly.relax_towards_stress_free`)."""
-        q = self.q_free.copy()
+        q = self.q_ref.copy()
         f = float(fraction)
         for beam in self.prestressed:
             a, b = beam.centerline, beam.stress_free
