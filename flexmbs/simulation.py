@@ -496,7 +496,13 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
         state0, previous = resume_point(out, asm, run_name)
         resume_t = state0.t
         solver_state = _solver_state(out)
-        if not t_end > resume_t:
+        # a run killed after its last output's checkpoint, before its summary said so, has
+        # nothing left to integrate: resuming it ends the folder (the summary, its counters)
+        at_end = abs(t_end - resume_t) <= 1e-9 * dt
+        if at_end and previous.get("status") == "completed":
+            raise ModelError(f"cannot resume: the run in {out} has already completed at "
+                             f"t = {resume_t:.6g}; give a later t_end to continue it")
+        if not (t_end > resume_t or at_end):
             raise ModelError(f"cannot resume: the checkpoint in {out} is at t = {resume_t:.6g} "
                              f"and t_end = {t_end:.6g}; give a later t_end")
     if not resume:
@@ -532,10 +538,14 @@ def simulate(model: Model | Assembly, *, t_end: float, dt: float,
             state0 = consistent_initial_state(asm, q0, v0, 0.0)
         run.t0 = time.perf_counter()     # Result.wall_time: the integration's
         try:
-            final, stats = integrate(asm, opts, t_end=t_end, dt=dt, state=state0,
-                                     output_interval=output_interval, observer=run.record,
-                                     progress=run.watch, solver_state=solver_state,
-                                     snapshot=run.solver_now.update)
+            if resume_t is not None and abs(t_end - resume_t) <= 1e-9 * dt:
+                run.record(state0)          # already on disk: the Result's final state only
+                final, stats = state0, IntegrationStats()
+            else:
+                final, stats = integrate(asm, opts, t_end=t_end, dt=dt, state=state0,
+                                         output_interval=output_interval, observer=run.record,
+                                         progress=run.watch, solver_state=solver_state,
+                                         snapshot=run.solver_now.update)
         except ConvergenceError as exc:
             # keep what was computed: the partial history travels with the exception
             exc.partial_result = run.result(  # type: ignore[attr-defined]

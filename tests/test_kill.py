@@ -84,7 +84,9 @@ def _kill_and_resume(reference: Path, tmp_path: Path, kills: int) -> tuple[list[
             time.sleep(0.01)
         time.sleep(rng.uniform(0.0, 0.6))     # a random moment of the run (~0.6 s alone)
         proc.kill()
-        finished = proc.wait() == EXIT_OK
+        # killed after its summary said "completed" (in its exit): it had finished
+        finished = proc.wait() == EXIT_OK or json.loads(
+            (out / "summary.json").read_text())["status"] == "completed"
         on_disk.append(-1 if finished else _readable(out))
         if not finished:
             lost.append(handed.read_text().count("\n") - on_disk[-1])

@@ -137,6 +137,28 @@ def test_resume_refuses(tmp_path, capsys, what):
     assert {p: p.read_bytes() for p in folder.glob("*.csv")} == before   # left untouched
 
 
+def test_a_run_killed_after_its_last_checkpoint_is_ended_by_resume(tmp_path):
+    """A run killed between its last output's checkpoint (at t_end) and its summary's
+    "completed" has nothing left to integrate: --resume with the same t_end ends the folder
+    (status, counters) and leaves every output as the uninterrupted run wrote it."""
+    full, part = tmp_path / "full", tmp_path / "part"
+    assert run(CANTILEVER, "--t-end", T1, "--out", str(full), *FULL_NEWTON) == EXIT_OK
+    assert run(CANTILEVER, "--t-end", T1, "--out", str(part), *FULL_NEWTON) == EXIT_OK
+    summary = json.loads((part / "summary.json").read_text())
+    killed = {k: v for k, v in summary.items() if k not in ("stats", "checks", "wall_time")}
+    (part / "summary.json").write_text(json.dumps({**killed, "status": "running"}))
+    outputs = {p.relative_to(part): p.read_bytes() for p in part.rglob("*")
+               if p.is_file() and p.name != "summary.json"}
+    assert run(CANTILEVER, "--t-end", T1, "--resume", str(part), *FULL_NEWTON) == EXIT_OK
+    ended, ref = (json.loads((d / "summary.json").read_text()) for d in (part, full))
+    assert ended["status"] == "completed" and ended["stats"] == ref["stats"]
+    assert ended["stats"]["steps"] > 0
+    assert {p.relative_to(part): p.read_bytes() for p in part.rglob("*")
+            if p.is_file() and p.name != "summary.json"} == outputs
+    # once ended, the same t_end is refused: nothing to continue
+    assert run(CANTILEVER, "--t-end", T1, "--resume", str(part), *FULL_NEWTON) == EXIT_BAD_INPUT
+
+
 def test_resume_keeps_frames_the_index_had_not_listed_yet(tmp_path):
     """Item 1 of issue 18: the .pvd index lags the frames (rewritten at most once a second), so
     a kill can leave frames on disk that the index does not list although the checkpoint is
