@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..elements.ancf_cable import element_point_values
 from ..elements.centerline import (
     beam_point,
     element_crossings,
@@ -37,7 +38,8 @@ from .stationary import PAIR_MARGIN, line_model_points, stationary_pair
 #: contact's force and geometry in the last ten: what an output at the state reads)
 COLS = ("section", "index", "kind", "elem", "xi", "qx", "qy", "qz", "a", "b", "depth", "psi", "gap",
         "gap_rate", "phi", "dx", "dy", "dz", "stick", "elem_i", "xi_i",
-        "f_n", "xi_p", "nx", "ny", "nz", "px", "py", "pz", "cx", "cy", "cz", "fx", "fy", "fz")
+        "f_n", "xi_p", "nx", "ny", "nz", "px", "py", "pz", "cx", "cy", "cz", "fx", "fy", "fz",
+        "fade")
 #: the contact's gap and gap rate: columns gap, gap_rate
 GAP_COL = 12
 #: first column of the friction history after the step (``d_new`` (3), ``stick``; pair.N_GEO)
@@ -49,6 +51,8 @@ FORCE_COL = 21
 #: first column of the contact's ``[n, P, Q, F_H]`` (pair.N_GEO's first 12: normal, beam
 #: point, hole point, force on the hole)
 GEOMETRY_COL = 23
+#: the weight of the contact near the beam's end (:func:`end_fade`): column fade
+FADE_COL = COLS.index("fade")
 N_COLS = len(COLS)
 
 
@@ -67,6 +71,10 @@ DETECT_INT_WORK = 64 + MAX_CANDIDATES + 5 + 64
 N_TIPS = 2
 #: a tip section cuts the beam this many beam radii behind its end (measured along the beam)
 TIP_SETBACK = 0.5
+#: a bore's section takes in a contact near an end of the beam over this many beam radii of
+#: the end past its plane (:func:`end_fade`; the tip section, TIP_SETBACK radii behind the
+#: end, holds the stretch beyond)
+FADE_LENGTH = TIP_SETBACK
 
 
 @njit(inline="always")
@@ -101,6 +109,40 @@ def _to_body(x, r_H, A, out):
     for c in range(3):
         out[c] = ((x[0] - r_H[0]) * A[0, c] + (x[1] - r_H[1]) * A[1, c]
                   + (x[2] - r_H[2]) * A[2, c]) / scale
+
+
+@njit
+def end_fade(qe, lengths, e, origin, n, r_b):
+    """Weight of a bore section's contact whose crossing lies on element ``e`` near an end of
+    the beam (docs/design-notes.md, "A tip reaching a section"): with ``h = n·(r_end − o)``
+    the end node's distance from the section plane (``origin``, normal ``n``) and ``d = σ h``
+    how far the end is past it (σ = ±1: the end's tangent side), ``w = x²(3 − 2x)``,
+    ``x = d/ℓ`` clipped to [0, 1], ``ℓ = min(FADE_LENGTH r_b, L_e/2)``. A section a tip
+    reaches takes its contact in from zero instead of at once (k δ where the tip is δ outside
+    the section's wall). Returns ``(w, dw/dh, end)``; ``end`` +1: the last node, −1: the
+    first, 0: ``e`` is no end element or the end is ℓ or more past the plane (w = 1)."""
+    ne = qe.shape[0]
+    best_w, best_s, best_end = 1.0, 0.0, 0
+    for side in range(2):
+        end = -1 if side == 0 else 1
+        ee = 0 if end < 0 else ne - 1
+        if e != ee:
+            continue
+        r, rx, _ = element_point_values(qe[ee], lengths[ee], 0.0 if end < 0 else 1.0)
+        h = n[0] * (r[0] - origin[0]) + n[1] * (r[1] - origin[1]) + n[2] * (r[2] - origin[2])
+        tn = n[0] * rx[0] + n[1] * rx[1] + n[2] * rx[2]
+        sigma = float(end) if tn >= 0.0 else -float(end)
+        ell = min(FADE_LENGTH * r_b, 0.5 * lengths[ee])
+        x = sigma * h / ell
+        if x >= 1.0:
+            continue
+        w, slope = 0.0, 0.0
+        if x > 0.0:
+            w = x * x * (3.0 - 2.0 * x)
+            slope = 6.0 * x * (1.0 - x) * sigma / ell
+        if w < best_w:
+            best_w, best_s, best_end = w, slope, end
+    return best_w, best_s, best_end
 
 
 @njit(inline="always")

@@ -21,6 +21,7 @@ from ._detect import (
     ANCHOR_COL,
     CROSSING_COL,
     DETECT_WORK,
+    FADE_COL,
     FORCE_COL,
     GAP_COL,
     GEOMETRY_COL,
@@ -28,6 +29,7 @@ from ._detect import (
     N_TIPS,
     angle_distance,
     detect_section,
+    end_fade,
     place_tips,
     reset_crossings,
 )
@@ -43,7 +45,7 @@ from .pair import (
     contact_force,
 )
 from .sections import section_boundary
-from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
+from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent, fade_gradient
 from .tube import POSE_SIZE, POSE_WORK, TubeSections, pose_curvature, section_pose
 from .tube import rebase as rebase_section
 
@@ -51,7 +53,7 @@ from .tube import rebase as rebase_section
 #: then the hole body's pose, rotation and velocity, a contact's arrays and a tube section's
 #: rotation (carved in order)
 FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3 * 2 + N_GEO
-               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9)
+               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9 + 6 + N_EXT)
 
 #: a tube joint's float work (:attr:`ClearancePart.tube_work`): a section's pose, its rate and
 #: its pose at the step's start (7 each), J and G (7 × CENTERLINE_SIZE each), H
@@ -481,6 +483,11 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     pair_work = fwork[o + 3:o + 3 + PAIR_WORK]
     o += 3 + PAIR_WORK
     A_k = fwork[o:o + 9].reshape((3, 3))
+    o += 9
+    plane_o = fwork[o:o + 3]           # a section's plane, global (end_fade)
+    plane_n = fwork[o + 3:o + 6]
+    Dw = fwork[o + 6:o + 6 + N_EXT]
+    n_reg = origins.shape[0] - tip_on.shape[0]
     count = 0
     scale = 0.0
     hold_on = hold[0] != 0
@@ -511,6 +518,29 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         g, gdot, f, xiP = contact_force(qk, vk, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
                                         C, geo, pair_work, held)
+        # a section the beam's end is passing takes its contact in gradually (end_fade; the
+        # tip sections, which ride with the tip, in full)
+        fade, slope, end = 1.0, 0.0, 0
+        if k < n_reg:
+            for a in range(3):
+                plane_o[a] = qk[a]
+                plane_n[a] = 0.0
+                for c in range(3):
+                    plane_o[a] += Ak[a, c] * ok[c]
+                    plane_n[a] += Ak[a, c] * fk[c, 0]
+            fade, slope, end = end_fade(qe[:ne], lengths, int(row[CROSSING_COL]), plane_o,
+                                        plane_n, r_b)
+        if fade < 1.0:
+            f *= fade
+            for c in range(N_LOCAL):
+                Qc[c] *= fade
+                if want_tangent and not exact:
+                    for b in range(N_LOCAL):
+                        K[c, b] *= fade
+                        C[c, b] *= fade
+            for c in range(9, 12):
+                geo[c] *= fade
+        row[FADE_COL] = fade
         row[GAP_COL] = g
         row[GAP_COL + 1] = gdot
         for c in range(4):
@@ -552,6 +582,18 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                             row[CROSSING_COL + 1],
                             qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
                             fric, hist, v_app, consistent, paper, Qx, KX, C, held)
+            if fade < 1.0:
+                # −∂(w Q)/∂q = w K − Q ⊗ ∂w/∂q; ∂w/∂q on [r_H, p] and the end element, which
+                # takes the e_I columns (the crossing's: unused by the consistent detection)
+                if slope != 0.0:
+                    eI = int(row[CROSSING_COL])
+                    fade_gradient(qk, ok, fk, qe[eI], lengths[eI], end, slope, Dw)
+                for a in range(N_LOCAL):
+                    for b in range(N_EXT):
+                        KX[a, b] = fade * KX[a, b] - Qx[a] * Dw[b] if slope != 0.0 else (
+                            fade * KX[a, b])
+                    for b in range(N_LOCAL):
+                        C[a, b] *= fade
             for a in range(N_LOCAL):
                 for b in range(N_EXT):
                     K_out[count, a, b] = sign * KX[a, b]

@@ -37,8 +37,10 @@ from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack
 from ._detect import (
     ANCHOR_COL,
+    CROSSING_COL,
     DETECT_INT_WORK,
     DETECT_WORK,
+    FADE_COL,
     FORCE_COL,
     GAP_COL,
     GEOMETRY_COL,
@@ -47,6 +49,7 @@ from ._detect import (
     N_COLS,
     N_TIPS,
     detect_section,
+    end_fade,
     place_tips,
 )
 from .bores import CircleHole, CurvedBore, Hole, SuperellipseHole, section_tree
@@ -78,7 +81,7 @@ from .laws import (
     law_dissipates,
     law_energy,
 )
-from .pair import N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, contact_point, friction_vector
+from .pair import N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, ContactResult, contact_point, friction_vector
 from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
 from .tube import TubeSections
@@ -134,6 +137,18 @@ class ContactRecord(NamedTuple):
     gap_rate: float
     anchor: np.ndarray
     stuck: float
+    fade: float = 1.0
+
+
+def _faded(res: ContactResult, fade: float) -> ContactResult:
+    """A contact's result with its force and tangent weighted by ``fade``
+    (:func:`~flexmbs.contact._detect.end_fade`, the Python paths' use of it; their tangent is
+    then Gauss–Newton in the weight too)."""
+    if fade >= 1.0:
+        return res
+    return res._replace(f_n=fade * res.f_n, force_on_hole=fade * res.force_on_hole,
+                        Q_body=fade * res.Q_body, Q_elem=fade * res.Q_elem,
+                        Q_twist=fade * res.Q_twist, K=fade * res.K, C=fade * res.C, fade=fade)
 
 
 def _row_contact(row: np.ndarray, res: Any) -> tuple:
@@ -579,7 +594,7 @@ class SlidingClearanceJoint(Interaction):
                                 f_n=float(row[FORCE_COL]), force_on_hole=g[9:12],
                                 xi=float(row[FORCE_COL + 1]), gap_rate=float(row[GAP_COL + 1]),
                                 anchor=row[ANCHOR_COL:ANCHOR_COL + 3],
-                                stuck=float(row[ANCHOR_COL + 3]))
+                                stuck=float(row[ANCHOR_COL + 3]), fade=float(row[FADE_COL]))
             out.append(_row_contact(row, rec))
         self._records = (kept[0], out)
         return out
@@ -644,7 +659,8 @@ class SlidingClearanceJoint(Interaction):
                                     spin=self._spin(q, v, eP))
                 if res.gap >= 0.0:
                     continue
-                out.append((k, j, cand.kind, eP, res, a, b, psi))
+                fade, _, _ = end_fade(qe, self.geometry.lengths, e, origin, n, r_b)
+                out.append((k, j, cand.kind, eP, _faded(res, fade), a, b, psi))
         return out
 
     def _detection_frame(self, q: np.ndarray) -> DetectionFrame:
@@ -699,6 +715,8 @@ class SlidingClearanceJoint(Interaction):
         m = self.detect_rows(q, update)
         if m < 0:
             self._raise_left_bore(m)
+        r_H, A, origins, axes, _ = self._detection_frame(q)
+        qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
         out = []
         for row in self._rows[:m].copy():
             k, eP = int(row[0]), int(row[3])
@@ -712,7 +730,12 @@ class SlidingClearanceJoint(Interaction):
                                 friction_stiffness=self.friction_stiffness(),
                                 spin=self._spin(q, v, eP))
             if res.gap < 0.0:
-                out.append(_row_contact(row, res))
+                fade = 1.0
+                if k < len(self.stations):       # a bore's section (the tips: in full)
+                    fade, _, _ = end_fade(qe, self.geometry.lengths, int(row[CROSSING_COL]),
+                                          r_H + A @ origins[k], A @ axes[k][:, 0],
+                                          self.beam_radius)
+                out.append(_row_contact(row, _faded(res, fade)))
         return out
 
     def freeze_detection(self, q: np.ndarray | None, v: np.ndarray | None = None) -> None:
@@ -971,7 +994,7 @@ class SlidingClearanceJoint(Interaction):
         rows at the same state."""
         law = self.contact.parameters()
         v = np.zeros_like(q) if v is None else v
-        return float(sum(kind * law_energy(law, -res.gap)
+        return float(sum(kind * res.fade * law_energy(law, -res.gap)
                          for _k, _j, kind, _eP, res, *_ in self._observed(q, v)))
 
     def contact_force(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -77,6 +77,7 @@ class ContactResult(NamedTuple):
     anchor: np.ndarray         #: (3,) stick law: elastic displacement from the anchor after the
                                #: step (hole body coordinates)
     stuck: float               #: 1.0 if the contact sticks, else 0.0
+    fade: float = 1.0          #: weight of a contact a beam's end is passing (_detect.end_fade)
 
 
 @njit

@@ -41,7 +41,7 @@ from .pair import (
     twist_increment,
 )
 
-__all__ = ["N_EXT", "I_OFF", "P_OFF", "T_OFF", "contact_tangent"]
+__all__ = ["N_EXT", "I_OFF", "P_OFF", "T_OFF", "contact_tangent", "fade_gradient"]
 
 #: local coordinates of the exact tangent's columns: body (7), crossing element e_I, element e_P
 #: and e_P's twists (N_TWIST)
@@ -78,6 +78,44 @@ def _d_dot(a, Da, b, Db, out):
     for j in range(out.size):
         out[j] = (Da[0, j] * b[0] + Da[1, j] * b[1] + Da[2, j] * b[2]
                   + a[0] * Db[0, j] + a[1] * Db[1, j] + a[2] * Db[2, j])
+
+
+@njit
+def fade_gradient(qb, u_o, frame, qI, LI, end, slope, out):
+    """``out`` (N_EXT) = ∂w/∂[r_H, p, e_I] of :func:`~flexmbs.contact._detect.end_fade`'s weight
+    ``w(h)``, ``h = n·(r_end − o)``, ``n = A(p) frame[:, 0]``, ``o = r_H + A(p) u_o`` and
+    ``r_end`` the end node of the crossing's element ``qI`` (``end`` −1: at ξ = 0, +1: at
+    ξ = 1); ``slope`` = dw/dh: ``∂h/∂r_H = −n``, ``∂h/∂p = (2T(f_n)p)ᵀ(r_end − o) −
+    (2T(u_o)p)ᵀ n``, ``∂h/∂e_I = S(ξ_end)ᵀ n``."""
+    p = qb[3:7]
+    A = rotation(p)
+    f_n = np.empty(3)
+    u = np.empty(3)
+    nvec = np.empty(3)
+    o = np.empty(3)
+    for c in range(3):
+        f_n[c] = frame[c, 0]
+        u[c] = u_o[c]
+    for c in range(3):
+        nvec[c] = A[c, 0] * f_n[0] + A[c, 1] * f_n[1] + A[c, 2] * f_n[2]
+        o[c] = qb[c] + A[c, 0] * u[0] + A[c, 1] * u[1] + A[c, 2] * u[2]
+    xi_end = 0.0 if end < 0 else 1.0
+    S, _, _ = shape_xi(xi_end, LI)
+    r_end, _, _ = element_point(qI, LI, xi_end)
+    Bn = _t_times(f_n, p)
+    Bo = _t_times(u, p)
+    for j in range(out.size):
+        out[j] = 0.0
+    for c in range(3):
+        out[c] = -slope * nvec[c]
+    for i in range(4):
+        acc = 0.0
+        for c in range(3):
+            acc += Bn[c, i] * (r_end[c] - o[c]) - nvec[c] * Bo[c, i]
+        out[3 + i] = slope * acc
+    for m in range(4):
+        for c in range(3):
+            out[I_OFF + 3 * m + c] = slope * S[m] * nvec[c]
 
 
 @njit(internal=True)

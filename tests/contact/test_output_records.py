@@ -53,6 +53,7 @@ def _same_contacts(kept: list, python: list) -> None:
         scale = max(b.f_n, 1e-12)
         assert a.gap == pytest.approx(b.gap, abs=1e-15)
         assert a.f_n == pytest.approx(b.f_n, rel=1e-10, abs=1e-12)
+        assert a.fade == pytest.approx(b.fade, rel=1e-12)      # a section a tip reaches
         np.testing.assert_allclose(a.force_on_hole, b.force_on_hole, rtol=0, atol=1e-10 * scale)
         np.testing.assert_allclose(a.P, b.P, rtol=0, atol=1e-15)
         np.testing.assert_allclose(a.Q, b.Q, rtol=0, atol=1e-15)
@@ -76,7 +77,7 @@ def test_an_output_reads_the_residuals_contacts_and_changes_nothing():
     _same_contacts(kept, python)
     law = joint.contact.parameters()
     assert joint.contact_energy(q, v) == pytest.approx(
-        sum(c[2] * law_energy(law, -c[4].gap) for c in python), rel=1e-12)
+        sum(c[2] * c[4].fade * law_energy(law, -c[4].gap) for c in python), rel=1e-12)
     rows = joint.output(asm, q, v, end.lam, end.t)
     assert len(rows) == len(python)
     # a residual of its own at a state (not a step's): the same records
