@@ -43,6 +43,8 @@ from .pair import (
     PAIR_WORK,
     TWIST_OFF,
     contact_force,
+    is_pinned,
+    xi_bounds,
 )
 from .sections import section_boundary
 from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent, fade_gradient
@@ -515,9 +517,10 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
             for c in range(7):
                 hist[4 + c] = start_k[c]
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
+        xi_lo, xi_hi = xi_bounds(eP, ne)     # not past the beam's ends (the detection's range)
         g, gdot, f, xiP = contact_force(qk, vk, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
-                                        C, geo, pair_work, held)
+                                        C, geo, pair_work, held, xi_lo, xi_hi)
         # a section the beam's end is passing takes its contact in gradually (end_fade; the
         # tip sections, which ride with the tip, in full)
         fade, slope, end = 1.0, 0.0, 0
@@ -581,7 +584,8 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
             contact_tangent(qk, vk, ok, fk, qe[eI], lengths[eI],
                             row[CROSSING_COL + 1],
                             qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
-                            fric, hist, v_app, consistent, paper, Qx, KX, C, held)
+                            fric, hist, v_app, consistent, paper, Qx, KX, C, held,
+                            is_pinned(xiP, xi_lo, xi_hi))
             if fade < 1.0:
                 # −∂(w Q)/∂q = w K − Q ⊗ ∂w/∂q; ∂w/∂q on [r_H, p] and the end element, which
                 # takes the e_I columns (the crossing's: unused by the consistent detection)

@@ -81,7 +81,16 @@ from .laws import (
     law_dissipates,
     law_energy,
 )
-from .pair import N_HISTORY, N_LOCAL, N_SPIN, N_TWIST, ContactResult, contact_point, friction_vector
+from .pair import (
+    N_HISTORY,
+    N_LOCAL,
+    N_SPIN,
+    N_TWIST,
+    ContactResult,
+    contact_point,
+    friction_vector,
+    xi_bounds,
+)
 from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
 from .tube import TubeSections
@@ -616,7 +625,8 @@ class SlidingClearanceJoint(Interaction):
                                     self.consistent and want_tangent,
                                     history=self._history(q, k, psi, eP),
                                     friction_stiffness=self.friction_stiffness(),
-                                    spin=self._spin(q, v, eP))
+                                    spin=self._spin(q, v, eP),
+                                    xi_range=xi_bounds(eP, len(g.lengths)))
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b, psi))
             return out
@@ -656,7 +666,8 @@ class SlidingClearanceJoint(Interaction):
                                     self._approach_for(k, psi), self.consistent and want_tangent,
                                     history=self._history(q, k, psi, eP),
                                     friction_stiffness=self.friction_stiffness(),
-                                    spin=self._spin(q, v, eP))
+                                    spin=self._spin(q, v, eP),
+                                    xi_range=xi_bounds(eP, len(self.geometry.lengths)))
                 if res.gap >= 0.0:
                     continue
                 fade, _, _ = end_fade(qe, self.geometry.lengths, e, origin, n, r_b)
@@ -728,7 +739,8 @@ class SlidingClearanceJoint(Interaction):
                                 self._approach_for(k, row[11]), self.consistent and want_tangent,
                                 history=self._history(q, k, row[11], eP),
                                 friction_stiffness=self.friction_stiffness(),
-                                spin=self._spin(q, v, eP))
+                                spin=self._spin(q, v, eP),
+                                xi_range=xi_bounds(eP, len(self.geometry.lengths)))
             if res.gap < 0.0:
                 fade = 1.0
                 if k < len(self.stations):       # a bore's section (the tips: in full)

@@ -118,10 +118,27 @@ PAIR_WORK = _WORK_B + N_LOCAL
 
 
 @njit
-def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):
+def xi_bounds(elem, n_elem):
+    """The range a contact's ξ_P may take on element ``elem`` of a beam of ``n_elem``: the
+    cubic continued half an element and more past an inner node (the neighbour's domain, the
+    projection's own), but not past an end of the beam. A contact whose ξ_P sits on such a
+    bound is pinned there (:func:`is_pinned`): the beam's end point, a sphere of radius r_b."""
+    return (0.0 if elem == 0 else -1.0), (1.0 if elem == n_elem - 1 else 2.0)
+
+
+@njit
+def is_pinned(xi, xi_lo, xi_hi):
+    """ξ_P held on a bound of :func:`xi_bounds` (the beam's end): the tangent's ξ_P does not
+    move with the coordinates."""
+    return xi == xi_lo or xi == xi_hi  # noqa: SIM109 (compiled: two float comparisons)
+
+
+@njit
+def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work, xi_lo, xi_hi):
     """Gap kinematics without the Hessian (the hot path): ``(xi, g, gdot, n, P, Q, B, W, T, dS,
     rx, rxx, ell)``, the arrays views of ``work`` (:data:`PAIR_WORK`; no allocation), dS, rx,
-    rxx tuples; see :func:`contact_geometry`."""
+    rxx tuples; see :func:`contact_geometry`. The projection keeps ξ in ``[xi_lo, xi_hi]``
+    (:func:`xi_bounds`: at a beam's end, the end)."""
     p = q_body[3:7]
     T = work[_WORK_T:_WORK_BP].reshape((3, 4, 4))
     Bp = work[_WORK_BP:_WORK_Q].reshape((3, 4))
@@ -134,8 +151,8 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):
     point_jacobian_of(T, p, Bp, Q)            # 2T(u_Q)p and A u_Q
     for k in range(3):
         Q[k] += q_body[k]
-    # closest-point projection on this element (extrapolating the cubic)
-    xi = xi0
+    # closest-point projection on this element (extrapolating the cubic up to a beam's end)
+    xi = max(xi_lo, min(xi_hi, xi0))
     for _ in range(30):
         r, rx, rxx = element_point_values(q_elem, length, xi)
         d = (r[0] - Q[0], r[1] - Q[1], r[2] - Q[2])
@@ -146,9 +163,11 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):
         hx = a11 + d[0] * rxx[0] + d[1] * rxx[1] + d[2] * rxx[2]
         step = -h / hx if hx > 0.0 else (-0.25 if h > 0.0 else 0.25)
         step = max(-0.5, min(0.5, step))
-        xi = max(-1.0, min(2.0, xi + step))
-        if abs(step) < 1e-15:
+        moved = max(xi_lo, min(xi_hi, xi + step))
+        if abs(step) < 1e-15 or moved == xi:
+            xi = moved
             break
+        xi = moved
     S, dS, _, _ = hermite_basis(xi, length)
     Pv, rx, rxx = element_point_values(q_elem, length, xi)
     for c in range(3):
@@ -173,8 +192,9 @@ def _kinematics(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, work):
 
 
 @njit
-def _gap_hessian(n, W, T, dS, rx, rxx, ell):
-    """The consistent ``∂²g_N/∂q_c²`` (N_LOCAL, N_LOCAL) of §5 (ξ_P variation, Euler-parameter part)."""
+def _gap_hessian(n, W, T, dS, rx, rxx, ell, pinned):
+    """The consistent ``∂²g_N/∂q_c²`` (N_LOCAL, N_LOCAL) of §5 (ξ_P variation, Euler-parameter
+    part; ``pinned``: ξ_P held at the beam's end, no ξ_P variation)."""
     H = np.zeros((N_LOCAL, N_LOCAL))
     for i in range(N_LOCAL):
         for j in range(N_LOCAL):
@@ -190,6 +210,8 @@ def _gap_hessian(n, W, T, dS, rx, rxx, ell):
             for k in range(3):
                 acc += n[k] * T[k, i, j]
             H[3 + i, 3 + j] += 2.0 * acc
+    if pinned:
+        return H
     a11 = rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]
     den = a11 - ell * (n[0] * rxx[0] + n[1] * rxx[1] + n[2] * rxx[2])
     w = np.zeros(N_LOCAL)
@@ -205,7 +227,8 @@ def _gap_hessian(n, W, T, dS, rx, rxx, ell):
 
 
 @njit
-def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian):
+def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want_hessian,
+                     xi_lo=-1.0, xi_hi=2.0):
     """Gap kinematics of one contact (docs/theory.md §II.4–§II.5), numba kernel.
 
     Returns ``(xi, g, gdot, n, P, Q, B (N_LOCAL,), W (3, N_LOCAL), H (N_LOCAL, N_LOCAL))`` with
@@ -213,8 +236,9 @@ def contact_geometry(q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, want
     ``H = ∂²g_N/∂q_c²`` of §5 including the ξ_P variation and the Euler-parameter Hessian.
     """
     xi, g, gdot, n, P, Q, B, W, T, dS, rx, rxx, ell = _kinematics(
-        q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, np.empty(PAIR_WORK))
-    H = _gap_hessian(n, W, T, dS, rx, rxx, ell) if want_hessian else np.zeros((N_LOCAL, N_LOCAL))
+        q_body, v_body, u_Q, q_elem, v_elem, length, xi0, r_b, np.empty(PAIR_WORK), xi_lo, xi_hi)
+    H = (_gap_hessian(n, W, T, dS, rx, rxx, ell, is_pinned(xi, xi_lo, xi_hi)) if want_hessian
+         else np.zeros((N_LOCAL, N_LOCAL)))
     return xi, g, gdot, n, P, Q, B, W, H
 
 
@@ -340,7 +364,8 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):
 
 @njit
 def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,
-                  approach_velocity, want_tangent, Qc, K, C, geo, work, held=False):
+                  approach_velocity, want_tangent, Qc, K, C, geo, work, held=False, xi_lo=-1.0,
+                  xi_hi=2.0):
     """Penalty force of one contact point and its Gauss–Newton tangent (docs/theory.md §II.4–§II.5).
 
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
@@ -354,11 +379,12 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     N_LOCAL), and ``geo`` (:data:`N_GEO`) = [n, P, Q, F_H, d_new (body coordinates), stuck];
     ``work`` (:data:`PAIR_WORK`): its scratch (the frictionless path allocates nothing).
     ``held``: the contact is in the active set the Newton iterations hold
-    (:func:`~flexmbs.contact.laws.held_law_force`: a linear law pulls at g > 0).
+    (:func:`~flexmbs.contact.laws.held_law_force`: a linear law pulls at g > 0); ``xi_lo``,
+    ``xi_hi``: the range of ξ_P (:func:`xi_bounds`).
     Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
-                                                            length, xi0, r_b, work)
+                                                            length, xi0, r_b, work, xi_lo, xi_hi)
     f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held)
     F_H = work[_WORK_FH:_WORK_W]
     for c in range(3):
@@ -455,7 +481,8 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
 
 def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.ndarray,
                     length: float, xi: float, r_b: float, law: np.ndarray, fric: np.ndarray,
-                    hist: np.ndarray, approach_velocity: float) -> np.ndarray:
+                    hist: np.ndarray, approach_velocity: float,
+                    xi_range: tuple[float, float]) -> np.ndarray:
     """Friction part ``W_fᵀ F_t`` of the generalized force (for the finite-difference tangent):
     :func:`contact_force` with and without friction (the twists of ``q_c``, ``v_c`` in
     ``spin``)."""
@@ -470,7 +497,7 @@ def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.
         contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:TWIST_OFF].copy(),
                       v_c[7:TWIST_OFF].copy(), spin_arg, float(length), float(xi), float(r_b), law, fr,
                       hist, approach_velocity, False, Qc, np.empty((0, 0)), np.empty((0, 0)),
-                      np.empty(N_GEO), np.empty(PAIR_WORK))
+                      np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range)
         out.append(Qc)
     return out[0] - out[1]
 
@@ -496,7 +523,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                   approach_velocity: float = 0.0, consistent: bool = False, *,
                   history: np.ndarray | None = None,
                   friction_stiffness: float | None = None,
-                  spin: np.ndarray | None = None) -> ContactResult:
+                  spin: np.ndarray | None = None,
+                  xi_range: tuple[float, float] = (-1.0, 2.0)) -> ContactResult:
     """Gap, penalty force and tangent of one beam/hole contact point (docs/theory.md §II.4–§II.5).
 
     ``g_N = |Q − P| − r_b``, ``n = (Q − P)/|Q − P|``, ``f_N = law(−g_N, −ġ_N, approach_velocity)``,
@@ -506,7 +534,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     contact's ``history`` (:data:`N_HISTORY`; default: no anchor, the step starting here) and
     the stick law's stiffness ``friction_stiffness`` when the law leaves it open (default: the
     normal law's first parameter); ``spin`` (:data:`N_SPIN`, default none) a rod element's
-    twists, whose surface turns under the friction (:func:`spin_map`).
+    twists, whose surface turns under the friction (:func:`spin_map`); ``xi_range`` the range
+    of ξ_P (:func:`xi_bounds`: at a beam's end, the end).
 
     Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction terms at frozen n, u_Q, ξ_P);
     ``consistent=True`` adds the exact geometric and damping terms of the normal force,
@@ -531,13 +560,14 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length),
                                      float(xi), float(r_b), law_p, fric, hist,
                                      float(approach_velocity), True, Qc, K, C, geo,
-                                     np.empty(PAIR_WORK))
+                                     np.empty(PAIR_WORK), False, *xi_range)
     n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
     if consistent:
         # exact geometric and damping terms of the normal force (§5), and the friction
         # stiffness by central differences in place of its Gauss-Newton part
         _, _, _, _, _, _, B, W, H = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem,
-                                                     float(length), float(xi), float(r_b), True)
+                                                     float(length), float(xi), float(r_b), True,
+                                                     *xi_range)
         _, kt, ct = law.force(-g, -gdot, approach_velocity)
         v_c = np.concatenate([v_body, v_elem, sp[3:5]])
         K += ct * np.outer(B, H @ v_c) - f * H
@@ -548,10 +578,10 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
             Kn, Cn = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
             contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, fric, hist, float(approach_velocity), True, Qf, Kf,
-                          Cf, np.empty(N_GEO), np.empty(PAIR_WORK))
+                          Cf, np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range)
             contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, no_friction(), hist, float(approach_velocity), True,
-                          Qf, Kn, Cn, np.empty(N_GEO), np.empty(PAIR_WORK))
+                          Qf, Kn, Cn, np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range)
             K -= Kf - Kn
             q_c = np.concatenate([q_body, q_elem, sp[1:3]])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
@@ -561,9 +591,9 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                 qp[j] += hstep
                 qm[j] -= hstep
                 dQ = (_friction_force(qp, v_c, sp, u_Q, length, xi_p, r_b, law_p, fric, hist,
-                                      approach_velocity)
+                                      approach_velocity, xi_range)
                       - _friction_force(qm, v_c, sp, u_Q, length, xi_p, r_b, law_p, fric, hist,
-                                        approach_velocity)) / (2.0 * hstep)
+                                        approach_velocity, xi_range)) / (2.0 * hstep)
                 K[:, j] -= dQ
     return ContactResult(gap=float(g), normal=n, P=P, Q=Q, f_n=float(f), force_on_hole=F_H,
                          Q_body=Qc[:7], Q_elem=Qc[7:TWIST_OFF], Q_twist=Qc[TWIST_OFF:], K=K,

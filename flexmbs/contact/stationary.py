@@ -187,7 +187,7 @@ def _joint_newton(qe, lengths, origin, ey, ez, shape, params, psi, elem, xi, Y, 
     per iteration, no inner projection), from ξ one projection step off the seed. Returns
     ``(converged, psi, elem, xi, ell, d2)`` (d2: the reduced D″, whose sign is the kind)."""
     n = qe.shape[0]
-    s = elem + xi
+    s = min(max(elem + xi, 0.0), float(n))     # on the beam: not past its ends (as every step)
     for _ in range(PAIR_JOINT_ITER):
         e = min(max(int(math.floor(s)), 0), n - 1)
         x = s - e

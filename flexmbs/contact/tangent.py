@@ -232,12 +232,13 @@ def _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b
 
 
 @njit(internal=True)
-def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):
+def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp, pinned):
     """Wall point ``Q = o + Y₁(ψ) e_y + Y₂(ψ) e_z`` of the consistent pair (docs/theory.md §II.4b)
     and its derivative (3, N_EXT): ψ moves with the coordinates by the implicit-function theorem
     on ``r₁ = (x − Q)·x_ξ = 0``, ``r₂ = (x − Q)·Q_ψ = 0`` (x on e_P at ξ_P), ``[Δξ, Δψ] =
     −H⁻¹[∂r₁, ∂r₂]`` with the Hessian H of ``½|x − Q|²`` in (ξ, ψ). No column of a crossing
-    element: the pair depends on the body and e_P only."""
+    element: the pair depends on the body and e_P only. ``pinned``: ξ_P held at the beam's
+    end (:func:`~flexmbs.contact.pair.is_pinned`), ψ stationary alone: ``Δψ = −∂r₂/h22``."""
     NX = N_EXT
     SP, dSP, _ = shape_xi(xiP, LP)
     x, rx, rxx = element_point(qP, LP, xiP)
@@ -289,7 +290,10 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):
         dr1 = du0 * rx[0] + du1 * rx[1] + du2 * rx[2] + u[0] * drx0 + u[1] * drx1 + u[2] * drx2
         dr2 = du0 * Qp[0] + du1 * Qp[1] + du2 * Qp[2] + u[0] * dQp0 + u[1] * dQp1 + u[2] * dQp2
         # [h11, h12; −h12, h22] [Δξ, Δψ] = −[dr1, dr2]
-        dpsi = 0.0 if singular else -(h11 * dr2 + h12 * dr1) / det
+        if pinned:
+            dpsi = 0.0 if h22 == 0.0 else -dr2 / h22
+        else:
+            dpsi = 0.0 if singular else -(h11 * dr2 + h12 * dr1) / det
         DQd[0, j] = dQ0 + Qp[0] * dpsi
         DQd[1, j] = dQ1 + Qp[1] * dpsi
         DQd[2, j] = dQ2 + Qp[2] * dpsi
@@ -299,7 +303,7 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp):
 @njit
 def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,
                     r_b, law, fric, hist, approach_velocity, consistent, paper, Qc, K, C,
-                    held=False):
+                    held=False, pinned=False):
     """Force and exact tangent of one detected contact.
 
     ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin;
@@ -321,8 +325,9 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     the e_I columns zero), else the paper's 2-D common normal; ``paper`` None: no contact of
     the model uses the paper's (its code compiled out, ``consistent`` then always set). Writes
     ``Qc`` (N_LOCAL) on ``[r_H, p, e_P, φ_P]``, ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I,
-    e_P, φ_P] and ``C`` (N_LOCAL, N_LOCAL) = −∂Q_c/∂[ṙ_H, ṗ, ė_P, φ̇_P]. Returns
-    ``(g, ġ, f_N)``.
+    e_P, φ_P] and ``C`` (N_LOCAL, N_LOCAL) = −∂Q_c/∂[ṙ_H, ṗ, ė_P, φ̇_P]. ``pinned``: ξ_P is
+    held at the beam's end (:func:`~flexmbs.contact.pair.is_pinned`; it does not move with the
+    coordinates). Returns ``(g, ġ, f_N)``.
     """
     NX = N_EXT
     p = qb[3:7]
@@ -374,7 +379,8 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
             Do[c, 3 + i] = Bo[c, i]
 
     if consistent:
-        Qd, DQd = _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp)
+        Qd, DQd = _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp,
+                                         pinned)
     else:
         Qd, DQd = _paper_hole_point(paper, qI, LI, xiI, nvec, Dn, ey, Dey, ez, Dez, o, Do, r_b, phi, Y,
                                     Yp, Ypp)
@@ -419,7 +425,7 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
         for c in range(3):
             DxiP[P_OFF + 3 * m + c] += SP[m] * rxP[c] + dPQ[c] * dSP[m]
     for j in range(NX):
-        DxiP[j] = -DxiP[j] / Gx
+        DxiP[j] = 0.0 if pinned else -DxiP[j] / Gx    # pinned: held at the beam's end
     # ---- gap, normal
     u = Q - P
     ell = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
