@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers; the same names as _LA
     from .contact.tube_joint import TubeJoint
     from .elements.ancf_cable import CableOptions
     from .geometry.curves import Centerline, arc, line, polyline
-    from .loads import Constant, Function, HalfSine, Ramp, Sine, Table, TimeFunction
+    from .loads import Constant, Function, HalfSine, Moves, Ramp, Sine, Table, TimeFunction
     from .model import GROUND, Beam, Model, Node, Pose, RigidBody
     from .ropes import Rope
     from .simulation import Result, modes, simulate, solve_quasi_static, solve_static
@@ -73,6 +73,7 @@ _LAZY = {
     "Constant": ".loads",
     "Function": ".loads",
     "HalfSine": ".loads",
+    "Moves": ".loads",
     "Ramp": ".loads",
     "Sine": ".loads",
     "Table": ".loads",
@@ -146,7 +147,7 @@ __all__ = [
     "LankaraniNikravesh", "LinearPenalty", "RegularizedCoulomb",
     "Beam", "BeamStiffness", "CableOptions", "Centerline", "CircularSection", "Constant",
     "ConvergenceError", "FlexmbsError", "Function", "GROUND", "GeneralizedAlpha", "GeometryError",
-    "HalfSine", "Material", "Model", "ModelError", "NewtonOptions", "Node", "Pose", "Ramp",
+    "HalfSine", "Material", "Model", "ModelError", "Moves", "NewtonOptions", "Node", "Pose", "Ramp",
     "RedundantConstraintError", "Result", "RigidBody", "Rope", "ScenarioError", "SimulationStopped",
     "Sine", "SlidingJoint", "StaticOptions", "Table", "TimeFunction", "__version__", "arc", "line",
     "modes", "polyline", "read_curve", "simulate", "solve_quasi_static", "solve_static", "sweep",

@@ -110,6 +110,46 @@ class Ramp(TimeFunction):
         return self.value * 0.5 * w * w * math.cos(math.pi * x)
 
 
+@dataclass(frozen=True)
+class Moves(TimeFunction):
+    """A sequence of smooth moves: the sum of cosine :class:`Ramp` s, move i changing the value
+    by ``change_i`` between ``start_i`` and ``end_i`` (a feeder that pushes, rests and pushes
+    again, starting and stopping each time at rest: no jump in the rate, as a table's corners
+    would give).
+
+    Parameters
+    ----------
+    moves : sequence of (start, end, change)
+        The moves [s, s, value]; ``end > start``; they may overlap (their changes add).
+    """
+
+    moves: Sequence[tuple[float, float, float]]
+    _ramps: tuple[Ramp, ...] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        ramps = []
+        for i, move in enumerate(self.moves):
+            if len(move) != 3:
+                raise ModelError(f"Moves: move {i} must be (start, end, change) (got {move!r})")
+            start, end, change = (float(x) for x in move)
+            if not end > start:
+                raise ModelError(f"Moves: move {i} must end after it starts (start {start:g}, "
+                                 f"end {end:g})")
+            ramps.append(Ramp(start=start, end=end, value=change, smooth=True))
+        if not ramps:
+            raise ModelError("Moves: give at least one move (start, end, change)")
+        object.__setattr__(self, "_ramps", tuple(ramps))
+
+    def __call__(self, t: float) -> float:
+        return sum(r(t) for r in self._ramps)
+
+    def d1(self, t: float) -> float:
+        return sum(r.d1(t) for r in self._ramps)
+
+    def d2(self, t: float) -> float:
+        return sum(r.d2(t) for r in self._ramps)
+
+
 @dataclass(frozen=True, kw_only=True)
 class HalfSine(TimeFunction):
     """``amplitude * sin(pi (t - start)/duration)`` for start <= t <= start + duration, else 0.

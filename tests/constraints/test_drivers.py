@@ -258,3 +258,24 @@ def test_compiled_and_python_loops_agree_with_springs_and_drivers():
     assert np.abs(runs[0].q - runs[1].q).max() < 1e-10
     assert np.abs(runs[0].lam - runs[1].lam).max() < 1e-7 * np.abs(runs[1].lam).max()
     assert np.ptp(runs[0].q[:, 7]) > 0.1                      # the second arm really moved
+
+
+def test_moves_are_smooth_pushes_that_start_and_stop_at_rest():
+    """fm.Moves (scenario type "moves"): the positions of two pushes and a pull-back, each a
+    cosine ramp; the rate and the acceleration against central differences of the value, the
+    rate zero at every start and end (no impulse where a table's corners would have one)."""
+    moves = fm.Moves([(0.0, 0.4, 0.025), (0.8, 1.2, 0.02), (1.3, 1.5, -0.005)])
+    assert moves(0.0) == 0.0 and moves(0.6) == pytest.approx(0.025, abs=1e-15)
+    assert moves(1.25) == pytest.approx(0.045) and moves(2.0) == pytest.approx(0.04)
+    assert moves(0.2) == pytest.approx(0.0125)       # half way: half the push
+    for t in (0.0, 0.4, 0.8, 1.2, 1.3, 1.5):
+        assert moves.d1(t) == pytest.approx(0.0, abs=1e-15), t
+    h = 1e-6
+    for t in (0.05, 0.33, 0.9, 1.41):
+        assert moves.d1(t) == pytest.approx((moves(t + h) - moves(t - h)) / (2 * h), rel=1e-6)
+        assert moves.d2(t) == pytest.approx((moves.d1(t + h) - moves.d1(t - h)) / (2 * h),
+                                            rel=1e-5)
+    with pytest.raises(fm.ModelError, match="move 1 must end after it starts"):
+        fm.Moves([(0.0, 0.4, 1.0), (0.5, 0.5, 1.0)])
+    with pytest.raises(fm.ModelError, match="at least one move"):
+        fm.Moves([])

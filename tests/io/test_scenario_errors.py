@@ -232,6 +232,14 @@ bending_stiffness = 1.0
                                           "force = [0, 0, 1]\nfunction = { type = 'table', "
                                           "times = [0, 1, 1], values = [0, 1, 2] }\n",
      "loads[0].function.times: expected strictly increasing times"),
+    ("moves_backwards", SIM + BEAM + "[[loads]]\ntype = 'distributed'\nbeam = 'rail'\n"
+                                     "force = [0, 0, 1]\nfunction = { type = 'moves', "
+                                     "moves = [[0, 0.4, 1], [0.6, 0.5, 1]] }\n",
+     "loads[0].function.moves: expected move 1 ending after it starts (end > start = 0.6)"),
+    ("moves_not_triples", SIM + BEAM + "[[loads]]\ntype = 'distributed'\nbeam = 'rail'\n"
+                                      "force = [0, 0, 1]\nfunction = { type = 'moves', "
+                                      "moves = [[0, 0.4]] }\n",
+     "loads[0].function.moves: expected a non-empty list of [start, end, change]"),
     ("load_unknown_type", SIM + BEAM + "[[loads]]\ntype = 'pressure'\nbeam = 'rail'\n",
      "loads[0].type: unknown load type 'pressure' (known: point, distributed)"),
     # --- joints and probes

@@ -9,7 +9,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from ...errors import ScenarioError
-from ...loads import Constant, HalfSine, Ramp, Sine, TimeFunction
+from ...loads import Constant, HalfSine, Moves, Ramp, Sine, TimeFunction
 from ...loads import Table as TableFunction
 from ...registry import Registry
 from ..tables import Table, is_number
@@ -21,7 +21,7 @@ __all__ = ["FUNCTIONS", "LOADS", "read_function"]
 LOADS: Registry[Builder] = Registry("load type")
 
 #: ``function = { type = ... }``
-FUNCTIONS = ("constant", "ramp", "half_sine", "sine", "table")
+FUNCTIONS = ("constant", "ramp", "half_sine", "sine", "table", "moves")
 
 D = TypeVar("D", bound="TimeFunction | None")
 
@@ -60,6 +60,21 @@ def read_function(t: Table, key: str, default: D, *, unit: str) -> TimeFunction 
         return Sine(amplitude=f.number("amplitude", 1.0, unit=unit),
                     frequency=f.number("frequency", gt=0, unit="Hz"),
                     phase=f.number("phase", 0.0, unit="rad"))
+    if kind == "moves":
+        f.allow(("type", "moves"))
+        moves = f.get("moves", expected="a list of [start, end, change]")
+        if not (isinstance(moves, list) and moves and all(
+                isinstance(m, list) and len(m) == 3 and all(is_number(x) and math.isfinite(x)
+                                                            for x in m) for m in moves)):
+            raise f.fail("moves", "a non-empty list of [start, end, change] (3 numbers each: "
+                         f"s, s, {unit})", moves)
+        f.check_size("moves", [x for m in moves for x in m[:2]], "s", "times")
+        f.check_size("moves", [m[2] for m in moves], unit, "changes")
+        for i, (start, end, _) in enumerate(moves):
+            if not end > start:
+                raise f.fail("moves", f"move {i} ending after it starts (end > start = "
+                             f"{start:g})", moves)
+        return Moves([(float(a), float(b), float(c)) for a, b, c in moves])
     f.allow(("type", "times", "values"))
     times = f.get("times", expected="a list of times")
     values = f.get("values", expected="a list of numbers")
