@@ -63,13 +63,13 @@ def catheter_figure(run: Run, *, times: tuple[float, ...] = (0.4, 0.8, 1.2, 1.6)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     ax.set_title("the vessel, the catheter and the wire at the end of each push")
-    t = run.probes["t"]
+    time = run.probes["t"]
     for beam, color in (("wire", "tab:blue"), ("catheter", "tab:orange")):
         col = f"{beam}_feeder_fx"
         if col not in run.probes:
             raise ValueError(f"{run.directory}: probes.csv has no {col} column (a reaction "
                              f"probe '{beam}_feeder')")
-        bx.plot(t, run.probes[col], color=color, label=f"{beam}'s feeder")
+        bx.plot(time, run.probes[col], color=color, label=f"{beam}'s feeder")
         for start, end, _ in (pushes or {}).get(beam, ()):
             bx.axvspan(start, end, color=color, alpha=0.08)
     bx.axhline(0.0, color="0.5", lw=0.8)
