@@ -66,6 +66,19 @@ def load_module(path: Path, name: str) -> ModuleType:
     return mod
 
 
+def assert_scenario_is_the_script_s(toml: Path, example: ModuleType) -> None:
+    """An example's scenario file is what its script writes (``example.scenario()``: one
+    source) and builds the model its ``build()`` does (sizes and reference coordinates)."""
+    from flexmbs.assembly import Assembly
+    from flexmbs.io.scenario import load_scenario
+
+    assert toml.read_text(encoding="utf-8") == example.scenario()
+    from_file = Assembly(load_scenario(toml).model)
+    built = Assembly(example.build()[0])
+    assert (from_file.n_coords, from_file.n_mult) == (built.n_coords, built.n_mult)
+    np.testing.assert_allclose(from_file.q_ref, built.q_ref, rtol=0, atol=1e-15)
+
+
 def load_example(name: str) -> ModuleType:
     """The example script ``examples/<name>.py`` as a module (its model builders)."""
     return load_module(EXAMPLES / f"{name}.py", f"example_{name}")

@@ -25,16 +25,22 @@ TILT = 0.02          # the wire rises 0.6 mm over its 30 mm: 0.1 mm into the wal
 ELL = FADE_LENGTH * R_W
 
 
-def _wire_in_bore(friction: fm.Friction | None = None):
-    """A straight wire tilted by TILT whose last node is at x = 20 mm, the plane of the third of
-    five sections (0, 10, ..., 40 mm) of a free rigid body's straight open bore."""
+#: a straight wire tilted by TILT whose last node is at x = 20 mm, the plane of the third of
+#: five sections (0, 10, ..., 40 mm) of a free rigid body's straight open bore
+TILTED = ((-0.01, 0.0, 0.0), (0.02, TILT * 0.03, 0.0), 12)
+
+
+def _wire_in_bore(friction: fm.Friction | None = None, wire=TILTED):
+    """The wire ``(start, end, elements)`` in the bore of a free rigid body (sections at
+    0, 10, ..., 40 mm, open ends); the tip sections off."""
+    start, end, elements = wire
     model = fm.Model(name="fade", gravity=(0.0, 0.0, 0.0))
-    wire = model.add_beam(fm.line((-0.01, 0.0, 0.0), (0.02, TILT * 0.03, 0.0), 12),
-                          section=fm.CircularSection(R_W), material=STEEL, name="wire")
+    beam = model.add_beam(fm.line(start, end, elements), section=fm.CircularSection(R_W),
+                          material=STEEL, name="wire")
     tube = model.add_rigid_body(mass=1.0, inertia=(1e-3, 1e-3, 1e-3), name="tube",
                                 position=(0.02, 0.0, 0.0))
     hole = fm.Hole(fm.CircleHole(BORE, 0.04).section, 0.04, 5, open_ends=True)
-    joint = fm.SlidingClearanceJoint(wire, tube, hole=hole, friction=friction,
+    joint = fm.SlidingClearanceJoint(beam, tube, hole=hole, friction=friction,
                                      contact=fm.LinearPenalty(stiffness=K, damping=5.0),
                                      name="tube")
     with warnings.catch_warnings():
@@ -42,7 +48,30 @@ def _wire_in_bore(friction: fm.Friction | None = None):
         model.add_joint(joint)
     asm = Assembly(model)
     joint.state.tip_on[:] = False             # the bore's sections only (the tips: in full)
-    return asm, wire, tube, joint
+    return asm, beam, tube, joint
+
+
+def _assert_tangent_exact(asm, wire, tube, q, v) -> None:
+    """The assembled iteration matrix at (q, v) against central differences of the compiled
+    residual, in the body's coordinates and the wire's last element's: 1e-6 relative."""
+    n, m = asm.n_coords, asm.n_mult
+    a, lam = np.zeros(n), np.zeros(m)
+
+    def res(q_):
+        rq, rl = np.zeros(n), np.zeros(m)
+        asm.evaluate(q_, v, a, lam, 0.0, rq, rl)
+        return rq
+
+    rq, rl = np.zeros(n), np.zeros(m)
+    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
+    Kmat = asm.matrix.toarray()[:n, :n]
+    scale = np.abs(Kmat).max()
+    h = 1e-9
+    for j in np.concatenate([asm.body_dofs(tube), asm.beam_dofs(wire)[-12:]]):
+        e = np.zeros(n)
+        e[j] = h
+        col = (res(q + e) - res(q - e)) / (2 * h)
+        assert np.abs(Kmat[:, j] - col).max() <= 1e-6 * scale, j
 
 
 def _shifted(asm: Assembly, wire, s: float) -> np.ndarray:
@@ -100,26 +129,9 @@ def test_the_tangent_is_exact_while_a_section_takes_a_tip_in(friction, rng):
     n, m = asm.n_coords, asm.n_mult
     q = _shifted(asm, wire, 0.5 * ELL)
     v = 1e-3 * rng.standard_normal(n)
-    a, lam = np.zeros(n), np.zeros(m)
-    rows = joint.output(asm, q, v, lam, 0.0)
+    rows = joint.output(asm, q, v, np.zeros(m), 0.0)
     assert {r["section"] for r in rows} == {2}, rows
-
-    def res(q_):
-        rq, rl = np.zeros(n), np.zeros(m)
-        asm.evaluate(q_, v, a, lam, 0.0, rq, rl)
-        return rq
-
-    rq, rl = np.zeros(n), np.zeros(m)
-    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
-    Kmat = asm.matrix.toarray()[:n, :n]
-    last = asm.beam_dofs(wire)[-12:]
-    scale = np.abs(Kmat).max()
-    h = 1e-9
-    for j in np.concatenate([asm.body_dofs(tube), last]):
-        e = np.zeros(n)
-        e[j] = h
-        col = (res(q + e) - res(q - e)) / (2 * h)
-        assert np.abs(Kmat[:, j] - col).max() <= 1e-6 * scale, j
+    _assert_tangent_exact(asm, wire, tube, q, v)
 
 
 # a short wire tilted steeply (0.2) towards the wall, free in the bore between the sections at
@@ -129,22 +141,11 @@ def test_the_tangent_is_exact_while_a_section_takes_a_tip_in(friction, rng):
 STEEP = 0.2
 
 
+STEEP_WIRE = ((0.015, 0.6e-3 - STEEP * 0.005, 0.0), (0.02, 0.6e-3, 0.0), 4)
+
+
 def _steep_wire(friction: fm.Friction | None = None):
-    model = fm.Model(name="steep", gravity=(0.0, 0.0, 0.0))
-    wire = model.add_beam(fm.line((0.015, 0.6e-3 - STEEP * 0.005, 0.0), (0.02, 0.6e-3, 0.0), 4),
-                          section=fm.CircularSection(R_W), material=STEEL, name="wire")
-    tube = model.add_rigid_body(mass=1.0, inertia=(1e-3, 1e-3, 1e-3), name="tube",
-                                position=(0.02, 0.0, 0.0))
-    hole = fm.Hole(fm.CircleHole(BORE, 0.04).section, 0.04, 5, open_ends=True)
-    joint = fm.SlidingClearanceJoint(wire, tube, hole=hole, friction=friction,
-                                     contact=fm.LinearPenalty(stiffness=K, damping=5.0),
-                                     name="tube")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model.add_joint(joint)
-    asm = Assembly(model)
-    joint.state.tip_on[:] = False
-    return asm, wire, tube, joint
+    return _wire_in_bore(friction, STEEP_WIRE)
 
 
 def _end_contacts(asm, joint, q):
@@ -190,25 +191,8 @@ def test_the_tangent_is_exact_at_a_contact_pinned_to_the_end(friction, rng):
     the pinned point at once): the assembled iteration matrix against central differences of
     the compiled residual, 1e-6 relative, in the body's coordinates and the last element's."""
     asm, wire, tube, joint = _steep_wire(friction)
-    n, m = asm.n_coords, asm.n_mult
+    n = asm.n_coords
     q = _shifted(asm, wire, 0.2 * ELL)
     found = _end_contacts(asm, joint, q)
     assert found and all(c[4].xi == 1.0 and 0.0 < c[4].fade < 1.0 for c in found), found
-    v = 1e-3 * rng.standard_normal(n)
-    a, lam = np.zeros(n), np.zeros(m)
-
-    def res(q_):
-        rq, rl = np.zeros(n), np.zeros(m)
-        asm.evaluate(q_, v, a, lam, 0.0, rq, rl)
-        return rq
-
-    rq, rl = np.zeros(n), np.zeros(m)
-    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
-    Kmat = asm.matrix.toarray()[:n, :n]
-    scale = np.abs(Kmat).max()
-    h = 1e-9
-    for j in np.concatenate([asm.body_dofs(tube), asm.beam_dofs(wire)[-12:]]):
-        e = np.zeros(n)
-        e[j] = h
-        col = (res(q + e) - res(q - e)) / (2 * h)
-        assert np.abs(Kmat[:, j] - col).max() <= 1e-6 * scale, j
+    _assert_tangent_exact(asm, wire, tube, q, 1e-3 * rng.standard_normal(n))

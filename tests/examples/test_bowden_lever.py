@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.conftest import load_module
+from tests.conftest import assert_scenario_is_the_script_s, load_module
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -53,16 +53,10 @@ def test_the_lever_turns_by_the_pull_less_the_capstan_loss(example) -> None:
 def test_the_scenario_file_is_the_script_s_model_and_runs(example, tmp_path) -> None:
     """examples/bowden_lever.toml is what the script writes (edit one source), it builds the
     model the Python builder does, and a short run on the CLI writes what the figures read."""
-    from flexmbs.assembly import Assembly
     from flexmbs.cli import main
-    from flexmbs.io.scenario import load_scenario
 
     toml = ROOT / "examples" / "bowden_lever.toml"
-    assert toml.read_text(encoding="utf-8") == example.scenario()
-    from_file = Assembly(load_scenario(toml).model)
-    built = Assembly(example.build()[0])
-    assert (from_file.n_coords, from_file.n_mult) == (built.n_coords, built.n_mult)
-    np.testing.assert_allclose(from_file.q_ref, built.q_ref, rtol=0, atol=1e-15)
+    assert_scenario_is_the_script_s(toml, example)
 
     out = tmp_path / "out"
     assert main(["run", str(toml), "--out", str(out), "-q", "--set", "simulation.t_end=0.03",
@@ -85,12 +79,3 @@ def test_the_scenario_file_is_the_script_s_model_and_runs(example, tmp_path) -> 
                        wrap=example.WRAP, mu={"μ = 0": 0.0}, take_up=0.3e-3 * example.WRAP)
     assert len(fig.axes) == 2
     plt.close(fig)
-
-
-def test_the_figure_script_finds_the_checkout(capsys) -> None:
-    module = load_module(ROOT / "examples" / "figures" / "bowden_lever.py", "figures_bowden_lever")
-    assert module.ROOT == ROOT
-    with pytest.raises(SystemExit) as exc:
-        module.main(["--help"])
-    assert exc.value.code == 0
-    assert "Bowden lever figure set" in capsys.readouterr().out

@@ -25,7 +25,7 @@ import pytest
 
 import flexmbs as fm
 from flexmbs.contact._detect import TIP_SETBACK
-from tests.conftest import FULL, load_module
+from tests.conftest import FULL, assert_scenario_is_the_script_s, load_module
 
 ROOT = Path(__file__).resolve().parents[2]
 T_END = 1.6 if FULL else 0.6
@@ -127,16 +127,10 @@ def test_the_tips_advance_along_the_vessel_by_the_pushes(example, run) -> None:
 def test_the_scenario_file_is_the_script_s_model_and_runs(example, tmp_path) -> None:
     """examples/catheter.toml is what the script writes (edit one source), it builds the
     Python model, and a short run on the command line gives the Python run's tips."""
-    from flexmbs.assembly import Assembly
     from flexmbs.cli import main
-    from flexmbs.io.scenario import load_scenario
 
     toml = ROOT / "examples" / "catheter.toml"
-    assert toml.read_text(encoding="utf-8") == example.scenario()
-    from_file = Assembly(load_scenario(toml).model)
-    built = Assembly(example.build()[0])
-    assert (from_file.n_coords, from_file.n_mult) == (built.n_coords, built.n_mult)
-    np.testing.assert_allclose(from_file.q_ref, built.q_ref, rtol=0, atol=1e-15)
+    assert_scenario_is_the_script_s(toml, example)
     out = tmp_path / "out"
     assert main(["run", str(toml), "--out", str(out), "-q", "--t-end", "0.1"]) == 0
     sys.path.insert(0, str(ROOT))
@@ -165,12 +159,3 @@ def test_the_scenario_file_is_the_script_s_model_and_runs(example, tmp_path) -> 
     fig = catheter_figure(done, times=(0.05, 0.1), pushes={"wire": example.WIRE_PUSHES})
     assert len(fig.axes) == 2
     plt.close(fig)
-
-
-def test_the_figure_script_finds_the_checkout(capsys) -> None:
-    module = load_module(ROOT / "examples" / "figures" / "catheter.py", "figures_catheter")
-    assert module.ROOT == ROOT
-    with pytest.raises(SystemExit) as exc:
-        module.main(["--help"])
-    assert exc.value.code == 0
-    assert "Catheter figure" in capsys.readouterr().out

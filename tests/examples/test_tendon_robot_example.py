@@ -54,15 +54,6 @@ def test_a_short_run_writes_what_the_figures_read(example, tmp_path, capsys):
         plt.close(fig)
 
 
-def test_the_figure_script_finds_the_checkout(capsys):
-    module = load_module(ROOT / "examples" / "figures" / "tendon_robot.py", "figures_tendon_robot")
-    assert module.ROOT == ROOT
-    with pytest.raises(SystemExit) as exc:
-        module.main(["--help"])
-    assert exc.value.code == 0
-    assert "Tendon robot figure set" in capsys.readouterr().out
-
-
 def test_the_scenario_file_is_the_script_s_robot(example, tmp_path):
     """examples/tendon_robot.toml is what the script writes (edit one source), and a scenario
     file written for 4 disks builds the model the Python builder does and runs on the CLI."""
