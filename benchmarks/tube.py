@@ -22,10 +22,15 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
+
+if __package__ in (None, ""):      # run as a script: the checkout's flexmbs (a second
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # checkout compares)
 
 import flexmbs as fm
 
