@@ -27,6 +27,7 @@ from ._detect import (
     GEOMETRY_COL,
     MAX_CANDIDATES,
     N_TIPS,
+    _section_plane,
     angle_distance,
     detect_section,
     end_fade,
@@ -55,7 +56,7 @@ from .tube import rebase as rebase_section
 #: then the hole body's pose, rotation and velocity, a contact's arrays and a tube section's
 #: rotation (carved in order)
 FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3 * 2 + N_GEO
-               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9 + 6 + N_EXT)
+               + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9 + 12 + N_EXT)
 
 #: a tube joint's float work (:attr:`ClearancePart.tube_work`): a section's pose, its rate and
 #: its pose at the step's start (7 each), J and G (7 × CENTERLINE_SIZE each), H
@@ -488,7 +489,9 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     o += 9
     plane_o = fwork[o:o + 3]           # a section's plane, global (end_fade)
     plane_n = fwork[o + 3:o + 6]
-    Dw = fwork[o + 6:o + 6 + N_EXT]
+    plane_y = fwork[o + 6:o + 9]
+    plane_z = fwork[o + 9:o + 12]
+    Dw = fwork[o + 12:o + 12 + N_EXT]
     n_reg = origins.shape[0] - tip_on.shape[0]
     count = 0
     scale = 0.0
@@ -525,12 +528,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
         # tip sections, which ride with the tip, in full)
         fade, slope, end = 1.0, 0.0, 0
         if k < n_reg:
-            for a in range(3):
-                plane_o[a] = qk[a]
-                plane_n[a] = 0.0
-                for c in range(3):
-                    plane_o[a] += Ak[a, c] * ok[c]
-                    plane_n[a] += Ak[a, c] * fk[c, 0]
+            _section_plane(qk, Ak, ok, fk, plane_o, plane_n, plane_y, plane_z)
             fade, slope, end = end_fade(qe[:ne], lengths, int(row[CROSSING_COL]), plane_o,
                                         plane_n, r_b)
         if fade < 1.0:

@@ -48,6 +48,7 @@ from ._detect import (
     MAX_CROSSINGS,
     N_COLS,
     N_TIPS,
+    _section_plane,
     detect_section,
     end_fade,
     place_tips,
@@ -728,6 +729,7 @@ class SlidingClearanceJoint(Interaction):
             self._raise_left_bore(m)
         r_H, A, origins, axes, _ = self._detection_frame(q)
         qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
+        plane = np.zeros((4, 3))                 # a section's origin, normal, e_y, e_z
         out = []
         for row in self._rows[:m].copy():
             k, eP = int(row[0]), int(row[3])
@@ -744,9 +746,9 @@ class SlidingClearanceJoint(Interaction):
             if res.gap < 0.0:
                 fade = 1.0
                 if k < len(self.stations):       # a bore's section (the tips: in full)
+                    _section_plane(r_H, A, origins[k], axes[k], *plane)
                     fade, _, _ = end_fade(qe, self.geometry.lengths, int(row[CROSSING_COL]),
-                                          r_H + A @ origins[k], A @ axes[k][:, 0],
-                                          self.beam_radius)
+                                          plane[0], plane[1], self.beam_radius)
                 out.append(_row_contact(row, _faded(res, fade)))
         return out
 
