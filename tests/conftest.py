@@ -56,6 +56,30 @@ def pytest_sessionstart(session: pytest.Session) -> None:
                             f"{time.perf_counter() - start:.0f} s (exit {codes})")
 
 
+def assert_iteration_matrix_exact(asm, q: np.ndarray, v: np.ndarray, columns, *,
+                                  rtol: float = 1e-6, h: float = 1e-9) -> None:
+    """The assembled stiffness part of Newton's matrix at ``(q, v)`` (accelerations and
+    multipliers zero) against central differences of the compiled residual in the coordinates
+    ``columns``: each column within ``rtol`` of the matrix's largest entry."""
+    n, m = asm.n_coords, asm.n_mult
+    a, lam = np.zeros(n), np.zeros(m)
+
+    def residual(q_: np.ndarray) -> np.ndarray:
+        rq, rl = np.zeros(n), np.zeros(m)
+        asm.evaluate(q_, v, a, lam, 0.0, rq, rl)
+        return rq
+
+    rq, rl = np.zeros(n), np.zeros(m)
+    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
+    K = asm.matrix.toarray()[:n, :n]
+    scale = np.abs(K).max()
+    for j in columns:
+        e = np.zeros(n)
+        e[j] = h
+        column = (residual(q + e) - residual(q - e)) / (2 * h)
+        assert np.abs(K[:, j] - column).max() <= rtol * scale, j
+
+
 def load_module(path: Path, name: str) -> ModuleType:
     """The script ``path`` as a module named ``name`` (an example's or a figure script's
     functions)."""

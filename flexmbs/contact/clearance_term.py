@@ -521,9 +521,11 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                 hist[4 + c] = start_k[c]
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
         xi_lo, xi_hi = xi_bounds(eP, ne)     # not past the beam's ends (the detection's range)
+        # an open bore's end section: its law lets go as the axis nears the rim (mouth_weight)
+        mouth = r_b if open_ends and (k == 0 or k == n_reg - 1) else 0.0
         g, gdot, f, xiP = contact_force(qk, vk, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
-                                        C, geo, pair_work, held, xi_lo, xi_hi)
+                                        C, geo, pair_work, held, xi_lo, xi_hi, mouth)
         # a section the beam's end is passing takes its contact in gradually (end_fade; the
         # tip sections, which ride with the tip, in full)
         fade, slope, end = 1.0, 0.0, 0
@@ -583,7 +585,7 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
                             row[CROSSING_COL + 1],
                             qe[eP], ve, spin, lengths[eP], xiP, row[14], Y, Yp, Ypp, r_b, law,
                             fric, hist, v_app, consistent, paper, Qx, KX, C, held,
-                            is_pinned(xiP, xi_lo, xi_hi))
+                            is_pinned(xiP, xi_lo, xi_hi), mouth)
             if fade < 1.0:
                 # −∂(w Q)/∂q = w K − Q ⊗ ∂w/∂q; ∂w/∂q on [r_H, p] and the end element, which
                 # takes the e_I columns (the crossing's: unused by the consistent detection)

@@ -668,12 +668,20 @@ class SlidingClearanceJoint(Interaction):
                                     history=self._history(q, k, psi, eP),
                                     friction_stiffness=self.friction_stiffness(),
                                     spin=self._spin(q, v, eP),
-                                    xi_range=xi_bounds(eP, len(self.geometry.lengths)))
+                                    xi_range=xi_bounds(eP, len(self.geometry.lengths)),
+                                    mouth=self._mouth(k))
                 if res.gap >= 0.0:
                     continue
                 fade, _, _ = end_fade(qe, self.geometry.lengths, e, origin, n, r_b)
                 out.append((k, j, cand.kind, eP, _faded(res, fade), a, b, psi))
         return out
+
+    def _mouth(self, k: int) -> float:
+        """The beam radius at an end section of an open bore, whose law lets go as the beam's
+        axis nears the rim (:func:`~flexmbs.contact.laws.mouth_weight`), else 0 (the compiled
+        path's rule, :func:`~flexmbs.contact.clearance_term.clearance_forces`)."""
+        last = len(self.stations) - 1
+        return self.beam_radius if self.hole.open_ends and k in (0, last) else 0.0
 
     def _detection_frame(self, q: np.ndarray) -> DetectionFrame:
         """What the detection takes at ``q``: the hole body's position and rotation, the
@@ -742,7 +750,8 @@ class SlidingClearanceJoint(Interaction):
                                 history=self._history(q, k, row[11], eP),
                                 friction_stiffness=self.friction_stiffness(),
                                 spin=self._spin(q, v, eP),
-                                xi_range=xi_bounds(eP, len(self.geometry.lengths)))
+                                xi_range=xi_bounds(eP, len(self.geometry.lengths)),
+                                mouth=self._mouth(k))
             if res.gap < 0.0:
                 fade = 1.0
                 if k < len(self.stations):       # a bore's section (the tips: in full)
@@ -1008,8 +1017,8 @@ class SlidingClearanceJoint(Interaction):
         rows at the same state."""
         law = self.contact.parameters()
         v = np.zeros_like(q) if v is None else v
-        return float(sum(kind * res.fade * law_energy(law, -res.gap)
-                         for _k, _j, kind, _eP, res, *_ in self._observed(q, v)))
+        return float(sum(kind * res.fade * law_energy(law, -res.gap, self._mouth(k))
+                         for k, _j, kind, _eP, res, *_ in self._observed(q, v)))
 
     def contact_force(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Total contact force on the hole body (global components)."""

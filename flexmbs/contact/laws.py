@@ -49,6 +49,8 @@ __all__ = [
     "get_law",
     "law_force",
     "held_law_force",
+    "mouth_weight",
+    "MOUTH_FADE",
     "N_LAW",
     "DAMPING_ONSET",
     "law_energy",
@@ -106,28 +108,85 @@ def law_force(law, delta, delta_dot, approach_velocity):
     return f, kt, ct
 
 
+#: the part of the beam radius over which an open bore's end section lets its contact go as the
+#: beam's axis nears the mouth's rim (:func:`mouth_weight`)
+MOUTH_FADE = 0.5
+
+#: Gauss–Legendre nodes and weights on [0, 1] (five points: exact for polynomials of degree 9)
+_GAUSS_X = (0.04691007703066800, 0.23076534494715845, 0.5, 0.76923465505284155,
+            0.95308992296933200)
+_GAUSS_W = (0.11846344252809454, 0.23931433524968324, 0.28444444444444444, 0.23931433524968324,
+            0.11846344252809454)
+
+
 @njit
-def held_law_force(law, delta, delta_dot, approach_velocity, held):
+def mouth_weight(delta, mouth):
+    """``(w, dw/dδ)``: the weight of a contact at an end section of an open bore, whose law acts
+    as ``w(δ) f(δ, δ̇)`` (docs/design-notes.md, "The mouth of an open bore"). ``mouth`` is the
+    beam radius r_b there (0 elsewhere: w = 1); ``x = (r_b − δ)/ℓ`` is the distance of the beam's
+    axis from the wall (``r_b − δ``) over ``ℓ = MOUTH_FADE r_b``, ``w = x²(3 − 2x)`` clipped to
+    [0, 1]. The section ignores a beam whose axis crosses its plane outside the wall (the beam
+    outside the mouth); without the weight, a beam whose axis slides in over the rim met a
+    contact of a whole radius of penetration, a jump of k r_b. A penetration below
+    ``(1 − MOUTH_FADE) r_b`` is not changed."""
+    if mouth <= 0.0:
+        return 1.0, 0.0
+    ell = MOUTH_FADE * mouth
+    x = (mouth - delta) / ell
+    if x >= 1.0:
+        return 1.0, 0.0
+    if x <= 0.0:
+        return 0.0, 0.0
+    return x * x * (3.0 - 2.0 * x), -6.0 * x * (1.0 - x) / ell
+
+
+@njit
+def held_law_force(law, delta, delta_dot, approach_velocity, held, mouth=0.0):
     """:func:`law_force`, and for a contact the Newton iterations hold in the active set
     (``held``, :class:`~flexmbs.solvers.newton.NewtonOptions` ``hold_contacts``) at ``δ ≤ 0``
     the elastic part's extension: ``(Kδ, K, 0)`` for a linear law without onset (the force
     pulls: the held problem has no kink at δ = 0), 0 otherwise (every other law is C¹ there
     with a zero slope, so its extension is 0). The held set is made consistent with the gaps
-    before a step is accepted, so no converged state holds a pulling contact."""
+    before a step is accepted, so no converged state holds a pulling contact. ``mouth``: the
+    beam radius at an end section of an open bore, whose force is weighted by
+    :func:`mouth_weight` (its derivatives by the product rule), else 0."""
     if held and delta <= 0.0:
         if law[1] == 1.0 and law[5] == 0.0:
             return law[0] * delta, law[0], 0.0
         return 0.0, 0.0, 0.0
-    return law_force(law, delta, delta_dot, approach_velocity)
+    f, kt, ct = law_force(law, delta, delta_dot, approach_velocity)
+    if mouth > 0.0:
+        w, dw = mouth_weight(delta, mouth)
+        return w * f, w * kt + dw * f, w * ct
+    return f, kt, ct
 
 
 @njit
-def law_energy(law, delta):
+def law_energy(law, delta, mouth=0.0):
     """Potential ``Φ(δ) = Kδⁿ⁺¹/(n + 1)`` of the elastic part of :func:`law_force` (``Φ′ = Kδⁿ``;
     0 for ``δ ≤ 0``; with an onset δ₀: ``Kδ³/(6δ₀)``, then ``K(δ²/2 − δ₀δ/2 + δ₀²/6)``): the
-    section potential of docs/theory.md §II.4b. The damping terms have none."""
+    section potential of docs/theory.md §II.4b. The damping terms have none. ``mouth`` (the
+    beam radius at an end section of an open bore, :func:`mouth_weight`): ``Φ′ = w f``, the
+    part above ``(1 − MOUTH_FADE) r_b`` by five-point Gauss–Legendre (exact for the linear law
+    past its onset; ``w f`` is a polynomial of degree 4 there)."""
     if delta <= 0.0:
         return 0.0
+    if mouth > 0.0:
+        start = (1.0 - MOUTH_FADE) * mouth
+        if delta > start:
+            top = min(delta, mouth)
+            acc = 0.0
+            for i in range(5):
+                s = start + _GAUSS_X[i] * (top - start)
+                w, _ = mouth_weight(s, mouth)
+                acc += _GAUSS_W[i] * w * law_force(law, s, 0.0, 1.0)[0]
+            return _elastic_energy(law, start) + acc * (top - start)
+    return _elastic_energy(law, delta)
+
+
+@njit
+def _elastic_energy(law, delta):
+    """:func:`law_energy` without a mouth (``delta`` > 0)."""
     n, onset = law[1], law[5]
     if n == 1.0 and onset > 0.0:
         if delta < onset:

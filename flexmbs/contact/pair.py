@@ -365,7 +365,7 @@ def stick_trial(A, hist, u_Q, Q, P, S, n, turn, delta, d):
 @njit
 def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, law, fric, hist,
                   approach_velocity, want_tangent, Qc, K, C, geo, work, held=False, xi_lo=-1.0,
-                  xi_hi=2.0):
+                  xi_hi=2.0, mouth=0.0):
     """Penalty force of one contact point and its Gauss–Newton tangent (docs/theory.md §II.4–§II.5).
 
     ``law`` = :meth:`ForceLaw.parameters`; ``fric`` = :meth:`~flexmbs.contact.laws.Friction.parameters`
@@ -380,12 +380,13 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
     ``work`` (:data:`PAIR_WORK`): its scratch (the frictionless path allocates nothing).
     ``held``: the contact is in the active set the Newton iterations hold
     (:func:`~flexmbs.contact.laws.held_law_force`: a linear law pulls at g > 0); ``xi_lo``,
-    ``xi_hi``: the range of ξ_P (:func:`xi_bounds`).
+    ``xi_hi``: the range of ξ_P (:func:`xi_bounds`); ``mouth``: r_b at an end section of an
+    open bore (:func:`~flexmbs.contact.laws.mouth_weight`), else 0.
     Returns ``(g_N, ġ_N, f_N, ξ_P)``.
     """
     xi, g, gdot, n, P, Q, B, W, _, _, _, _, _ = _kinematics(q_body, v_body, u_Q, q_elem, v_elem,
                                                             length, xi0, r_b, work, xi_lo, xi_hi)
-    f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held)
+    f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held, mouth)
     F_H = work[_WORK_FH:_WORK_W]
     for c in range(3):
         F_H[c] = f * n[c]
@@ -482,7 +483,7 @@ def contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin, length, xi0, r_b, l
 def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.ndarray,
                     length: float, xi: float, r_b: float, law: np.ndarray, fric: np.ndarray,
                     hist: np.ndarray, approach_velocity: float,
-                    xi_range: tuple[float, float]) -> np.ndarray:
+                    xi_range: tuple[float, float], mouth: float) -> np.ndarray:
     """Friction part ``W_fᵀ F_t`` of the generalized force (for the finite-difference tangent):
     :func:`contact_force` with and without friction (the twists of ``q_c``, ``v_c`` in
     ``spin``)."""
@@ -497,7 +498,7 @@ def _friction_force(q_c: np.ndarray, v_c: np.ndarray, spin: np.ndarray, u_Q: np.
         contact_force(q_c[:7].copy(), v_c[:7].copy(), u_Q, q_c[7:TWIST_OFF].copy(),
                       v_c[7:TWIST_OFF].copy(), spin_arg, float(length), float(xi), float(r_b), law, fr,
                       hist, approach_velocity, False, Qc, np.empty((0, 0)), np.empty((0, 0)),
-                      np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range)
+                      np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range, mouth)
         out.append(Qc)
     return out[0] - out[1]
 
@@ -524,7 +525,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                   history: np.ndarray | None = None,
                   friction_stiffness: float | None = None,
                   spin: np.ndarray | None = None,
-                  xi_range: tuple[float, float] = (-1.0, 2.0)) -> ContactResult:
+                  xi_range: tuple[float, float] = (-1.0, 2.0),
+                  mouth: float = 0.0) -> ContactResult:
     """Gap, penalty force and tangent of one beam/hole contact point (docs/theory.md §II.4–§II.5).
 
     ``g_N = |Q − P| − r_b``, ``n = (Q − P)/|Q − P|``, ``f_N = law(−g_N, −ġ_N, approach_velocity)``,
@@ -535,7 +537,8 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     the stick law's stiffness ``friction_stiffness`` when the law leaves it open (default: the
     normal law's first parameter); ``spin`` (:data:`N_SPIN`, default none) a rod element's
     twists, whose surface turns under the friction (:func:`spin_map`); ``xi_range`` the range
-    of ξ_P (:func:`xi_bounds`: at a beam's end, the end).
+    of ξ_P (:func:`xi_bounds`: at a beam's end, the end); ``mouth`` the beam radius at an end
+    section of an open bore (:func:`~flexmbs.contact.laws.mouth_weight`), else 0.
 
     Tangent: Gauss–Newton ``K = k_t BᵀB`` (+ the friction terms at frozen n, u_Q, ξ_P);
     ``consistent=True`` adds the exact geometric and damping terms of the normal force,
@@ -560,7 +563,7 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
     g, gdot, f, xi_p = contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length),
                                      float(xi), float(r_b), law_p, fric, hist,
                                      float(approach_velocity), True, Qc, K, C, geo,
-                                     np.empty(PAIR_WORK), False, *xi_range)
+                                     np.empty(PAIR_WORK), False, *xi_range, mouth)
     n, P, Q, F_H = geo[0:3], geo[3:6], geo[6:9], geo[9:12]
     if consistent:
         # exact geometric and damping terms of the normal force (§5), and the friction
@@ -568,7 +571,7 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
         _, _, _, _, _, _, B, W, H = contact_geometry(q_body, v_body, u_Q, q_elem, v_elem,
                                                      float(length), float(xi), float(r_b), True,
                                                      *xi_range)
-        _, kt, ct = law.force(-g, -gdot, approach_velocity)
+        _, kt, ct = held_law_force(law_p, -g, -gdot, float(approach_velocity), False, mouth)
         v_c = np.concatenate([v_body, v_elem, sp[3:5]])
         K += ct * np.outer(B, H @ v_c) - f * H
         if fric[0] != 0.0 and f > 0.0:
@@ -578,10 +581,10 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
             Kn, Cn = np.empty((N_LOCAL, N_LOCAL)), np.empty((N_LOCAL, N_LOCAL))
             contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, fric, hist, float(approach_velocity), True, Qf, Kf,
-                          Cf, np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range)
+                          Cf, np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range, mouth)
             contact_force(q_body, v_body, u_Q, q_elem, v_elem, spin_arg, float(length), float(xi),
                           float(r_b), law_p, no_friction(), hist, float(approach_velocity), True,
-                          Qf, Kn, Cn, np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range)
+                          Qf, Kn, Cn, np.empty(N_GEO), np.empty(PAIR_WORK), False, *xi_range, mouth)
             K -= Kf - Kn
             q_c = np.concatenate([q_body, q_elem, sp[1:3]])
             hstep = 1e-7 * max(1.0, float(np.max(np.abs(q_c))))
@@ -591,9 +594,9 @@ def contact_point(q_body: np.ndarray, v_body: np.ndarray, u_Q: np.ndarray, q_ele
                 qp[j] += hstep
                 qm[j] -= hstep
                 dQ = (_friction_force(qp, v_c, sp, u_Q, length, xi_p, r_b, law_p, fric, hist,
-                                      approach_velocity, xi_range)
+                                      approach_velocity, xi_range, mouth)
                       - _friction_force(qm, v_c, sp, u_Q, length, xi_p, r_b, law_p, fric, hist,
-                                        approach_velocity, xi_range)) / (2.0 * hstep)
+                                        approach_velocity, xi_range, mouth)) / (2.0 * hstep)
                 K[:, j] -= dQ
     return ContactResult(gap=float(g), normal=n, P=P, Q=Q, f_n=float(f), force_on_hole=F_H,
                          Q_body=Qc[:7], Q_elem=Qc[7:TWIST_OFF], Q_twist=Qc[TWIST_OFF:], K=K,

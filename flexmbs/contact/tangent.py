@@ -303,7 +303,7 @@ def _stationary_hole_point(qP, LP, xiP, o, Do, ey, Dey, ez, Dez, Y, Yp, Ypp, pin
 @njit
 def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi, Y, Yp, Ypp,
                     r_b, law, fric, hist, approach_velocity, consistent, paper, Qc, K, C,
-                    held=False, pinned=False):
+                    held=False, pinned=False, mouth=0.0):
     """Force and exact tangent of one detected contact.
 
     ``qb``, ``vb`` (7): hole body; ``u_o`` (3): body coordinates of the section origin;
@@ -327,7 +327,8 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     ``Qc`` (N_LOCAL) on ``[r_H, p, e_P, φ_P]``, ``K`` (N_LOCAL, N_EXT) = −∂Q_c/∂[r_H, p, e_I,
     e_P, φ_P] and ``C`` (N_LOCAL, N_LOCAL) = −∂Q_c/∂[ṙ_H, ṗ, ė_P, φ̇_P]. ``pinned``: ξ_P is
     held at the beam's end (:func:`~flexmbs.contact.pair.is_pinned`; it does not move with the
-    coordinates). Returns ``(g, ġ, f_N)``.
+    coordinates); ``mouth``: r_b at an end section of an open bore
+    (:func:`~flexmbs.contact.laws.mouth_weight`), else 0. Returns ``(g, ġ, f_N)``.
     """
     NX = N_EXT
     p = qb[3:7]
@@ -478,7 +479,7 @@ def contact_tangent(qb, vb, u_o, frame, qI, LI, xiI, qP, vP, spin, LP, xiP, phi,
     for j in range(N_LOCAL):
         Bn[j] = nc[0] * W[0, j] + nc[1] * W[1, j] + nc[2] * W[2, j]
     # ---- force F_H = f n + F_t
-    f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held)
+    f, kt, ct = held_law_force(law, -g, -gdot, approach_velocity, held, mouth)
     Df = np.empty(NX)
     for j in range(NX):
         Df[j] = -kt * Dg[j] - ct * Dgdot[j]

@@ -18,6 +18,7 @@ import pytest
 import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.contact._detect import FADE_LENGTH
+from tests.conftest import assert_iteration_matrix_exact
 
 STEEL = fm.Material(E=2e11, rho=7800.0)
 R_W, BORE, K = 0.5e-3, 1e-3, 1e6
@@ -52,26 +53,10 @@ def _wire_in_bore(friction: fm.Friction | None = None, wire=TILTED):
 
 
 def _assert_tangent_exact(asm, wire, tube, q, v) -> None:
-    """The assembled iteration matrix at (q, v) against central differences of the compiled
-    residual, in the body's coordinates and the wire's last element's: 1e-6 relative."""
-    n, m = asm.n_coords, asm.n_mult
-    a, lam = np.zeros(n), np.zeros(m)
-
-    def res(q_):
-        rq, rl = np.zeros(n), np.zeros(m)
-        asm.evaluate(q_, v, a, lam, 0.0, rq, rl)
-        return rq
-
-    rq, rl = np.zeros(n), np.zeros(m)
-    asm.evaluate(q, v, a, lam, 0.0, rq, rl, matrix=(0.0, 0.0, 1.0))
-    Kmat = asm.matrix.toarray()[:n, :n]
-    scale = np.abs(Kmat).max()
-    h = 1e-9
-    for j in np.concatenate([asm.body_dofs(tube), asm.beam_dofs(wire)[-12:]]):
-        e = np.zeros(n)
-        e[j] = h
-        col = (res(q + e) - res(q - e)) / (2 * h)
-        assert np.abs(Kmat[:, j] - col).max() <= 1e-6 * scale, j
+    """The iteration matrix against central differences in the body's coordinates and the
+    wire's last element's (whose end node the weight depends on)."""
+    assert_iteration_matrix_exact(asm, q, v, np.concatenate([asm.body_dofs(tube),
+                                                             asm.beam_dofs(wire)[-12:]]))
 
 
 def _shifted(asm: Assembly, wire, s: float) -> np.ndarray:

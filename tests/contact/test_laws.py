@@ -214,3 +214,37 @@ def test_regularized_coulomb(rng: np.random.Generator) -> None:
                                rtol=1e-8)
     with pytest.raises(ModelError, match="eps_v"):
         RegularizedCoulomb(mu=0.3, eps_v=0.0)
+
+
+@pytest.mark.parametrize("law", [LinearPenalty(stiffness=1e6, damping=20.0),
+                                 Hertz(stiffness=1e9, exponent=1.5),
+                                 HuntCrossley(stiffness=1e9, restitution=0.6)],
+                         ids=["linear", "hertz", "hunt_crossley"])
+def test_the_weighted_law_at_a_mouth(law: ForceLaw) -> None:
+    """At an open bore's end section (``mouth`` = r_b) the law is ``w(δ) f`` with
+    ``w = x²(3 − 2x)``, ``x = (r_b − δ)/(r_b/2)``: unchanged below r_b/2, 0 at δ = r_b (the
+    axis at the wall); its δ- and δ̇-derivatives match central differences; the potential's
+    derivative is the weighted elastic force (central differences of ``law_energy``), and the
+    potential is continuous at r_b/2."""
+    from flexmbs.contact.laws import MOUTH_FADE, held_law_force, law_energy
+
+    p, r_b, v0, ddot = law.parameters(), 0.5e-3, 0.2, 0.01
+    for delta in (0.1 * r_b, 0.3 * r_b):
+        assert held_law_force(p, delta, ddot, v0, False, r_b) == law.force(delta, ddot, v0)
+    assert held_law_force(p, r_b, ddot, v0, False, r_b) == (0.0, 0.0, 0.0)
+    start = (1.0 - MOUTH_FADE) * r_b
+    assert law_energy(p, start * (1 + 1e-12), r_b) == pytest.approx(law_energy(p, start), rel=1e-9)
+    for delta in (0.55 * r_b, 0.75 * r_b, 0.95 * r_b):
+        x = (r_b - delta) / (MOUTH_FADE * r_b)
+        f, kd, kv = held_law_force(p, delta, ddot, v0, False, r_b)
+        assert f == pytest.approx(x * x * (3 - 2 * x) * law.force(delta, ddot, v0)[0], rel=1e-12)
+        h = 1e-7 * delta
+
+        def force(d: float, dd: float = ddot) -> float:
+            return held_law_force(p, d, dd, v0, False, r_b)[0]
+
+        assert kd == pytest.approx((force(delta + h) - force(delta - h)) / (2 * h), rel=FD_RTOL)
+        assert kv == pytest.approx((force(delta, ddot + 1e-7) - force(delta, ddot - 1e-7)) / 2e-7,
+                                   rel=FD_RTOL, abs=1e-9 * f)
+        dE = (law_energy(p, delta + h, r_b) - law_energy(p, delta - h, r_b)) / (2 * h)
+        assert dE == pytest.approx(force(delta, 0.0), rel=1e-6)
