@@ -224,21 +224,32 @@ def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):
 @njit(inline="always")
 def post_step(sy, q, v, qdd, acc):
     """Interaction state after a converged step, then the nodal frames re-based where needed
-    (:func:`rebase`); must follow a :func:`residual` at this state (whose contact detection it
-    reuses). Returns 0 or an ``ERR_*`` code (then nothing is changed)."""
+    (:func:`after_step`); must follow a :func:`residual` at this state (whose contact detection
+    it reuses). Returns 0 or an ``ERR_*`` code (then nothing is changed)."""
+    _, code = after_step(sy, q, v, qdd, acc)
+    return code
+
+
+@njit(inline="always")
+def after_step(sy, q, v, qdd, acc):
+    """The one sequence after a converged step or static increment (following a residual at
+    ``q``): the elements' checks, the joints' state (slide elements, contact tracking and
+    friction anchors, ``q`` the next step's start), the springs' and ropes' state, then the
+    nodal frames re-based where needed (:func:`_rebase`: ``q, v, qdd`` and the integrator's
+    ``acc``; empty rates for statics). Returns ``(re-based nodes, 0)`` or ``(0, error code)``
+    (then nothing is changed)."""
     _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, rope, springs, \
         _drivers, error, bases = sy
     code = groups_post_step(beams, q, error)
     if code != 0:
-        return code
+        return 0, code
     code = sliding_post_step(sliding, q, error)
     if code != 0:
-        return code
+        return 0, code
     clearance_post_step_all(clearance, q)
     springs_post_step(springs, q)
     ropes_post_step(rope, q, v)
-    _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc)
-    return 0
+    return _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc), 0
 
 
 @njit(inline="always")
@@ -264,23 +275,10 @@ def _rebase(beams, joints, loads, clearance, bases, q, v, qdd, acc):
 
 @njit(inline="always")
 def rebase_static(sy, q):
-    """After a converged static increment (following a residual at ``q``): the elements'
-    checks, the joints' state as after a step (:func:`post_step`: slide elements, contact
-    tracking and friction anchors, ``q`` the next increment's start), then the re-basing of
-    ``q`` (no rates). Returns ``(re-based nodes, 0)`` or ``(0, error code)``."""
-    _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, rope, springs, \
-        _drivers, error, bases = sy
-    code = groups_post_step(beams, q, error)
-    if code != 0:
-        return 0, code
-    code = sliding_post_step(sliding, q, error)
-    if code != 0:
-        return 0, code
-    clearance_post_step_all(clearance, q)
-    springs_post_step(springs, q)
+    """After a converged static increment: :func:`after_step` without rates. Returns
+    ``(re-based nodes, 0)`` or ``(0, error code)``."""
     empty = q[:0]
-    ropes_post_step(rope, q, empty)
-    return _rebase(beams, joints, loads, clearance, bases, q, empty, empty, empty), 0
+    return after_step(sy, q, empty, empty, empty)
 
 
 @njit(inline="always")

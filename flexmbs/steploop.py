@@ -204,6 +204,39 @@ def _restore(backup, q, v, qdd, a, lam):
 
 
 @njit(inline="always")
+def alpha_coefficients(h, am, af, gamma, beta):
+    """``(β′, γ′, βh²)`` of a generalized-α step of size h (docs/theory.md §I.6): ``q̈ = β′ Δq``,
+    ``q̇ = γ′ Δq`` for a Newton update Δq, and the iteration matrix's stiffness scale."""
+    return (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta), beta * h * h
+
+
+@njit(inline="always")
+def alpha_predict(q, v, qdd, a, a_star, h, am, af, gamma, beta, keep_acceleration):
+    """The step's predictor, in place: ``a* = (α_f q̈ − α_m a)/(1 − α_m)`` into ``a_star``,
+    ``q += h q̇ + h²((½ − β) a + β a*)``, ``q̇ += h((1 − γ) a + γ a*)``; then Arnold & Brüls'
+    ``q̈ = 0``, or (``keep_acceleration``) ``q̈`` kept and ``q``, ``q̇`` made consistent with
+    it through β′, γ′. The multipliers keep their last values."""
+    bp, gp, _ = alpha_coefficients(h, am, af, gamma, beta)
+    for i in range(q.size):
+        a_star[i] = (af * qdd[i] - am * a[i]) / (1 - am)
+        q[i] += h * v[i] + h * h * ((0.5 - beta) * a[i] + beta * a_star[i])
+        v[i] += h * ((1 - gamma) * a[i] + gamma * a_star[i])
+        if keep_acceleration:
+            q[i] += qdd[i] / bp
+            v[i] += (gp / bp) * qdd[i]
+        else:
+            qdd[i] = 0.0
+
+
+@njit(inline="always")
+def alpha_correct(a, a_star, qdd, am, af):
+    """The step's corrector: the algorithmic acceleration ``a = a* + (1 − α_f)/(1 − α_m) q̈``."""
+    c_corr = (1 - af) / (1 - am)
+    for i in range(a.size):
+        a[i] = a_star[i] + c_corr * qdd[i]
+
+
+@njit(inline="always")
 def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):
     """Up to ``run.n_steps`` gen-alpha steps of size ``run.h`` (settings and work arrays in
     ``run``, an :class:`AlphaRun`): predictor, modified-Newton iterations
@@ -229,10 +262,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):
      step_tolerance, retreats, hold) = run
     n = q.size
     m = lam.size
-    bp = (1 - am) / (h * h * beta * (1 - af))
-    gp = gamma / (h * beta)
-    s = beta * h * h
-    c_corr = (1 - af) / (1 - am)
+    bp, gp, s = alpha_coefficients(h, am, af, gamma, beta)
     info[INFO_DONE] = 0.0
     info[INFO_CODE] = 0.0
     info[INFO_STEP_ERR_MAX] = 0.0
@@ -245,17 +275,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):
             backup[3, i] = a[i]
         for i in range(m):
             backup[4, i] = lam[i]
-        for i in range(n):
-            # predictor: Arnold & Brüls' q''_{n+1} = 0, or q''_{n+1} = q''_n (q, v consistent
-            # with it through beta', gamma'); lam = lam_n
-            a_star[i] = (af * qdd[i] - am * a[i]) / (1 - am)
-            q[i] += h * v[i] + h * h * ((0.5 - beta) * a[i] + beta * a_star[i])
-            v[i] += h * ((1 - gamma) * a[i] + gamma * a_star[i])
-            if keep_acceleration:
-                q[i] += qdd[i] / bp
-                v[i] += (gp / bp) * qdd[i]
-            else:
-                qdd[i] = 0.0
+        alpha_predict(q, v, qdd, a, a_star, h, am, af, gamma, beta, keep_acceleration)
         info[INFO_IT] = 0.0
         info[INFO_PREV] = np.inf
         info[INFO_STEP_ITS] = 0.0
@@ -399,8 +419,7 @@ def alpha_run(model, q, v, qdd, lam, fv, mode, r, data, run):
         if status == STATUS_FAILED:
             _restore(backup, q, v, qdd, a, lam)
             return STATUS_FAILED
-        for i in range(n):
-            a[i] = a_star[i] + c_corr * qdd[i]
+        alpha_correct(a, a_star, qdd, am, af)
         if step_tolerance > 0.0:
             e = step_error(a, backup[3, :n], h, beta, gamma, step_tolerance)
             info[INFO_STEP_ERR] = e

@@ -29,7 +29,7 @@ from ..driver import constraint_velocity
 from ..errors import ConvergenceError, ModelError
 from ..kernel import OP_STEPS, kernel
 from ..linalg.sparse_lu import ST_HAVE, sparse_restore
-from ..steploop import step_error
+from ..steploop import alpha_coefficients, alpha_correct, alpha_predict, step_error
 from .factor import FOLLOW_COST_RATIO, FOLLOW_REACH, MAX_REPLANS, PlannedLU
 from .newton import Newton, NewtonOptions
 
@@ -428,27 +428,22 @@ class _PythonStepper:
         am, af, gamma, beta = self.am, self.af, self.gamma, self.beta
         st = self.state
         saved = st.copy()
-        # predictor: q'' = 0 (Arnold & Brüls) or q'' = q''_n; lam = lam_n
-        bp, gp = (1 - am) / (h * h * beta * (1 - af)), gamma / (h * beta)
-        a_star = (af * st.qdd - am * st.a) / (1 - am)
-        st.q += h * st.v + h * h * ((0.5 - beta) * st.a + beta * a_star)
-        st.v += h * ((1 - gamma) * st.a + gamma * a_star)
-        if self.keep_acceleration:
-            st.q += st.qdd / bp
-            st.v += (gp / bp) * st.qdd
-        else:
-            st.qdd[:] = 0.0
-        self.step.setup(t0 + h, bp, gp, beta * h * h)
+        # the compiled loop's predictor and corrector (flexmbs.steploop)
+        bp, gp, s = alpha_coefficients(h, am, af, gamma, beta)
+        a_star = np.empty_like(st.a)
+        alpha_predict(st.q, st.v, st.qdd, st.a, a_star, h, am, af, gamma, beta,
+                      self.keep_acceleration)
+        self.step.setup(t0 + h, bp, gp, s)
         try:
             self.newton.solve(self.step)
             if self.velocity_step is not None:
-                self.velocity_step.setup(t0 + h, bp, gp, beta * h * h)
+                self.velocity_step.setup(t0 + h, bp, gp, s)
                 self.corrector.invalidate()     # its matrix: this step's q, no stiffness
                 self.corrector.solve(self.velocity_step)
         except ConvergenceError as exc:
             st.restore(saved)
             raise _StepFailure(0, str(exc)) from None
-        st.a[:] = a_star + (1 - af) / (1 - am) * st.qdd
+        alpha_correct(st.a, a_star, st.qdd, am, af)
         self.error = 0.0
         if tolerance > 0.0:
             self.error = float(step_error(st.a, saved.a, h, beta, gamma, tolerance))
