@@ -20,7 +20,7 @@ from . import driver
 from .assembly import Assembly
 from .budget import check_run
 from .checks import RunChecks
-from .elements import ancf_cable as cable
+from .elements import hermite
 from .errors import ConvergenceError, FlexmbsWarning, ModelError, ScenarioError
 from .io.checkpoint import CheckpointVersionError, load_checkpoint
 from .io.output import OutputWriter, failure_reason
@@ -93,12 +93,12 @@ class Result:
     def beam_point(self, beam: Beam, s: float, quantity: str = "position") -> np.ndarray:
         """Position, displacement or velocity history of the material point at arc length ``s``."""
         e, xi = beam.locate(s)
-        S, dofs = cable.centerline_interpolation(self.assembly.centerline_dofs(beam),
+        S, dofs = hermite.centerline_interpolation(self.assembly.centerline_dofs(beam),
                                                  beam.centerline.lengths, np.array([e]),
                                                  np.array([xi]))
 
         def interp(X: np.ndarray) -> np.ndarray:
-            return cable.interpolate(S, dofs, X)[..., 0, :]
+            return hermite.interpolate(S, dofs, X)[..., 0, :]
         if quantity == "position":
             return interp(self.q)
         if quantity == "displacement":
@@ -134,7 +134,7 @@ def beam_positions(asm: Assembly, beam: Beam, q: np.ndarray, s: np.ndarray) -> n
     lengths ``s`` (measured from the first node)."""
     s = np.atleast_1d(np.asarray(s, float))
     loc = [beam.locate(float(x)) for x in s]
-    return cable.centerline_points(q, asm.centerline_dofs(beam), beam.centerline.lengths,
+    return hermite.centerline_points(q, asm.centerline_dofs(beam), beam.centerline.lengths,
                                    np.array([a for a, _ in loc]), np.array([b for _, b in loc]))
 
 

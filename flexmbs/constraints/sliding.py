@@ -36,9 +36,9 @@ from ..contact.laws import (
     coulomb_return_map,
     no_friction,
 )
-from ..elements import ancf_cable as cable
-from ..elements.ancf_cable import CENTERLINE_SIZE, hermite_basis, shape_xi
+from ..elements import hermite
 from ..elements.centerline import closest_point
+from ..elements.hermite import CENTERLINE_SIZE, hermite_basis, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor, rotation_matrix
 from ..errors import FlexmbsError, ModelError, SimulationStopped
 from ..loads import TimeFunction, as_time_function
@@ -58,7 +58,7 @@ N_SLIDE = S_INDEX + 1
 
 @njit
 def _shape_x(xi, L):
-    """Hermite S1..S4 and their x-derivatives (as :func:`flexmbs.elements.ancf_cable.shape_functions`)."""
+    """Hermite S1..S4 and their x-derivatives (as :func:`flexmbs.elements.hermite.shape_functions`)."""
     S, dS, ddS = shape_xi(xi, L)
     return S, dS / L, ddS / (L * L)
 
@@ -460,7 +460,7 @@ class SlidingJoint(Interaction):
         n = len(g.lengths)
         xi = np.linspace(0.0, 1.0, 9)
         e_all = np.repeat(np.arange(n), xi.size)
-        pts = cable.centerline_points(q, g.elem_dofs, g.lengths, e_all, np.tile(xi, n))
+        pts = hermite.centerline_points(q, g.elem_dofs, g.lengths, e_all, np.tile(xi, n))
         i = int(np.argmin(np.linalg.norm(pts - x, axis=1)))
         qe = np.ascontiguousarray(q[g.elem_dofs])
         e, xi_p, *_ = closest_point(qe, g.lengths, np.asarray(x, float), int(e_all[i]),

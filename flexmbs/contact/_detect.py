@@ -16,12 +16,12 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import element_point_values
 from ..elements.centerline import (
     beam_point,
     element_crossings,
     element_plane_range,
 )
+from ..elements.hermite import element_point_values
 from .bores import section_between, sections_near
 from .geometry import closest_point_kernel, section_ellipse_at
 from .sections import (

@@ -14,8 +14,8 @@ import numpy as np
 
 from .._jit import njit
 from ..codes import ERROR_CODES
-from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.centerline import element_tree
+from ..elements.hermite import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_into
 from ._detect import (
     ANCHOR_COL,

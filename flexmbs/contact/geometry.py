@@ -11,7 +11,6 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import element_point_values, shape_xi
 from ..elements.centerline import (
     beam_point,
     closest_point,
@@ -20,6 +19,7 @@ from ..elements.centerline import (
     section_crossing,
     section_crossing_kernel,
 )
+from ..elements.hermite import element_point_values, shape_xi
 
 __all__ = [
     "beam_point",

@@ -30,8 +30,8 @@ from ..constraints.interaction import (
     MatrixSink,
     ModelParts,
 )
-from ..elements.ancf_cable import CENTERLINE_SIZE
 from ..elements.centerline import element_tree, element_tree_size
+from ..elements.hermite import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
 from ..errors import ConvergenceError, FlexmbsError, FlexmbsWarning, ModelError
 from ..terms import pad_stack

@@ -23,13 +23,7 @@ import numpy as np
 
 from .._jit import njit
 from ..elements._rod_derivatives import spin as chart_spin
-from ..elements.ancf_cable import (
-    CENTERLINE_SIZE,
-    element_point,
-    element_point_values,
-    hermite_basis,
-    shape_xi,
-)
+from ..elements.hermite import CENTERLINE_SIZE, element_point, element_point_values, hermite_basis, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor_into, rotation
 from .laws import (
     FRICTION_NONE,

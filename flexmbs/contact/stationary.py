@@ -31,8 +31,8 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import element_point_values
 from ..elements.centerline import bracketed_newton_step, closest_point_kernel
+from ..elements.hermite import element_point_values
 from .sections import SHAPE_CIRCLE, section_boundary, trig_quadratic_roots
 
 __all__ = ["line_model_points", "stationary_pair", "PAIR_MAX_ITER", "PAIR_MARGIN"]

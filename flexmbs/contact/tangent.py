@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import CENTERLINE_SIZE, element_point, shape_xi
+from ..elements.hermite import CENTERLINE_SIZE, element_point, shape_xi
 from ..elements.rigid_body import point_jacobian_of, point_tensor_of, rotation
 from .laws import FRICTION_NONE, FRICTION_STICK, held_law_force, tangential_force
 from .pair import (

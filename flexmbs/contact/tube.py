@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._jit import njit
-from ..elements.ancf_cable import CENTERLINE_SIZE, hermite_basis
+from ..elements.hermite import CENTERLINE_SIZE, hermite_basis
 
 __all__ = ["POSE_SIZE", "REBASE_COS", "POSE_WORK", "TubeSections", "section_pose",
            "pose_curvature", "rebase", "quaternion_after"]

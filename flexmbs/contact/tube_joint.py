@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..constraints.interaction import ModelParts
-from ..elements.ancf_cable import CENTERLINE_SIZE
+from ..elements.hermite import CENTERLINE_SIZE
 from ..elements.rigid_body import quaternion_from_matrix, rotation_matrix
 from ..errors import ModelError
 from .bores import Hole, refit_section_tree

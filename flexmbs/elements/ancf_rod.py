@@ -1,7 +1,7 @@
 """Element B: the 14-DOF ANCF Kirchhoff rod with a nodal twist angle (docs/theory.md §I.2).
 
 Per node ``[r (3), g = r′ (3), φ (1)]``; the centreline is the cable's cubic Hermite
-(:func:`flexmbs.elements.ancf_cable.hermite_basis`, the one statement of the basis). Each node has
+(:func:`flexmbs.elements.hermite.hermite_basis`, the one statement of the basis). Each node has
 a fixed base ``(t̄_i, D̄_i)`` from the reference (unit tangent, a unit vector ⟂ it, by parallel
 transport along the beam's nodes, §4.6); its triad is
 
@@ -61,8 +61,8 @@ from ._rod_derivatives import (
     twist,
     twist_h,
 )
-from .ancf_cable import hermite_basis
 from .group import add_matrix, add_residual, gather_states
+from .hermite import hermite_basis
 from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
 __all__ = ["LAYOUT", "RodProperties", "RodRest", "RodPart", "base_frames", "internal_forces",

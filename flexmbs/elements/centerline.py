@@ -19,8 +19,8 @@ import math
 import numpy as np
 
 from .._jit import njit
-from .ancf_cable import element_point as _elem_point
-from .ancf_cable import element_point_values
+from .hermite import element_point as _elem_point
+from .hermite import element_point_values
 
 __all__ = ["dot3", "cross3", "beam_point", "section_crossing", "section_crossing_kernel", "closest_point",
            "closest_point_kernel"]

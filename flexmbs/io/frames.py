@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..elements import ancf_cable as cable
+from ..elements import hermite
 from ..elements import rigid_body as rb
 from ..errors import ModelError
 from ..springs import ANGLE, SpringPart, spring_forces, spring_points
@@ -153,8 +153,8 @@ class FrameBuilder:
                 k = np.append(k, spe)
             ns = e.size
             L = np.asarray(beam.centerline.lengths, float)
-            S, dofs = cable.centerline_interpolation(asm.centerline_dofs(beam), L, e, xi_tab[k])
-            ref = cable.interpolate(S, dofs, asm.q_ref)
+            S, dofs = hermite.centerline_interpolation(asm.centerline_dofs(beam), L, e, xi_tab[k])
+            ref = hermite.interpolate(S, dofs, asm.q_ref)
             cum = np.concatenate([[0.0], np.cumsum(L)])
             seg = np.column_stack([np.arange(ns - 1), np.arange(1, ns)])
             if beam.closed:
@@ -202,8 +202,8 @@ class FrameBuilder:
 
     def _beam_point_data(self, b: _BeamSampler, q: np.ndarray, v: np.ndarray
                          ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        x = cable.interpolate(b.S, b.dofs, q)
-        vel = cable.interpolate(b.S, b.dofs, v)
+        x = hermite.interpolate(b.S, b.dofs, q)
+        vel = hermite.interpolate(b.S, b.dofs, v)
         (etype, rest, options), elem_dofs, radius, _ = self._beam_const[b.index]
         point_data = {"displacement": x - b.ref, "velocity": vel, "arc_length": b.arc}
         fields = etype.output_fields(q[elem_dofs], rest, options, b.xi)

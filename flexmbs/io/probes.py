@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..elements import ancf_cable as cable
+from ..elements import hermite
 from ..errors import ModelError
 from ..model import Beam, RigidBody
 
@@ -81,7 +81,7 @@ class BeamPointProbe(Probe):
             raise ModelError(f"probe '{self.name}': beam '{self.beam.name}' is not part of the model")
 
     def _interp(self, asm: Any, x: np.ndarray) -> np.ndarray:
-        return cable.centerline_points(x, self._dofs(asm)[1], self.beam.centerline.lengths,
+        return hermite.centerline_points(x, self._dofs(asm)[1], self.beam.centerline.lengths,
                                        np.array([self._element]), np.array([self._xi]))[0]
 
     def _dofs(self, asm: Any) -> tuple[Any, np.ndarray, dict[str, np.ndarray]]:

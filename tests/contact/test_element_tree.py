@@ -15,8 +15,8 @@ import pytest
 import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.contact import joint as joint_module
-from flexmbs.elements.ancf_cable import element_point
 from flexmbs.elements.centerline import element_tree, element_tree_size
+from flexmbs.elements.hermite import element_point
 from tests.contact.test_curved_bore import _hairpin_model
 
 

@@ -20,7 +20,7 @@ from flexmbs.contact.laws import ForceLaw
 from flexmbs.contact.shapes.circle import CircleSection
 from flexmbs.contact.shapes.superellipse import SuperellipseSection
 from flexmbs.contact.tube import POSE_SIZE, POSE_WORK, pose_curvature, rebase, section_pose
-from flexmbs.elements.ancf_cable import CENTERLINE_SIZE, shape_xi
+from flexmbs.elements.hermite import CENTERLINE_SIZE, shape_xi
 from flexmbs.elements.rigid_body import rotation
 from flexmbs.errors import ModelError
 from tests.contact.test_potential import assert_tangent_over

@@ -16,7 +16,7 @@ from flexmbs.contact.geometry import (
     section_ellipse,
     to_section,
 )
-from flexmbs.elements.ancf_cable import shape_functions
+from flexmbs.elements.hermite import shape_functions
 
 
 def _hermite(q: np.ndarray, L: np.ndarray, e: int, xi: float) -> np.ndarray:

@@ -23,8 +23,8 @@ from flexmbs.contact._detect import (
 )
 from flexmbs.contact.bores import section_tree
 from flexmbs.contact.sections import SHAPE_CIRCLE, SHAPE_SUPERELLIPSE, section_boundary
-from flexmbs.elements.ancf_cable import shape_xi
 from flexmbs.elements.centerline import element_tree, element_tree_size
+from flexmbs.elements.hermite import shape_xi
 from tests.conftest import FULL
 
 L_ELEM = 0.02        # the beam element, centred on the section

@@ -15,7 +15,7 @@ from flexmbs.contact.laws import FRICTION_NONE, FRICTION_REGULARISED, FRICTION_S
 from flexmbs.contact.pair import HIST_TWIST, N_HISTORY, N_LOCAL, N_SPIN, TWIST_OFF
 from flexmbs.contact.sections import circle_boundary
 from flexmbs.contact.tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent
-from flexmbs.elements.ancf_cable import CENTERLINE_SIZE, shape_xi
+from flexmbs.elements.hermite import CENTERLINE_SIZE, shape_xi
 from flexmbs.elements.rigid_body import rotation
 
 R_BORE = 2.5e-3

@@ -41,7 +41,7 @@ def test_numbering_follows_the_layout():
 def test_one_hermite_basis_derivatives_by_finite_differences():
     """shape_functions, shape_xi and the third derivative all come from hermite_basis; check
     its ξ-derivatives against central differences and the partition of unity."""
-    from flexmbs.elements.ancf_cable import hermite_basis, shape_functions
+    from flexmbs.elements.hermite import hermite_basis, shape_functions
 
     L, h = 0.37, 1e-6
     for xi in (-0.3, 0.0, 0.41, 1.0, 1.7):
@@ -59,7 +59,7 @@ def test_one_hermite_basis_derivatives_by_finite_differences():
 
 
 def test_centerline_points_of_a_line_and_an_arc():
-    from flexmbs.elements.ancf_cable import centerline_points
+    from flexmbs.elements.hermite import centerline_points
 
     model = fm.Model()
     line = model.add_beam(fm.line((0, 0, 0), (2, 0, 0), elements=4),

@@ -14,7 +14,7 @@ import pytest
 import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.cli import main
-from flexmbs.elements.ancf_cable import shape_functions
+from flexmbs.elements.hermite import shape_functions
 from flexmbs.io.scenario import load_scenario
 from flexmbs.solvers.eigen import eigenmodes
 from tests.conftest import FULL

@@ -154,7 +154,7 @@ def test_the_base_reactions_balance_the_tendon_tension():
 
 def _wire_points(asm: Assembly, q: np.ndarray, parts) -> np.ndarray:
     """The wire's centreline at its start, where every hole is on it, and at its anchor."""
-    from flexmbs.elements.ancf_cable import element_point
+    from flexmbs.elements.hermite import element_point
 
     beam = parts.beam
     stations = ([0.0] + [j.slide_coordinate(q) for j in parts.holes]
