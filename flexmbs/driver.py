@@ -123,6 +123,8 @@ class SystemPart(NamedTuple):
     drivers: DriverPart
     error: np.ndarray                # (4,) [code, joint, detail, window row] of the last error
     bases: np.ndarray                # (nodes with a twist, 7) re-based nodes' records (§2.4)
+    zero: np.ndarray                 # (1 + k,) int64: the matrix positions a Jacobian zeroes
+                                     # (clear_matrix; Assembly.follow)
 
     def without_absent(self, present: dict[str, bool]) -> SystemPart:
         """This system with ``None`` for every optional kind that ``present`` marks absent,
@@ -179,7 +181,7 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):
     """``r = [r_q; r_lam]``; returns ``(scale, error code)``: the largest single force entering
     ``r_q`` (the force scale of the convergence test) and 0 or an ``ERR_*`` code."""
     n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, rope, springs, \
-        drivers, error, _bases = sy
+        drivers, error, _bases, _zero = sy
     for i in range(n, r.size):
         r[i] = 0.0
     scale = loads_residual(loads, q, fv, mode, r)
@@ -197,13 +199,30 @@ def residual(sy, q, v, qdd, lam, fv, mode, r):
 
 
 @njit(inline="always")
+def clear_matrix(zero, data):
+    """``data`` = 0 where a Jacobian may write: every stored position (``zero[0]`` < 0), or, while
+    the factorisation's plan follows the sliding and clearance joints (:meth:`Assembly.follow
+    <flexmbs.assembly.Assembly.follow>`), the ``zero[0]`` positions ``zero[1:]``: those it
+    reads and the multipliers' rows and columns (:func:`constraint_velocity` reads Φ_q
+    whole). A following member writes only inside its windows (else its off-plan error), and
+    no factorisation reads a position outside its plan, so a stored pattern that reserves a
+    joint's body against a whole beam is not swept at every evaluation."""
+    count = zero[0]
+    if count < 0:
+        for i in range(data.size):
+            data[i] = 0.0
+        return
+    for i in range(count):
+        data[zero[1 + i]] = 0.0
+
+
+@njit(inline="always")
 def jacobian(sy, q, v, qdd, lam, fv, mode, cM, cC, cK, data):
     """Iteration matrix into ``data``; returns ``(largest diagonal beam or spring stiffness,
     error code)``."""
     _n, _m, beams, bodies, loads, linear, norms, joints, sliding, clearance, rope, springs, \
-        drivers, error, _bases = sy
-    for i in range(data.size):
-        data[i] = 0.0
+        drivers, error, _bases, zero = sy
+    clear_matrix(zero, data)
     kscale = 0.0
     kscale = max(kscale, groups_jacobian(beams, q, v, qdd, mode, cM, cC, cK, data))
     bodies_jacobian(bodies, q, v, qdd, fv, mode, cM, cC, cK, data)
@@ -239,7 +258,7 @@ def after_step(sy, q, v, qdd, acc):
     ``acc``; empty rates for statics). Returns ``(re-based nodes, 0)`` or ``(0, error code)``
     (then nothing is changed)."""
     _n, _m, beams, _bodies, loads, _linear, _norms, joints, sliding, clearance, rope, springs, \
-        _drivers, error, bases = sy
+        _drivers, error, bases, _zero = sy
     code = groups_post_step(beams, q, error)
     if code != 0:
         return 0, code
@@ -257,7 +276,7 @@ def hold_contacts(sy, action):
     """The clearance joints' held active set (:func:`~flexmbs.contact.clearance_term.clearance_hold`:
     ``action`` one of its ``HOLD_*``); returns its count for ``HOLD_READ``, else 0."""
     _n, _m, _beams, _bodies, _loads, _linear, _norms, _joints, _sliding, clearance, _rope, \
-        _springs, _drivers, _error, _bases = sy
+        _springs, _drivers, _error, _bases, _zero = sy
     return clearance_hold(clearance, action)
 
 
@@ -288,7 +307,7 @@ def set_bases(sy, log, stop, elements, q):
     resumed run; after a re-basing they have them already). ``q``: the re-based start of the
     next step (empty for a resumed run, whose start :meth:`Assembly.begin` sets)."""
     _n, _m, beams, _bodies, loads, _linear, _norms, joints, _sliding, clearance, _rope, \
-        _springs, _drivers, _error, _bases = sy
+        _springs, _drivers, _error, _bases, _zero = sy
     _set_bases(beams, joints, loads, clearance, log, stop, elements, q)
 
 

@@ -114,6 +114,7 @@ class Assembly:
         self._kernel_ready = False
         self._plans: dict[tuple[bool, bytes | None], Any] = {}
         self._window_index: list[tuple[np.ndarray, np.ndarray, np.ndarray, list]] | None = None
+        self._window_mask: tuple[bytes, np.ndarray] | None = None   # _window_entries' last
         self._rows: list[tuple[InteractionKind, list[tuple[Any, np.ndarray]]]] | None = None
         n, m = self.n_coords, self.n_mult
         self.evaluate(self.q_ref, np.zeros(n), None, np.zeros(m), 0.0, np.zeros(n), np.zeros(m),
@@ -535,6 +536,21 @@ class Assembly:
             else:
                 part.window[:] = windows[at:at + len(members)]
             at += len(members)
+        zero = self.system.zero
+        if windows is None or zero.size == 1:
+            zero[0] = -1
+        else:
+            # the Jacobian clears only what the plan reads, and the multipliers' rows and
+            # columns (the velocity corrector reads Φ_q whole: driver.constraint_velocity)
+            at_ = np.flatnonzero(self._window_entries(windows) | self._multiplier_entries())
+            zero[1:1 + at_.size] = at_
+            zero[0] = at_.size
+
+    def _multiplier_entries(self) -> np.ndarray:
+        """The stored positions in a multiplier's row or column (a mask)."""
+        A, n = self.matrix, self.n_coords
+        cols = np.repeat(np.arange(self.n_total), np.diff(A.indptr))
+        return (A.indices >= n) | (cols >= n)
 
     def off_plan(self, code: int) -> bool:
         """Whether a driver error ``code`` says a member left the elements the plan follows it
@@ -550,6 +566,9 @@ class Assembly:
         tube's neighbouring element, which shares a node) has them in its window, or an owner
         that does not follow reserved them. One pass over the candidate positions (a
         re-plan's set-up)."""
+        key = np.asarray(windows, np.int64).tobytes()
+        if self._window_mask is not None and self._window_mask[0] == key:
+            return self._window_mask[1]
         if self._window_index is None:
             self._window_index = self._following_index()
         candidate = np.zeros(self.matrix.nnz, bool)
@@ -562,7 +581,9 @@ class Assembly:
                 cov |= (first[dloc] < hi) & (last[dloc] >= lo)
             candidate[pos] = True
             covered[pos[cov]] = True
-        return ~candidate | covered
+        mask = ~candidate | covered
+        self._window_mask = (key, mask)
+        return mask
 
     def _following_index(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, list]]:
         """What :meth:`_window_entries` reads, built once: per group of rows with the same own

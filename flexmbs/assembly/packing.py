@@ -151,9 +151,22 @@ def pack_system(owners: list[TermOwner], model: Model, ctx: PackContext) -> Pack
         n=ctx.n_coords, m=ctx.n_total - ctx.n_coords, beams=_element_parts(groups, ctx), **parts,
         error=np.zeros(4, np.int64),
         bases=np.zeros((sum(2 * g.dofs.shape[0] for g in groups
-                            if g.element_type.rebase is not None), BASE_RECORD)))
+                            if g.element_type.rebase is not None), BASE_RECORD)),
+        zero=_zero_list(owners, ctx))
     kernel_system = system.without_absent({owner.field: owner.present for owner in owners})
     return PackedSystem(groups, system, kernel_system, system.complete(), interactions_by_kind(model))
+
+
+def _zero_list(owners: list[TermOwner], ctx: PackContext) -> np.ndarray:
+    """:attr:`SystemPart.zero <flexmbs.driver.SystemPart>`: ``[-1]`` (a Jacobian zeroes every
+    stored position), with room for every position when an interaction kind follows its
+    members (:meth:`Assembly.follow <flexmbs.assembly.Assembly.follow>` lists the positions a
+    following plan reads there)."""
+    following = {kind.name for kind in driver.INTERACTION_KINDS if kind.follow is not None}
+    room = any(owner.field in following and owner.present for owner in owners)
+    zero = np.zeros(1 + (ctx.matrix_pattern()[1].size if room else 0), np.int64)
+    zero[0] = -1
+    return zero
 
 
 def _pack_groups(specs: list[GroupSpec], ctx: PackContext) -> list[BeamGroup]:

@@ -223,3 +223,38 @@ def test_statics_on_a_plan_that_follows_the_contacts(monkeypatch):
             assert len(replans) >= 1
     assert len(replans) >= 1
     np.testing.assert_allclose(solutions[0], solutions[1], rtol=0, atol=1e-12)
+
+
+def test_a_jacobian_on_a_following_plan_sweeps_only_the_plan():
+    """While a plan follows the contacts (``Assembly.follow``), Newton's matrix is cleared only
+    at the positions that plan reads and in the multipliers' rows and columns
+    (``SystemPart.zero``): with the stored values made NaN
+    first, the planned entries equal those of the whole pattern's evaluation at the same state,
+    and every other entry is left as it was (NaN: not swept); with the whole beams held again
+    (``follow(None)``) every entry is cleared."""
+    model, _ = _tube()
+    res = fm.simulate(model, t_end=0.05, dt=1e-3, output_interval=0.05, record_energy=False)
+    asm = res.assembly
+    q, v = res.q[-1], res.v[-1]
+    n, m = asm.n_coords, asm.n_mult
+
+    def matrix() -> np.ndarray:
+        rq, rl = np.zeros(n), np.zeros(m)
+        asm.evaluate(q, v, np.zeros(n), np.zeros(m), 0.05, rq, rl, matrix=(1.0, 0.5, 0.25))
+        return asm.matrix.data.copy()
+
+    whole = matrix()
+    windows = asm.contact_windows(1)
+    assert windows is not None
+    keep = asm._window_entries(windows) | asm._multiplier_entries()
+    assert 0 < keep.sum() < keep.size
+    asm.follow(windows)
+    assert asm.system.zero[0] == keep.sum()
+    asm.matrix.data[:] = np.nan
+    planned = matrix()
+    np.testing.assert_array_equal(planned[keep], whole[keep])
+    assert np.isnan(planned[~keep]).all()
+    asm.follow(None)
+    assert asm.system.zero[0] == -1
+    asm.matrix.data[:] = np.nan
+    np.testing.assert_array_equal(matrix(), whole)
