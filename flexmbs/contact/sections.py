@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.centerline import bracketed_newton_step
+from ..elements.centerline import bracketed_newton_step, straddles
 from ..errors import ModelError
 from .roots import quartic_real_roots, trig_quadratic_roots
 from .shapes import (
@@ -125,7 +125,7 @@ def common_normal_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out,
             Fj, _, _, _ = _common_normal_f(kind, params, cy, cz, eax, eay, a, b, hi, Y, Yp, Ypp)
         else:
             Fj = F0
-        if Fi == 0.0 or Fi * Fj < 0.0:
+        if straddles(Fi, Fj):
             flo = Fi
             s = 0.5 * (lo + hi) if Fi != 0.0 else lo
             for _ in range(60):

@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from .._jit import njit
-from ..elements.centerline import bracketed_newton_step, closest_point_kernel
+from ..elements.centerline import bracketed_newton_step, closest_point_kernel, straddles
 from ..elements.hermite import element_point_values
 from .sections import SHAPE_CIRCLE, section_boundary, trig_quadratic_roots
 
@@ -131,7 +131,7 @@ def line_model_points(kind, params, cy, cz, eax, eay, a, b, samples, psi_out, ki
         Fj = F0
         if i + 1 < samples:
             Fj, _, _ = _line_model_f(kind, params, cy, cz, eax, eay, s2, hi, Y, Yp, Ypp)
-        if Fi == 0.0 or Fi * Fj < 0.0:
+        if straddles(Fi, Fj):
             flo = Fi
             s = 0.5 * (lo + hi) if Fi != 0.0 else lo
             for _ in range(60):

@@ -70,6 +70,14 @@ def _phi_at(q_e, lengths, origin, normal, s):
     return dot3(normal, d), dot3(normal, rx), e, xi, math.sqrt(dot3(d, d))
 
 
+@njit(inline="always")
+def straddles(fa, fb):
+    """A root lies in ``[a, b]`` by the signs of ``f(a) = fa``, ``f(b) = fb``: ``fa`` zero, or
+    the signs opposite (compared, not multiplied: ``fa fb`` underflows to 0 when both are
+    tiny, and a root on a sample went unseen)."""
+    return fa == 0.0 or (fa < 0.0 and fb > 0.0) or (fa > 0.0 and fb < 0.0)
+
+
 @njit
 def bracketed_newton_step(s, f, df, lo, hi, flo):
     """One Newton step on a bracketed root, bisection when it would leave the bracket: the
@@ -323,7 +331,7 @@ def section_crossing_kernel(q_e, lengths, origin, normal, elem0, xi0, tol, max_i
     fa = dot3(normal, q_e[0, 0:3] - origin)
     for k in range(n):
         fb = dot3(normal, q_e[k, 6:9] - origin)
-        if fa == 0.0 or fa * fb < 0.0 or (fb == 0.0 and k == n - 1):
+        if straddles(fa, fb) or (fb == 0.0 and k == n - 1):
             if fa == 0.0:
                 sr, ok = float(k), True
             elif fb == 0.0:
