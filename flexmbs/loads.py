@@ -303,12 +303,17 @@ def pack_loads(f_const: np.ndarray, timed: list, moments: list, functions: Funct
         pos[i, :3] = dofs.positions(slope[i], slope[i]).reshape(3, 3)
         if twist[i] >= 0:
             pos[i, 3] = dofs.positions(twist[i:i + 1], slope[i]).reshape(3)
-    return LoadsPart(np.ascontiguousarray(f_const, dtype=float),
-                     cat(idx) if idx else np.zeros(0, np.int64),
-                     cat(val) if val else np.zeros(0), cat(fn) if fn else np.zeros(0, np.int64),
-                     slope, twist, np.array([m[2] for m in moments], float).reshape(k, 3),
-                     np.array([m[3] for m in moments], float).reshape(k, 3),
-                     np.array([functions(m[4]) for m in moments], np.int64).reshape(k), pos)
+    return LoadsPart(
+        f_const=np.ascontiguousarray(f_const, dtype=float),
+        idx=cat(idx) if idx else np.zeros(0, np.int64),
+        val=cat(val) if val else np.zeros(0),
+        fn=cat(fn) if fn else np.zeros(0, np.int64),
+        m_slope=slope,
+        m_twist=twist,
+        m_torque=np.array([m[2] for m in moments], float).reshape(k, 3),
+        m_base=np.array([m[3] for m in moments], float).reshape(k, 3),
+        m_fn=np.array([functions(m[4]) for m in moments], np.int64).reshape(k),
+        m_pos=pos)
 
 
 def moments_pattern(moments: list) -> list[tuple[np.ndarray, np.ndarray]]:

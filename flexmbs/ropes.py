@@ -193,9 +193,20 @@ def pack_ropes(ropes: list[Rope], ctx: PackContext | DofMap) -> RopePart:
     law = np.zeros((n, N_LAW))
     for i, r in enumerate(ropes):
         law[i] = r.law
-    part = RopePart(idx, kind, point, T, pos, law, np.array([r.length for r in ropes], float),
-                    np.array([float(r.approach[0]) for r in ropes], float), np.zeros((3, w)),
-                    np.zeros(w), np.zeros((w, w)), np.zeros((2, 3)), np.zeros(w))
+    part = RopePart(
+        idx=idx,
+        kind=kind,
+        point=point,
+        T=T,
+        pos=pos,
+        law=law,
+        length=np.array([r.length for r in ropes], float),
+        approach=np.array([float(r.approach[0]) for r in ropes], float),
+        D=np.zeros((3, w)),
+        g=np.zeros(w),
+        H=np.zeros((w, w)),
+        x=np.zeros((2, 3)),
+        hv=np.zeros(w))
     if not isinstance(ctx, _Positions):
         for i, r in enumerate(ropes):
             r.approach = part.approach[i:i + 1]

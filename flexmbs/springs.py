@@ -212,14 +212,31 @@ def pack_springs(springs: Sequence[SpringDamper], dofs: DofMap) -> SpringPart:
         else:
             tables.append(concatenate_tables([])[0])
     table, eq_ptr = concatenate_tables(tables)
-    return SpringPart(idx, measure, kind, point, T,
-                      np.array([s.stiffness for s in springs], float),
-                      np.array([s.damping for s in springs], float),
-                      np.array([s.rest_length for s in springs], float),
-                      np.array([s.preload for s in springs], float), tab, tab_n, pos, table,
-                      eq_ptr, np.zeros((3, w)), np.zeros(w), np.zeros((w, w)), np.zeros((2, 3)),
-                      np.zeros(w), np.zeros(2), np.zeros((2, w)), np.zeros(2),
-                      np.array([s.rest_length for s in springs], float), term_work())
+    return SpringPart(
+        idx=idx,
+        measure=measure,
+        kind=kind,
+        point=point,
+        T=T,
+        k=np.array([s.stiffness for s in springs], float),
+        c=np.array([s.damping for s in springs], float),
+        l0=np.array([s.rest_length for s in springs], float),
+        f0=np.array([s.preload for s in springs], float),
+        tab=tab,
+        tab_n=tab_n,
+        pos=pos,
+        table=table,
+        eq_ptr=eq_ptr,
+        D=np.zeros((3, w)),
+        g=np.zeros(w),
+        H=np.zeros((w, w)),
+        x=np.zeros((2, 3)),
+        ql=np.zeros(w),
+        cs=np.zeros(2),
+        dcs=np.zeros((2, w)),
+        lam2=np.zeros(2),
+        theta_ref=np.array([s.rest_length for s in springs], float),
+        work=term_work())
 
 
 def _attachment(obj: Any, frame: np.ndarray | None) -> Attachment:

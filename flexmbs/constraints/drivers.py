@@ -219,16 +219,27 @@ def pack_drivers(drivers: list[JointDriver], dofs: DofMap, functions: FunctionTa
         ph.append(dofs.positions(c, c))
     nl = max((c.size for c in coords), default=0)
     cat = np.concatenate
-    return DriverPart(table, np.ascontiguousarray(eq_ptr, i64), cptr,
-                      cat(coords).astype(i64) if coords else np.zeros(0, i64),
-                      np.array([d.motion for d in drivers], i64),
-                      np.array([functions(d.function) for d in drivers], i64),
-                      np.array([d.value0 for d in drivers], float), rows,
-                      cat(pj).astype(i64) if pj else np.zeros(0, i64),
-                      cat(pt).astype(i64) if pt else np.zeros(0, i64), hptr,
-                      cat(ph).astype(i64) if ph else np.zeros(0, i64),
-                      np.zeros(nl), np.zeros(2), np.zeros((2, nl)), np.zeros(nl), np.zeros(2),
-                      np.zeros(2), np.zeros((nl, nl)), term_work())
+    return DriverPart(
+        table=table,
+        eq_ptr=np.ascontiguousarray(eq_ptr, i64),
+        coord_ptr=cptr,
+        coords=cat(coords).astype(i64) if coords else np.zeros(0, i64),
+        motion=np.array([d.motion for d in drivers], i64),
+        fn=np.array([functions(d.function) for d in drivers], i64),
+        value0=np.array([d.value0 for d in drivers], float),
+        rows=rows,
+        pos_jac=cat(pj).astype(i64) if pj else np.zeros(0, i64),
+        pos_jacT=cat(pt).astype(i64) if pt else np.zeros(0, i64),
+        hptr=hptr,
+        pos_hess=cat(ph).astype(i64) if ph else np.zeros(0, i64),
+        ql=np.zeros(nl),
+        phi_k=np.zeros(2),
+        jac_k=np.zeros((2, nl)),
+        jac=np.zeros(nl),
+        w=np.zeros(2),
+        lam_k=np.zeros(2),
+        H=np.zeros((nl, nl)),
+        work=term_work())
 
 
 @njit(inline="always")

@@ -817,8 +817,13 @@ def pack_norms(constraints: list[EulerParameterNormalization], dofs: DofMap) -> 
         pt.append(t)
         ph.append(h.reshape(4, 4).diagonal().copy())
     i64 = np.int64
-    return NormPart(coords, rows, np.array(pj, i64).reshape(k, 4), np.array(pt, i64).reshape(k, 4),
-                    np.array(ph, i64).reshape(k, 4), np.zeros(4))
+    return NormPart(
+        coords=coords,
+        rows=rows,
+        pos_jac=np.array(pj, i64).reshape(k, 4),
+        pos_jacT=np.array(pt, i64).reshape(k, 4),
+        pos_hess=np.array(ph, i64).reshape(k, 4),
+        p=np.zeros(4))
 
 
 def pack_joints(constraints: list, dofs: DofMap) -> JointPart:
@@ -852,10 +857,25 @@ def pack_joints(constraints: list, dofs: DofMap) -> JointPart:
     def cat(parts: list[np.ndarray]) -> np.ndarray:
         return np.concatenate(parts).astype(i64) if parts else np.zeros(0, i64)
 
-    return JointPart(table, np.ascontiguousarray(eq_ptr, i64), cptr, cat(coords), cat(rows), jptr,
-                    cat(pj), cat(pt), hptr, cat(ha), cat(hb), cat(ph), np.zeros(max_nl),
-                    np.zeros(max_ne), np.zeros((max_ne, max_nl)), np.zeros((max_nl, max_nl)),
-                    np.zeros(max_ne), term_work())
+    return JointPart(
+        table=table,
+        eq_ptr=np.ascontiguousarray(eq_ptr, i64),
+        coord_ptr=cptr,
+        coords=cat(coords),
+        rows=cat(rows),
+        jptr=jptr,
+        pos_jac=cat(pj),
+        pos_jacT=cat(pt),
+        hptr=hptr,
+        hess_a=cat(ha),
+        hess_b=cat(hb),
+        pos_hess=cat(ph),
+        ql=np.zeros(max_nl),
+        phi=np.zeros(max_ne),
+        jac=np.zeros((max_ne, max_nl)),
+        H=np.zeros((max_nl, max_nl)),
+        lam=np.zeros(max_ne),
+        work=term_work())
 
 
 @njit(refcount=False, internal=True)

@@ -52,10 +52,15 @@ def pack_linear(matrix: sp.csr_matrix, rhs0: np.ndarray, fn_rows: list[int], fn_
     posT = np.array([dofs.positions(np.array([c]), np.array([n + r]))[0]
                      for r, c in zip(rows, A.indices, strict=True)], dtype=np.int64)
     i64 = np.int64
-    return LinearPart(np.ascontiguousarray(A.indptr, dtype=i64),
-                      np.ascontiguousarray(A.indices, dtype=i64),
-                      np.ascontiguousarray(A.data, dtype=float), np.ascontiguousarray(rhs0, float),
-                      np.array(fn_rows, dtype=i64), np.array(fn_idx, dtype=i64), pos, posT)
+    return LinearPart(
+        indptr=np.ascontiguousarray(A.indptr, dtype=i64),
+        indices=np.ascontiguousarray(A.indices, dtype=i64),
+        data=np.ascontiguousarray(A.data, dtype=float),
+        rhs0=np.ascontiguousarray(rhs0, float),
+        fn_row=np.array(fn_rows, dtype=i64),
+        fn_idx=np.array(fn_idx, dtype=i64),
+        pos=pos,
+        posT=posT)
 
 
 @njit(internal=True)

@@ -789,10 +789,18 @@ def pack_beams(element_dofs: np.ndarray, props: CableProperties, options: CableO
     rest = rest_state(np.ascontiguousarray(q_ref[D]), props, options) if ne else _empty_rest()
     mass = np.ascontiguousarray(mass_matrix(props))
     return BeamPart(
-        D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, 144), props, rest,
-        1 if options.bending == "scalar" else 0, mass,
-        np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12)), np.zeros((ne, 12, 12)),
-        np.zeros((ne, 12, 12)), kernel_work())
+        dofs=D,
+        pos=np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, 144),
+        props=props,
+        rest=rest,
+        scalar=1 if options.bending == "scalar" else 0,
+        mass=mass,
+        qe=np.zeros((ne, 12)),
+        ve=np.zeros((ne, 12)),
+        force=np.zeros((ne, 12)),
+        stiff=np.zeros((ne, 12, 12)),
+        damp=np.zeros((ne, 12, 12)),
+        work=kernel_work())
 
 
 def _empty_rest() -> CableRest:

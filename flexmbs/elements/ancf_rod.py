@@ -1039,10 +1039,20 @@ def pack_rods(element_dofs: np.ndarray, props: RodProperties, options: object, q
     t_bar, d_bar = nodal_bases(D, q_ref) if ne else (np.zeros((0, 2, 3)), np.zeros((0, 2, 3)))
     rest = rest_state(np.ascontiguousarray(q_ref[D]), props, t_bar, d_bar)
     n = ELEMENT_SIZE
-    return RodPart(D, np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, n * n), props,
-                   rest, np.ascontiguousarray(mass_matrix(props)), new_work(), np.zeros((ne, n)),
-                   np.zeros((ne, n)), np.zeros((ne, n)), np.zeros((ne, n, n)), np.zeros((ne, n, n)),
-                   np.zeros((1, n, n)), np.array([REBASE_LIMIT, TURN_LIMIT]))
+    return RodPart(
+        dofs=D,
+        pos=np.ascontiguousarray(positions, dtype=np.int64).reshape(ne, n * n),
+        props=props,
+        rest=rest,
+        mass=np.ascontiguousarray(mass_matrix(props)),
+        work=new_work(),
+        qe=np.zeros((ne, n)),
+        ve=np.zeros((ne, n)),
+        force=np.zeros((ne, n)),
+        stiff=np.zeros((ne, n, n)),
+        damp=np.zeros((ne, n, n)),
+        empty=np.zeros((1, n, n)),
+        limits=np.array([REBASE_LIMIT, TURN_LIMIT]))
 
 
 @njit(refcount=False)

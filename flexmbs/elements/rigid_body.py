@@ -610,17 +610,25 @@ def pack_bodies(bodies: list, loads: list, dofs: DofMap, functions: FunctionTabl
     pos = np.array([dofs.positions(d, d) for d in table], dtype=np.int64).reshape(nb, 49)
     c = np.ascontiguousarray
     return BodiesPart(
-        c(table), np.array([b.mass for b in bodies], float),
-        c(np.array([b.inertia for b in bodies], float).reshape(nb, 3, 3)), c(pos),
-        np.array([index[id(b)] for b, *_ in loads], dtype=np.int64),
-        c(point_tensor(np.array([np.zeros(3) if pt is None else pt for _, pt, *_ in loads], float)
-                          .reshape(nl, 3))),
-        c(np.array([f for _, _, f, _, _ in loads], float).reshape(nl, 3)),
-        c(np.array([np.zeros(3) if m is None else m for _, _, _, m, _ in loads], float)
-          .reshape(nl, 3)),
-        np.array([functions(fn) for *_, fn in loads], dtype=np.int64),
-        np.zeros(4), np.zeros(4), np.zeros(4), np.zeros((4, 4)), np.zeros((4, 4)),
-        np.zeros((4, 4)), np.zeros(4), np.zeros(4))
+        dofs=c(table),
+        mass=np.array([b.mass for b in bodies], float),
+        inertia=c(np.array([b.inertia for b in bodies], float).reshape(nb, 3, 3)),
+        pos=c(pos),
+        load_body=np.array([index[id(b)] for b, *_ in loads], dtype=np.int64),
+        load_T=c(point_tensor(np.array([np.zeros(3) if pt is None else pt for _, pt, *_ in loads], float)
+                                 .reshape(nl, 3))),
+        load_force=c(np.array([f for _, _, f, _, _ in loads], float).reshape(nl, 3)),
+        load_moment=c(np.array([np.zeros(3) if m is None else m for _, _, _, m, _ in loads], float)
+                      .reshape(nl, 3)),
+        load_fn=np.array([functions(fn) for *_, fn in loads], dtype=np.int64),
+        p=np.zeros(4),
+        pd=np.zeros(4),
+        pdd=np.zeros(4),
+        dq=np.zeros((4, 4)),
+        dv=np.zeros((4, 4)),
+        Mpp=np.zeros((4, 4)),
+        Q=np.zeros(4),
+        Q2=np.zeros(4))
 
 
 @njit(inline="always")
