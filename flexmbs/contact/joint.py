@@ -14,7 +14,6 @@ the approach velocities of the damped laws are updated after each converged step
 from __future__ import annotations
 
 import dataclasses
-import math
 import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -259,7 +258,7 @@ class SlidingClearanceJoint(Interaction):
     - ``"paper"``: the paper's 2-D common normal in the section plane, then the closest point of
       the axis (§3–§4; Tang & Liu). Not conservative once the beam crosses the section
       obliquely (closed-loop work 11 % of the path work at 44°–54°); kept to reproduce the
-      paper. Sections without a compiled boundary (user-defined Python shapes) use it.
+      paper.
 
     Parameters
     ----------
@@ -312,21 +311,21 @@ class SlidingClearanceJoint(Interaction):
                              f"(got {tangent!r})")
         self.tangent = tangent
         shape = hole.section.compiled_shape()
-        compiled = shape is not None
-        if shape is not None and int(shape[0]) not in SHAPE_CODES.values():
+        if shape is None:
+            raise ModelError(f"joint '{self.name}': {type(hole.section).__name__} has no compiled "
+                             "boundary (compiled_shape() is None): a hole shape is a compiled "
+                             "boundary kernel and its section class (docs/extending.md, "
+                             "\"A hole shape\")")
+        if int(shape[0]) not in SHAPE_CODES.values():
             raise ModelError(f"joint '{self.name}': {type(hole.section).__name__} has the "
                              f"compiled shape code {int(shape[0])}, which flexmbs.codes.SHAPE_CODES "
                              "does not list: add the shape there and to the dispatchers of "
                              "flexmbs.contact.shapes")
         if detection is None:
-            detection = "consistent" if compiled else "paper"
+            detection = "consistent"
         if detection not in DETECTIONS:
             raise ModelError(f"joint '{self.name}': detection must be one of "
                              f"{', '.join(DETECTIONS)} (got {detection!r})")
-        if detection == "consistent" and not compiled:
-            raise ModelError(f"joint '{self.name}': detection \"consistent\" needs a hole section "
-                             f"with a compiled boundary ({type(hole.section).__name__} has none); "
-                             "use detection = \"paper\"")
         self.detection = detection
         r_b = beam_radius if beam_radius is not None else beam.radius
         if r_b is None or not r_b > 0:
@@ -489,15 +488,15 @@ class SlidingClearanceJoint(Interaction):
         """The tip sections at the hole body's coordinates ``qb`` and the beam's centreline
         ``qe`` (:func:`~flexmbs.contact._detect.place_tips`): an open bore with a compiled
         section; else none."""
-        compiled = self.hole.section.compiled_shape()
+        kind, params = self._compiled_shape()
         self.state.tip_on[:] = False
-        if not self.hole.open_ends or compiled is None:
+        if not self.hole.open_ends:
             return
         place_tips(np.ascontiguousarray(qe), np.array(self.beam.centerline.lengths, dtype=float),
                    np.ascontiguousarray(qb[:3], dtype=float), rotation_matrix(qb[3:7]),
                    self.state.origins, self.state.axes, self._stations, *self._tree,
-                   float(self._tip_reach), float(self.beam_radius), int(compiled[0]),
-                   np.ascontiguousarray(compiled[1], dtype=float), self.state.tip_on,
+                   float(self._tip_reach), float(self.beam_radius), int(kind),
+                   np.ascontiguousarray(params, dtype=float), self.state.tip_on,
                    self.state.tip_station, self._cross[4])
 
     def _check_start(self, qb: np.ndarray, qe: np.ndarray, *, warn: bool) -> None:
@@ -520,9 +519,7 @@ class SlidingClearanceJoint(Interaction):
             found, e, xi, cy, cz, a, _b, eax, eay = section_state(
                 qe, lengths, origin, n, ey, ez, 0, 0.5, self.beam_radius,
                 2.0 * R_out + self.beam_radius)   # a beam looping back crosses the plane twice
-            compiled = self.hole.section.compiled_shape()
-            outside = (math.hypot(cy, cz) > R_out if compiled is None
-                       else not section_contains(compiled[0], compiled[1], cy, cz))
+            outside = not section_contains(*self._compiled_shape(), cy, cz)
             if self.hole.open_ends and (not found or (outside and k in (0, ns - 1))):
                 continue          # the beam is not in the bore here (yet)
             if not found or outside:
@@ -631,50 +628,14 @@ class SlidingClearanceJoint(Interaction):
                 if res.gap < 0.0:
                     out.append((k, j, kind, eP, res, a, b, psi))
             return out
-        if self.hole.section.compiled_shape() is not None:
-            return self._contacts_compiled(q, v, want_tangent, update)
-        qb = q[self.geometry.body_dofs]
-        vb = v[self.geometry.body_dofs]
-        A, origins, axes = self._planes(qb)
-        qe = np.ascontiguousarray(q[self.geometry.elem_dofs])
-        section = self.hole.section
-        R_out = section.bounding_radius()
-        R_in = section.inscribed_radius()
-        r_b = self.beam_radius
-        out = []
-        for k in range(len(self.stations)):
-            origin, (n, ey, ez) = origins[k], axes[k].T
-            found, e, xi, cy, cz, a, b, eax, eay = section_state(
-                qe, self.geometry.lengths, origin, n, ey, ez, max(0, int(self.state.elem[k])),
-                float(self.state.xi[k]), r_b, 2 * R_out + r_b)
-            if not found:
-                continue
-            if update:
-                self.state.elem[k], self.state.xi[k] = e, xi
-                self.state.ws_list[0] = -1
-            if math.hypot(cy, cz) + a < R_in:
-                continue  # broad phase: the ellipse is strictly inside the bore
-            ell = Ellipse2D(np.array([cy, cz]), np.array([eax, eay]), a, b)
-            for j, cand in enumerate(section.candidates(ell)):
-                if cand.depth <= 0.0:
-                    continue
-                Qg = origin + cand.Q[0] * ey + cand.Q[1] * ez
-                psi = math.atan2(cand.Q[1], cand.Q[0])
-                u_Q = A.T @ (Qg - qb[:3])
-                eP, xiP, *_ = closest_point(qe, self.geometry.lengths, Qg, e, xi)
-                res = contact_point(qb, vb, u_Q, qe[eP], v[self.geometry.elem_dofs[eP]],
-                                    self.geometry.lengths[eP], xiP, r_b, self.contact, self.friction,
-                                    self._approach_for(k, psi), self.consistent and want_tangent,
-                                    history=self._history(q, k, psi, eP),
-                                    friction_stiffness=self.friction_stiffness(),
-                                    spin=self._spin(q, v, eP),
-                                    xi_range=xi_bounds(eP, len(self.geometry.lengths)),
-                                    mouth=self._mouth(k))
-                if res.gap >= 0.0:
-                    continue
-                fade, _, _ = end_fade(qe, self.geometry.lengths, e, origin, n, r_b)
-                out.append((k, j, cand.kind, eP, _faded(res, fade), a, b, psi))
-        return out
+        return self._contacts_compiled(q, v, want_tangent, update)
+
+    def _compiled_shape(self) -> tuple[int, np.ndarray]:
+        """The hole section's compiled boundary ``(kind, params)`` (every joint's section has
+        one: the constructor refuses a section without)."""
+        shape = self.hole.section.compiled_shape()
+        assert shape is not None
+        return shape
 
     def _mouth(self, k: int) -> float:
         """The beam radius at an end section of an open bore, whose law lets go as the beam's
@@ -710,9 +671,7 @@ class SlidingClearanceJoint(Interaction):
         if update:
             self.state.ws_list[0] = -1
         section = self.hole.section
-        compiled = section.compiled_shape()
-        assert compiled is not None
-        shape, params = compiled
+        shape, params = self._compiled_shape()
         g = self.geometry
         etree = np.zeros((element_tree_size(qe.shape[0]), 4))
         element_tree(qe, g.lengths, etree)
@@ -847,8 +806,7 @@ class SlidingClearanceJoint(Interaction):
         """Whether the compiled kernels evaluate this joint (:class:`ClearancePart`): a section
         with a compiled shape, detection not frozen, exact or Gauss–Newton tangent; else the
         per-contact Python path of :meth:`evaluate` does."""
-        return (self.hole.section.compiled_shape() is not None and self._frozen is None
-                and self.tangent != "frozen_point")
+        return self._frozen is None and self.tangent != "frozen_point"
 
     @property
     def consistent(self) -> bool:
@@ -1120,64 +1078,88 @@ def pack_clearance(joints: list[SlidingClearanceJoint], ctx: PackContext) -> Cle
                     cross[i, k, side] = dofs.positions_present(j.geometry.elem_dofs[k],
                                                                j.geometry.elem_dofs[other])
     i64, c = np.int64, np.ascontiguousarray
-    shapes = [j.hole.section.compiled_shape() or (0, np.zeros(4)) for j in joints]
+    shapes = [j._compiled_shape() for j in joints]
+    beam_of, beam_joint, beam_qe, beam_tree = _beams(joints, max_ne)
+    indptr, indices = ctx.matrix_pattern()
     part = ClearancePart(
-        c(np.array([j.geometry.body_dofs for j in joints], i64).reshape(nj, 7)),
-        pad_stack([j.geometry.elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
-        pad_stack([j.geometry.twist_dofs for j in joints], (N_TWIST,), -1, np.int64),
-        pad_stack([j.state.t_bar for j in joints], (N_TWIST, 3), 0.0, float),
-        np.array([len(j.geometry.lengths) for j in joints], i64),
-        pad_stack([j.geometry.lengths for j in joints], (), 1.0, float),
-        pad_stack([j.state.origins for j in joints], (3,), 0.0, float),
-        pad_stack([j.state.axes for j in joints], (3, 3), 0.0, float),
-        pad_stack([j.geometry.tree[0] for j in joints], (3,), 0.0, float),
-        pad_stack([j.geometry.tree[1] for j in joints], (), -1.0, float),   # -1: no node
-        pad_stack([j.geometry.tree[2] for j in joints], (), 0, np.int64),
-        pad_stack([j.geometry.tree[3] for j in joints], (), 0, np.int64),
-        np.array([j.hole.open_ends for j in joints], dtype=np.bool_),
-        np.zeros(max_ns, i64), np.zeros((max_ns, MAX_CROSSINGS), i64),
-        np.zeros((max_ns, MAX_CROSSINGS)), np.zeros(max_ns, i64),
-        np.zeros(max_ns + DETECT_INT_WORK, i64),
-        np.array([j.n_slots for j in joints], i64),
-        np.array([j.beam_radius for j in joints], float),
-        np.array([shapes[i][0] for i in range(nj)], i64),
-        c(np.array([shapes[i][1] for i in range(nj)], float).reshape(nj, 4)),
-        np.array([j.hole.section.bounding_radius() for j in joints], float),
-        np.array([j.hole.section.inscribed_radius() for j in joints], float),
-        np.array([j.detection == "consistent" for j in joints], dtype=np.bool_),
-        c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, N_LAW)),
-        c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
-        np.array([j.compiled_form() for j in joints], dtype=np.bool_),
-        np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),
-        pad_stack([j.state.elem for j in joints], (), 0, np.int64),
-        pad_stack([j.state.xi for j in joints], (), 0.5, float),
-        np.full((nj, max_ns + 1), -1, i64),          # not known: listed by the first step
-        pad_stack([j.state.approach for j in joints], (MAX_POINTS,), 0.0, float),
-        pad_stack([j.state.active for j in joints], (MAX_POINTS,), False, np.bool_),
-        pad_stack([j.state.psi for j in joints], (MAX_POINTS,), 0.0, float),
-        pad_stack([j.state.anchor for j in joints], (MAX_POINTS, 3), 0.0, float),
-        pad_stack([j.state.stuck for j in joints], (MAX_POINTS,), 0.0, float),
-        np.array(q_ref, dtype=float, copy=True),
-        pos, cross, np.zeros((max_ne, CENTERLINE_SIZE)), np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
-        np.zeros(nj, i64), np.full((nj, max_ns), -1, i64), np.zeros((nj, max_ns)),
-        np.full((nj, max_ns + 1), -1, i64),
-        np.zeros((n_contacts, N_LOCAL, N_EXT)), np.zeros((n_contacts, N_LOCAL, N_LOCAL)),
-        np.zeros(n_contacts, i64), np.zeros(n_contacts, i64),
-        np.zeros((0, N_LOCAL, N_EXT)),
-        np.zeros((0, N_LOCAL, N_LOCAL)), np.zeros(0, i64), np.zeros(n_total),
-        pad_stack([j.geometry.stations for j in joints], (), 0.0, float),
-        pad_stack([j.state.tip_on for j in joints], (), False, np.bool_),
-        pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
-        np.array([j.geometry.tip_reach for j in joints], float), np.zeros(nj, np.bool_),
-        np.zeros(N_SPIN), np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
-        np.zeros(FORCES_WORK),
-        c(np.array([[0, len(j.geometry.lengths)] for j in joints for _ in j.window_owns()],
-                   i64).reshape(-1, 2)),
-        np.cumsum([0] + [len(j.window_owns()) for j in joints[:-1]], dtype=i64)[:nj],
-        *_beams(joints, max_ne), _tubes(joints, max_ns), np.zeros(TUBE_WORK),
-        np.zeros(n_contacts, i64), np.zeros((n_contacts, 7)), *ctx.matrix_pattern(),
-        np.zeros(2, i64), np.zeros((nj, max_ns, MAX_POINTS), np.bool_),
-        np.zeros((nj, max_ns, MAX_POINTS)))
+        body=c(np.array([j.geometry.body_dofs for j in joints], i64).reshape(nj, 7)),
+        elem_dofs=pad_stack([j.geometry.elem_dofs for j in joints], (CENTERLINE_SIZE,), 0, np.int64),
+        twist_dofs=pad_stack([j.geometry.twist_dofs for j in joints], (N_TWIST,), -1, np.int64),
+        t_bar=pad_stack([j.state.t_bar for j in joints], (N_TWIST, 3), 0.0, float),
+        n_elem=np.array([len(j.geometry.lengths) for j in joints], i64),
+        lengths=pad_stack([j.geometry.lengths for j in joints], (), 1.0, float),
+        origins=pad_stack([j.state.origins for j in joints], (3,), 0.0, float),
+        frames=pad_stack([j.state.axes for j in joints], (3, 3), 0.0, float),
+        tree_c=pad_stack([j.geometry.tree[0] for j in joints], (3,), 0.0, float),
+        tree_r=pad_stack([j.geometry.tree[1] for j in joints], (), -1.0, float),
+        tree_lo=pad_stack([j.geometry.tree[2] for j in joints], (), 0, np.int64),
+        tree_hi=pad_stack([j.geometry.tree[3] for j in joints], (), 0, np.int64),
+        open_ends=np.array([j.hole.open_ends for j in joints], dtype=np.bool_),
+        cross_n=np.zeros(max_ns, i64),
+        cross_e=np.zeros((max_ns, MAX_CROSSINGS), i64),
+        cross_xi=np.zeros((max_ns, MAX_CROSSINGS)),
+        touched=np.zeros(max_ns, i64),
+        work=np.zeros(max_ns + DETECT_INT_WORK, i64),
+        n_sec=np.array([j.n_slots for j in joints], i64),
+        r_b=np.array([j.beam_radius for j in joints], float),
+        shape=np.array([shapes[i][0] for i in range(nj)], i64),
+        params=c(np.array([shapes[i][1] for i in range(nj)], float).reshape(nj, 4)),
+        R_out=np.array([j.hole.section.bounding_radius() for j in joints], float),
+        R_in=np.array([j.hole.section.inscribed_radius() for j in joints], float),
+        consistent=np.array([j.detection == "consistent" for j in joints], dtype=np.bool_),
+        law=c(np.array([j.contact.parameters() for j in joints], float).reshape(nj, N_LAW)),
+        fric=c(np.array([j.friction_parameters() for j in joints], float).reshape(nj, N_FRICTION)),
+        enabled=np.array([j.compiled_form() for j in joints], dtype=np.bool_),
+        exact=np.array([j.tangent == "exact" for j in joints], dtype=np.bool_),
+        elem_ws=pad_stack([j.state.elem for j in joints], (), 0, np.int64),
+        xi_ws=pad_stack([j.state.xi for j in joints], (), 0.5, float),
+        ws_list=np.full((nj, max_ns + 1), -1, i64),
+        approach=pad_stack([j.state.approach for j in joints], (MAX_POINTS,), 0.0, float),
+        active=pad_stack([j.state.active for j in joints], (MAX_POINTS,), False, np.bool_),
+        psi=pad_stack([j.state.psi for j in joints], (MAX_POINTS,), 0.0, float),
+        anchor=pad_stack([j.state.anchor for j in joints], (MAX_POINTS, 3), 0.0, float),
+        stuck=pad_stack([j.state.stuck for j in joints], (MAX_POINTS,), 0.0, float),
+        q_start=np.array(q_ref, dtype=float, copy=True),
+        pos=pos,
+        cross=cross,
+        qe=np.zeros((max_ne, CENTERLINE_SIZE)),
+        rows=np.zeros((nj, MAX_CANDIDATES * max_ns, N_COLS)),
+        n_candidates=np.zeros(nj, i64),
+        elem_out=np.full((nj, max_ns), -1, i64),
+        xi_out=np.zeros((nj, max_ns)),
+        out_list=np.full((nj, max_ns + 1), -1, i64),
+        K=np.zeros((n_contacts, N_LOCAL, N_EXT)),
+        C=np.zeros((n_contacts, N_LOCAL, N_LOCAL)),
+        kelem=np.zeros(n_contacts, i64),
+        kelem_i=np.zeros(n_contacts, i64),
+        no_K=np.zeros((0, N_LOCAL, N_EXT)),
+        no_C=np.zeros((0, N_LOCAL, N_LOCAL)),
+        no_elem=np.zeros(0, i64),
+        scratch=np.zeros(n_total),
+        stations=pad_stack([j.geometry.stations for j in joints], (), 0.0, float),
+        tip_on=pad_stack([j.state.tip_on for j in joints], (), False, np.bool_),
+        tip_station=pad_stack([j.state.tip_station for j in joints], (), 0.0, float),
+        tip_reach=np.array([j.geometry.tip_reach for j in joints], float),
+        tips_due=np.zeros(nj, np.bool_),
+        spin=np.zeros(N_SPIN),
+        paper=np.array([j.detection != "consistent" for j in joints], dtype=np.bool_),
+        fwork=np.zeros(FORCES_WORK),
+        window=c(np.array([[0, len(j.geometry.lengths)] for j in joints for _ in j.window_owns()],
+                          i64).reshape(-1, 2)),
+        win_row=np.cumsum([0] + [len(j.window_owns()) for j in joints[:-1]], dtype=i64)[:nj],
+        beam_of=beam_of,
+        beam_joint=beam_joint,
+        beam_qe=beam_qe,
+        beam_tree=beam_tree,
+        tube=_tubes(joints, max_ns),
+        tube_work=np.zeros(TUBE_WORK),
+        ksec=np.zeros(n_contacts, i64),
+        kforce=np.zeros((n_contacts, 7)),
+        indptr=indptr,
+        indices=indices,
+        hold=np.zeros(2, i64),
+        held=np.zeros((nj, max_ns, MAX_POINTS), np.bool_),
+        held_psi=np.zeros((nj, max_ns, MAX_POINTS)))
     for i, j in enumerate(joints):     # the joint's state lives in the packed arrays
         j.state = ClearanceState.views(part, i, j.n_slots, len(j.geometry.lengths))
         j.packed_tube(part.tube, i)

@@ -110,16 +110,18 @@ def _se_brute(sec: SuperellipseSection, E: Ellipse2D, n: int = N_BRUTE
 @settings(max_examples=150, deadline=None, derandomize=True)
 @given(b=st.floats(0.3, 0.8), ratio=st.floats(1.0, 2.0), th=st.floats(0.0, np.pi),
        rc=st.floats(0.0, 0.8), ac=st.floats(0.0, 2.0 * np.pi), A=st.floats(0.8, 1.2),
-       B=st.floats(0.8, 1.2), n=st.floats(2.0, 6.0))
+       B=st.floats(0.8, 1.2), n=st.floats(2.0, 6.0), turn=st.floats(0.0, np.pi))
 def test_superellipse_candidates_match_brute_force(b: float, ratio: float, th: float, rc: float,
-                                                   ac: float, A: float, B: float, n: float) -> None:
-    """Dense sampling of d(ψ) = N·(X(N) − Y) (20000 ψ) locates maxima to 3e-4 rad; the detector
+                                                   ac: float, A: float, B: float, n: float,
+                                                   turn: float) -> None:
+    """The compiled detector (through ``candidates``) on a superellipse turned by ``turn``.
+    Dense sampling of d(ψ) = N·(X(N) − Y) (20000 ψ) locates maxima to 3e-4 rad; the detector
     (128 samples + Newton) must find each well-separated one; depth agrees to O(h²) ~ 1e-6.
     Ellipses that cannot fit the bore (a above 95 % of the inscribed radius: the joint reports
     jamming for them) are excluded: there the stationary points crowd and the bracketing
     tolerance of the detector was seen to leave d' ~ 4e-3."""
     assume(ratio * b < 0.95 * min(A, B))
-    sec = SuperellipseSection(a=A, b=B, exponent=n)
+    sec = SuperellipseSection(a=A, b=B, exponent=n, angle=turn)
     E = Ellipse2D(np.array([rc * math.cos(ac), rc * math.sin(ac)]),
                   np.array([math.cos(th), math.sin(th)]), ratio * b, b)
     cands = sec.candidates(E, margin=MARGIN)

@@ -1,7 +1,7 @@
 """The superellipse bore on the compiled path (issue "non-circular bores, compiled"): its
-boundary kernel against differences of itself, its detector against the Python generic one, a
-round superellipse against the circle, and the exact tangent through the shape interface
-against central differences of the residual."""
+boundary kernel against differences of itself (its detector against brute force:
+tests/contact/test_sections.py), a round superellipse against the circle, and the exact
+tangent through the shape interface against central differences of the residual."""
 
 from __future__ import annotations
 
@@ -14,8 +14,6 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.contact.sections import (
     SHAPE_SUPERELLIPSE,
-    Ellipse2D,
-    SuperellipseSection,
     common_normal_points,
     superellipse_boundary,
 )
@@ -36,30 +34,6 @@ def test_boundary_kernel_derivatives_and_wall(n):
         assert np.allclose((a1 - Y) / (2 * h), yp, rtol=0, atol=1e-7 * A)
         # (n = 3: Y‴ jumps at the vertices, so the difference quotient is off by O(h A) there)
         assert np.allclose((b1 - Yp) / (2 * h), ypp, rtol=0, atol=1e-5 * A)
-
-
-@pytest.mark.parametrize("angle", [0.0, 0.7])
-def test_compiled_detector_finds_the_python_detectors_points(angle):
-    """Same points, kinds and depths as the Python generic detector, the section turned or not."""
-    sec = SuperellipseSection(a=3e-3, b=2e-3, exponent=4.0, angle=angle)
-    params = np.array([3e-3, 2e-3, 4.0, angle])
-    rng = np.random.default_rng(0)
-    for _ in range(20):
-        c = rng.normal(scale=4e-4, size=2)
-        ang = rng.uniform(0, np.pi)
-        ell = Ellipse2D(c, np.array([math.cos(ang), math.sin(ang)]), 1.9e-3, 1.5e-3)
-        ref = np.array(sorted((cd.psi, cd.kind, cd.depth)
-                              for cd in sec.candidates(ell, margin=1.0)))
-        psi, phi, kind, depth = np.empty(16), np.empty(16), np.empty(16, np.int64), np.empty(16)
-        m = common_normal_points(SHAPE_SUPERELLIPSE, params, c[0], c[1], ell.e_a[0], ell.e_a[1],
-                                 ell.a, ell.b, 128, psi, phi, kind, depth)
-        got = np.array(sorted((psi[i], int(kind[i]), depth[i]) for i in range(m)))
-        assert got.shape == ref.shape
-        assert np.allclose(got[:, :2], ref[:, :2], rtol=0, atol=1e-9)
-        assert np.allclose(got[:, 2], ref[:, 2], rtol=0, atol=1e-12)
-        for i in range(m):   # φ is the ellipse angle of the support point
-            X = ell.point(phi[i])
-            assert np.linalg.norm(X - c) > 0
 
 
 def _sleeve_model(hole: fm.Hole, tangent: str = "exact") -> tuple[fm.Model, object]:

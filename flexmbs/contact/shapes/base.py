@@ -59,11 +59,6 @@ class Ellipse2D:
         return (self.center + (self.a * np.cos(phi))[..., None] * self.e_a
                 + (self.b * np.sin(phi))[..., None] * self.e_b)
 
-    def angle_of(self, X: np.ndarray) -> float:
-        """Ellipse angle φ of a point X on the ellipse."""
-        d = np.asarray(X, dtype=float) - self.center
-        return math.atan2(float(d @ self.e_b) / self.b, float(d @ self.e_a) / self.a)
-
     def support(self, N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Support point and map (docs/theory.md §II.6): ``X(N) = c + ΣN/√(NᵀΣN)`` and
         ``J_E = (Σ − ΣNNᵀΣ/NᵀΣN)/√(NᵀΣN)`` for unit normals ``N (..., 2)``."""
@@ -150,78 +145,41 @@ class HoleSection(ABC):
 
     def compiled_shape(self) -> tuple[int, np.ndarray] | None:
         """``(kind, params)`` of the compiled boundary kernel
-        (:func:`flexmbs.contact.shapes.section_boundary`), or None: the joint then runs this
-        section's Python detector."""
+        (:func:`flexmbs.contact.shapes.section_boundary`); a joint refuses a section without
+        one (None)."""
         return None
 
     def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
-        """All stationary points of the penetration with ``depth > −margin`` (docs/theory.md §II.6).
-
-        Generic detector: common-normal residual ``F(ψ) = T·(X(N(ψ)) − Y(ψ))`` sampled at
-        ``self.samples`` points, sign changes bracketed, safeguarded Newton with
-        ``F' = |Y_ψ|[κ(TᵀJ_E T − d) − 1]``; ``F' < 0`` is a maximum of ``d = N·(X − Y)``.
-        """
+        """All stationary points of the penetration with ``depth > −margin`` (docs/theory.md §II.6),
+        by the compiled generic detector (:func:`flexmbs.contact.sections.common_normal_points`:
+        the common-normal residual ``F(ψ) = T·(X(N(ψ)) − Y(ψ))`` sampled at ``self.samples``
+        points, sign changes bracketed, safeguarded Newton) on the section's compiled boundary."""
         c = ellipse.center
         if math.hypot(c[0], c[1]) + ellipse.a < self.inscribed_radius() - margin:
             return []  # broad phase: the ellipse is strictly inside the inscribed circle
+        shape = self.compiled_shape()
+        if shape is None:
+            raise NotImplementedError(f"{type(self).__name__}: a hole section without a compiled "
+                                      "boundary has no detector")
+        from ..sections import common_normal_points
+
+        kind, params = shape
         m = max(int(self.samples), 64)
-        psi = np.linspace(0.0, 2.0 * np.pi, m, endpoint=False)
-        F, _, _ = self._residual(ellipse, psi)
+        psi, phi, depth = np.empty(m), np.empty(m), np.empty(m)
+        kinds = np.empty(m, dtype=np.int64)
+        count = common_normal_points(int(kind), np.ascontiguousarray(params, dtype=float),
+                                     float(c[0]), float(c[1]), float(ellipse.e_a[0]),
+                                     float(ellipse.e_a[1]), float(ellipse.a), float(ellipse.b),
+                                     m, psi, phi, kinds, depth)
         out: list[Candidate] = []
-        for i in range(m):
-            j = (i + 1) % m
-            if F[i] == 0.0 or F[i] * F[j] < 0.0:
-                lo = psi[i]
-                hi = psi[i] + 2.0 * np.pi / m
-                root = self._bracketed_root(ellipse, lo, hi, F[i])
-                if root is not None:
-                    cand = self._candidate(ellipse, root)
-                    if cand.depth > -margin:
-                        out.append(cand)
+        for i in range(count):
+            if not depth[i] > -margin:
+                continue
+            Y, N, _, _, _ = self.boundary(float(psi[i]))
+            out.append(Candidate(phi=float(phi[i]) % (2.0 * np.pi), X=ellipse.point(float(phi[i])),
+                                 Q=np.asarray(Y, dtype=float), normal=np.asarray(N, dtype=float),
+                                 depth=float(depth[i]), kind=int(kinds[i]), psi=float(psi[i])))
         return out
-
-    # --- generic helpers -------------------------------------------------------------------
-    def _residual(self, ellipse: Ellipse2D, psi: np.ndarray | float
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``F(ψ)``, ``F'(ψ)`` and ``d(ψ)`` (docs/theory.md §II.6)."""
-        Y, N, T, speed, kappa = self.boundary(psi)
-        X, J = ellipse.support(N)
-        F = np.einsum("...i,...i->...", T, X - Y)
-        d = np.einsum("...i,...i->...", N, X - Y)
-        rho = np.einsum("...i,...ij,...j->...", T, J, T)
-        dF = speed * (kappa * (rho - d) - 1.0)
-        return F, dF, d
-
-    def _bracketed_root(self, ellipse: Ellipse2D, lo: float, hi: float, flo: float
-                        ) -> float | None:
-        s = 0.5 * (lo + hi)
-        tol = 1e-13 * max(1.0, self.bounding_radius())
-        for _ in range(60):
-            F, dF, _ = self._residual(ellipse, s)
-            f = float(F)
-            df = float(dF)
-            if abs(f) <= tol:
-                return s
-            if (f < 0.0) == (flo < 0.0):
-                lo, flo = s, f
-            else:
-                hi = s
-            s_new = s - f / df if df != 0.0 else 0.5 * (lo + hi)
-            if not (lo < s_new < hi):
-                s_new = 0.5 * (lo + hi)
-            if hi - lo < 1e-15:
-                return s_new
-            s = s_new
-        return s
-
-    def _candidate(self, ellipse: Ellipse2D, psi: float) -> Candidate:
-        Y, N, T, speed, kappa = self.boundary(psi)
-        X, J = ellipse.support(N)
-        d = float(N @ (X - Y))
-        dF = float(speed * (kappa * (T @ J @ T - d) - 1.0))
-        return Candidate(phi=ellipse.angle_of(X) % (2.0 * np.pi), X=X, Q=np.asarray(Y, dtype=float),
-                         normal=np.asarray(N, dtype=float), depth=d,
-                         kind=1 if dF < 0.0 else -1, psi=float(psi % (2.0 * np.pi)))
 
 
 def _once(name: str, method: Callable[[Any], float]) -> Callable[[Any], float]:
