@@ -396,14 +396,7 @@ def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):
 
 
 @njit(internal=True)
-def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, lengths, origins, frames,
-                     tree_c, tree_r, tree_lo,
-                     tree_hi, etree, open_ends, tip_on, cross_n, cross_e, cross_xi, touched, work, elem_ws,
-                     xi_ws, ws_list, elem_out, xi_out, out_list, r_b, shape, params, R_out, R_in,
-                     consistent, paper, law, fric,
-                     approach, active, psi_track, anchor, stuck, q_start, qe, rows, want_tangent,
-                     exact, r_q, K_out, C_out, elem_k, elem_i, fwork, j, tube, tw, ksec, kforce,
-                     hold, held_on, held_psi):
+def clearance_forces(cl, j, q, v, want_tangent, r_q, K_out, C_out, elem_k, elem_i):
     """Residual of one clearance joint with a circular bore (docs/theory.md §II.8): detection of all
     sections from the warm starts (crossings written to ``elem_out``, ``xi_out``), penalty force
     of every penetrating point (sign +1 at maxima, −1 at minima, §3) subtracted from ``r_q``;
@@ -433,7 +426,30 @@ def clearance_forces(q, v, body_dofs, elem_dofs, twist_dofs, t_bar, spin, length
     :data:`TUBE_WORK`); its force goes to the tube's element through ``Jᵀ``, and the tangent
     keeps the section of each contact in ``ksec`` and its force on the pose in ``kforce``
     for :func:`_tube_tangent`. Returns ``(rows, contacts, scale)``; ``rows = −1 − k`` if the
-    beam axis left the bore at section k."""
+    beam axis left the bore at section k.
+
+    Takes the packed part ``cl`` (:class:`ClearancePart`) and the joint ``j``; its arrays are
+    read here under the names above (a joint's slice of each, up to its elements and
+    sections)."""
+    ne_j = cl.n_elem[j]
+    ns = cl.n_sec[j]
+    body_dofs, elem_dofs, twist_dofs = cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j]
+    t_bar, spin, lengths = cl.t_bar[j, :ne_j], cl.spin, cl.lengths[j, :ne_j]
+    origins, frames = cl.origins[j, :ns], cl.frames[j, :ns]
+    tree_c, tree_r, tree_lo, tree_hi = cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j]
+    etree, qe = cl.beam_tree[cl.beam_of[j]], cl.beam_qe[cl.beam_of[j]]
+    open_ends, tip_on = cl.open_ends[j], cl.tip_on[j]
+    cross_n, cross_e, cross_xi, touched, work = (cl.cross_n, cl.cross_e, cl.cross_xi, cl.touched,
+                                                 cl.work)
+    elem_ws, xi_ws, ws_list = cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j]
+    elem_out, xi_out, out_list = cl.elem_out[j, :ns], cl.xi_out[j, :ns], cl.out_list[j]
+    r_b, shape, params, R_out, R_in = cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j]
+    consistent, paper, law, fric = cl.consistent[j], cl.paper, cl.law[j], cl.fric[j]
+    approach, active, psi_track = cl.approach[j, :ns], cl.active[j, :ns], cl.psi[j, :ns]
+    anchor, stuck, q_start, rows = cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.rows[j]
+    exact, fwork, tube, tw = cl.exact[j], cl.fwork, cl.tube, cl.tube_work
+    ksec, kforce, hold = cl.ksec, cl.kforce, cl.hold
+    held_on, held_psi = cl.held[j, :ns], cl.held_psi[j, :ns]
     o = DETECT_WORK
     qb = fwork[o:o + 7]
     A = fwork[o + 7:o + 16].reshape((3, 3))
@@ -754,9 +770,7 @@ def contact_capacity(max_sections: int) -> int:
 def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):
     """:func:`clearance_forces` of clearance joint j; records the candidates' count and, if the
     beam axis left the bore, the error. Returns (candidates, contacts, scale)."""
-    ne_j = cl.n_elem[j]
     ns = cl.n_sec[j]
-    b = cl.beam_of[j]
     place_due_tips(cl.tips_due, j, cl.q_start, cl.qe, cl.n_elem[j], cl.n_sec[j], cl.elem_dofs[j],
                    cl.body[j], cl.lengths[j], cl.origins[j], cl.frames[j], cl.stations[j],
                    cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], cl.tip_reach[j],
@@ -765,18 +779,7 @@ def _joint_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i, error):
     tube_place_sections(cl.tube, j, q, ns - N_TIPS, cl.origins[j], cl.frames[j], cl.tree_c[j],
                         cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j], 2.0 * cl.R_out[j] + cl.r_b[j],
                         cl.tip_on[j], cl.tube_work)
-    m, cnt, sc = clearance_forces(
-        q, v, cl.body[j], cl.elem_dofs[j, :ne_j], cl.twist_dofs[j, :ne_j], cl.t_bar[j, :ne_j], cl.spin,
-        cl.lengths[j, :ne_j], cl.origins[j, :ns],
-        cl.frames[j, :ns], cl.tree_c[j], cl.tree_r[j], cl.tree_lo[j], cl.tree_hi[j],
-        cl.beam_tree[b], cl.open_ends[j], cl.tip_on[j], cl.cross_n, cl.cross_e, cl.cross_xi,
-        cl.touched, cl.work,
-        cl.elem_ws[j, :ns], cl.xi_ws[j, :ns], cl.ws_list[j], cl.elem_out[j, :ns],
-        cl.xi_out[j, :ns], cl.out_list[j], cl.r_b[j], cl.shape[j], cl.params[j], cl.R_out[j], cl.R_in[j],
-        cl.consistent[j], cl.paper, cl.law[j], cl.fric[j], cl.approach[j, :ns], cl.active[j, :ns],
-        cl.psi[j, :ns], cl.anchor[j, :ns], cl.stuck[j, :ns], cl.q_start, cl.beam_qe[b], cl.rows[j],
-        want_tangent, cl.exact[j], r, K, C, elem, elem_i, cl.fwork, j, cl.tube, cl.tube_work,
-        cl.ksec, cl.kforce, cl.hold, cl.held[j, :ns], cl.held_psi[j, :ns])
+    m, cnt, sc = clearance_forces(cl, j, q, v, want_tangent, r, K, C, elem, elem_i)
     if m == _OVERFLOW:
         cl.n_candidates[j] = 0
         error[0] = ERR_TOO_MANY_CONTACTS
