@@ -28,10 +28,10 @@ from .sections import (
     SHAPE_CIRCLE,
     SHAPE_SAMPLES,
     circle_stationary_points,
-    common_normal_points,
     section_boundary,
     section_contains,
 )
+from .shapes.detector import common_normal_points
 from .stationary import PAIR_MARGIN, line_model_points, stationary_pair
 
 #: columns of a candidate row (from ``gap`` on filled by :func:`clearance_forces`; the

@@ -17,8 +17,9 @@ import pytest
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.contact.sections import common_normal_points, get_section
+from flexmbs.contact.sections import get_section
 from flexmbs.contact.shapes import SHAPE_ROUNDED_POLYGON, Ellipse2D, section_boundary, section_contains
+from flexmbs.contact.shapes.detector import common_normal_points
 from flexmbs.contact.shapes.rounded_polygon import smallest_corner_radius
 from flexmbs.errors import ModelError
 from tests.contact.test_superellipse_compiled import (

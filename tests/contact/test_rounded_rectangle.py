@@ -16,12 +16,13 @@ import pytest
 
 import flexmbs as fm
 from flexmbs.assembly import Assembly
-from flexmbs.contact.sections import common_normal_points, get_section
+from flexmbs.contact.sections import get_section
 from flexmbs.contact.shapes import (
     SHAPE_ROUNDED_RECTANGLE,
     Ellipse2D,
     section_boundary,
 )
+from flexmbs.contact.shapes.detector import common_normal_points
 from flexmbs.errors import ModelError
 from tests.contact.test_superellipse_compiled import (
     _sleeve_model,

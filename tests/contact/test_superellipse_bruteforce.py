@@ -13,7 +13,8 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from flexmbs.contact.sections import SHAPE_SUPERELLIPSE, common_normal_points, section_boundary
+from flexmbs.contact.sections import SHAPE_SUPERELLIPSE, section_boundary
+from flexmbs.contact.shapes.detector import common_normal_points
 from tests.conftest import FULL
 
 M_DIR = 4096        # normal directions of the brute force

@@ -14,9 +14,9 @@ import flexmbs as fm
 from flexmbs.assembly import Assembly
 from flexmbs.contact.sections import (
     SHAPE_SUPERELLIPSE,
-    common_normal_points,
     superellipse_boundary,
 )
+from flexmbs.contact.shapes.detector import common_normal_points
 
 
 @pytest.mark.parametrize("n", [2.0, 3.0, 4.0, 10.0])

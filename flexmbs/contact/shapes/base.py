@@ -151,7 +151,7 @@ class HoleSection(ABC):
 
     def candidates(self, ellipse: Ellipse2D, margin: float = 0.0) -> list[Candidate]:
         """All stationary points of the penetration with ``depth > −margin`` (docs/theory.md §II.6),
-        by the compiled generic detector (:func:`flexmbs.contact.sections.common_normal_points`:
+        by the compiled generic detector (:func:`flexmbs.contact.shapes.detector.common_normal_points`:
         the common-normal residual ``F(ψ) = T·(X(N(ψ)) − Y(ψ))`` sampled at ``self.samples``
         points, sign changes bracketed, safeguarded Newton) on the section's compiled boundary."""
         c = ellipse.center
@@ -161,7 +161,7 @@ class HoleSection(ABC):
         if shape is None:
             raise NotImplementedError(f"{type(self).__name__}: a hole section without a compiled "
                                       "boundary has no detector")
-        from ..sections import common_normal_points
+        from .detector import common_normal_points
 
         kind, params = shape
         m = max(int(self.samples), 64)
