@@ -35,6 +35,7 @@ from ._detect import (
     reset_crossings,
 )
 from .bores import refit_section_tree
+from .laws import mouth_radius
 from .pair import (
     HIST_TWIST,
     N_GEO,
@@ -538,7 +539,7 @@ def clearance_forces(cl, j, q, v, want_tangent, r_q, K_out, C_out, elem_k, elem_
         element_spin(q, v, twist_dofs[eP], t_bar[eP], spin)
         xi_lo, xi_hi = xi_bounds(eP, ne)     # not past the beam's ends (the detection's range)
         # an open bore's end section: its law lets go as the axis nears the rim (mouth_weight)
-        mouth = r_b if open_ends and (k == 0 or k == n_reg - 1) else 0.0
+        mouth = mouth_radius(open_ends, k, n_reg, r_b)
         g, gdot, f, xiP = contact_force(qk, vk, u_Q, qe[eP], ve, spin, lengths[eP], row[4], r_b,
                                         law, fric, hist, v_app, want_tangent and not exact, Qc, K,
                                         C, geo, pair_work, held, xi_lo, xi_hi, mouth)

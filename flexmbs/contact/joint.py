@@ -80,6 +80,7 @@ from .laws import (
     check_resumed_friction,
     law_dissipates,
     law_energy,
+    mouth_radius,
 )
 from .pair import (
     N_HISTORY,
@@ -641,8 +642,8 @@ class SlidingClearanceJoint(Interaction):
         """The beam radius at an end section of an open bore, whose law lets go as the beam's
         axis nears the rim (:func:`~flexmbs.contact.laws.mouth_weight`), else 0 (the compiled
         path's rule, :func:`~flexmbs.contact.clearance_term.clearance_forces`)."""
-        last = len(self.stations) - 1
-        return self.beam_radius if self.hole.open_ends and k in (0, last) else 0.0
+        return float(mouth_radius(bool(self.hole.open_ends), k, len(self.stations),
+                                  float(self.beam_radius)))
 
     def _detection_frame(self, q: np.ndarray) -> DetectionFrame:
         """What the detection takes at ``q``: the hole body's position and rotation, the

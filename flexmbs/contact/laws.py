@@ -50,6 +50,7 @@ __all__ = [
     "law_force",
     "held_law_force",
     "mouth_weight",
+    "mouth_radius",
     "MOUTH_FADE",
     "N_LAW",
     "DAMPING_ONSET",
@@ -138,6 +139,16 @@ def mouth_weight(delta, mouth):
     if x <= 0.0:
         return 0.0, 0.0
     return x * x * (3.0 - 2.0 * x), -6.0 * x * (1.0 - x) / ell
+
+
+@njit
+def mouth_radius(open_ends, k, n_sections, r_b):
+    """The ``mouth`` argument of :func:`held_law_force` for section ``k`` of a bore's
+    ``n_sections`` (its tip sections not counted): the beam radius at an end section of an open
+    bore, else 0 (:func:`mouth_weight`)."""
+    if open_ends and (k == 0 or k == n_sections - 1):
+        return r_b
+    return 0.0
 
 
 @njit
