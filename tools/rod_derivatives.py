@@ -10,11 +10,13 @@ The rod's strain energy is a composition of four small maps, each differentiated
   the half-angle form 2 atan(y/(1 + x)), which divides by zero at Δθ = ±π);
 - ``curvatures``: at a point ξ, ``(r′, r″, t0, d20, Δθ)`` -> ``(K1, K2, K3)``, 13 inputs;
 - ``axial``: ``r′`` -> ``ε = |r′|/μ − 1`` (integrated at other points, against membrane locking);
-- ``spin``: a node's ``(g, ġ)`` -> the spin of its chart about the tangent,
-  ``w = ω_SR·t = −t̄·(t × ṫ)/(1 + t̄·t)`` (§2.4; linear in ġ: ``w = b·ġ``), with what the
-  section's kinetic energy ``½ ρJ_p ω²``, ``ω = φ̇ + w``, needs for its Lagrange equations:
-  ``b = ∂w/∂ġ``, ``s = (∂w/∂g)·ġ`` (so ``ω̇ = φ̈ + b·g̈ + s``) and the gyroscopic vector
-  ``c = (∂b/∂g − (∂b/∂g)ᵀ) ġ``; first derivatives only.
+- ``director_turn``: ``(t, t0, d20)`` -> the angle β about the unit tangent ``t`` from a frame
+  carried without spin, ``SR(t̄ → t) ȳ``, to ``SR(t0 → t) d20`` (parameters ``[t̄, ȳ]``, ``ȳ ⟂ t̄``;
+  atan2: β in (−π, π]), 9 inputs. A flexible tube's section on a rod turns by ``ψ = β + ξΔθ``,
+  the angle to the rod's director ``d2(ξ) = Rot(t, ξΔθ) SR(t0 → t) d20`` (docs/theory.md
+  §II.9); the element kernel adds ``ξΔθ`` and composes ``t = r′/|r′|`` (the map's inputs are
+  unit vectors, which keeps sympy's Hessian small: 2 min instead of more than 20 with ``r′``
+  and the rotation by ``ξΔθ`` inside).
 
 Besides values with Jacobians (``name``) and with Hessians (``name_h``), except for the
 curvatures: ``curvatures_wh``, only the weighted sum ``Σ_j σ_j ∂²K_j/∂z²`` (the tangent's,
@@ -105,6 +107,14 @@ def curvature_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
     return [*rp, *rpp, *t0, *d20, dth], [xi, L, mu], [(dth / L + tau) / mu, c2 / mu, c3 / mu]
 
 
+def director_turn_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
+    t, t0, d20, tb, yb = _vec("t"), _vec("ta"), _vec("da"), _vec("tb"), _vec("yb")
+    carried = _sr(tb, t, yb)                          # ⟂ t
+    transported = _sr(t0, t, d20)                     # ⟂ t
+    return [*t, *t0, *d20], [*tb, *yb], [sp.atan2(carried.cross(transported).dot(t),
+                                                  carried.dot(transported))]
+
+
 def spin_map() -> tuple[list[sp.Symbol], list[sp.Symbol], list[sp.Expr]]:
     g, gd, tb = _vec("g"), _vec("gd"), _vec("tb")
     n = sp.sqrt(g.dot(g))
@@ -174,7 +184,7 @@ def _code(name: str, doc: str, inputs: list[sp.Symbol], params: list[sp.Symbol],
     reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("w"), optimizations="basic")
     printer = PythonCodePrinter({"fully_qualified_modules": False,
                                                     "standard": "python3"})
-    lines = [f"@njit(refcount=False)\ndef {name}({', '.join(args)}):  # noqa: ANN001, ANN201",
+    lines = [f"@njit(refcount=False)\ndef {name}({', '.join(args)}):",
              f'    """{doc}"""']
     for i, s in enumerate(inputs):
         lines.append(f"    {s} = x[{i}]")
@@ -198,13 +208,14 @@ def generate() -> str:
             'annotations\n\nfrom math import atan, atan2, cos, sin, sqrt  # noqa: F401\n\n'
             'from .._jit import njit\n\n'
             '__all__ = ["triad", "triad_h", "twist", "twist_h", "curvatures", "curvatures_wh", "axial",\n'
-            '           "axial_h", "spin", "spin_value"]\n')
+            '           "axial_h", "spin", "spin_value", "director_turn", "director_turn_h"]\n')
     parts = [head]
     maps = {"triad": (triad_map, "node (g, φ) -> (t, d2): x = [g, φ], p = [t̄, D̄]"),
             "twist": (twist_map, "nodal triads -> Δθ: x = [t0, d20, t1, d21]"),
             "curvatures": (curvature_map, "point -> (K1, K2, K3): x = [r′, r″, t0, d20, Δθ], "
                                           "p = [ξ, L, μ]"),
-            "axial": (axial_map, "point -> ε: x = r′, p = [μ]")}
+            "axial": (axial_map, "point -> ε: x = r′, p = [μ]"),
+            "director_turn": (director_turn_map, "point -> β: x = [t, t0, d20], p = [t̄, ȳ]")}
     for name, (fn, doc) in maps.items():
         inputs, params, outputs = fn()
         parts.append("\n\n" + _emit(name, doc + " (values, Jacobian)", inputs, params, outputs,

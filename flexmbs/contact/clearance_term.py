@@ -50,7 +50,16 @@ from .pair import (
 )
 from .sections import section_boundary
 from .tangent import I_OFF, N_EXT, P_OFF, T_OFF, contact_tangent, fade_gradient
-from .tube import POSE_SIZE, POSE_WORK, TubeSections, pose_curvature, section_pose
+from .tube import (
+    POSE_SIZE,
+    POSE_WORK,
+    SECTION_COORDS,
+    TURN_SIZE,
+    TubeSections,
+    pose_curvature,
+    section_turn,
+    tube_pose,
+)
 from .tube import rebase as rebase_section
 
 #: :func:`clearance_forces`' float work (:attr:`ClearancePart.fwork`): :func:`detect_section`'s,
@@ -60,11 +69,12 @@ FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3
                + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9 + 12 + N_EXT)
 
 #: a tube joint's float work (:attr:`ClearancePart.tube_work`): a section's pose, its rate and
-#: its pose at the step's start (7 each), J and G (7 × CENTERLINE_SIZE each), H
-#: (CENTERLINE_SIZE²), the outer element's coordinates and rates, the unit section (origin 0,
-#: axes I) and :data:`~flexmbs.contact.tube.POSE_WORK`
-TUBE_WORK = (3 * POSE_SIZE + 2 * POSE_SIZE * CENTERLINE_SIZE + CENTERLINE_SIZE * CENTERLINE_SIZE
-             + 2 * CENTERLINE_SIZE + 12 + POSE_WORK)
+#: its pose at the step's start (7 each), J and G (7 × SECTION_COORDS each), H
+#: (SECTION_COORDS²), the outer element's section coordinates and rates, the unit section
+#: (origin 0, axes I), :data:`~flexmbs.contact.tube.POSE_WORK` and a rod section's turn
+#: (:data:`~flexmbs.contact.tube.TURN_SIZE`)
+TUBE_WORK = (3 * POSE_SIZE + 2 * POSE_SIZE * SECTION_COORDS + SECTION_COORDS * SECTION_COORDS
+             + 2 * SECTION_COORDS + 12 + POSE_WORK + TURN_SIZE)
 
 #: two contact points of one section are the same contact from one step to the next if the
 #: section angles of their hole points differ by less than this [rad] (docs/theory.md §II.3)
@@ -241,7 +251,7 @@ def _frame_into(q, body_dofs, qb, A):
 @njit(inline="always")
 def _tube_carve(tw):
     """The arrays of a tube joint's work (:data:`TUBE_WORK`; views, nothing allocated)."""
-    P, CS = POSE_SIZE, CENTERLINE_SIZE
+    P, CS = POSE_SIZE, SECTION_COORDS
     pose = tw[0:P]
     vel = tw[P:2 * P]
     start = tw[2 * P:3 * P]
@@ -258,7 +268,8 @@ def _tube_carve(tw):
     unit_o = tw[o:o + 3]
     unit_f = tw[o + 3:o + 12].reshape((3, 3))
     o += 12
-    return pose, vel, start, J, G, H, qo, vo, unit_o, unit_f, tw[o:o + POSE_WORK]
+    return (pose, vel, start, J, G, H, qo, vo, unit_o, unit_f, tw[o:o + POSE_WORK],
+            tw[o + POSE_WORK:o + POSE_WORK + TURN_SIZE])
 
 
 @njit
@@ -296,13 +307,23 @@ def tube_section(tube, j, k, q, v, tw):
         return False
     if not tube.on[j]:
         return False
-    pose, vel, _, J, _, _, qo, vo, _, _, pw = _tube_carve(tw)
-    for c in range(CENTERLINE_SIZE):
+    pose, vel, _, J, _, _, qo, vo, _, _, pw, turn = _tube_carve(tw)
+    width = tube.width[j]
+    for c in range(width):
         qo[c] = q[tube.dofs[j, k, c]]
         vo[c] = v[tube.dofs[j, k, c]] if v.size > 0 else 0.0
-    section_pose(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], vo, pose,
-                 vel, J, pw)
+    tube_pose(qo, width, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k],
+              tube.node_t[j, k], tube.node_d[j, k], tube.turn, turn, vo, pose, vel, J, pw)
     return True
+
+
+@njit(inline="always")
+def _tube_turn(tube, j, k, e, turn, second):
+    """Section k's turn (:func:`~flexmbs.contact.tube.section_turn`) at the section coordinates
+    ``e`` into ``turn``; returns ψ (0 for a cable's section)."""
+    return section_turn(e, tube.width[j], tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k],
+                        tube.p0[j, k], tube.node_t[j, k], tube.node_d[j, k], tube.turn, turn,
+                        second)
 
 
 @njit
@@ -311,7 +332,7 @@ def tube_force(tube, j, k, J, Qc, sign, r_q):
     (``Jᵀ``) and subtracted from ``r_q``."""
     if tube is None:
         return
-    for c in range(CENTERLINE_SIZE):
+    for c in range(tube.width[j]):
         s = 0.0
         for a in range(7):
             s += J[a, c] * Qc[a]
@@ -325,12 +346,14 @@ def tube_start_pose(tube, j, k, q_start, tw):
     ``H`` as scratch."""
     if tube is None:
         return
-    _, _, start, _, G, H, qo, vo, _, _, pw = _tube_carve(tw)
-    for c in range(CENTERLINE_SIZE):
+    _, _, start, _, G, H, qo, vo, _, _, pw, turn = _tube_carve(tw)
+    width = tube.width[j]
+    for c in range(width):
         qo[c] = q_start[tube.dofs[j, k, c]]
         vo[c] = 0.0
-    section_pose(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], vo, start,
-                 H[0, :POSE_SIZE], G, pw)
+    tube_pose(qo, width, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k],
+              tube.node_t[j, k], tube.node_d[j, k], tube.turn, turn, vo, start, H[0, :POSE_SIZE],
+              G, pw)
 
 
 @njit
@@ -385,8 +408,12 @@ def tube_tip_slots(tube, j, n_bore, stations, tip_on, tip_station):
             tip_on[t] = False
             continue
         slot = n_bore + t
-        for c in range(CENTERLINE_SIZE):
+        for c in range(SECTION_COORDS):
             tube.dofs[j, slot, c] = tube.dofs[j, src, c]
+        for a in range(2):
+            for c in range(3):
+                tube.node_t[j, slot, a, c] = tube.node_t[j, src, a, c]
+                tube.node_d[j, slot, a, c] = tube.node_d[j, src, a, c]
         tube.length[j, slot] = tube.length[j, src]
         tube.xi[j, slot] = min(max(xi, 0.0), 1.0)
         for c in range(3):
@@ -456,7 +483,7 @@ def clearance_forces(cl, j, q, v, want_tangent, r_q, K_out, C_out, elem_k, elem_
     A = fwork[o + 7:o + 16].reshape((3, 3))
     vb = fwork[o + 16:o + 23]
     o += 23
-    pose_k, vel_k, start_k, J_k, _, _, _, _, unit_o, unit_f, _ = _tube_carve(tw)
+    pose_k, vel_k, start_k, J_k, _, _, _, _, unit_o, unit_f, _, _ = _tube_carve(tw)
     tubular = tube_joint(tube, j)     # a tube: its sections are global, each its own pose
     if tubular:
         for i in range(7):
@@ -943,9 +970,29 @@ def clearance_set_bases(cl, log, stop, q):
                     if np.int64(log[i, 0]) == dof:
                         for c in range(3):
                             cl.t_bar[j, e, a, c] = log[i, 1 + c]
+    _tube_set_bases(cl.tube, log, stop)
     if q.size > 0:
         for i in range(cl.q_start.size):
             cl.q_start[i] = q[i]
+
+
+@njit
+def _tube_set_bases(tube, log, stop):
+    """Rod tubes' sections read the new bases (t̄, D̄) of their element's re-based nodes (the
+    section's turn is measured through them; it does not change)."""
+    if tube is None:
+        return
+    for j in range(tube.on.size):
+        if not tube.on[j] or tube.width[j] <= CENTERLINE_SIZE:
+            continue
+        for k in range(tube.dofs.shape[1]):
+            for a in range(SECTION_COORDS - CENTERLINE_SIZE):
+                dof = tube.dofs[j, k, CENTERLINE_SIZE + a]
+                for i in range(stop):
+                    if np.int64(log[i, 0]) == dof:
+                        for c in range(3):
+                            tube.node_t[j, k, a, c] = log[i, 1 + c]
+                            tube.node_d[j, k, a, c] = log[i, 4 + c]
 
 
 @njit(internal=True)
@@ -997,7 +1044,7 @@ def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, fra
         for c in range(CENTERLINE_SIZE):
             qe[e, c] = q[elem_dofs[e, c]]
     if tube_joint(tube, j):
-        _, _, _, _, _, _, _, _, unit_o, unit_f, _ = _tube_carve(tw)
+        _, _, _, _, _, _, _, _, unit_o, unit_f, _, _ = _tube_carve(tw)
         for c in range(3):
             unit_o[c] = 0.0
             for d in range(3):
@@ -1033,11 +1080,14 @@ def tube_rebase(tube, j, n_bore, q, tw):
         return
     if not tube.on[j]:
         return
-    _, _, _, _, _, _, qo, _, _, _, pw = _tube_carve(tw)
+    _, _, _, _, _, _, qo, _, _, _, pw, turn = _tube_carve(tw)
+    width = tube.width[j]
     for k in range(n_bore):
-        for c in range(CENTERLINE_SIZE):
+        for c in range(width):
             qo[c] = q[tube.dofs[j, k, c]]
-        rebase_section(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], pw)
+        psi = _tube_turn(tube, j, k, qo, turn, False)
+        rebase_section(qo, width, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k],
+                       tube.p0[j, k], psi, pw)
 
 
 @njit(inline="always")
@@ -1074,9 +1124,11 @@ def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
     eI = cl.kelem_i[i]
     tw = cl.tube_work
     tube_section(tube, j, k, q, v, tw)
-    _, _, _, J, G, H, qo, vo, _, _, pw = _tube_carve(tw)
-    pose_curvature(qo, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k], vo,
-                   cl.kforce[i], H, G, pw)
+    _, _, _, J, G, H, qo, vo, _, _, pw, turn = _tube_carve(tw)
+    width = tube.width[j]
+    _tube_turn(tube, j, k, qo, turn, True)
+    pose_curvature(qo, width, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k],
+                   turn, vo, cl.kforce[i], H, G, pw)
     K = cl.K[i]
     C = cl.C[i]
     CS = CENTERLINE_SIZE
@@ -1098,13 +1150,13 @@ def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
             _csc_add(ip, ix, data, ra, cl.twist_dofs[j, eP, c],
                      cK * K[la, T_OFF + c] + cC * C[la, TWIST_OFF + c])
         # columns of the tube's element
-        for c in range(CS):
+        for c in range(width):
             s = 0.0
             for b in range(7):
                 s += (cK * K[la, b] + cC * C[la, b]) * J[b, c] + cK * C[la, b] * G[b, c]
             _csc_add(ip, ix, data, ra, od[c], s)
     # the tube's rows
-    for r in range(CS):
+    for r in range(width):
         ro = od[r]
         for c in range(CS):          # against e_P (and e_I)
             s = 0.0
@@ -1123,7 +1175,7 @@ def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
             for b in range(7):
                 s += J[b, r] * (cK * K[b, T_OFF + c] + cC * C[b, TWIST_OFF + c])
             _csc_add(ip, ix, data, ro, cl.twist_dofs[j, eP, c], s)
-        for c in range(CS):          # against itself
+        for c in range(width):       # against itself
             s = -cK * H[r, c]
             for b in range(7):
                 t = 0.0

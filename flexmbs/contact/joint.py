@@ -29,6 +29,7 @@ from ..constraints.interaction import (
     MatrixSink,
     ModelParts,
 )
+from ..elements.ancf_rod import new_turn_work
 from ..elements.centerline import element_tree, element_tree_size
 from ..elements.hermite import CENTERLINE_SIZE
 from ..elements.rigid_body import rotation_matrix
@@ -94,7 +95,7 @@ from .pair import (
 )
 from .sections import Ellipse2D, section_contains
 from .tangent import N_EXT
-from .tube import TubeSections
+from .tube import SECTION_COORDS, TubeSections
 
 __all__ = ["SlidingClearanceJoint", "Hole", "CircleHole", "SuperellipseHole", "CurvedBore",
            "CLEARANCE", "MAX_POINTS", "TANGENTS", "DETECTIONS", "hole_frame"]
@@ -1171,20 +1172,24 @@ def _tubes(joints: list[SlidingClearanceJoint], max_ns: int) -> TubeSections:
     """The sections of the joints whose bore is a flexible tube (:meth:`tube_sections`; zeros
     for the others)."""
     nj = len(joints)
-    CS = CENTERLINE_SIZE
-    out = TubeSections(on=np.zeros(nj, np.bool_), dofs=np.zeros((nj, max_ns, CS), np.int64),
+    out = TubeSections(on=np.zeros(nj, np.bool_), width=np.full(nj, CENTERLINE_SIZE, np.int64),
+                       dofs=np.zeros((nj, max_ns, SECTION_COORDS), np.int64),
                        length=np.ones((nj, max_ns)), xi=np.zeros((nj, max_ns)),
                        t_bar=np.zeros((nj, max_ns, 3)), p0=np.zeros((nj, max_ns, 4)),
-                       row=np.zeros((nj, max_ns), np.int64))
+                       row=np.zeros((nj, max_ns), np.int64),
+                       node_t=np.zeros((nj, max_ns, 2, 3)), node_d=np.zeros((nj, max_ns, 2, 3)),
+                       turn=new_turn_work())
     for i, j in enumerate(joints):
         sections = j.tube_sections()
         if sections is None:
             continue
-        dofs, length, xi, t_bar, p0, row = sections
-        n = len(xi)
+        dofs, length, xi, t_bar, p0, row, node_t, node_d = sections
+        n, width = len(xi), dofs.shape[1]
         out.on[i] = True
-        out.dofs[i, :n], out.length[i, :n], out.xi[i, :n] = dofs, length, xi
+        out.width[i] = width
+        out.dofs[i, :n, :width], out.length[i, :n], out.xi[i, :n] = dofs, length, xi
         out.t_bar[i, :n], out.p0[i, :n], out.row[i, :n] = t_bar, p0, row
+        out.node_t[i, :n], out.node_d[i, :n] = node_t, node_d
     return out
 
 
@@ -1215,6 +1220,8 @@ def _compiled_view(part: ClearancePart) -> ClearancePart:
     unused = {"tips_due": not part.open_ends.any(), "spin": not (part.twist_dofs >= 0).any(),
               "paper": not part.paper.any(), "tube": not part.tube.on.any()}
     none: dict[str, Any] = {name: None for name, off in unused.items() if off}
+    if not unused["tube"] and not (part.tube.width > CENTERLINE_SIZE).any():
+        none["tube"] = part.tube._replace(turn=None)    # no tube is a rod: no turn compiled
     return part._replace(**none)
 
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..constraints.interaction import ModelParts
-from ..elements.hermite import CENTERLINE_SIZE
+from ..elements.ancf_rod import new_turn_work, nodal_bases
 from ..elements.rigid_body import quaternion_from_matrix, rotation_matrix
 from ..errors import ModelError
 from .bores import Hole, refit_section_tree
@@ -25,7 +25,17 @@ from .geometry import section_state
 from .joint import DetectionFrame, SlidingClearanceJoint, hole_frame
 from .laws import ForceLaw, Friction, RegularizedCoulomb
 from .sections import CircleSection, HoleSection, section_contains
-from .tube import POSE_SIZE, POSE_WORK, TubeSections, section_pose
+from .tube import (
+    POSE_SIZE,
+    POSE_WORK,
+    SECTION_COORDS,
+    TURN_SIZE,
+    TubeSections,
+    quaternion_after,
+    section_order,
+    section_turn,
+    tube_pose,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Beam
@@ -76,8 +86,9 @@ class TubeJoint(SlidingClearanceJoint):
     inner_radius : float, optional
         The lumen's radius [m] (a circular lumen); or give ``lumen``.
     lumen : HoleSection, optional
-        The lumen's section; circular only for now (a lumen that is not round needs sections
-        that turn with a rod's twist).
+        The lumen's section (any compiled hole shape). On a rod tube it turns with the rod: its
+        y axis is the rod's director ``d2`` at the section. A cable has no twist to turn it:
+        there the lumen must be round.
     spacing : float, optional
         Distance between sections along the tube [m]; or give ``sections``.
     sections : int, optional
@@ -106,10 +117,11 @@ class TubeJoint(SlidingClearanceJoint):
             raise ModelError(f"joint '{name}': give the lumen as inner_radius = <radius> or "
                              "lumen = <hole section>, one of them")
         section = lumen if inner_radius is None else CircleSection(float(inner_radius))
-        if not isinstance(section, CircleSection):
-            raise ModelError(f"joint '{name}': a {type(section).__name__} lumen needs sections "
-                             "that turn with the tube's twist, which flexible tubes do not have "
-                             "yet; use a circular lumen (inner_radius)")
+        if not isinstance(section, CircleSection) and outer.layout.twist is None:
+            raise ModelError(f"joint '{name}': lumen: a {type(section).__name__} lumen must turn "
+                             f"with the tube, but tube '{outer.name}' is a "
+                             f"{outer.layout.name} without twist; give inner_radius (a round "
+                             "lumen) or make the tube a rod (element = \"ancf_rod14\")")
         lo = outer.check_arc_length(float(start))
         hi = outer.length if end is None else outer.check_arc_length(float(end))
         if not hi > lo:
@@ -138,14 +150,59 @@ class TubeJoint(SlidingClearanceJoint):
         at = [outer.locate(float(s)) for s in self.stations]
         self._tube_elem = np.array([e for e, _ in at], np.int64)
         self._tube_xi = np.array([xi for _, xi in at], float)
-        # the sections' base frames: the tube's reference frames there (x along the tangent)
+        self._order = section_order(outer.layout)
+        self._work = np.zeros(POSE_WORK)
+        self._turn_work = new_turn_work()
+        self._turn = np.zeros(TURN_SIZE)
+        # the sections' base frames: the tube's reference frames there (x along the tangent),
+        # on a rod turned about it onto the rod's director (and the rod's nodal bases)
         self._tube_tbar = np.zeros((ns, 3))
         self._tube_p0 = np.zeros((ns, 4))
+        self._node_t = np.zeros((ns, 2, 3))
+        self._node_d = np.zeros((ns, 2, 3))
         for k, s in enumerate(self.stations):
             t = outer.frame_at(float(s)).rotation[:, 0]
             self._tube_tbar[k] = t
             self._tube_p0[k] = quaternion_from_matrix(hole_frame(t))
-        self._work = np.zeros(POSE_WORK)
+        if outer.layout.twist is not None:
+            self._align_to_director(self._reference_coordinates())
+
+    @property
+    def _width(self) -> int:
+        """The section coordinates of the tube's elements (:func:`~flexmbs.contact.tube.section_order`)."""
+        return int(self._order.size)
+
+    def _reference_coordinates(self) -> np.ndarray:
+        """The tube's element coordinates (n_elem, element size) in its stress-free reference."""
+        outer = self.outer
+        return np.ascontiguousarray(outer.element_type.reference_nodal_coordinates(
+            outer.centerline.points, outer.centerline.tangents)[outer.connectivity].reshape(
+                outer.n_elem, -1), dtype=float)
+
+    def _align_to_director(self, q_elements: np.ndarray) -> None:
+        """A rod tube: its elements' nodal bases, as the rod's packing takes them, and each
+        section's base frame turned about its tangent onto the rod's director at the station
+        in the reference (ψ = 0 there: :func:`~flexmbs.contact.tube.section_turn`)."""
+        outer = self.outer
+        size = q_elements.shape[1]
+        nodes = np.asarray(outer.connectivity, np.int64)
+        node_size = outer.layout.node_size
+        dofs = (nodes[:, :, None] * node_size + np.arange(node_size)).reshape(outer.n_elem, size)
+        q_ref = np.zeros(int(nodes.max() + 1) * node_size)
+        q_ref[dofs] = q_elements
+        t_bar, d_bar = nodal_bases(dofs, q_ref)
+        self._node_t[:] = t_bar[self._tube_elem]
+        self._node_d[:] = d_bar[self._tube_elem]
+        turned = np.zeros(4)
+        for k in range(len(self.stations)):
+            e = self._tube_elem[k]
+            psi = section_turn(np.ascontiguousarray(q_elements[e, self._order]), self._width,
+                               float(outer.centerline.lengths[e]), float(self._tube_xi[k]),
+                               self._tube_tbar[k], self._tube_p0[k], self._node_t[k],
+                               self._node_d[k], self._turn_work, self._turn, False)
+            half = np.r_[np.cos(0.5 * psi), np.sin(0.5 * psi) * self._tube_tbar[k]]
+            quaternion_after(half, self._tube_p0[k], turned)
+            self._tube_p0[k] = turned / np.linalg.norm(turned)
 
     # ------------------------------------------------------------------ set-up
     def validate(self, model: ModelParts) -> None:
@@ -153,16 +210,12 @@ class TubeJoint(SlidingClearanceJoint):
             if beam not in model.beams:
                 raise ModelError(f"joint '{self.name}': the {what} beam '{beam.name}' is not "
                                  "part of the model")
-        outer = self.outer
-        qo = np.ascontiguousarray(outer.element_type.reference_nodal_coordinates(
-            outer.centerline.points, outer.centerline.tangents)[outer.connectivity].reshape(
-                outer.n_elem, -1)[:, outer.layout.centerline], dtype=float)
+        qo = np.ascontiguousarray(self._reference_coordinates()[:, self._order])
         self._check_tube_start(qo, self._reference_elements(), warn=True)
 
     def bind(self, dofs: DofMap, extra_dofs: np.ndarray) -> None:
-        lay = self.outer.layout
-        self._outer_dofs = np.ascontiguousarray(
-            dofs.element_dofs(self.outer)[:, lay.centerline], dtype=np.int64)
+        self._outer_dofs = np.ascontiguousarray(dofs.element_dofs(self.outer)[:, self._order],
+                                                dtype=np.int64)
         self._section_dofs = self._outer_dofs[self._tube_elem]
         self._outer_lengths = np.array(self.outer.centerline.lengths, dtype=float)
         # the coordinates the pattern and the plan give the joint (the hole body's elsewhere):
@@ -192,7 +245,7 @@ class TubeJoint(SlidingClearanceJoint):
     def tube_sections(self) -> tuple[np.ndarray, ...]:
         ns = self.n_slots
         n = len(self.stations)
-        dofs = np.zeros((ns, CENTERLINE_SIZE), np.int64)
+        dofs = np.zeros((ns, self._width), np.int64)
         dofs[:n] = self._section_dofs
         dofs[n:] = self._section_dofs[0]           # tip slots: unused
         length = np.ones(ns)
@@ -207,25 +260,43 @@ class TubeJoint(SlidingClearanceJoint):
         p0[n:] = self._tube_p0[0]
         row = np.zeros(ns, np.int64)         # tip slots: set where they are placed
         row[:n] = np.searchsorted(np.unique(self._tube_elem), self._tube_elem)
-        return dofs, length, xi, t_bar, p0, row
+        node_t, node_d = np.zeros((ns, 2, 3)), np.zeros((ns, 2, 3))
+        node_t[:n], node_d[:n] = self._node_t, self._node_d
+        return dofs, length, xi, t_bar, p0, row, node_t, node_d
 
     def packed_tube(self, tube: TubeSections, i: int) -> None:
         n = len(self.stations)
         self._tube_tbar = tube.t_bar[i, :n]
         self._tube_p0 = tube.p0[i, :n]
+        self._node_t = tube.node_t[i, :n]
+        self._node_d = tube.node_d[i, :n]
         self._packed = (tube, i)
 
-    def _slot(self, k: int) -> tuple[np.ndarray, float, float, np.ndarray, np.ndarray]:
-        """Section slot k's tube element (coordinates), its length, the station on it and the
-        base: a bore section's, or a tip section's as the compiled step placed it
-        (``clearance_term.tube_tip_slots``)."""
+    def _slot(self, k: int) -> tuple[np.ndarray, float, float, np.ndarray, np.ndarray,
+                                      np.ndarray, np.ndarray]:
+        """Section slot k's tube element (section coordinates), its length, the station on it,
+        the base and the rod's nodal bases: a bore section's, or a tip section's as the compiled
+        step placed it (``clearance_term.tube_tip_slots``)."""
         n = len(self.stations)
         if k < n:
             return (self._section_dofs[k], float(self._outer_lengths[self._tube_elem[k]]),
-                    float(self._tube_xi[k]), self._tube_tbar[k], self._tube_p0[k])
+                    float(self._tube_xi[k]), self._tube_tbar[k], self._tube_p0[k],
+                    self._node_t[k], self._node_d[k])
         tube, i = self._packed
-        return (tube.dofs[i, k], float(tube.length[i, k]), float(tube.xi[i, k]),
-                tube.t_bar[i, k], tube.p0[i, k])
+        return (tube.dofs[i, k, :self._width], float(tube.length[i, k]), float(tube.xi[i, k]),
+                tube.t_bar[i, k], tube.p0[i, k], tube.node_t[i, k], tube.node_d[i, k])
+
+    def _pose_of(self, e: np.ndarray, ve: np.ndarray | None, length: float, xi: float,
+                 t_bar: np.ndarray, p0: np.ndarray, node_t: np.ndarray, node_d: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """A section's pose and rate from its element's section coordinates ``e`` (rates
+        ``ve``; None: at rest), by the compiled :func:`~flexmbs.contact.tube.tube_pose`."""
+        pose, rate = np.zeros(POSE_SIZE), np.zeros(POSE_SIZE)
+        e = np.ascontiguousarray(e, dtype=float)
+        ve = np.zeros_like(e) if ve is None else np.ascontiguousarray(ve, dtype=float)
+        tube_pose(e, self._width, length, xi, t_bar, p0, node_t, node_d, self._turn_work,
+                  self._turn, ve, pose, rate, np.zeros((POSE_SIZE, SECTION_COORDS)), self._work)
+        return pose, rate
 
     # ------------------------------------------------------------------ the sections
     def section_poses(self, q: np.ndarray, v: np.ndarray | None = None, *, tips: bool = False
@@ -234,14 +305,12 @@ class TubeJoint(SlidingClearanceJoint):
         ``tips``: all the slots, the placed tip sections' too (n + N_TIPS; zeros where none)."""
         n = self.n_slots if tips else len(self.stations)
         poses, rates = np.zeros((n, POSE_SIZE)), np.zeros((n, POSE_SIZE))
-        J = np.zeros((POSE_SIZE, CENTERLINE_SIZE))
         for k in range(n):
             if k >= len(self.stations) and not self.state.tip_on[k - len(self.stations)]:
                 continue
-            d, length, xi, t_bar, p0 = self._slot(k)
-            section_pose(np.ascontiguousarray(q[d]), length, xi, t_bar, p0,
-                         np.zeros(CENTERLINE_SIZE) if v is None else np.ascontiguousarray(v[d]),
-                         poses[k], rates[k], J, self._work)
+            d, length, xi, t_bar, p0, node_t, node_d = self._slot(k)
+            poses[k], rates[k] = self._pose_of(q[d], None if v is None else v[d], length, xi,
+                                               t_bar, p0, node_t, node_d)
         return poses, rates
 
     def _world_sections(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -265,11 +334,8 @@ class TubeJoint(SlidingClearanceJoint):
 
     def _contact_pose(self, q: np.ndarray, v: np.ndarray, k: int
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        d, length, xi, t_bar, p0 = self._slot(k)
-        pose, rate = np.zeros(POSE_SIZE), np.zeros(POSE_SIZE)
-        section_pose(np.ascontiguousarray(q[d]), length, xi, t_bar, p0,
-                     np.ascontiguousarray(v[d]), pose, rate,
-                     np.zeros((POSE_SIZE, CENTERLINE_SIZE)), self._work)
+        d, length, xi, t_bar, p0, node_t, node_d = self._slot(k)
+        pose, rate = self._pose_of(q[d], v[d], length, xi, t_bar, p0, node_t, node_d)
         return pose, rate, rotation_matrix(pose[3:7])
 
     def _history(self, q: np.ndarray, k: int, psi: float, eP: int) -> np.ndarray:
@@ -285,10 +351,10 @@ class TubeJoint(SlidingClearanceJoint):
         n = len(self.stations)
         poses = np.zeros((n, POSE_SIZE))
         for k in range(n):
-            section_pose(qo[self._tube_elem[k]], float(self.outer.centerline.lengths[self._tube_elem[k]]),
-                         float(self._tube_xi[k]), self._tube_tbar[k], self._tube_p0[k],
-                         np.zeros(CENTERLINE_SIZE), poses[k], np.zeros(POSE_SIZE),
-                         np.zeros((POSE_SIZE, CENTERLINE_SIZE)), self._work)
+            e = self._tube_elem[k]
+            poses[k] = self._pose_of(qo[e], None, float(self.outer.centerline.lengths[e]),
+                                     float(self._tube_xi[k]), self._tube_tbar[k],
+                                     self._tube_p0[k], self._node_t[k], self._node_d[k])[0]
         origins, axes = self._world_sections(poses)
         lengths = np.array(self.beam.centerline.lengths, dtype=float)
         section = self.hole.section

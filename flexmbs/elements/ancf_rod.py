@@ -54,6 +54,8 @@ from ._rod_derivatives import (
     axial_h,
     curvatures,
     curvatures_wh,
+    director_turn,
+    director_turn_h,
     spin,
     spin_value,
     triad,
@@ -65,7 +67,8 @@ from .group import add_matrix, add_residual, gather_states
 from .hermite import hermite_basis
 from .layout import ELEMENT_TYPES, ElementLayout, ElementType
 
-__all__ = ["LAYOUT", "RodProperties", "RodRest", "RodPart", "base_frames", "internal_forces",
+__all__ = ["LAYOUT", "RodProperties", "RodRest", "RodPart", "TurnWork", "base_frames",
+           "director_turn_at", "new_turn_work", "internal_forces",
            "mass_matrix", "nodal_triads", "rest_state", "strain_energy", "strain_measures",
            "output_fields"]
 
@@ -93,6 +96,8 @@ N_Z = 13                   #: inputs of the Gauss-point map: r′, r″, t_0, d2
 N_N = 7                    #: the nodal part of them: t_0, d2_0, Δθ
 N_U = 8                    #: their element inputs: g_0, φ_0, g_1, φ_1
 N_SPIN = 8                 #: outputs of the generated ``spin`` map: w, b (3), s, c (3)
+N_TURN = 10                #: what a section's turn depends on at a point: r′, t_0, d2_0, Δθ
+N_TURN_MAP = 9             #: inputs of the generated ``director_turn`` map: t, t_0, d2_0
 #: element coordinates of the centreline [r0, g0, r1, g1] and of the nodal inputs [g0, φ0, g1, φ1]
 CENTERLINE = LAYOUT.centerline
 U_COLS = np.array([a * NODE_SIZE + i for a in range(2) for i in (*LAYOUT.slope, TWIST)], np.int64)
@@ -188,6 +193,31 @@ class RodWork(NamedTuple):
     w_x: np.ndarray       # (12, N_U) ∂²Δθ/∂t² · ∂t/∂u
     unit: np.ndarray      # (3, 3) identity: weights picking one curvature's Hessian
     p_cc: np.ndarray      # (12, 12) Σ_points centreline-centreline block of (∂z/∂q)ᵀ A ∂z/∂q
+
+
+class TurnWork(NamedTuple):
+    """Scratch of :func:`director_turn_at` (zeroed once, as :class:`RodWork`)."""
+
+    rod: RodWork
+    x: np.ndarray         # (N_TURN_MAP,) t, t_0, d2_0: the generated map's inputs
+    p: np.ndarray         # (6,) t̄, ȳ
+    val: np.ndarray       # (1,) β
+    jac: np.ndarray       # (1, N_TURN_MAP)
+    hes: np.ndarray       # (1, N_TURN_MAP, N_TURN_MAP)
+    zg: np.ndarray        # (N_TURN,) ∂ψ/∂z, z = (r′, t_0, d2_0, Δθ)
+    zh: np.ndarray        # (N_TURN, N_TURN) ∂²ψ/∂z²
+    zq: np.ndarray        # (N_TURN, ELEMENT_SIZE) ∂z/∂q
+    hz: np.ndarray        # (N_TURN, ELEMENT_SIZE) (∂²ψ/∂z²) ∂z/∂q
+    q_e: np.ndarray       # (ELEMENT_SIZE,) a caller's element coordinates
+    grad: np.ndarray      # (ELEMENT_SIZE,) a caller's ∂ψ/∂q
+    hess: np.ndarray      # (ELEMENT_SIZE, ELEMENT_SIZE) a caller's ∂²ψ/∂q²
+
+
+def new_turn_work() -> TurnWork:
+    z = np.zeros
+    n, m = ELEMENT_SIZE, N_TURN_MAP
+    return TurnWork(new_work(), z(m), z(6), z(1), z((1, m)), z((1, m, m)), z(N_TURN),
+                    z((N_TURN, N_TURN)), z((N_TURN, n)), z((N_TURN, n)), z(n), z(n), z((n, n)))
 
 
 def new_work() -> RodWork:
@@ -354,6 +384,116 @@ def _axial_point(q_e, L, xi, mu, w):
     _centerline_rows(q_e, L, xi, w)
     w.p_a[0] = mu
     axial(w.x_z, w.p_a, w.a_val, w.a_jac)
+
+
+@njit(refcount=False)
+def director_turn_at(q_e, L, t_bar, d_bar, xi, sec_t, sec_y, tw, grad, hes, second):
+    """The turn ψ about the tangent of the rod's director ``d2(ξ)`` at the point ξ of an element
+    ``q_e`` (ELEMENT_SIZE; nodal bases ``t_bar``, ``d_bar`` (2, 3)), measured from the frame
+    carried without spin from a base (``sec_t``, ``sec_y``: ``SR(t̄ → t) ȳ``); its gradient
+    ``grad`` (ELEMENT_SIZE) and, with ``second``, its Hessian ``hes`` (ELEMENT_SIZE²) with respect
+    to ``q_e``. ``ψ = β + ξΔθ`` (``d2(ξ) = Rot(t, ξΔθ) SR(t0 → t) d2_0`` and both are ⟂ t), β the
+    generated ``director_turn`` map of ``(t, t_0, d2_0)``, composed with ``t = r′/|r′|`` and with
+    the nodal triads and Δθ (:func:`_nodal_hessian`) by the chain rule, as the curvatures are
+    (§2.2). A flexible tube's section turns by ψ with the rod (docs/theory.md §II.9); β is an
+    atan2, which the caller keeps far from ±π. ``tw``: :func:`new_turn_work`."""
+    w = tw.rod
+    if second:
+        _nodal_hessian(q_e, t_bar, d_bar, w, False)
+    else:
+        _nodal(q_e, t_bar, d_bar, w, False)
+    _centerline_rows(q_e, L, xi, w)
+    x, zq, zg, zh = tw.x, tw.zq, tw.zg, tw.zh
+    ell = math.sqrt(w.x_z[0] ** 2 + w.x_z[1] ** 2 + w.x_z[2] ** 2)
+    for c in range(3):
+        x[c] = w.x_z[c] / ell
+        x[3 + c] = w.t_val[0, c]
+        x[6 + c] = w.t_val[0, 3 + c]
+        tw.p[c] = sec_t[c]
+        tw.p[3 + c] = sec_y[c]
+    if second:
+        director_turn_h(x, tw.p, tw.val, tw.jac, tw.hes)
+    else:
+        director_turn(x, tw.p, tw.val, tw.jac)
+    # to z = (r′, t_0, d2_0, Δθ): ∂t/∂r′ = (I − t tᵀ)/ℓ,
+    # ∂²t_c/∂r′_i∂r′_j = (3 t_c t_i t_j − δ_ci t_j − δ_cj t_i − δ_ij t_c)/ℓ²
+    for i in range(3):
+        s = 0.0
+        for c in range(3):
+            s += tw.jac[0, c] * ((1.0 if c == i else 0.0) - x[c] * x[i]) / ell
+        zg[i] = s
+    for i in range(6):
+        zg[3 + i] = tw.jac[0, 3 + i]
+    zg[9] = xi
+    if second:
+        for i in range(N_TURN):
+            for k in range(N_TURN):
+                zh[i, k] = 0.0
+        H = tw.hes[0]
+        for i in range(3, N_TURN_MAP):       # t_0, d2_0 against themselves
+            for k in range(3, N_TURN_MAP):
+                zh[i, k] = H[i, k]
+        for a in range(3):                   # r′ rows and columns through T = ∂t/∂r′
+            for k in range(3, N_TURN_MAP):
+                s = 0.0
+                for c in range(3):
+                    s += ((1.0 if c == a else 0.0) - x[c] * x[a]) / ell * H[c, k]
+                zh[a, k] = s
+                zh[k, a] = s
+            for b in range(3):
+                s = 0.0
+                for c in range(3):
+                    Tac = ((1.0 if c == a else 0.0) - x[c] * x[a]) / ell
+                    for d in range(3):
+                        s += Tac * H[c, d] * ((1.0 if d == b else 0.0) - x[d] * x[b]) / ell
+                zh[a, b] = s
+        for i in range(3):                   # + Σ_c ∂β/∂t_c ∂²t_c/∂r′²
+            for j in range(3):
+                s = 0.0
+                for c in range(3):
+                    d2t = (3.0 * x[c] * x[i] * x[j] - (x[j] if c == i else 0.0)
+                           - (x[i] if c == j else 0.0) - (x[c] if i == j else 0.0))
+                    s += tw.jac[0, c] * d2t / (ell * ell)
+                zh[i, j] += s
+    # ∂z/∂q: r′ from the centreline coordinates, (t_0, d2_0, Δθ) from the nodal inputs u
+    for i in range(N_TURN):
+        for col in range(ELEMENT_SIZE):
+            zq[i, col] = 0.0
+    for m in range(4):
+        for c in range(3):
+            zq[c, CENTERLINE[3 * m + c]] = w.ab[0, m]
+    for i in range(N_N):
+        for k in range(N_U):
+            zq[3 + i, U_COLS[k]] = w.n_jac[i, k]
+    for col in range(ELEMENT_SIZE):
+        s = 0.0
+        for i in range(N_TURN):
+            s += zg[i] * zq[i, col]
+        grad[col] = s
+    psi = tw.val[0] + xi * w.w_val[0]
+    if not second:
+        return psi
+    # ∂²ψ/∂q² = Zᵀ (∂²ψ/∂z²) Z + Σ_i ∂ψ/∂n_i ∂²n_i/∂u² (Z = ∂z/∂q; n = t_0, d2_0, Δθ)
+    hz = tw.hz
+    for i in range(N_TURN):
+        for col in range(ELEMENT_SIZE):
+            s = 0.0
+            for k in range(N_TURN):
+                s += zh[i, k] * zq[k, col]
+            hz[i, col] = s
+    for a in range(ELEMENT_SIZE):
+        for b in range(ELEMENT_SIZE):
+            s = 0.0
+            for i in range(N_TURN):
+                s += zq[i, a] * hz[i, b]
+            hes[a, b] = s
+    for k in range(N_U):
+        for m in range(N_U):
+            s = 0.0
+            for i in range(N_N):
+                s += zg[3 + i] * w.n_hes[i, k, m]
+            hes[U_COLS[k], U_COLS[m]] += s
+    return psi
 
 
 @njit(refcount=False)

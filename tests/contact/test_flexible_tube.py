@@ -19,7 +19,15 @@ from flexmbs.assembly import Assembly
 from flexmbs.contact.laws import ForceLaw
 from flexmbs.contact.shapes.circle import CircleSection
 from flexmbs.contact.shapes.superellipse import SuperellipseSection
-from flexmbs.contact.tube import POSE_SIZE, POSE_WORK, pose_curvature, rebase, section_pose
+from flexmbs.contact.tube import (
+    POSE_SIZE,
+    POSE_WORK,
+    SECTION_COORDS,
+    TURN_SIZE,
+    pose_curvature,
+    rebase,
+    section_pose,
+)
 from flexmbs.elements.hermite import CENTERLINE_SIZE, shape_xi
 from flexmbs.elements.rigid_body import rotation
 from flexmbs.errors import ModelError
@@ -46,9 +54,11 @@ def _base(t: np.ndarray) -> np.ndarray:
 
 def _pose(qe: np.ndarray, xi: float, tb: np.ndarray, p0: np.ndarray, ve: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    pose, vel, J = np.zeros(POSE_SIZE), np.zeros(POSE_SIZE), np.zeros((POSE_SIZE, CENTERLINE_SIZE))
-    section_pose(qe, 0.1, xi, tb, p0, ve, pose, vel, J, np.zeros(POSE_WORK))
-    return pose, vel, J
+    pose, vel, J = np.zeros(POSE_SIZE), np.zeros(POSE_SIZE), np.zeros((POSE_SIZE, SECTION_COORDS))
+    section_pose(qe, CENTERLINE_SIZE, 0.1, xi, tb, p0, np.zeros(TURN_SIZE), ve, pose, vel, J,
+                 np.zeros(POSE_WORK))
+    assert not J[:, CENTERLINE_SIZE:].any()          # a cable's section does not turn
+    return pose, vel, J[:, :CENTERLINE_SIZE]
 
 
 @pytest.mark.parametrize("slope", [0.0, -1.0], ids=["folded", "turned_back"])
@@ -83,8 +93,10 @@ def test_section_pose_and_its_derivatives(seed: int) -> None:
     assert np.allclose(rotation(pose[3:]) @ [1.0, 0.0, 0.0], x / np.linalg.norm(x), atol=1e-14)
     assert np.allclose(vel, J @ ve, atol=1e-13)
     lam = rng.normal(size=POSE_SIZE)
-    H, G = np.zeros((CENTERLINE_SIZE, CENTERLINE_SIZE)), np.zeros((POSE_SIZE, CENTERLINE_SIZE))
-    pose_curvature(qe, 0.1, xi, tb, p0, ve, lam, H, G, np.zeros(POSE_WORK))
+    H, G = np.zeros((SECTION_COORDS, SECTION_COORDS)), np.zeros((POSE_SIZE, SECTION_COORDS))
+    pose_curvature(qe, CENTERLINE_SIZE, 0.1, xi, tb, p0, np.zeros(TURN_SIZE), ve, lam, H, G,
+                   np.zeros(POSE_WORK))
+    H, G = H[:CENTERLINE_SIZE, :CENTERLINE_SIZE], G[:, :CENTERLINE_SIZE]
     h = 1e-6
     cols = [[_pose(qe + s * h * e, xi, tb, p0, ve) for s in (1, -1)] for e in np.eye(CENTERLINE_SIZE)]
     Jfd = np.array([(p[0] - m[0]) / (2 * h) for p, m in cols]).T
@@ -107,10 +119,10 @@ def test_a_section_that_turned_far_takes_a_new_base_without_moving() -> None:
     tb = np.array([1.0, 0.0, 0.0])
     p0 = np.array([1.0, 0.0, 0.0, 0.0])
     before = _pose(qe, 0.5, tb, p0, np.zeros(CENTERLINE_SIZE))[0]
-    assert rebase(qe, 0.1, 0.5, tb, p0, np.zeros(POSE_WORK))
+    assert rebase(qe, CENTERLINE_SIZE, 0.1, 0.5, tb, p0, 0.0, np.zeros(POSE_WORK))
     after = _pose(qe, 0.5, tb, p0, np.zeros(CENTERLINE_SIZE))[0]
     assert np.abs(after - before).max() < 1e-14 or np.abs(after + before).max() < 1e-14
-    assert not rebase(qe, 0.1, 0.5, tb, p0, np.zeros(POSE_WORK))
+    assert not rebase(qe, CENTERLINE_SIZE, 0.1, 0.5, tb, p0, 0.0, np.zeros(POSE_WORK))
 
 
 def wire_in_tube(push: float = 1.1e-3, *, friction: float | None = None, damping: float = 0.0,
@@ -226,7 +238,8 @@ def test_bad_tubes_are_refused_in_one_line() -> None:
         fm.TubeJoint(wire, tube, inner_radius=0.9 * WIRE_R, sections=5)
     with pytest.raises(ModelError, match="finer than the inner beam's radius"):
         fm.TubeJoint(wire, tube, inner_radius=LUMEN_R, spacing=0.5 * WIRE_R)
-    with pytest.raises(ModelError, match="turn with the tube's twist"):
+    with pytest.raises(ModelError, match="lumen: a SuperellipseSection lumen must turn with the "
+                                         "tube, but tube 'tube' is a ancf_cable"):
         fm.TubeJoint(wire, tube, lumen=SuperellipseSection(a=2e-3, b=1.5e-3, exponent=4.0),
                      sections=5)
     with pytest.raises(ModelError, match="spacing = <distance> or sections"):
