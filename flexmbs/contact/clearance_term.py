@@ -69,11 +69,11 @@ FORCES_WORK = (DETECT_WORK + 7 + 9 + 7 + N_LOCAL * (2 + 2 * N_LOCAL + N_EXT) + 3
                + N_HISTORY + CENTERLINE_SIZE + 3 + PAIR_WORK + 9 + 12 + N_EXT)
 
 #: a tube joint's float work (:attr:`ClearancePart.tube_work`): a section's pose, its rate and
-#: its pose at the step's start (7 each), J and G (7 × SECTION_COORDS each), H
-#: (SECTION_COORDS²), the outer element's section coordinates and rates, the unit section
-#: (origin 0, axes I), :data:`~flexmbs.contact.tube.POSE_WORK` and a rod section's turn
-#: (:data:`~flexmbs.contact.tube.TURN_SIZE`)
-TUBE_WORK = (3 * POSE_SIZE + 2 * POSE_SIZE * SECTION_COORDS + SECTION_COORDS * SECTION_COORDS
+#: its pose at the step's start (7 each), J, G and the pose block's product with J (7 ×
+#: SECTION_COORDS each), H (SECTION_COORDS²), the outer element's section coordinates and
+#: rates, the unit section (origin 0, axes I), :data:`~flexmbs.contact.tube.POSE_WORK` and a
+#: rod section's turn (:data:`~flexmbs.contact.tube.TURN_SIZE`)
+TUBE_WORK = (3 * POSE_SIZE + 3 * POSE_SIZE * SECTION_COORDS + SECTION_COORDS * SECTION_COORDS
              + 2 * SECTION_COORDS + 12 + POSE_WORK + TURN_SIZE)
 
 #: two contact points of one section are the same contact from one step to the next if the
@@ -268,8 +268,12 @@ def _tube_carve(tw):
     unit_o = tw[o:o + 3]
     unit_f = tw[o + 3:o + 12].reshape((3, 3))
     o += 12
-    return (pose, vel, start, J, G, H, qo, vo, unit_o, unit_f, tw[o:o + POSE_WORK],
-            tw[o + POSE_WORK:o + POSE_WORK + TURN_SIZE])
+    pw = tw[o:o + POSE_WORK]
+    o += POSE_WORK
+    turn = tw[o:o + TURN_SIZE]
+    o += TURN_SIZE
+    KJ = tw[o:o + P * CS].reshape((P, CS))
+    return pose, vel, start, J, G, H, qo, vo, unit_o, unit_f, pw, turn, KJ
 
 
 @njit
@@ -307,7 +311,7 @@ def tube_section(tube, j, k, q, v, tw):
         return False
     if not tube.on[j]:
         return False
-    pose, vel, _, J, _, _, qo, vo, _, _, pw, turn = _tube_carve(tw)
+    pose, vel, _, J, _, _, qo, vo, _, _, pw, turn, _ = _tube_carve(tw)
     width = tube.width[j]
     for c in range(width):
         qo[c] = q[tube.dofs[j, k, c]]
@@ -346,7 +350,7 @@ def tube_start_pose(tube, j, k, q_start, tw):
     ``H`` as scratch."""
     if tube is None:
         return
-    _, _, start, _, G, H, qo, vo, _, _, pw, turn = _tube_carve(tw)
+    _, _, start, _, G, H, qo, vo, _, _, pw, turn, _ = _tube_carve(tw)
     width = tube.width[j]
     for c in range(width):
         qo[c] = q_start[tube.dofs[j, k, c]]
@@ -483,7 +487,7 @@ def clearance_forces(cl, j, q, v, want_tangent, r_q, K_out, C_out, elem_k, elem_
     A = fwork[o + 7:o + 16].reshape((3, 3))
     vb = fwork[o + 16:o + 23]
     o += 23
-    pose_k, vel_k, start_k, J_k, _, _, _, _, unit_o, unit_f, _, _ = _tube_carve(tw)
+    pose_k, vel_k, start_k, J_k, _, _, _, _, unit_o, unit_f, _, _, _ = _tube_carve(tw)
     tubular = tube_joint(tube, j)     # a tube: its sections are global, each its own pose
     if tubular:
         for i in range(7):
@@ -1044,7 +1048,7 @@ def place_due_tips(due, j, q, qe, ne, ns, elem_dofs, body, lengths, origins, fra
         for c in range(CENTERLINE_SIZE):
             qe[e, c] = q[elem_dofs[e, c]]
     if tube_joint(tube, j):
-        _, _, _, _, _, _, _, _, unit_o, unit_f, _, _ = _tube_carve(tw)
+        _, _, _, _, _, _, _, _, unit_o, unit_f, _, _, _ = _tube_carve(tw)
         for c in range(3):
             unit_o[c] = 0.0
             for d in range(3):
@@ -1080,7 +1084,7 @@ def tube_rebase(tube, j, n_bore, q, tw):
         return
     if not tube.on[j]:
         return
-    _, _, _, _, _, _, qo, _, _, _, pw, turn = _tube_carve(tw)
+    _, _, _, _, _, _, qo, _, _, _, pw, turn, _ = _tube_carve(tw)
     width = tube.width[j]
     for k in range(n_bore):
         for c in range(width):
@@ -1124,7 +1128,7 @@ def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
     eI = cl.kelem_i[i]
     tw = cl.tube_work
     tube_section(tube, j, k, q, v, tw)
-    _, _, _, J, G, H, qo, vo, _, _, pw, turn = _tube_carve(tw)
+    _, _, _, J, G, H, qo, vo, _, _, pw, turn, KJ = _tube_carve(tw)
     width = tube.width[j]
     _tube_turn(tube, j, k, qo, turn, True)
     pose_curvature(qo, width, tube.length[j, k], tube.xi[j, k], tube.t_bar[j, k], tube.p0[j, k],
@@ -1155,7 +1159,13 @@ def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
             for b in range(7):
                 s += (cK * K[la, b] + cC * C[la, b]) * J[b, c] + cK * C[la, b] * G[b, c]
             _csc_add(ip, ix, data, ra, od[c], s)
-    # the tube's rows
+    # the tube's rows; KJ = (cK K_bb + cC C_bb) J + cK C_bb G, once
+    for b in range(7):
+        for c in range(width):
+            t = 0.0
+            for d in range(7):
+                t += (cK * K[b, d] + cC * C[b, d]) * J[d, c] + cK * C[b, d] * G[d, c]
+            KJ[b, c] = t
     for r in range(width):
         ro = od[r]
         for c in range(CS):          # against e_P (and e_I)
@@ -1175,11 +1185,8 @@ def _tube_tangent(cl, tube, j, i, q, v, cC, cK, data):
             for b in range(7):
                 s += J[b, r] * (cK * K[b, T_OFF + c] + cC * C[b, TWIST_OFF + c])
             _csc_add(ip, ix, data, ro, cl.twist_dofs[j, eP, c], s)
-        for c in range(width):       # against itself
+        for c in range(width):       # against itself: Jᵀ KJ − cK H
             s = -cK * H[r, c]
             for b in range(7):
-                t = 0.0
-                for d in range(7):
-                    t += (cK * K[b, d] + cC * C[b, d]) * J[d, c] + cK * C[b, d] * G[d, c]
-                s += J[b, r] * t
+                s += J[b, r] * KJ[b, c]
             _csc_add(ip, ix, data, ro, od[c], s)

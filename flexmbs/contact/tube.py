@@ -90,6 +90,14 @@ def _carve(work):
     M = work[58:74].reshape((4, 4))
     mu = work[74:78]
     Hx = work[78:87].reshape((3, 3))
+    return x, xd, h, Dh, D2h, M, mu, Hx
+
+
+@njit(inline="always")
+def _carve_turn(work):
+    """The work arrays of a rod section's turn (after :func:`_carve`'s; views): the turned base
+    c and ∂c/∂ψ, (0, t̄) ⊗ p̄, M(∂c/∂ψ), M(∂c/∂ψ) h, ν, a vector over the section coordinates.
+    Apart from :func:`_carve`, so that a cable's section does not build them."""
     c = work[87:91]
     dc = work[91:95]
     sb = work[95:99]
@@ -97,7 +105,7 @@ def _carve(work):
     Mdh = work[115:119]
     nu = work[119:123]
     hv = work[123:123 + SECTION_COORDS]
-    return x, xd, h, Dh, D2h, M, mu, Hx, c, dc, sb, Md, Mdh, nu, hv
+    return c, dc, sb, Md, Mdh, nu, hv
 
 
 @njit(inline="always")
@@ -171,15 +179,9 @@ def _carried(x, t_bar, h, Dh, D2h, second):
 
 
 @njit(inline="always")
-def _turned(p0, t_bar, psi, width, c, dc, sb):
+def _turned(p0, t_bar, psi, c, dc, sb):
     """The base frame turned by ψ about the base tangent, ``c = R(t̄, ψ) ⊗ p̄`` (4), and
-    ``dc = ∂c/∂ψ``; ``sb = (0, t̄) ⊗ p̄`` work. A cable's section (``width`` the centreline's)
-    does not turn: ``c = p̄``, ``dc = 0``."""
-    if width <= CENTERLINE_SIZE:
-        for a in range(4):
-            c[a] = p0[a]
-            dc[a] = 0.0
-        return
+    ``dc = ∂c/∂ψ``; ``sb = (0, t̄) ⊗ p̄`` work (a rod's section; a cable's does not turn)."""
     sb[0] = 0.0
     for a in range(3):
         sb[1 + a] = t_bar[a]
@@ -200,7 +202,8 @@ def section_pose(e, width, length, xi, t_bar, p0, turn, ve, pose, vel, J, work):
     rod); its rate ``ḃ`` (from the rates ``ve``) and ``J = ∂b/∂e`` (7, SECTION_COORDS) (module
     docstring); ``work`` (:data:`POSE_WORK`)."""
     S, dS, _, _ = hermite_basis(xi, length)
-    x, xd, h, Dh, D2h, M, _, _, c, dc, sb, Md, Mdh, _, _ = _carve(work)
+    x, xd, h, Dh, D2h, M, _, _ = _carve(work)
+    turns = width > CENTERLINE_SIZE
     for cc in range(3):
         r = 0.0
         rd = 0.0
@@ -216,10 +219,14 @@ def section_pose(e, width, length, xi, t_bar, p0, turn, ve, pose, vel, J, work):
         x[cc] = xc
         xd[cc] = xdc
     _carried(x, t_bar, h, Dh, D2h, False)
-    _turned(p0, t_bar, turn[0], width, c, dc, sb)
-    _right_product(c, M)
+    if turns:
+        c, dc, sb, Md, Mdh, _, _ = _carve_turn(work)
+        _turned(p0, t_bar, turn[0], c, dc, sb)
+        _right_product(c, M)
+    else:
+        _right_product(p0, M)
     for i in range(POSE_SIZE):
-        for j in range(SECTION_COORDS):
+        for j in range(width):
             J[i, j] = 0.0
     for a in range(4):
         pa = 0.0
@@ -233,7 +240,8 @@ def section_pose(e, width, length, xi, t_bar, p0, turn, ve, pose, vel, J, work):
                 MD += M[a, b] * Dh[b, cc]
             for m in range(4):
                 J[3 + a, 3 * m + cc] = MD * dS[m]
-    if width > CENTERLINE_SIZE:      # + M(c′) h ∂ψ/∂e
+    if turns:                        # + M(c′) h ∂ψ/∂e
+        _, dc, _, Md, Mdh, _, _ = _carve_turn(work)
         _right_product(dc, Md)
         g = turn[1:1 + SECTION_COORDS]
         for a in range(4):
@@ -264,7 +272,8 @@ def pose_curvature(e, width, length, xi, t_bar, p0, turn, ve, lam, H, G, work):
     ``ν = M(c′)ᵀ λ_p``, ``X = ∂x/∂e``, ``g = ∂ψ/∂e``: ``H = Xᵀ (Σ μ_b ∂²h_b) X + X̃ gᵀ + g X̃ᵀ
     − (μ·h/4) g gᵀ + (ν·h) ∂²ψ/∂e²`` with ``X̃ = Xᵀ ∂hᵀ ν``."""
     _, dS, _, _ = hermite_basis(xi, length)
-    x, xd, h, Dh, D2h, M, mu, Hx, c, dc, sb, Md, Mdh, nu, hv = _carve(work)
+    x, xd, h, Dh, D2h, M, mu, Hx = _carve(work)
+    turns = width > CENTERLINE_SIZE
     for cc in range(3):
         xc = 0.0
         xdc = 0.0
@@ -274,8 +283,12 @@ def pose_curvature(e, width, length, xi, t_bar, p0, turn, ve, lam, H, G, work):
         x[cc] = xc
         xd[cc] = xdc
     _carried(x, t_bar, h, Dh, D2h, True)
-    _turned(p0, t_bar, turn[0], width, c, dc, sb)
-    _right_product(c, M)
+    if turns:
+        c, dc, sb, _, _, _, _ = _carve_turn(work)
+        _turned(p0, t_bar, turn[0], c, dc, sb)
+        _right_product(c, M)
+    else:
+        _right_product(p0, M)
     for b in range(4):                    # μ = Mᵀ λ_p
         mu[b] = 0.0
         for a in range(4):
@@ -307,8 +320,9 @@ def pose_curvature(e, width, length, xi, t_bar, p0, turn, ve, lam, H, G, work):
                 s += M[a, b] * t
             for n in range(4):
                 G[3 + a, 3 * n + d] = s * dS[n]
-    if width <= CENTERLINE_SIZE:
+    if not turns:
         return
+    _, dc, _, Md, _, nu, hv = _carve_turn(work)
     g = turn[1:1 + SECTION_COORDS]
     Hpsi = turn[1 + SECTION_COORDS:1 + SECTION_COORDS * (1 + SECTION_COORDS)].reshape(
         (SECTION_COORDS, SECTION_COORDS))
@@ -368,7 +382,7 @@ def rebase(e, width, length, xi, t_bar, p0, psi, work):
     unchanged, and ψ is 0 on the new base); ``psi`` the section's turn (0 for a cable);
     ``work`` (:data:`POSE_WORK`). Returns whether it did."""
     _, dS, _, _ = hermite_basis(xi, length)
-    x, _, h, Dh, D2h, _, p, _, c, dc, sb, _, _, _, _ = _carve(work)
+    x, _, h, Dh, D2h, _, p, _ = _carve(work)
     for cc in range(3):
         s = 0.0
         for m in range(4):
@@ -379,8 +393,12 @@ def rebase(e, width, length, xi, t_bar, p0, psi, work):
             and abs(psi) <= REBASE_TURN):
         return False
     _carried(x, t_bar, h, Dh, D2h, False)
-    _turned(p0, t_bar, psi, width, c, dc, sb)
-    quaternion_after(h, c, p)
+    if width > CENTERLINE_SIZE:
+        c, dc, sb, _, _, _, _ = _carve_turn(work)
+        _turned(p0, t_bar, psi, c, dc, sb)
+        quaternion_after(h, c, p)
+    else:
+        quaternion_after(h, p0, p)
     norm = math.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3])
     for a in range(4):
         p0[a] = p[a] / norm
@@ -425,12 +443,15 @@ def section_turn(e, width, length, xi, t_bar, p0, node_t, node_d, tw, turn, seco
     return psi
 
 
-@njit
+@njit(inline="always")
 def tube_pose(e, width, length, xi, t_bar, p0, node_t, node_d, tw, turn, ve, pose, vel, J, work):
     """A section's pose, rate and ``J`` from its element's coordinates ``e`` and rates ``ve``:
     its turn (:func:`section_turn`, first order, into ``turn``), then :func:`section_pose`. The
     compiled step and the Python paths place sections through this one function."""
-    section_turn(e, width, length, xi, t_bar, p0, node_t, node_d, tw, turn, False)
+    if width > CENTERLINE_SIZE:      # a cable's section does not turn: no call
+        section_turn(e, width, length, xi, t_bar, p0, node_t, node_d, tw, turn, False)
+    else:
+        turn[0] = 0.0
     section_pose(e, width, length, xi, t_bar, p0, turn, ve, pose, vel, J, work)
 
 
