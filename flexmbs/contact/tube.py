@@ -193,6 +193,19 @@ def _turned(p0, t_bar, psi, c, dc, sb):
         dc[a] = 0.5 * (co * sb[a] - si * p0[a])
 
 
+@njit(inline="always")
+def _base_product(p0, t_bar, psi, turns, M, work):
+    """``M`` (4, 4) with ``M h = h ⊗ c``: ``c = R(t̄, ψ) ⊗ p̄`` the section's base turned by ψ (a
+    rod's section, ``turns``; its ``c``, ``∂c/∂ψ`` into the turn's work, :func:`_carve_turn`)
+    or ``c = p̄`` (a cable's)."""
+    if turns:
+        c, dc, sb, _, _, _, _ = _carve_turn(work)
+        _turned(p0, t_bar, psi, c, dc, sb)
+        _right_product(c, M)
+    else:
+        _right_product(p0, M)
+
+
 @njit
 def section_pose(e, width, length, xi, t_bar, p0, turn, ve, pose, vel, J, work):
     """Pose ``b = [r, p]`` (7) of the section at station ``xi`` of the element with section
@@ -219,12 +232,7 @@ def section_pose(e, width, length, xi, t_bar, p0, turn, ve, pose, vel, J, work):
         x[cc] = xc
         xd[cc] = xdc
     _carried(x, t_bar, h, Dh, D2h, False)
-    if turns:
-        c, dc, sb, Md, Mdh, _, _ = _carve_turn(work)
-        _turned(p0, t_bar, turn[0], c, dc, sb)
-        _right_product(c, M)
-    else:
-        _right_product(p0, M)
+    _base_product(p0, t_bar, turn[0], turns, M, work)
     for i in range(POSE_SIZE):
         for j in range(width):
             J[i, j] = 0.0
@@ -283,12 +291,7 @@ def pose_curvature(e, width, length, xi, t_bar, p0, turn, ve, lam, H, G, work):
         x[cc] = xc
         xd[cc] = xdc
     _carried(x, t_bar, h, Dh, D2h, True)
-    if turns:
-        c, dc, sb, _, _, _, _ = _carve_turn(work)
-        _turned(p0, t_bar, turn[0], c, dc, sb)
-        _right_product(c, M)
-    else:
-        _right_product(p0, M)
+    _base_product(p0, t_bar, turn[0], turns, M, work)
     for b in range(4):                    # μ = Mᵀ λ_p
         mu[b] = 0.0
         for a in range(4):
@@ -382,7 +385,7 @@ def rebase(e, width, length, xi, t_bar, p0, psi, work):
     unchanged, and ψ is 0 on the new base); ``psi`` the section's turn (0 for a cable);
     ``work`` (:data:`POSE_WORK`). Returns whether it did."""
     _, dS, _, _ = hermite_basis(xi, length)
-    x, _, h, Dh, D2h, _, p, _ = _carve(work)
+    x, _, h, Dh, D2h, M, p, _ = _carve(work)
     for cc in range(3):
         s = 0.0
         for m in range(4):
@@ -393,12 +396,11 @@ def rebase(e, width, length, xi, t_bar, p0, psi, work):
             and abs(psi) <= REBASE_TURN):
         return False
     _carried(x, t_bar, h, Dh, D2h, False)
-    if width > CENTERLINE_SIZE:
-        c, dc, sb, _, _, _, _ = _carve_turn(work)
-        _turned(p0, t_bar, psi, c, dc, sb)
-        quaternion_after(h, c, p)
-    else:
-        quaternion_after(h, p0, p)
+    _base_product(p0, t_bar, psi, width > CENTERLINE_SIZE, M, work)
+    for a in range(4):                    # the current frame h ⊗ c
+        p[a] = 0.0
+        for b in range(4):
+            p[a] += M[a, b] * h[b]
     norm = math.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3])
     for a in range(4):
         p0[a] = p[a] / norm
